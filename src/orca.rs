@@ -1,0 +1,1 @@
+//! ORCA solver (placeholder, filled in by the orca helper).

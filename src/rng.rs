@@ -1,0 +1,1 @@
+//! Counter-based RNG (placeholder, filled in by the rng helper).
