@@ -1,0 +1,167 @@
+//! Import of a SocNavGym 0.1.1 configuration (its YAML file parsed into a JSON value) into a
+//! socnav [`Config`]. Every key of 0.1.1 is mandatory there, so a missing key is an error here
+//! too; all missing or mistyped keys are reported together.
+
+use serde_json::Value;
+
+use super::{Config, HumanPolicy, Kinematics, RewardKind, Shape};
+use crate::error::SimError;
+
+/// Reads typed values out of the nested YAML dict and collects every problem.
+struct Reader<'a> {
+    root: &'a Value,
+    problems: Vec<String>,
+}
+
+impl<'a> Reader<'a> {
+    fn get(&mut self, section: &str, key: &str) -> Option<&'a Value> {
+        let value = self.root.get(section).and_then(|s| s.get(key));
+        if value.is_none() {
+            self.problems.push(format!("SocNavGym config lacks `{section}.{key}`"));
+        }
+        value
+    }
+
+    fn f32(&mut self, section: &str, key: &str) -> f32 {
+        match self.get(section, key).map(Value::as_f64) {
+            Some(Some(x)) => x as f32,
+            Some(None) => {
+                self.problems.push(format!("SocNavGym `{section}.{key}` must be a number"));
+                0.0
+            }
+            None => 0.0,
+        }
+    }
+
+    fn int(&mut self, section: &str, key: &str) -> i32 {
+        match self.get(section, key).map(Value::as_i64) {
+            Some(Some(x)) => x as i32,
+            Some(None) => {
+                self.problems.push(format!("SocNavGym `{section}.{key}` must be an integer"));
+                0
+            }
+            None => 0,
+        }
+    }
+
+    fn range(&mut self, key: &str) -> [i32; 2] {
+        [self.int("env", &format!("min_{key}")), self.int("env", &format!("max_{key}"))]
+    }
+
+    fn string(&mut self, section: &str, key: &str) -> String {
+        match self.get(section, key).map(Value::as_str) {
+            Some(Some(s)) => s.to_string(),
+            Some(None) => {
+                self.problems.push(format!("SocNavGym `{section}.{key}` must be a string"));
+                String::new()
+            }
+            None => String::new(),
+        }
+    }
+
+    fn bool(&mut self, section: &str, key: &str) -> bool {
+        match self.get(section, key).map(Value::as_bool) {
+            Some(Some(b)) => b,
+            Some(None) => {
+                self.problems.push(format!("SocNavGym `{section}.{key}` must be true or false"));
+                false
+            }
+            None => false,
+        }
+    }
+}
+
+/// Convert the 0.1.1 dict; validation is left to the caller.
+pub(super) fn convert(yaml: &Value) -> Result<Config, SimError> {
+    let mut r = Reader { root: yaml, problems: Vec::new() };
+    let mut c = Config::default();
+    c.render.resolution = r.int("rendering", "resolution_view").max(0) as u32;
+    c.render.frame_ms = r.int("rendering", "milliseconds").max(0) as u32;
+    c.episode.length = r.int("episode", "episode_length").max(0) as u32;
+    c.episode.time_step = r.f32("episode", "time_step");
+    c.robot.radius = r.f32("robot", "robot_radius");
+    c.robot.goal_radius = r.f32("robot", "goal_radius");
+    c.robot.kinematics = match r.string("robot", "robot_type").as_str() {
+        "diff-drive" => Kinematics::DiffDrive,
+        "holonomic" => Kinematics::Holonomic,
+        other => {
+            r.problems.push(format!("SocNavGym `robot.robot_type` {other:?} is not diff-drive or holonomic"));
+            Kinematics::DiffDrive
+        }
+    };
+    c.human.diameter = r.f32("human", "human_diameter");
+    c.human.goal_radius = r.f32("human", "human_goal_radius");
+    c.human.policy = match r.string("human", "human_policy").as_str() {
+        "random" => HumanPolicy::Random,
+        "orca" => HumanPolicy::Orca,
+        "sfm" => HumanPolicy::Sfm,
+        other => {
+            r.problems.push(format!("SocNavGym `human.human_policy` {other:?} is not random, orca or sfm"));
+            HumanPolicy::Random
+        }
+    };
+    c.human.gaze_angle = r.f32("human", "gaze_angle");
+    c.human.fov_angle = r.f32("human", "fov_angle");
+    c.human.prob_to_avoid_robot = r.f32("human", "prob_to_avoid_robot");
+    c.objects.laptop_width = r.f32("laptop", "laptop_width");
+    c.objects.laptop_length = r.f32("laptop", "laptop_length");
+    c.objects.plant_radius = r.f32("plant", "plant_radius");
+    c.objects.table_width = r.f32("table", "table_width");
+    c.objects.table_length = r.f32("table", "table_length");
+    c.objects.wall_thickness = r.f32("wall", "wall_thickness");
+    c.group.radius = r.f32("human-human-interaction", "interaction_radius");
+    c.group.goal_radius = r.f32("human-human-interaction", "interaction_goal_radius");
+    c.group.velocity_noise_std = r.f32("human-human-interaction", "noise_variance");
+    c.laptop_use.human_distance = r.f32("human-laptop-interaction", "human_laptop_distance");
+    c.room.margin = r.f32("env", "margin");
+    c.human.max_speed = r.f32("env", "max_advance_human");
+    c.robot.max_speed = r.f32("env", "max_advance_robot");
+    c.robot.max_rotation = r.f32("env", "max_rotation");
+    c.objects.wall_segment_size = r.f32("env", "wall_segment_size");
+    c.human.speed_threshold = r.f32("env", "speed_threshold");
+    c.events.crowd_dispersal_probability = r.f32("env", "crowd_dispersal_probability");
+    c.events.laptop_dispersal_probability = r.f32("env", "human_laptop_dispersal_probability");
+    c.events.crowd_formation_probability = r.f32("env", "crowd_formation_probability");
+    c.events.laptop_formation_probability = r.f32("env", "human_laptop_formation_probability");
+    c.reward.kind = match r.string("env", "reward_file").as_str() {
+        "dsrnn" => RewardKind::Dsrnn,
+        "sngnn" => RewardKind::Sngnn,
+        other => {
+            r.problems.push(format!(
+                "SocNavGym `env.reward_file` {other:?}: only the built-in dsrnn and sngnn rewards can be imported"
+            ));
+            RewardKind::Dsrnn
+        }
+    };
+    // `cuda_device` picks a GPU in 0.1.1; socnav selects its backend at run time instead.
+    let _ = r.int("env", "cuda_device");
+    let n = &mut c.counts;
+    n.static_humans = r.range("static_humans");
+    n.dynamic_humans = r.range("dynamic_humans");
+    n.tables = r.range("tables");
+    n.plants = r.range("plants");
+    n.laptops = r.range("laptops");
+    n.moving_groups = r.range("h_h_dynamic_interactions");
+    n.moving_groups_non_dispersing = r.range("h_h_dynamic_interactions_non_dispersing");
+    n.standing_groups = r.range("h_h_static_interactions");
+    n.standing_groups_non_dispersing = r.range("h_h_static_interactions_non_dispersing");
+    n.group_size = r.range("human_in_h_h_interactions");
+    n.laptop_users = r.range("h_l_interactions");
+    n.laptop_users_non_dispersing = r.range("h_l_interactions_non_dispersing");
+    c.observation.padded = r.bool("env", "get_padded_observations");
+    c.room.shape = match r.string("env", "set_shape").as_str() {
+        "square" => Shape::Square,
+        "rectangle" => Shape::Rectangle,
+        "L" => Shape::L,
+        "no-walls" => Shape::NoWalls,
+        "random" => Shape::Random,
+        other => {
+            r.problems.push(format!("SocNavGym `env.set_shape` {other:?} is not a known shape"));
+            Shape::Square
+        }
+    };
+    c.room.corridors = r.bool("env", "add_corridors");
+    c.room.size_x = r.range("map_x");
+    c.room.size_y = r.range("map_y");
+    if r.problems.is_empty() { Ok(c) } else { Err(SimError::Config(r.problems)) }
+}

@@ -1,0 +1,204 @@
+//! Cross-field validation of a [`Config`]: returns every problem at once, each naming the key
+//! and the offending value, so a user fixes a file in one go.
+
+use super::{Config, Shape};
+
+/// Fraction of the sampling area that the footprints of the largest entity counts may cover.
+/// Above it, rejection sampling spends most attempts failing; 0.1.1's paper rooms use about 10 %.
+const MAX_FILL_FRACTION: f32 = 0.5;
+
+/// Every problem of `config`, as human-readable lines naming the key and value (empty if valid).
+pub fn validate(config: &Config) -> Vec<String> {
+    let mut v = Problems::default();
+    check_scalars(config, &mut v);
+    check_counts(config, &mut v);
+    if v.0.is_empty() {
+        check_room_fits(config, &mut v);
+    }
+    v.0
+}
+
+#[derive(Default)]
+struct Problems(Vec<String>);
+
+impl Problems {
+    fn positive(&mut self, key: &str, x: f32) {
+        if !(x.is_finite() && x > 0.0) {
+            self.0.push(format!("`{key}` must be a finite number > 0, got {x}"));
+        }
+    }
+    fn non_negative(&mut self, key: &str, x: f32) {
+        if !(x.is_finite() && x >= 0.0) {
+            self.0.push(format!("`{key}` must be a finite number >= 0, got {x}"));
+        }
+    }
+    fn probability(&mut self, key: &str, p: f32) {
+        if !(0.0..=1.0).contains(&p) {
+            self.0.push(format!("`{key}` is a probability and must lie in [0, 1], got {p}"));
+        }
+    }
+    fn angle(&mut self, key: &str, a: f32) {
+        // 2π rounded up to f32 plus slack: SocNavGym configs write 6.2831853 for "see everything".
+        if !(a.is_finite() && a > 0.0 && a <= 6.2832) {
+            self.0.push(format!("`{key}` must lie in (0, 2π] rad, got {a}"));
+        }
+    }
+    fn range(&mut self, key: &str, r: [i32; 2]) {
+        if r[0] < 0 {
+            self.0.push(format!("`{key}` minimum must be >= 0, got {}", r[0]));
+        }
+        if r[0] > r[1] {
+            self.0.push(format!("`{key}` minimum {} is greater than its maximum {}", r[0], r[1]));
+        }
+    }
+}
+
+fn check_scalars(c: &Config, v: &mut Problems) {
+    if c.episode.length == 0 {
+        v.0.push("`episode.length` must be >= 1 step, got 0".into());
+    }
+    v.positive("episode.time_step", c.episode.time_step);
+    v.positive("robot.radius", c.robot.radius);
+    v.non_negative("robot.goal_radius", c.robot.goal_radius);
+    v.non_negative("robot.max_speed", c.robot.max_speed);
+    v.non_negative("robot.max_rotation", c.robot.max_rotation);
+    v.positive("human.diameter", c.human.diameter);
+    v.positive("human.goal_radius", c.human.goal_radius);
+    v.angle("human.gaze_angle", c.human.gaze_angle);
+    v.angle("human.fov_angle", c.human.fov_angle);
+    v.probability("human.prob_to_avoid_robot", c.human.prob_to_avoid_robot);
+    v.non_negative("human.max_speed", c.human.max_speed);
+    v.non_negative("human.speed_threshold", c.human.speed_threshold);
+    v.positive("group.radius", c.group.radius);
+    v.positive("group.goal_radius", c.group.goal_radius);
+    v.non_negative("group.velocity_noise_std", c.group.velocity_noise_std);
+    v.non_negative("laptop_use.human_distance", c.laptop_use.human_distance);
+    let o = &c.objects;
+    v.positive("objects.laptop_width", o.laptop_width);
+    v.positive("objects.laptop_length", o.laptop_length);
+    v.positive("objects.plant_radius", o.plant_radius);
+    v.positive("objects.table_width", o.table_width);
+    v.positive("objects.table_length", o.table_length);
+    v.positive("objects.wall_thickness", o.wall_thickness);
+    v.positive("objects.wall_segment_size", o.wall_segment_size);
+    v.non_negative("room.margin", c.room.margin);
+    let e = &c.events;
+    v.probability("events.crowd_dispersal_probability", e.crowd_dispersal_probability);
+    v.probability("events.laptop_dispersal_probability", e.laptop_dispersal_probability);
+    v.probability("events.crowd_formation_probability", e.crowd_formation_probability);
+    v.probability("events.laptop_formation_probability", e.laptop_formation_probability);
+    let r = &c.reward;
+    for (key, x) in [
+        ("reward.reach", r.reach),
+        ("reward.out_of_map", r.out_of_map),
+        ("reward.timeout", r.timeout),
+        ("reward.collision", r.collision),
+        ("reward.alive", r.alive),
+        ("reward.distance_scale", r.distance_scale),
+        ("reward.discomfort_factor", r.discomfort_factor),
+    ] {
+        if !x.is_finite() {
+            v.0.push(format!("`{key}` must be finite, got {x}"));
+        }
+    }
+    v.non_negative("reward.discomfort_distance", r.discomfort_distance);
+    if c.render.resolution < 16 {
+        v.0.push(format!("`render.resolution` must be >= 16 pixels, got {}", c.render.resolution));
+    }
+}
+
+fn check_counts(c: &Config, v: &mut Problems) {
+    v.range("room.size_x", c.room.size_x);
+    v.range("room.size_y", c.room.size_y);
+    if c.room.size_x[0] <= 0 {
+        v.0.push(format!("`room.size_x` must be at least 1 m, got {:?}", c.room.size_x));
+    }
+    if uses_independent_y(c.room.shape) && c.room.size_y[0] <= 0 {
+        v.0.push(format!("`room.size_y` must be at least 1 m, got {:?}", c.room.size_y));
+    }
+    for (key, range) in c.counts.named() {
+        v.range(&format!("counts.{key}"), range);
+    }
+    let groups_possible = c.counts.max_groups() > 0 || c.events.crowd_formation_probability > 0.0;
+    if groups_possible && c.counts.group_size[0] < 2 {
+        v.0.push(format!(
+            "`counts.group_size` minimum must be >= 2 when groups are asked for \
+             (max groups {}, crowd formation probability {}), got {}",
+            c.counts.max_groups(),
+            c.events.crowd_formation_probability,
+            c.counts.group_size[0]
+        ));
+    }
+    if c.counts.max_laptop_users() > 0 && c.counts.tables[0] < 1 {
+        v.0.push(format!(
+            "laptop users sit at tables: `counts.tables` minimum must be >= 1 when \
+             `counts.laptop_users`/`laptop_users_non_dispersing` can be > 0, got {}",
+            c.counts.tables[0]
+        ));
+    }
+    if c.counts.dynamic_humans[1] + c.counts.static_humans[1] + c.counts.max_laptop_users() + c.counts.max_groups()
+        > 0
+        && c.human.diameter <= 0.0
+    {
+        v.0.push("humans are asked for but `human.diameter` is not > 0".into());
+    }
+}
+
+/// Whether `size_y` is drawn separately from `size_x` for this shape.
+fn uses_independent_y(shape: Shape) -> bool {
+    matches!(shape, Shape::Rectangle | Shape::NoWalls | Shape::Random)
+}
+
+/// The room must hold the largest entity counts: each entity must fit in the sampling box, and
+/// their footprints together must leave room for rejection sampling.
+fn check_room_fits(c: &Config, v: &mut Problems) {
+    let smallest_x = c.room.size_x[0] as f32;
+    let smallest_y = if uses_independent_y(c.room.shape) { c.room.size_y[0] as f32 } else { smallest_x };
+    let box_x = smallest_x - 2.0 * c.room.margin;
+    let box_y = smallest_y - 2.0 * c.room.margin;
+    if box_x <= 0.0 || box_y <= 0.0 {
+        v.0.push(format!(
+            "room too small: the smallest room ({smallest_x} x {smallest_y} m) minus `room.margin` {} on each side \
+             leaves no area to place anything",
+            c.room.margin
+        ));
+        return;
+    }
+    let o = &c.objects;
+    let table_circumradius = (0.25 * o.table_length * o.table_length + 0.25 * o.table_width * o.table_width).sqrt();
+    let group_radius = c.group.radius + 0.5 * c.human.diameter;
+    let side = box_x.min(box_y);
+    for (what, radius, asked) in [
+        ("the robot", c.robot.radius, true),
+        ("a table", table_circumradius, c.counts.tables[1] > 0),
+        ("a group", group_radius, c.counts.max_groups() > 0),
+        ("a plant", o.plant_radius, c.counts.plants[1] > 0),
+    ] {
+        if asked && 2.0 * radius >= side {
+            v.0.push(format!(
+                "room too small: {what} ({:.2} m across) does not fit in the {box_x:.2} x {box_y:.2} m sampling box \
+                 of the smallest room",
+                2.0 * radius
+            ));
+        }
+    }
+    let n = &c.counts;
+    let disc = |r: f32| std::f32::consts::PI * r * r;
+    let max_group_members = n.max_groups() * n.group_size[1];
+    let humans = n.static_humans[1] + n.dynamic_humans[1] + n.max_laptop_users() + max_group_members;
+    let footprint = disc(c.robot.radius + c.robot.goal_radius)
+        + humans as f32 * disc(0.5 * c.human.diameter + c.human.goal_radius)
+        + n.max_groups() as f32 * disc(group_radius)
+        + n.plants[1] as f32 * disc(o.plant_radius)
+        + n.tables[1] as f32 * o.table_length * o.table_width
+        + n.laptops[1] as f32 * o.laptop_length * o.laptop_width;
+    let l_fraction = if c.room.shape == Shape::L { 7.0 / 9.0 } else { 1.0 };
+    let area = box_x * box_y * l_fraction;
+    if footprint > MAX_FILL_FRACTION * area {
+        v.0.push(format!(
+            "room too small: the largest counts need about {footprint:.1} m² of free space but the smallest room \
+             offers {area:.1} m² to sample in (at most {:.0} % may be covered)",
+            MAX_FILL_FRACTION * 100.0
+        ));
+    }
+}

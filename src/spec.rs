@@ -1,0 +1,201 @@
+//! The single source of truth for what a step returns: the observation layout, the info keys and
+//! the per-episode statistics. The Python package builds its spaces from this module; no shape is
+//! written twice.
+//!
+//! Observation of one environment (robot frame unless stated; spec section 5), flat `f32`:
+//! `[robot record | humans × 14 | laptops × 14 | tables × 14 | plants × 14 | wall segments × 14]`.
+//! Each entity type is padded with all-zero records to its capacity; per-type counts say how many
+//! records are real. Without padding (`observation.padded = false`) the real records are exactly
+//! 0.1.1's observation vectors; with padding the walls are omitted as in 0.1.1.
+
+use crate::state::Caps;
+
+/// Floats per entity record: one-hot type (6), x, y, sin, cos, radius, relative speed,
+/// relative angular speed, gaze.
+pub const RECORD: usize = 14;
+
+/// Floats of the robot record without velocity: one-hot (6), goal x, goal y, radius.
+pub const ROBOT_RECORD: usize = 9;
+
+/// Entity types in observation order, with their 0.1.1 dict keys.
+pub const ENTITY_KEYS: [&str; 5] = ["humans", "laptops", "tables", "plants", "walls"];
+
+/// Index of each entity type in [`ENTITY_KEYS`] and in the per-type count array.
+pub mod entity {
+    /// Humans.
+    pub const HUMANS: usize = 0;
+    /// Laptops.
+    pub const LAPTOPS: usize = 1;
+    /// Tables.
+    pub const TABLES: usize = 2;
+    /// Plants.
+    pub const PLANTS: usize = 3;
+    /// Wall segments.
+    pub const WALLS: usize = 4;
+}
+
+/// One-hot position of each observed type (robot 0, human 1, table 2, laptop 3, plant 4, wall 5).
+pub mod one_hot {
+    /// Robot.
+    pub const ROBOT: usize = 0;
+    /// Human.
+    pub const HUMAN: usize = 1;
+    /// Table.
+    pub const TABLE: usize = 2;
+    /// Laptop.
+    pub const LAPTOP: usize = 3;
+    /// Plant.
+    pub const PLANT: usize = 4;
+    /// Wall.
+    pub const WALL: usize = 5;
+}
+
+/// Where each part of an environment's observation lives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ObsLayout {
+    /// Floats in the robot record (9, or 12 with the robot velocity).
+    pub robot: usize,
+    /// Record capacity per entity type, in [`ENTITY_KEYS`] order.
+    pub capacity: [usize; 5],
+    /// Offset of each entity type's first record.
+    pub offset: [usize; 5],
+    /// Floats per environment.
+    pub dim: usize,
+}
+
+impl ObsLayout {
+    /// Layout for the given capacities and observation options.
+    pub fn new(caps: &Caps, padded: bool, robot_velocity: bool) -> Self {
+        let robot = ROBOT_RECORD + if robot_velocity { 3 } else { 0 };
+        let walls = if padded { 0 } else { caps.wall_segments };
+        let capacity = [caps.humans, caps.laptops, caps.tables, caps.plants, walls];
+        let mut offset = [0; 5];
+        let mut at = robot;
+        for (o, n) in offset.iter_mut().zip(capacity) {
+            *o = at;
+            at += n * RECORD;
+        }
+        Self { robot, capacity, offset, dim: at }
+    }
+}
+
+/// The info keys of spec section 8.2, in output order. Flags are 0.0 or 1.0; `None` in 0.1.1
+/// (`TIME_TO_REACH_GOAL` before success, `AVERAGE_OBSTACLE_DISTANCE` without obstacles) is NaN;
+/// infinities stay infinite.
+pub const INFO_KEYS: [&str; 32] = [
+    "OUT_OF_MAP",
+    "SUCCESS",
+    "COLLISION",
+    "COLLISION_HUMAN",
+    "COLLISION_OBJECT",
+    "COLLISION_WALL",
+    "TIMEOUT",
+    "FAILURE_TO_PROGRESS",
+    "STALLED_TIME",
+    "TIME_TO_REACH_GOAL",
+    "PATH_LENGTH",
+    "V_MIN",
+    "V_AVG",
+    "V_MAX",
+    "A_MIN",
+    "A_AVG",
+    "A_MAX",
+    "JERK_MIN",
+    "JERK_AVG",
+    "JERK_MAX",
+    "TIME_TO_COLLISION",
+    "MINIMUM_DISTANCE_TO_HUMAN",
+    "PERSONAL_SPACE_COMPLIANCE",
+    "MINIMUM_OBSTACLE_DISTANCE",
+    "AVERAGE_OBSTACLE_DISTANCE",
+    "STL",
+    "SPL",
+    "DISCOMFORT_SNGNN",
+    "DISCOMFORT_DSRNN",
+    "distance_reward",
+    "alive_reward",
+    "sngnn_reward",
+];
+
+/// Index of each key in [`INFO_KEYS`].
+pub mod info {
+    #![expect(missing_docs, reason = "each constant is the index of the info key of the same name")]
+    pub const OUT_OF_MAP: usize = 0;
+    pub const SUCCESS: usize = 1;
+    pub const COLLISION: usize = 2;
+    pub const COLLISION_HUMAN: usize = 3;
+    pub const COLLISION_OBJECT: usize = 4;
+    pub const COLLISION_WALL: usize = 5;
+    pub const TIMEOUT: usize = 6;
+    pub const FAILURE_TO_PROGRESS: usize = 7;
+    pub const STALLED_TIME: usize = 8;
+    pub const TIME_TO_REACH_GOAL: usize = 9;
+    pub const PATH_LENGTH: usize = 10;
+    pub const V_MIN: usize = 11;
+    pub const V_AVG: usize = 12;
+    pub const V_MAX: usize = 13;
+    pub const A_MIN: usize = 14;
+    pub const A_AVG: usize = 15;
+    pub const A_MAX: usize = 16;
+    pub const JERK_MIN: usize = 17;
+    pub const JERK_AVG: usize = 18;
+    pub const JERK_MAX: usize = 19;
+    pub const TIME_TO_COLLISION: usize = 20;
+    pub const MINIMUM_DISTANCE_TO_HUMAN: usize = 21;
+    pub const PERSONAL_SPACE_COMPLIANCE: usize = 22;
+    pub const MINIMUM_OBSTACLE_DISTANCE: usize = 23;
+    pub const AVERAGE_OBSTACLE_DISTANCE: usize = 24;
+    pub const STL: usize = 25;
+    pub const SPL: usize = 26;
+    pub const DISCOMFORT_SNGNN: usize = 27;
+    pub const DISCOMFORT_DSRNN: usize = 28;
+    pub const DISTANCE_REWARD: usize = 29;
+    pub const ALIVE_REWARD: usize = 30;
+    pub const SNGNN_REWARD: usize = 31;
+}
+
+/// Number of info keys.
+pub const N_INFO: usize = INFO_KEYS.len();
+
+/// Per-episode statistics written when an episode ends, aggregated as the paper's table does
+/// (spec section 8.3): outcome flags; `time_taken` (steps, the episode length on collision);
+/// the final step's cumulative metrics; STL, SPL and TIME_TO_REACH_GOAL of the success step (0
+/// and the episode length otherwise); minima over the steps; the mean obstacle distance and
+/// time to collision over the steps (-1 counted as the episode length); discomfort sums.
+pub const EPISODE_KEYS: [&str; 32] = [
+    "return",
+    "length",
+    "success",
+    "collision",
+    "collision_human",
+    "collision_object",
+    "collision_wall",
+    "timeout",
+    "out_of_map",
+    "time_taken",
+    "FAILURE_TO_PROGRESS",
+    "STALLED_TIME",
+    "TIME_TO_REACH_GOAL",
+    "PATH_LENGTH",
+    "V_MIN",
+    "V_AVG",
+    "V_MAX",
+    "A_MIN",
+    "A_AVG",
+    "A_MAX",
+    "JERK_MIN",
+    "JERK_AVG",
+    "JERK_MAX",
+    "PERSONAL_SPACE_COMPLIANCE",
+    "STL",
+    "SPL",
+    "MINIMUM_DISTANCE_TO_HUMAN",
+    "MINIMUM_OBSTACLE_DISTANCE",
+    "AVERAGE_OBSTACLE_DISTANCE",
+    "TIME_TO_COLLISION",
+    "DISCOMFORT_DSRNN",
+    "DISCOMFORT_SNGNN",
+];
+
+/// Number of per-episode statistics.
+pub const N_EPISODE: usize = EPISODE_KEYS.len();

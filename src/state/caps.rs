@@ -1,0 +1,133 @@
+//! Fixed capacities of the batched state, taken from a config's maximum counts. Every per-entity
+//! column has one of these strides; the GPU backend sizes its buffers and shader arrays from them.
+
+use crate::config::{Config, Shape};
+
+/// Capacities (slots per environment) of every entity kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Caps {
+    /// Humans of every role: lone static and walking humans, group members, laptop users.
+    pub humans: usize,
+    /// Groups, moving and standing (including crowds formed during an episode).
+    pub groups: usize,
+    /// Members of one group.
+    pub group_size: usize,
+    /// Human-laptop interactions (laptop users), including those formed during an episode.
+    pub laptop_users: usize,
+    /// Laptops, free and in use.
+    pub laptops: usize,
+    /// Tables.
+    pub tables: usize,
+    /// Plants.
+    pub plants: usize,
+    /// Walls (rectangles), internal corridor walls included.
+    pub walls: usize,
+    /// Observed wall segments.
+    pub wall_segments: usize,
+    /// Invisible spawn blockers (the L room's removed block, corridor doors).
+    pub blockers: usize,
+    /// ORCA obstacle vertices after RVO2's processing (which may split edges).
+    pub obstacle_vertices: usize,
+}
+
+/// Extra obstacle vertices allowed for edges that RVO2's obstacle tree splits, per polygon vertex.
+/// Splits happen where one rectangle's edge line crosses another rectangle (room corners do);
+/// `tests/scenario_props.rs` checks the largest count seen over many scenarios stays below this.
+const SPLIT_VERTICES_PER_VERTEX: usize = 1;
+
+impl Caps {
+    /// Capacities for `config`.
+    pub fn from_config(c: &Config) -> Self {
+        let n = &c.counts;
+        let max = |r: [i32; 2]| r[1].max(0) as usize;
+        let group_size = max(n.group_size);
+        let configured_groups = n.max_groups().max(0) as usize;
+        let configured_users = n.max_laptop_users().max(0) as usize;
+        let humans =
+            max(n.static_humans) + max(n.dynamic_humans) + configured_users + configured_groups * group_size;
+        // Crowd formation turns lone walkers into new groups of at least 2 members.
+        let groups = if c.events.crowd_formation_probability > 0.0 {
+            configured_groups.max(humans / 2)
+        } else {
+            configured_groups
+        };
+        let laptops = max(n.laptops) + configured_users;
+        // Laptop-use formation seats walkers at free laptops: at most one user per laptop.
+        let laptop_users =
+            if c.events.laptop_formation_probability > 0.0 { laptops } else { configured_users };
+        let base_walls = match c.room.shape {
+            Shape::NoWalls => 0,
+            Shape::Square | Shape::Rectangle => 4,
+            Shape::L | Shape::Random => 8,
+        };
+        let corridor_walls = if c.room.corridors && base_walls > 0 { 4 } else { 0 };
+        let walls = base_walls + corridor_walls;
+        let x = c.room.size_x[1].max(0) as f32;
+        let y = if matches!(c.room.shape, Shape::Square | Shape::L) { x } else { c.room.size_y[1].max(0) as f32 };
+        let perimeter = if base_walls > 0 { 2.0 * (x + y) } else { 0.0 };
+        let corridor_length = if corridor_walls > 0 { 2.0 * x.max(y) } else { 0.0 };
+        // Each wall gives floor(L / s) full segments plus one remainder segment.
+        let wall_segments = ((perimeter + corridor_length) / c.objects.wall_segment_size).ceil() as usize + walls;
+        let blockers = usize::from(matches!(c.room.shape, Shape::L | Shape::Random)) + if corridor_walls > 0 { 2 } else { 0 };
+        let polygons = walls + max(n.tables) + laptops + max(n.plants) + laptop_users + groups;
+        let obstacle_vertices = 4 * polygons * (1 + SPLIT_VERTICES_PER_VERTEX);
+        Self {
+            humans,
+            groups,
+            group_size,
+            laptop_users,
+            laptops,
+            tables: max(n.tables),
+            plants: max(n.plants),
+            walls,
+            wall_segments,
+            blockers,
+            obstacle_vertices,
+        }
+    }
+
+    /// Stride of per-environment columns.
+    pub fn env(&self) -> usize {
+        1
+    }
+    /// Stride of per-human columns.
+    pub fn human(&self) -> usize {
+        self.humans
+    }
+    /// Stride of per-group columns.
+    pub fn group(&self) -> usize {
+        self.groups
+    }
+    /// Stride of per-slot columns of a forming crowd.
+    pub fn crowd_slot(&self) -> usize {
+        self.group_size
+    }
+    /// Stride of per-laptop-user columns.
+    pub fn laptop_user(&self) -> usize {
+        self.laptop_users
+    }
+    /// Stride of per-laptop columns.
+    pub fn laptop(&self) -> usize {
+        self.laptops
+    }
+    /// Stride of per-table columns.
+    pub fn table(&self) -> usize {
+        self.tables
+    }
+    /// Stride of per-plant columns.
+    pub fn plant(&self) -> usize {
+        self.plants
+    }
+    /// Stride of per-wall columns.
+    pub fn wall(&self) -> usize {
+        self.walls
+    }
+    /// Stride of per-blocker columns.
+    pub fn blocker(&self) -> usize {
+        self.blockers
+    }
+    /// Stride of per-obstacle-vertex columns.
+    pub fn obstacle_vertex(&self) -> usize {
+        self.obstacle_vertices
+    }
+}

@@ -1,0 +1,163 @@
+//! The `soa!` macro: declares a structure-of-arrays table once and derives from that single list
+//! the owning struct (one `Vec` per column), a borrowed chunk type over a contiguous range of
+//! environments (one `&mut [T]` per column) that splits in two without allocating, and the
+//! per-column metadata (name, element kind, stride) used by hashing, memory accounting and,
+//! later, the GPU buffers.
+//!
+//! Every column belongs to a *kind* (per environment, per human slot, ...): its stride is the
+//! capacity of that kind, and element `slot` of environment `env` sits at `env * stride + slot`.
+
+/// Element type of a column, for hashing and GPU upload.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Elem {
+    /// 32-bit float.
+    F32,
+    /// 32-bit unsigned integer (ids, counts, flags: never `bool`, which WGSL cannot store).
+    U32,
+}
+
+/// A value that can live in a column.
+pub trait ColumnValue: Copy + Default + Send + Sync + 'static {
+    /// Its element kind.
+    const ELEM: Elem;
+    /// Its bits, for fingerprints (`-0.0` is normalised to `+0.0`).
+    fn bits(self) -> u32;
+}
+
+impl ColumnValue for f32 {
+    const ELEM: Elem = Elem::F32;
+    fn bits(self) -> u32 {
+        if self == 0.0 { 0 } else { self.to_bits() }
+    }
+}
+
+impl ColumnValue for u32 {
+    const ELEM: Elem = Elem::U32;
+    fn bits(self) -> u32 {
+        self
+    }
+}
+
+/// Declare an SoA table: `soa! { pub struct Name / NameChunk over Strides { kind: col: T, ... } }`.
+/// `Strides` must have a method `stride(&self, kind) -> usize` for each kind ident used.
+macro_rules! soa {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident / $chunk:ident over $strides:ty {
+            $( $(#[$cmeta:meta])* $kind:ident . $col:ident : $ty:ty ),* $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone)]
+        pub struct $name {
+            /// Number of environments.
+            pub n_envs: usize,
+            /// Per-kind strides (capacities).
+            pub strides: $strides,
+            $( $(#[$cmeta])* pub $col: Vec<$ty>, )*
+        }
+
+        /// A mutable view of a contiguous range of environments of the table.
+        #[derive(Debug)]
+        pub struct $chunk<'a> {
+            /// Number of environments in the chunk.
+            pub n_envs: usize,
+            /// Index of the chunk's first environment in the batch.
+            pub first_env: usize,
+            /// Per-kind strides (capacities).
+            pub strides: $strides,
+            $( $(#[$cmeta])* pub $col: &'a mut [$ty], )*
+        }
+
+        impl $name {
+            /// A zero-filled table for `n_envs` environments.
+            pub fn zeroed(n_envs: usize, strides: $strides) -> Self {
+                Self {
+                    n_envs,
+                    $( $col: vec![<$ty>::default(); n_envs * strides.$kind()], )*
+                    strides,
+                }
+            }
+
+            /// The whole table as one chunk.
+            pub fn chunk(&mut self) -> $chunk<'_> {
+                $chunk {
+                    n_envs: self.n_envs,
+                    first_env: 0,
+                    strides: self.strides,
+                    $( $col: &mut self.$col[..], )*
+                }
+            }
+
+            /// Column metadata: name, element kind, stride.
+            pub fn columns(&self) -> Vec<(&'static str, $crate::state::columns::Elem, usize)> {
+                vec![$( (
+                    stringify!($col),
+                    <$ty as $crate::state::columns::ColumnValue>::ELEM,
+                    self.strides.$kind(),
+                ), )*]
+            }
+
+            /// Bytes of state per environment (all columns).
+            pub fn bytes_per_env(&self) -> usize {
+                0 $( + self.strides.$kind() * std::mem::size_of::<$ty>() )*
+            }
+
+            /// FNV-1a hash over every column of environment `env`, in declaration order.
+            pub fn fingerprint_env(&self, env: usize, mut h: u64) -> u64 {
+                $(
+                    let s = self.strides.$kind();
+                    for v in &self.$col[env * s..(env + 1) * s] {
+                        h = $crate::state::columns::fnv(h, <$ty as $crate::state::columns::ColumnValue>::bits(*v));
+                    }
+                )*
+                h
+            }
+
+            /// Copy every column of environment `from` of `src` into environment `to` of `self`.
+            pub fn copy_env_from(&mut self, to: usize, src: &Self, from: usize) {
+                $(
+                    let s = self.strides.$kind();
+                    self.$col[to * s..(to + 1) * s].copy_from_slice(&src.$col[from * s..(from + 1) * s]);
+                )*
+            }
+        }
+
+        impl<'a> $chunk<'a> {
+            /// Split into the first `mid` environments and the rest.
+            pub fn split_at(self, mid: usize) -> ($chunk<'a>, $chunk<'a>) {
+                assert!(mid <= self.n_envs, "split point {mid} beyond chunk of {} envs", self.n_envs);
+                $( let $col = self.$col.split_at_mut(mid * self.strides.$kind()); )*
+                (
+                    $chunk {
+                        n_envs: mid,
+                        first_env: self.first_env,
+                        strides: self.strides,
+                        $( $col: $col.0, )*
+                    },
+                    $chunk {
+                        n_envs: self.n_envs - mid,
+                        first_env: self.first_env + mid,
+                        strides: self.strides,
+                        $( $col: $col.1, )*
+                    },
+                )
+            }
+        }
+    };
+}
+
+pub(crate) use soa;
+
+/// One FNV-1a round over a 32-bit word.
+#[inline]
+pub fn fnv(mut h: u64, word: u32) -> u64 {
+    for byte in word.to_le_bytes() {
+        h ^= u64::from(byte);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// FNV-1a offset basis.
+pub const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;

@@ -1,0 +1,98 @@
+//! Stage `contacts` (spec 4.6): after all motion, a human that touches a plant, wall, table or
+//! free laptop is pushed out by an MPE-style soft contact force: it turns to the force direction,
+//! takes speed min(|F|·dt, max speed) and moves once more. Non-wall objects count as discs (tables
+//! and laptops by their circumradius); against a wall the obstacle is the human's mirror image
+//! across the wall face. Lone static humans are never moved; the robot is never pushed.
+
+use crate::geometry::{Disc, Rect, disc_disc, disc_rect};
+use crate::math;
+use crate::params::StepParams;
+use crate::pipeline::Batch;
+use crate::state::{NONE, StateChunk, role};
+
+/// Softness of the contact (m), MPE's `contact_margin`.
+const MARGIN: f32 = 1e-3;
+/// Stiffness of the contact, MPE's `contact_force`.
+const STIFFNESS: f32 = 100.0;
+
+/// Resolve the contacts of every human of environment `e`.
+pub fn contacts(p: &StepParams, b: &mut Batch<'_>, e: usize) {
+    if b.s.stepping[e] == 0 {
+        return;
+    }
+    let s = &mut b.s;
+    let hb = e * s.strides.humans;
+    for i in hb..hb + s.n_humans[e] as usize {
+        if s.h_role[i] != role::STATIC {
+            push_out(p, s, e, i);
+        }
+    }
+}
+
+fn push_out(p: &StepParams, s: &mut StateChunk, e: usize, i: usize) {
+    let r = p.human_radius;
+    let pb = e * s.strides.plants;
+    for k in pb..pb + s.n_plants[e] as usize {
+        let plant = Disc { x: s.p_x[k], y: s.p_y[k], r: p.plant_radius };
+        if disc_disc(&human(p, s, i), &plant) {
+            let (dx, dy) = (s.h_x[i] - plant.x, s.h_y[i] - plant.y);
+            push(p, s, i, dx, dy, r + plant.r);
+        }
+    }
+    for w in 0..s.n_walls[e] as usize {
+        let wall = super::world::wall_rect(p, s, e, w);
+        if disc_rect(&human(p, s, i), &wall) {
+            let (dx, dy) = mirror_delta(&wall, s.h_x[i], s.h_y[i]);
+            push(p, s, i, dx, dy, 2.0 * r);
+        }
+    }
+    for t in 0..s.n_tables[e] as usize {
+        let table = super::world::table_rect(p, s, e, t);
+        push_from_rect(p, s, i, &table);
+    }
+    let lb = e * s.strides.laptops;
+    for l in 0..s.n_laptops[e] as usize {
+        if s.l_user[lb + l] == NONE {
+            let laptop = super::world::laptop_rect(p, s, e, l);
+            push_from_rect(p, s, i, &laptop);
+        }
+    }
+}
+
+#[inline]
+fn human(p: &StepParams, s: &StateChunk, i: usize) -> Disc {
+    Disc { x: s.h_x[i], y: s.h_y[i], r: p.human_radius }
+}
+
+fn push_from_rect(p: &StepParams, s: &mut StateChunk, i: usize, rect: &Rect) {
+    if disc_rect(&human(p, s, i), rect) {
+        let (dx, dy) = (s.h_x[i] - rect.x, s.h_y[i] - rect.y);
+        push(p, s, i, dx, dy, p.human_radius + rect.circumradius());
+    }
+}
+
+/// Human centre minus its mirror image across the wall face on the human's side.
+fn mirror_delta(wall: &Rect, x: f32, y: f32) -> (f32, f32) {
+    let (_, ly) = wall.to_local(x, y);
+    let face = if ly >= 0.0 { wall.hw } else { -wall.hw };
+    let across = 2.0 * (ly - face);
+    (-wall.s * across, wall.c * across)
+}
+
+/// Apply the contact force for separation vector (dx, dy) and contact distance `reach` (m).
+fn push(p: &StepParams, s: &mut StateChunk, i: usize, dx: f32, dy: f32, reach: f32) {
+    let dist = (dx * dx + dy * dy).sqrt();
+    if dist <= 0.0 {
+        return;
+    }
+    let penetration = MARGIN * math::softplus(-(dist - reach) / MARGIN);
+    let fx = STIFFNESS * dx / dist * penetration;
+    let fy = STIFFNESS * dy / dist * penetration;
+    let theta = math::atan2(fy, fx);
+    let speed = ((fx * fx + fy * fy).sqrt() * p.dt).min(p.human_max_speed);
+    let (sn, c) = math::sin_cos(theta);
+    s.h_theta[i] = theta;
+    s.h_speed[i] = speed;
+    s.h_x[i] += speed * p.dt * c;
+    s.h_y[i] += speed * p.dt * sn;
+}

@@ -1,0 +1,68 @@
+//! Stage `human_motion` (spec 4.1 step 6, 4.2-4.3): each lone walker, in slot order, chooses a
+//! velocity with its policy (ORCA or SFM) and moves at once, so later walkers see it where it now
+//! is (0.1.1 updates them one after another). Speeds below the threshold become 0 (except for
+//! walkers heading to a forming crowd); the heading always follows the velocity. Whether a walker
+//! takes the robot into account is drawn every step with `prob_to_avoid_robot`.
+
+use crate::math;
+use crate::params::StepParams;
+use crate::pipeline::Batch;
+use crate::rng::{RngStream, stream_id};
+use crate::state::{StateChunk, policy};
+
+use super::orca_world::{self, Others};
+
+/// RNG stream kind of the per-step "does this human avoid the robot" draws (`sub` = tick).
+pub const STREAM_AVOID_ROBOT: u32 = 3;
+
+/// Move the lone walkers of environment `e`.
+pub fn human_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
+    if b.s.stepping[e] == 0 {
+        return;
+    }
+    let env = b.env_index(e);
+    let s = &mut b.s;
+    let mut rng = RngStream::new(p.seed(), env, s.episode[e], stream_id(STREAM_AVOID_ROBOT, s.tick[e]));
+    let first = e * s.strides.humans + s.n_static[e] as usize;
+    for i in first..first + s.n_dynamic[e] as usize {
+        let avoid_robot = rng.chance(p.prob_avoid_robot);
+        let (vx, vy) = if s.h_policy[i] == policy::ORCA {
+            orca_velocity(p, s, e, i, avoid_robot)
+        } else {
+            super::sfm::velocity(p, s, e, i, avoid_robot)
+        };
+        walk(p, s, i, vx, vy);
+    }
+}
+
+/// The ORCA velocity (m/s) of lone walker `i`: itself at rest (or at its velocity) wanting to go
+/// to its goal at the human speed, in a fresh simulator with the other lone humans, the moving
+/// groups and, if it avoids it, the robot.
+fn orca_velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, avoid_robot: bool) -> (f32, f32) {
+    let (x, y) = (s.h_x[i], s.h_y[i]);
+    let pref = orca_world::preferred(x, y, s.h_goal_x[i], s.h_goal_y[i], p.human_max_speed);
+    let vel = if p.orca_actual_velocity != 0 {
+        let (sn, c) = math::sin_cos(s.h_theta[i]);
+        [s.h_speed[i] * c, s.h_speed[i] * sn]
+    } else {
+        [0.0, 0.0]
+    };
+    let agent = orca_world::agent(s, e, [x, y], vel, pref, p.human_radius);
+    let others = Others { skip_human: Some(i), skip_group: None, robot: avoid_robot };
+    let v = orca_world::with_world(|w| w.velocity(p, s, e, &agent, others));
+    (v[0], v[1])
+}
+
+/// Apply velocity (vx, vy) (m/s) to human `i`: threshold the speed, turn to the velocity, move.
+pub fn walk(p: &StepParams, s: &mut StateChunk, i: usize, vx: f32, vy: f32) {
+    let mut speed = (vx * vx + vy * vy).sqrt();
+    if speed < p.speed_threshold && s.h_forming[i] == 0 {
+        speed = 0.0;
+    }
+    let theta = math::atan2(vy, vx);
+    let (sn, c) = math::sin_cos(theta);
+    s.h_speed[i] = speed;
+    s.h_theta[i] = theta;
+    s.h_x[i] += speed * p.dt * c;
+    s.h_y[i] += speed * p.dt * sn;
+}

@@ -1,0 +1,223 @@
+//! Stage `observation` (spec section 5): the robot record and one 14-float record per entity, in
+//! the robot frame (x forward, y left), laid out as [`crate::spec::ObsLayout`] says.
+//!
+//! Conventions are 0.1.1's: sin/cos of the unwrapped relative heading; humans' relative speed is
+//! |v_h − v_r| (non-negative), every other entity carries −|v_r| and −ω; walls are split into
+//! segments of `wall_segment_size` from their "left" end. One 0.1.1 bug is fixed
+//! (docs/fidelity.md): the relative angular speed wraps the heading difference, so it never
+//! jumps by ±2π/dt.
+
+use crate::math;
+use crate::outputs::OutChunk;
+use crate::params::StepParams;
+use crate::pipeline::Batch;
+use crate::spec::{RECORD, entity, one_hot};
+use crate::state::StateChunk;
+
+/// Write the observation of environment `e` and cache the humans' relative headings.
+pub fn observation(p: &StepParams, b: &mut Batch<'_>, e: usize) {
+    if b.s.stepping[e] == 0 {
+        return;
+    }
+    write_observation(p, &mut b.s, &mut b.o, e);
+}
+
+/// The robot pose and velocities an observation is relative to.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    x: f32,
+    y: f32,
+    theta: f32,
+    sin: f32,
+    cos: f32,
+    /// Robot world velocity (m/s).
+    vx: f32,
+    vy: f32,
+    /// −|v| and −ω: what non-human records carry.
+    neg_speed: f32,
+    neg_w: f32,
+}
+
+impl Frame {
+    fn of(s: &StateChunk, e: usize) -> Self {
+        let theta = s.robot_theta[e];
+        let (sin, cos) = math::sin_cos(theta);
+        let (vx, vy) = super::reward::robot_world_velocity(s, e);
+        let (cx, cy) = (s.robot_vx[e], s.robot_vy[e]);
+        Self {
+            x: s.robot_x[e],
+            y: s.robot_y[e],
+            theta,
+            sin,
+            cos,
+            vx,
+            vy,
+            neg_speed: -(cx * cx + cy * cy).sqrt(),
+            neg_w: -s.robot_w[e],
+        }
+    }
+
+    /// World point → robot frame.
+    #[inline]
+    fn local(&self, x: f32, y: f32) -> (f32, f32) {
+        let dx = x - self.x;
+        let dy = y - self.y;
+        (self.cos * dx + self.sin * dy, self.cos * dy - self.sin * dx)
+    }
+}
+
+/// Write the full observation row of environment `e` (records past the counts are zeroed) and
+/// update the relative-heading cache of its humans.
+pub fn write_observation(p: &StepParams, s: &mut StateChunk, o: &mut OutChunk, e: usize) {
+    let layout = o.strides.layout;
+    let row = &mut o.obs[e * layout.dim..(e + 1) * layout.dim];
+    let f = Frame::of(s, e);
+    robot_record(p, s, e, &f, &mut row[..layout.robot]);
+    let mut counts = [0u32; 5];
+    counts[entity::HUMANS] = humans(p, s, e, &f, &mut row[layout.offset[entity::HUMANS]..]);
+    counts[entity::LAPTOPS] = laptops(p, s, e, &f, &mut row[layout.offset[entity::LAPTOPS]..]);
+    counts[entity::TABLES] = tables(p, s, e, &f, &mut row[layout.offset[entity::TABLES]..]);
+    counts[entity::PLANTS] = plants(p, s, e, &f, &mut row[layout.offset[entity::PLANTS]..]);
+    if layout.capacity[entity::WALLS] > 0 {
+        counts[entity::WALLS] = walls(p, s, e, &f, &mut row[layout.offset[entity::WALLS]..]);
+    }
+    for (t, &n) in counts.iter().enumerate() {
+        let from = layout.offset[t] + n as usize * RECORD;
+        let to = layout.offset[t] + layout.capacity[t] * RECORD;
+        row[from..to].fill(0.0);
+    }
+    o.obs_count[e * 5..e * 5 + 5].copy_from_slice(&counts);
+}
+
+fn robot_record(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) {
+    out[..6].fill(0.0);
+    out[one_hot::ROBOT] = 1.0;
+    let (gx, gy) = f.local(s.goal_x[e], s.goal_y[e]);
+    out[6] = gx;
+    out[7] = gy;
+    out[8] = p.robot_radius;
+    if p.obs_robot_velocity != 0 {
+        out[9] = s.robot_vx[e];
+        out[10] = s.robot_vy[e];
+        out[11] = s.robot_w[e];
+    }
+}
+
+/// One non-human record: one-hot, robot-frame position, sin/cos of the relative heading, radius,
+/// and the robot's negated speed and angular speed.
+#[inline]
+fn object_record(out: &mut [f32], kind: usize, f: &Frame, x: f32, y: f32, theta: f32, radius: f32) {
+    out[..6].fill(0.0);
+    out[kind] = 1.0;
+    let (lx, ly) = f.local(x, y);
+    let (sn, c) = math::sin_cos(theta - f.theta);
+    out[6] = lx;
+    out[7] = ly;
+    out[8] = sn;
+    out[9] = c;
+    out[10] = radius;
+    out[11] = f.neg_speed;
+    out[12] = f.neg_w;
+    out[13] = 0.0;
+}
+
+fn humans(p: &StepParams, s: &mut StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
+    let hb = e * s.strides.humans;
+    let n = s.n_humans[e] as usize;
+    for k in 0..n {
+        let i = hb + k;
+        let r = &mut out[k * RECORD..(k + 1) * RECORD];
+        r[..6].fill(0.0);
+        r[one_hot::HUMAN] = 1.0;
+        let theta = s.h_theta[i];
+        let (lx, ly) = f.local(s.h_x[i], s.h_y[i]);
+        let rel = theta - f.theta;
+        let (sn, c) = math::sin_cos(rel);
+        let (hs, hc) = math::sin_cos(theta);
+        let dvx = s.h_speed[i] * hc - f.vx;
+        let dvy = s.h_speed[i] * hs - f.vy;
+        let wrapped = math::wrap_angle(rel);
+        r[6] = lx;
+        r[7] = ly;
+        r[8] = sn;
+        r[9] = c;
+        r[10] = p.human_radius;
+        r[11] = (dvx * dvx + dvy * dvy).sqrt();
+        r[12] = math::wrap_angle(wrapped - s.h_prev_rel_theta[i]) / p.dt;
+        r[13] = gaze(p, s.h_x[i], s.h_y[i], hc, hs, f);
+        s.h_prev_rel_theta[i] = wrapped;
+    }
+    n as u32
+}
+
+/// 1 if the robot centre, seen from the human (heading cos `hc`, sin `hs`), lies within the gaze
+/// cone of half-angle gaze_angle/2.
+#[inline]
+fn gaze(p: &StepParams, hx: f32, hy: f32, hc: f32, hs: f32, f: &Frame) -> f32 {
+    let dx = f.x - hx;
+    let dy = f.y - hy;
+    let bearing = math::atan2(hc * dy - hs * dx, hc * dx + hs * dy);
+    let half = 0.5 * p.gaze_angle;
+    if bearing >= -half && bearing <= half { 1.0 } else { 0.0 }
+}
+
+fn laptops(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
+    let lb = e * s.strides.laptops;
+    let n = s.n_laptops[e] as usize;
+    let radius = (0.25 * p.laptop_length * p.laptop_length + 0.25 * p.laptop_width * p.laptop_width).sqrt();
+    for k in 0..n {
+        let i = lb + k;
+        object_record(&mut out[k * RECORD..], one_hot::LAPTOP, f, s.l_x[i], s.l_y[i], s.l_theta[i], radius);
+    }
+    n as u32
+}
+
+fn tables(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
+    let tb = e * s.strides.tables;
+    let n = s.n_tables[e] as usize;
+    let radius = (0.25 * p.table_length * p.table_length + 0.25 * p.table_width * p.table_width).sqrt();
+    for k in 0..n {
+        let i = tb + k;
+        object_record(&mut out[k * RECORD..], one_hot::TABLE, f, s.t_x[i], s.t_y[i], s.t_theta[i], radius);
+    }
+    n as u32
+}
+
+fn plants(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
+    let pb = e * s.strides.plants;
+    let n = s.n_plants[e] as usize;
+    for k in 0..n {
+        let i = pb + k;
+        object_record(&mut out[k * RECORD..], one_hot::PLANT, f, s.p_x[i], s.p_y[i], 0.0, p.plant_radius);
+    }
+    n as u32
+}
+
+/// Wall segments: for each wall, floor(L/s) segments of length s from its left end
+/// (centre − L/2·(cos θ, sin θ)), then one remainder segment if L is not a multiple of s.
+fn walls(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
+    let wb = e * s.strides.walls;
+    let step = p.wall_segment_size;
+    let mut k = 0usize;
+    for w in wb..wb + s.n_walls[e] as usize {
+        let (theta, length) = (s.w_theta[w], s.w_length[w]);
+        let (sn, c) = math::sin_cos(theta);
+        let left_x = s.w_x[w] - 0.5 * length * c;
+        let left_y = s.w_y[w] - 0.5 * length * sn;
+        let full = (length / step).floor();
+        let rest = length - full * step;
+        for j in 0..full as u32 {
+            let along = (j as f32 + 0.5) * step;
+            let r = &mut out[k * RECORD..];
+            object_record(r, one_hot::WALL, f, left_x + along * c, left_y + along * sn, theta, 0.5 * step);
+            k += 1;
+        }
+        if rest > 0.0 {
+            let along = full * step + 0.5 * rest;
+            let r = &mut out[k * RECORD..];
+            object_record(r, one_hot::WALL, f, left_x + along * c, left_y + along * sn, theta, 0.5 * rest);
+            k += 1;
+        }
+    }
+    k as u32
+}

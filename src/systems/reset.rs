@@ -1,0 +1,101 @@
+//! Starting an episode: the state that every new episode begins with (after scenario
+//! generation), and the reset of one environment inside a step (autoreset) or on request.
+
+use crate::math;
+use crate::params::StepParams;
+use crate::pipeline::Batch;
+use crate::scenario;
+use crate::state::StateChunk;
+
+/// Initialise everything of environment `e` that is not drawn by the scenario: counters, robot
+/// command, shadow robot, metric accumulators, reward memory, observation caches, ORCA obstacles.
+pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize) {
+    s.tick[e] = 0;
+    s.done[e] = 0;
+    s.pending_reset[e] = 0;
+    s.robot_vx[e] = 0.0;
+    s.robot_vy[e] = 0.0;
+    s.robot_w[e] = 0.0;
+    s.shadow_x[e] = s.robot_x[e];
+    s.shadow_y[e] = s.robot_y[e];
+    s.shadow_theta[e] = s.robot_theta[e];
+    s.shadow_vx[e] = 0.0;
+    s.shadow_vy[e] = 0.0;
+    s.shadow_w[e] = 0.0;
+    s.shadow_collided[e] = 0;
+    s.shadow_reached[e] = 0;
+    s.shadow_reach_tick[e] = 0;
+    s.shadow_path_length[e] = 0.0;
+    let dx = s.goal_x[e] - s.robot_x[e];
+    let dy = s.goal_y[e] - s.robot_y[e];
+    s.m_prev_goal_dist[e] = (dx * dx + dy * dy).sqrt();
+    init_metrics(s, e);
+    s.r_prev_dist[e] = 0.0;
+    s.r_has_prev[e] = 0;
+    s.r_discomfort_sngnn[e] = 0.0;
+    s.r_discomfort_dsrnn[e] = 0.0;
+    s.r_distance[e] = 0.0;
+    s.r_alive[e] = 0.0;
+    s.r_sngnn[e] = 0.0;
+    s.cf_active[e] = 0;
+    s.cf_count[e] = 0;
+    s.cf_close_steps[e] = 0;
+    s.lf_active[e] = 0;
+    let hb = e * s.strides.humans;
+    let n = s.n_humans[e] as usize;
+    for i in hb..hb + n {
+        s.h_prev_rel_theta[i] = math::wrap_angle(s.h_theta[i] - s.robot_theta[e]);
+    }
+    s.obstacles_dirty[e] = 1;
+    super::orca_obstacles::rebuild_if_dirty(p, s, e);
+}
+
+/// Metric accumulators of a new episode (spec 8.2): minima start at +inf, the rest at 0.
+fn init_metrics(s: &mut StateChunk, e: usize) {
+    s.m_failure_to_progress[e] = 0;
+    s.m_stalled_time[e] = 0.0;
+    s.m_path_length[e] = 0.0;
+    s.m_v_min[e] = f32::INFINITY;
+    s.m_v_max[e] = 0.0;
+    s.m_v_avg[e] = 0.0;
+    s.m_prev_vx[e] = 0.0;
+    s.m_prev_vy[e] = 0.0;
+    s.m_a_min[e] = f32::INFINITY;
+    s.m_a_max[e] = 0.0;
+    s.m_a_avg[e] = 0.0;
+    s.m_prev_ax[e] = 0.0;
+    s.m_prev_ay[e] = 0.0;
+    s.m_j_min[e] = f32::INFINITY;
+    s.m_j_max[e] = 0.0;
+    s.m_j_avg[e] = 0.0;
+    s.m_compliant[e] = 0;
+    s.ep_return[e] = 0.0;
+    s.ep_min_human_dist[e] = f32::INFINITY;
+    s.ep_min_obstacle_dist[e] = f32::INFINITY;
+    s.ep_sum_avg_obstacle_dist[e] = 0.0;
+    s.ep_sum_ttc[e] = 0.0;
+    s.ep_sum_discomfort_dsrnn[e] = 0.0;
+    s.ep_sum_sngnn[e] = 0.0;
+}
+
+/// Reset environment `e` and write its first observation; reward 0, flags cleared, info zeroed.
+pub fn reset_and_observe(p: &StepParams, b: &mut Batch<'_>, e: usize) {
+    b.o.reward[e] = 0.0;
+    b.o.terminated[e] = 0;
+    b.o.truncated[e] = 0;
+    reset_and_observe_keep_step_outputs(p, b, e);
+}
+
+/// Reset environment `e` and write its first observation and a zeroed info, keeping this step's
+/// reward and flags (SAME_STEP autoreset returns those of the finishing step).
+pub fn reset_and_observe_keep_step_outputs(p: &StepParams, b: &mut Batch<'_>, e: usize) {
+    let env_index = b.env_index(e);
+    if let Err(err) = scenario::reset_env(p, &mut b.s, e, env_index) {
+        b.s.done[e] = 1;
+        b.error.get_or_insert(err);
+        return;
+    }
+    let info = b.o.strides.info();
+    b.o.info[e * info..(e + 1) * info].fill(0.0);
+    super::observation::write_observation(p, &mut b.s, &mut b.o, e);
+}

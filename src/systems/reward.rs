@@ -1,0 +1,113 @@
+//! Stage `reward`: the DSRNN-style reward (spec 6.2). Terminal steps get the outcome's constant;
+//! other steps the potential-based distance term, the discomfort term and the alive term. The
+//! reward's info values persist: a terminal step reports those of the previous step (0.1.1).
+//!
+//! Fixed 0.1.1 bugs (docs/fidelity.md): the robot velocity uses the robot's heading once (0.1.1
+//! advances it by ω·dt twice); a pseudo-human's heading is its own group's (0.1.1 takes it from a
+//! leaked loop variable).
+
+use crate::geometry::origin_segment_distance;
+use crate::math::{self, FRAC_PI_2};
+use crate::params::StepParams;
+use crate::pipeline::Batch;
+use crate::spec::info;
+use crate::state::StateChunk;
+
+/// Score the step of environment `e`.
+pub fn reward(p: &StepParams, b: &mut Batch<'_>, e: usize) {
+    if b.s.stepping[e] == 0 {
+        return;
+    }
+    let row = e * b.o.strides.info();
+    let flag = |k: usize| b.o.info[row + k] != 0.0;
+    let r = if flag(info::OUT_OF_MAP) {
+        p.reward_out_of_map
+    } else if flag(info::SUCCESS) {
+        p.reward_reach
+    } else if flag(info::COLLISION) {
+        p.reward_collision
+    } else if flag(info::TIMEOUT) {
+        p.reward_timeout
+    } else {
+        step_reward(p, &mut b.s, e)
+    };
+    b.o.reward[e] = r;
+    let s = &b.s;
+    let out = &mut b.o.info[row..];
+    out[info::DISCOMFORT_SNGNN] = s.r_discomfort_sngnn[e];
+    out[info::DISCOMFORT_DSRNN] = s.r_discomfort_dsrnn[e];
+    out[info::DISTANCE_REWARD] = s.r_distance[e];
+    out[info::ALIVE_REWARD] = s.r_alive[e];
+    out[info::SNGNN_REWARD] = s.r_sngnn[e];
+}
+
+/// The reward of a non-terminal step; updates the reward memory.
+fn step_reward(p: &StepParams, s: &mut StateChunk, e: usize) -> f32 {
+    let dx = s.goal_x[e] - s.robot_x[e];
+    let dy = s.goal_y[e] - s.robot_y[e];
+    let d = (dx * dx + dy * dy).sqrt();
+    // 0 on the first step: the previous distance is unknown to the reward (0.1.1).
+    let r_dist = if s.r_has_prev[e] != 0 { -(p.reward_distance_scale * (d - s.r_prev_dist[e])) } else { 0.0 };
+    let d_min = min_predicted_clearance(p, s, e);
+    let r_disc = if d_min < p.reward_discomfort_distance {
+        (d_min - p.reward_discomfort_distance) * p.reward_discomfort_factor * p.dt
+    } else {
+        0.0
+    };
+    s.r_prev_dist[e] = d;
+    s.r_has_prev[e] = 1;
+    s.r_distance[e] = r_dist;
+    s.r_discomfort_dsrnn[e] = r_disc;
+    s.r_discomfort_sngnn[e] = 0.0;
+    s.r_alive[e] = p.reward_alive;
+    r_disc + r_dist + p.reward_alive
+}
+
+/// The robot's world-frame velocity (m/s) from its command and heading.
+#[inline]
+pub fn robot_world_velocity(s: &StateChunk, e: usize) -> (f32, f32) {
+    let theta = s.robot_theta[e];
+    let (sn, c) = math::sin_cos(theta);
+    let (sn2, c2) = math::sin_cos(theta + FRAC_PI_2);
+    (s.robot_vx[e] * c + s.robot_vy[e] * c2, s.robot_vx[e] * sn + s.robot_vy[e] * sn2)
+}
+
+/// The smallest clearance (m) between the robot and any human over the next dt, assuming
+/// constant relative velocity: the distance from the origin to the segment travelled by the
+/// relative position, minus both radii. +inf without humans.
+pub fn min_predicted_clearance(p: &StepParams, s: &StateChunk, e: usize) -> f32 {
+    let (vrx, vry) = robot_world_velocity(s, e);
+    let (rx, ry) = (s.robot_x[e], s.robot_y[e]);
+    let clearance = |x: f32, y: f32, speed: f32, theta: f32| {
+        let (sn, c) = math::sin_cos(theta);
+        let px = x - rx;
+        let py = y - ry;
+        let vx = speed * c - vrx;
+        let vy = speed * sn - vry;
+        origin_segment_distance(px, py, px + vx * p.dt, py + vy * p.dt) - p.human_radius - p.robot_radius
+    };
+    let hb = e * s.strides.humans;
+    let mut d_min = f32::INFINITY;
+    for i in hb..hb + s.n_humans[e] as usize {
+        d_min = d_min.min(clearance(s.h_x[i], s.h_y[i], s.h_speed[i], s.h_theta[i]));
+    }
+    if p.dsrnn_pseudo_humans != 0 {
+        let gb = e * s.strides.groups;
+        for g in gb..gb + s.n_groups[e] as usize {
+            let first = hb + s.g_first[g] as usize;
+            let n = s.g_count[g] as usize;
+            let mean_speed = s.h_speed[first..first + n].iter().sum::<f32>() / n as f32;
+            d_min = d_min.min(clearance(s.g_x[g], s.g_y[g], mean_speed, s.h_theta[first]));
+        }
+        let ub = e * s.strides.laptop_users;
+        let lb = e * s.strides.laptops;
+        for u in ub..ub + s.n_laptop_users[e] as usize {
+            let h = hb + s.lu_human[u] as usize;
+            let l = lb + s.lu_laptop[u] as usize;
+            let cx = 0.5 * (s.h_x[h] + s.l_x[l]);
+            let cy = 0.5 * (s.h_y[h] + s.l_y[l]);
+            d_min = d_min.min(clearance(cx, cy, 0.0, 0.0));
+        }
+    }
+    d_min
+}

@@ -1,0 +1,47 @@
+//! Stage `robot_motion` (spec 4.1 steps 2-3): scale the action to a physical command and move the
+//! robot by semi-implicit Euler (rotate first, then translate along the new heading). The robot
+//! is never pushed: a collision just ends the episode.
+
+use crate::math::{self, FRAC_PI_2};
+use crate::params::StepParams;
+use crate::pipeline::Batch;
+
+/// The physical command (v_x, v_y in m/s, robot frame; ω in rad/s) of an action in [-1, 1]³:
+/// each component scaled, then clipped to its maximum; the lateral one is 0 for diff-drive.
+#[inline]
+pub fn command(p: &StepParams, a: &[f32]) -> (f32, f32, f32) {
+    let v = p.robot_max_speed;
+    let w = p.robot_max_rotation;
+    let vx = (a[0] * v).clamp(-v, v);
+    let vy = if p.holonomic != 0 { (a[1] * v).clamp(-v, v) } else { 0.0 };
+    let wz = (a[2] * w).clamp(-w, w);
+    (vx, vy, wz)
+}
+
+/// Integrate a pose (m, m, rad) by one step of the command: θ ← wrap(θ + ω dt), then
+/// x ← x + v_x cos θ dt + v_y cos(θ + π/2) dt (likewise y), in 0.1.1's operation order.
+#[inline]
+pub fn integrate(dt: f32, x: f32, y: f32, theta: f32, vx: f32, vy: f32, w: f32) -> (f32, f32, f32) {
+    let theta = math::wrap_angle(theta + w * dt);
+    let (s, c) = math::sin_cos(theta);
+    let (s2, c2) = math::sin_cos(theta + FRAC_PI_2);
+    let x = x + vx * c * dt + vy * c2 * dt;
+    let y = y + vx * s * dt + vy * s2 * dt;
+    (x, y, theta)
+}
+
+/// Apply this step's action to the robot.
+pub fn robot_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
+    if b.s.stepping[e] == 0 {
+        return;
+    }
+    let (vx, vy, w) = command(p, &b.actions[3 * e..3 * e + 3]);
+    let s = &mut b.s;
+    s.robot_vx[e] = vx;
+    s.robot_vy[e] = vy;
+    s.robot_w[e] = w;
+    let (x, y, theta) = integrate(p.dt, s.robot_x[e], s.robot_y[e], s.robot_theta[e], vx, vy, w);
+    s.robot_x[e] = x;
+    s.robot_y[e] = y;
+    s.robot_theta[e] = theta;
+}

@@ -1,0 +1,127 @@
+//! SocNavGym 0.1.1's one-shot social force model (spec 4.3, orca-sfm.md 3.5): the velocity of a
+//! lone walker is recomputed from scratch every step as (f/mass)·dt, capped at the human speed,
+//! with f = w·(desired + Σ obstacle + Σ pedestrian forces), w = 1/√3. There is no velocity state.
+
+use crate::geometry::Rect;
+use crate::math;
+use crate::params::StepParams;
+use crate::state::{StateChunk, group_kind, role};
+
+/// Weight of each force group (0.1.1: 1/√3 each).
+const W: f32 = 0.577_350_26;
+
+/// Per-episode SFM parameters of an environment.
+#[derive(Debug, Clone, Copy)]
+struct Params {
+    r0: f32,
+    gamma: f32,
+    n: f32,
+    n_prime: f32,
+    lambda: f32,
+}
+
+/// The SFM velocity (m/s, world frame) of human slot `i` of environment `e`; `robot` says whether
+/// this human takes the robot into account this step.
+pub fn velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, robot: bool) -> (f32, f32) {
+    let sp = Params { r0: s.sfm_r0[e], gamma: s.sfm_gamma[e], n: s.sfm_n[e], n_prime: s.sfm_n_prime[e], lambda: s.sfm_lambda[e] };
+    let (x, y) = (s.h_x[i], s.h_y[i]);
+    let (dx, dy) = unit(s.h_goal_x[i] - x, s.h_goal_y[i] - y);
+    let (mut fdx, mut fdy) = (p.human_max_speed * dx, p.human_max_speed * dy);
+    let (mut fox, mut foy) = (0.0f32, 0.0f32);
+    let mut obstacle = |ox: f32, oy: f32, surface_gap: f32| {
+        let (ux, uy) = unit(x - ox, y - oy);
+        let m = math::exp(-surface_gap / sp.r0);
+        fox += m * ux;
+        foy += m * uy;
+    };
+    let r = p.human_radius;
+    let disc_gap = |ox: f32, oy: f32, ro: f32| length(x - ox, y - oy) - ro - r;
+    let pb = e * s.strides.plants;
+    for k in pb..pb + s.n_plants[e] as usize {
+        obstacle(s.p_x[k], s.p_y[k], disc_gap(s.p_x[k], s.p_y[k], p.plant_radius));
+    }
+    let mut rect = |rc: Rect| {
+        let (qx, qy) = rc.nearest_point(x, y);
+        obstacle(qx, qy, length(x - qx, y - qy) - r);
+    };
+    for w in 0..s.n_walls[e] as usize {
+        rect(super::world::wall_rect(p, s, e, w));
+    }
+    for t in 0..s.n_tables[e] as usize {
+        rect(super::world::table_rect(p, s, e, t));
+    }
+    let lb = e * s.strides.laptops;
+    for l in 0..s.n_laptops[e] as usize {
+        if s.l_user[lb + l] == crate::state::NONE {
+            rect(super::world::laptop_rect(p, s, e, l));
+        }
+    }
+    let gb = e * s.strides.groups;
+    for g in gb..gb + s.n_groups[e] as usize {
+        if s.g_kind[g] == group_kind::STANDING {
+            obstacle(s.g_x[g], s.g_y[g], disc_gap(s.g_x[g], s.g_y[g], p.group_radius));
+        }
+    }
+    if robot {
+        let (rx, ry) = (s.robot_x[e], s.robot_y[e]);
+        obstacle(rx, ry, disc_gap(rx, ry, p.robot_radius));
+    }
+    let (fpx, fpy) = pedestrian_forces(s, e, i, &sp);
+    fdx = W * fdx + W * fox + W * fpx;
+    fdy = W * fdy + W * foy + W * fpy;
+    // mass 1: v = f·dt, capped at the human speed.
+    let (vx, vy) = (fdx * p.dt, fdy * p.dt);
+    let v = length(vx, vy);
+    if v > p.human_max_speed {
+        let k = p.human_max_speed / v;
+        (vx * k, vy * k)
+    } else {
+        (vx, vy)
+    }
+}
+
+/// Σ f_ij over lone humans, moving-group members and laptop users (standing-group members are
+/// obstacles through their group's disc).
+fn pedestrian_forces(s: &StateChunk, e: usize, i: usize, sp: &Params) -> (f32, f32) {
+    let hb = e * s.strides.humans;
+    let (xi, yi) = (s.h_x[i], s.h_y[i]);
+    let (si, ci) = math::sin_cos(s.h_theta[i]);
+    let (vix, viy) = (s.h_speed[i] * ci, s.h_speed[i] * si);
+    let (mut fx, mut fy) = (0.0f32, 0.0f32);
+    for j in hb..hb + s.n_humans[e] as usize {
+        if j == i || s.h_role[j] == role::STANDING_GROUP {
+            continue;
+        }
+        let (sj, cj) = math::sin_cos(s.h_theta[j]);
+        let (vjx, vjy) = (s.h_speed[j] * cj, s.h_speed[j] * sj);
+        let (ex, ey) = unit(s.h_x[j] - xi, s.h_y[j] - yi);
+        let dx = sp.lambda * (vjx - vix) + ex;
+        let dy = sp.lambda * (vjy - viy) + ey;
+        let d_len = length(dx, dy);
+        let b = sp.gamma * d_len;
+        let (tx, ty) = if d_len > 0.0 { (dx / d_len, dy / d_len) } else { (0.0, 0.0) };
+        let theta = math::acos((ex * tx + ey * ty).clamp(-1.0, 1.0));
+        let (nx, ny) = (-ey, ex);
+        let d = length(xi - s.h_x[j], yi - s.h_y[j]);
+        let m = -math::exp(-d / b);
+        let a1 = sp.n_prime * b * theta;
+        let a2 = sp.n * b * theta;
+        let k1 = math::exp(-(a1 * a1));
+        let k2 = math::exp(-(a2 * a2));
+        fx += m * (k1 * tx + k2 * nx);
+        fy += m * (k1 * ty + k2 * ny);
+    }
+    (fx, fy)
+}
+
+#[inline]
+fn length(x: f32, y: f32) -> f32 {
+    (x * x + y * y).sqrt()
+}
+
+/// Unit vector of (x, y); zero for the zero vector.
+#[inline]
+fn unit(x: f32, y: f32) -> (f32, f32) {
+    let l = length(x, y);
+    if l > 0.0 { (x / l, y / l) } else { (0.0, 0.0) }
+}
