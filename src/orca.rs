@@ -1,1 +1,0 @@
-//! ORCA solver (placeholder, filled in by the orca helper).
