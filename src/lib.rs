@@ -1,9 +1,44 @@
 //! socnav: a GPU-batched social-navigation simulator with SocNavGym 0.1.1 semantics.
 //!
-//! The crate is the core library: configuration, scenario generation, the batched
-//! structure-of-arrays state, the stages of the step and the backends that run them.
-//! See `docs/ARCHITECTURE.md` for the code map and the invariants.
+//! One [`BatchEnv`] steps thousands of environments at once. A step runs the stages of
+//! [`pipeline::STAGES`] in the reference's order: actions and robot motion, the ORCA shadow
+//! robot, group and human motion (ORCA, social force), goal re-sampling, contacts, termination,
+//! reward, metrics, observation, autoreset. The state is a structure of arrays
+//! ([`state::BatchState`]) with fixed capacities taken from the config; randomness comes only
+//! from a counter-based generator keyed by (seed, env, episode, stream, draw), so the same seed
+//! and actions give the same trajectory on any machine and thread count.
+//!
+//! See `docs/ARCHITECTURE.md` for the code map and the invariants, `configs/README.md` for
+//! every configuration key and `docs/fidelity.md` for every deviation from SocNavGym 0.1.1.
+//!
+//! ```
+//! use socnav::{Actions, BatchEnv, Config, EnvOptions};
+//! let config = Config::default(); // the paper's experiment 1
+//! let mut env = BatchEnv::new(config, EnvOptions { n_envs: 8, seed: 0, ..Default::default() }).unwrap();
+//! env.reset(None).unwrap();
+//! let actions = vec![0.5f32, 0.0, 0.1].repeat(8);
+//! env.step(Actions::Continuous(&actions)).unwrap();
+//! assert_eq!(env.outputs().reward.len(), 8);
+//! ```
 
+pub mod backend;
+pub mod config;
+mod env;
+pub mod error;
+pub mod fixed;
+pub mod geometry;
 pub mod math;
 pub mod orca;
+pub mod outputs;
+pub mod params;
+pub mod pipeline;
 pub mod rng;
+pub mod scenario;
+pub mod spec;
+pub mod state;
+pub mod systems;
+
+pub use config::Config;
+pub use env::{Actions, BatchEnv, EnvOptions};
+pub use error::SimError;
+pub use params::{AutoresetMode, StepParams};

@@ -7,7 +7,7 @@ use bytemuck::{Pod, Zeroable};
 use crate::config::{
     Config, HumanPolicy, Kinematics, LaptopUserObstacle, OrcaNeighbourVelocity, RewardKind, Shape,
 };
-use crate::state::Caps;
+
 
 /// How finished environments are reset (DESIGN.md section 3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -166,7 +166,7 @@ pub struct StepParams {
     /// recorded ones by re-synchronising).
     pub replay: u32,
     /// Padding to a multiple of 16 bytes.
-    pub _pad: [u32; 1],
+    pub _pad: [u32; 4],
 }
 
 const _: () = assert!(std::mem::size_of::<StepParams>() % 16 == 0);
@@ -247,7 +247,7 @@ impl StepParams {
             seed_lo: seed as u32,
             seed_hi: (seed >> 32) as u32,
             replay: 0,
-            _pad: [0; 1],
+            _pad: [0; 4],
         }
     }
 
@@ -290,7 +290,4 @@ pub mod count {
     pub const LAPTOP_USERS_ND: usize = 11;
 }
 
-/// Capacities are part of what a stage needs; they travel beside the params.
-pub fn caps_of(config: &Config) -> Caps {
-    Caps::from_config(config)
-}
+

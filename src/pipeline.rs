@@ -28,7 +28,8 @@ impl<'a> Batch<'a> {
     pub fn split_at(self, mid: usize) -> (Batch<'a>, Batch<'a>) {
         let (s0, s1) = self.s.split_at(mid);
         let (o0, o1) = self.o.split_at(mid);
-        let (a0, a1) = self.actions.split_at(3 * mid);
+        // Resets run without actions: both halves then get none.
+        let (a0, a1) = if self.actions.is_empty() { (self.actions, self.actions) } else { self.actions.split_at(3 * mid) };
         (
             Batch { s: s0, o: o0, actions: a0, error: None },
             Batch { s: s1, o: o1, actions: a1, error: self.error },

@@ -199,3 +199,16 @@ pub const EPISODE_KEYS: [&str; 32] = [
 
 /// Number of per-episode statistics.
 pub const N_EPISODE: usize = EPISODE_KEYS.len();
+
+/// The 7 discrete actions of 0.1.1's `DiscreteActions` wrapper, as continuous actions
+/// (forward, lateral, rotation): turn left, turn right, forward + left, forward + right, forward,
+/// backward, stop.
+pub const DISCRETE_ACTIONS: [[f32; 3]; 7] = [
+    [0.0, 0.0, 1.0],
+    [0.0, 0.0, -1.0],
+    [1.0, 0.0, 1.0],
+    [1.0, 0.0, -1.0],
+    [1.0, 0.0, 0.0],
+    [-1.0, 0.0, 0.0],
+    [0.0, 0.0, 0.0],
+];

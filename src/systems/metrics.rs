@@ -6,7 +6,6 @@
 //! robot-frame command (v_x, v_y) and ignore ω. TIME_TO_COLLISION covers laptop users properly
 //! (0.1.1 re-evaluates a leaked loop variable instead).
 
-use crate::geometry::Rect;
 use crate::params::StepParams;
 use crate::pipeline::Batch;
 use crate::spec::{EPISODE_KEYS, info};

@@ -1,0 +1,254 @@
+//! [`BatchEnv`]: the public face of the simulator. It validates what callers hand in (actions,
+//! masks, state documents) with exact messages, then passes plain slices to the backend.
+
+use crate::backend::Backend;
+use crate::backend::cpu::CpuBackend;
+use crate::config::{Config, Kinematics, RewardKind};
+use crate::error::SimError;
+use crate::outputs::Outputs;
+use crate::params::{AutoresetMode, StepParams};
+use crate::pipeline::STAGES;
+use crate::spec::{DISCRETE_ACTIONS, ObsLayout};
+use crate::state::{BatchState, Caps, document};
+
+/// Options of a batch that are not part of the scenario configuration.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EnvOptions {
+    /// Number of environments.
+    pub n_envs: usize,
+    /// Seed of the batch: with the same config, seed and actions, every run is identical.
+    pub seed: u64,
+    /// What happens to finished environments.
+    pub autoreset: AutoresetMode,
+    /// CPU threads (all cores when `None`).
+    pub threads: Option<usize>,
+}
+
+impl Default for EnvOptions {
+    fn default() -> Self {
+        Self { n_envs: 1, seed: 0, autoreset: AutoresetMode::NextStep, threads: None }
+    }
+}
+
+/// Actions for every environment of the batch.
+#[derive(Debug, Clone, Copy)]
+pub enum Actions<'a> {
+    /// 3 floats per environment in [-1, 1]: forward, lateral (0 for diff-drive), rotation;
+    /// values outside are clipped after scaling, as 0.1.1 does.
+    Continuous(&'a [f32]),
+    /// One of the 7 discrete actions per environment ([`DISCRETE_ACTIONS`]).
+    Discrete(&'a [u32]),
+}
+
+/// A batch of SocNavGym environments.
+pub struct BatchEnv {
+    config: Config,
+    params: StepParams,
+    caps: Caps,
+    layout: ObsLayout,
+    backend: CpuBackend,
+    actions: Vec<f32>,
+}
+
+impl std::fmt::Debug for BatchEnv {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BatchEnv")
+            .field("n_envs", &self.n_envs())
+            .field("backend", &self.backend.name())
+            .field("caps", &self.caps)
+            .finish()
+    }
+}
+
+impl BatchEnv {
+    /// A batch of `options.n_envs` environments of `config` on the CPU backend. Call
+    /// [`BatchEnv::reset`] before the first step.
+    pub fn new(config: Config, options: EnvOptions) -> Result<Self, SimError> {
+        let problems = crate::config::validate(&config);
+        if !problems.is_empty() {
+            return Err(SimError::Config(problems));
+        }
+        if config.reward.kind == RewardKind::Sngnn {
+            return Err(SimError::Config(vec![
+                "`reward.kind = \"sngnn\"`: the SNGNN-v2 reward is not available in this build yet; use \"dsrnn\"".into(),
+            ]));
+        }
+        if options.n_envs == 0 {
+            return Err(SimError::Shape("a batch needs at least one environment, got n_envs = 0".into()));
+        }
+        if options.threads == Some(0) {
+            return Err(SimError::Shape("`threads` must be at least 1, got 0".into()));
+        }
+        let caps = Caps::from_config(&config);
+        let layout = ObsLayout::new(&caps, config.observation.padded, config.observation.robot_velocity);
+        let params = StepParams::new(&config, options.seed, options.autoreset);
+        let state = BatchState::new(options.n_envs, caps);
+        let out = Outputs::new(options.n_envs, layout);
+        let backend = CpuBackend::new(params, state, out, options.threads)?;
+        let actions = vec![0.0; 3 * options.n_envs];
+        Ok(Self { config, params, caps, layout, backend, actions })
+    }
+
+    /// Number of environments.
+    pub fn n_envs(&self) -> usize {
+        self.actions.len() / 3
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// The step constants.
+    pub fn params(&self) -> &StepParams {
+        &self.params
+    }
+
+    /// Slot capacities per entity kind.
+    pub fn caps(&self) -> &Caps {
+        &self.caps
+    }
+
+    /// Observation layout of one environment.
+    pub fn layout(&self) -> &ObsLayout {
+        &self.layout
+    }
+
+    /// Name of the backend running the batch.
+    pub fn backend_name(&self) -> &'static str {
+        self.backend.name()
+    }
+
+    /// CPU threads in use.
+    pub fn threads(&self) -> usize {
+        self.backend.threads()
+    }
+
+    /// Reset every environment; with `Some(seed)` the batch is re-seeded and its episode counters
+    /// restart, so the run from here is a function of that seed alone.
+    pub fn reset(&mut self, seed: Option<u64>) -> Result<(), SimError> {
+        if let Some(seed) = seed {
+            self.params.seed_lo = seed as u32;
+            self.params.seed_hi = (seed >> 32) as u32;
+            self.backend.set_params(self.params);
+            self.backend.state_mut().episode.fill(0);
+        }
+        self.backend.state_mut().pending_reset.fill(0);
+        self.backend.reset(None)
+    }
+
+    /// Reset the environments whose mask entry is true (the DISABLED autoreset mode's reset).
+    pub fn reset_envs(&mut self, mask: &[bool]) -> Result<(), SimError> {
+        if mask.len() != self.n_envs() {
+            return Err(SimError::Shape(format!(
+                "reset mask has {} entries, expected one per environment ({})",
+                mask.len(),
+                self.n_envs()
+            )));
+        }
+        let state = self.backend.state_mut();
+        for (e, &m) in mask.iter().enumerate() {
+            if m {
+                state.pending_reset[e] = 0;
+            }
+        }
+        self.backend.reset(Some(mask))
+    }
+
+    /// Step every environment. Invalid actions are rejected before anything moves.
+    pub fn step(&mut self, actions: Actions<'_>) -> Result<(), SimError> {
+        let n = self.n_envs();
+        match actions {
+            Actions::Continuous(a) => {
+                if a.len() != 3 * n {
+                    return Err(SimError::Action(format!(
+                        "expected {} floats (3 per environment for {n} environments), got {}",
+                        3 * n,
+                        a.len()
+                    )));
+                }
+                if let Some(i) = a.iter().position(|v| !v.is_finite()) {
+                    return Err(SimError::Action(format!(
+                        "environment {}: component {} is {} (actions must be finite)",
+                        i / 3,
+                        i % 3,
+                        a[i]
+                    )));
+                }
+                if self.config.robot.kinematics == Kinematics::DiffDrive {
+                    if let Some(e) = (0..n).find(|e| a[3 * e + 1] != 0.0) {
+                        return Err(SimError::Action(format!(
+                            "environment {e}: lateral component {} must be 0 for a diff-drive robot",
+                            a[3 * e + 1]
+                        )));
+                    }
+                }
+                self.actions.copy_from_slice(a);
+            }
+            Actions::Discrete(a) => {
+                if a.len() != n {
+                    return Err(SimError::Action(format!(
+                        "expected {n} discrete actions (one per environment), got {}",
+                        a.len()
+                    )));
+                }
+                if let Some(e) = a.iter().position(|&k| k as usize >= DISCRETE_ACTIONS.len()) {
+                    return Err(SimError::Action(format!(
+                        "environment {e}: discrete action {} is not in 0..{}",
+                        a[e],
+                        DISCRETE_ACTIONS.len()
+                    )));
+                }
+                for (chunk, &k) in self.actions.chunks_exact_mut(3).zip(a) {
+                    chunk.copy_from_slice(&DISCRETE_ACTIONS[k as usize]);
+                }
+            }
+        }
+        self.backend.step(&self.actions)
+    }
+
+    /// The outputs of the last step or reset (overwritten by the next one).
+    pub fn outputs(&self) -> &Outputs {
+        self.backend.outputs()
+    }
+
+    /// The batch state (read-only).
+    pub fn state(&self) -> &BatchState {
+        self.backend.state()
+    }
+
+    /// Seconds spent per stage since creation, with the stage names.
+    pub fn stage_seconds(&self) -> Vec<(&'static str, f64)> {
+        STAGES.iter().map(|s| s.name).zip(self.backend.stage_seconds()).collect()
+    }
+
+    /// Replay mode: the random social events are not drawn (the golden replay re-synchronises
+    /// the state with the reference instead).
+    pub fn set_replay(&mut self, replay: bool) {
+        self.params.replay = u32::from(replay);
+        self.backend.set_params(self.params);
+    }
+
+    /// Environment `env` as a self-contained JSON document (DESIGN.md section 5).
+    pub fn get_state(&self, env: usize) -> Result<serde_json::Value, SimError> {
+        self.check_env(env)?;
+        Ok(document::export(&self.params, self.backend.state(), env))
+    }
+
+    /// Load environment `env` from a JSON document as [`BatchEnv::get_state`] writes it (or a
+    /// golden episode's header and snapshot); its observation is rewritten from the loaded state.
+    pub fn set_state(&mut self, env: usize, doc: &serde_json::Value) -> Result<(), SimError> {
+        self.check_env(env)?;
+        let params = self.params;
+        document::import(&params, self.backend.state_mut(), env, doc)?;
+        self.backend.state_changed(env);
+        Ok(())
+    }
+
+    fn check_env(&self, env: usize) -> Result<(), SimError> {
+        if env >= self.n_envs() {
+            return Err(SimError::Shape(format!("environment index {env} out of range 0..{}", self.n_envs())));
+        }
+        Ok(())
+    }
+}

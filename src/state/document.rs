@@ -1,0 +1,270 @@
+//! One environment's state as a self-contained JSON document (DESIGN.md section 5): the static
+//! part of a golden episode header (`room`, `walls`, `spawn_blockers`, `human_params`, `counts`)
+//! plus a golden state snapshot (`state`, format in the golden README section 5), plus a
+//! `socnav` object with what 0.1.1 does not have (episode counter, done flag, per-episode sums).
+//! Tests synchronise with the reference through it; users load fixed scenarios with it.
+//!
+//! Numbers are rounded to f32 on the way in; non-finite numbers are the strings "inf", "-inf",
+//! "nan" (as in the golden files). Sizes that are config constants in socnav (radii, table and
+//! laptop sizes, wall thickness) must match the batch's config. A snapshot larger than the
+//! batch's capacities is an error naming the capacity.
+
+use serde_json::{Map, Value, json};
+
+use super::{BatchState, NONE, blocker_kind, group_kind, policy, role, room_shape};
+use crate::error::SimError;
+use crate::math;
+use crate::params::StepParams;
+
+mod read;
+
+use read::Reader;
+
+/// Format tag of documents written by [`export`].
+pub const FORMAT: &str = "socnav-state/1";
+
+fn num(x: f32) -> Value {
+    if x.is_finite() {
+        json!(x as f64)
+    } else if x.is_nan() {
+        json!("nan")
+    } else if x > 0.0 {
+        json!("inf")
+    } else {
+        json!("-inf")
+    }
+}
+
+fn opt_index(i: u32) -> Value {
+    if i == NONE { Value::Null } else { json!(i) }
+}
+
+const ROLE_NAMES: [&str; 5] = ["static", "dynamic", "moving_group", "standing_group", "hl"];
+const SHAPE_NAMES: [&str; 4] = ["square", "rectangle", "L", "no-walls"];
+
+/// Environment `e` of `s` as a document.
+pub fn export(p: &StepParams, s: &BatchState, e: usize) -> Value {
+    let c = &s.strides;
+    let wb = e * c.walls;
+    let walls: Vec<Value> = (wb..wb + s.n_walls[e] as usize)
+        .map(|w| {
+            json!({"id": s.w_id[w], "x": num(s.w_x[w]), "y": num(s.w_y[w]), "theta": num(s.w_theta[w]),
+                   "length": num(s.w_length[w]), "thickness": num(p.wall_thickness)})
+        })
+        .collect();
+    let bb = e * c.blockers;
+    let blockers: Vec<Value> = (bb..bb + s.n_blockers[e] as usize)
+        .map(|b| {
+            let kind = if s.b_kind[b] == blocker_kind::L_BLOCK { "laptop" } else { "wall" };
+            json!({"kind": kind, "x": num(s.b_x[b]), "y": num(s.b_y[b]), "theta": num(s.b_theta[b]),
+                   "length": num(s.b_length[b]), "width": num(s.b_width[b])})
+        })
+        .collect();
+    json!({
+        "format": FORMAT,
+        "room": {"map_x": num(s.map_x[e]), "map_y": num(s.map_y[e]),
+                 "shape": SHAPE_NAMES[s.room_shape[e] as usize]},
+        "walls": walls,
+        "spawn_blockers": blockers,
+        "human_params": {
+            "orca_neighborDist": num(s.orca_neighbor_dist[e]), "orca_timeHorizon": num(s.orca_time_horizon[e]),
+            "orca_timeHorizonObst": num(s.orca_time_horizon_obst[e]), "orca_maxSpeed": num(s.orca_max_speed[e]),
+            "sfm_r0": num(s.sfm_r0[e]), "sfm_gamma": num(s.sfm_gamma[e]), "sfm_n": num(s.sfm_n[e]),
+            "sfm_n_prime": num(s.sfm_n_prime[e]), "sfm_lambda": num(s.sfm_lambda[e]),
+        },
+        "counts": {"total_humans": s.n_humans[e]},
+        "state": export_snapshot(p, s, e),
+        "socnav": {
+            "episode": s.episode[e], "done": s.done[e] != 0, "pending_reset": s.pending_reset[e] != 0,
+            "episode_sums": {
+                "return": num(s.ep_return[e]), "min_human_distance": num(s.ep_min_human_dist[e]),
+                "min_obstacle_distance": num(s.ep_min_obstacle_dist[e]),
+                "sum_average_obstacle_distance": num(s.ep_sum_avg_obstacle_dist[e]),
+                "sum_time_to_collision": num(s.ep_sum_ttc[e]),
+                "sum_discomfort_dsrnn": num(s.ep_sum_discomfort_dsrnn[e]), "sum_sngnn_reward": num(s.ep_sum_sngnn[e]),
+            },
+        },
+    })
+}
+
+fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
+    let c = &s.strides;
+    let hb = e * c.humans;
+    let mut goals = Map::new();
+    goals.insert("0".into(), json!([num(s.goal_x[e]), num(s.goal_y[e]), num(p.goal_radius)]));
+    let humans: Vec<Value> = (0..s.n_humans[e] as usize)
+        .map(|k| {
+            let i = hb + k;
+            let r = s.h_role[i];
+            let group_goal = r == role::MOVING_GROUP;
+            let goal = match r {
+                role::STATIC | role::DYNAMIC | role::MOVING_GROUP => json!([num(s.h_goal_x[i]), num(s.h_goal_y[i])]),
+                _ => Value::Null,
+            };
+            let goal_radius = if group_goal { p.group_goal_radius } else { p.human_goal_radius };
+            if !goal.is_null() {
+                goals.insert(s.h_id[i].to_string(), json!([goal[0], goal[1], num(goal_radius)]));
+            }
+            let mut h = json!({
+                "id": s.h_id[i], "x": num(s.h_x[i]), "y": num(s.h_y[i]), "theta": num(s.h_theta[i]),
+                "speed": num(s.h_speed[i]), "radius": num(p.human_radius), "goal": goal,
+                "goal_radius": if r == role::LAPTOP_USER { Value::Null } else { num(goal_radius) },
+                "policy": if s.h_policy[i] == policy::ORCA { "orca" } else { "sfm" },
+                "role": ROLE_NAMES[r as usize],
+            });
+            if s.h_group[i] != NONE {
+                h["group"] = json!(s.h_group[i]);
+            }
+            if s.h_laptop_user[i] != NONE {
+                h["hl"] = json!(s.h_laptop_user[i]);
+            }
+            if s.h_forming[i] != 0 {
+                let crowd = s.cf_active[e] != 0 && (0..s.cf_count[e] as usize).any(|k| s.cf_human[e * c.group_size + k] as usize == i - hb);
+                h[if crowd { "forming_crowd" } else { "forming_hl" }] = json!(true);
+            }
+            h
+        })
+        .collect();
+    let gb = e * c.groups;
+    let groups: Vec<Value> = (gb..gb + s.n_groups[e] as usize)
+        .map(|g| {
+            let moving = s.g_kind[g] == group_kind::MOVING;
+            let first = hb + s.g_first[g] as usize;
+            let members: Vec<u32> = (first..first + s.g_count[g] as usize).map(|i| s.h_id[i]).collect();
+            json!({
+                "kind": if moving { "moving" } else { "standing" }, "dispersable": s.g_dispersable[g] != 0,
+                "members": members, "centre": [num(s.g_x[g]), num(s.g_y[g])],
+                "goal": if moving { json!([num(s.g_goal_x[g]), num(s.g_goal_y[g])]) } else { Value::Null },
+                "goal_radius": num(p.group_goal_radius), "radius": num(p.group_radius), "noise": num(p.group_noise_std),
+            })
+        })
+        .collect();
+    let lb = e * c.laptops;
+    let ub = e * c.laptop_users;
+    let users: Vec<Value> = (ub..ub + s.n_laptop_users[e] as usize)
+        .map(|u| {
+            let h = hb + s.lu_human[u] as usize;
+            let l = lb + s.lu_laptop[u] as usize;
+            json!({"human": s.h_id[h], "laptop": s.l_id[l], "dispersable": s.lu_dispersable[u] != 0,
+                   "centre": [num(0.5 * (s.h_x[h] + s.l_x[l])), num(0.5 * (s.h_y[h] + s.l_y[l]))],
+                   "distance": num(p.laptop_width + p.human_laptop_distance)})
+        })
+        .collect();
+    let laptops: Vec<Value> = (lb..lb + s.n_laptops[e] as usize)
+        .map(|l| {
+            json!({"id": s.l_id[l], "x": num(s.l_x[l]), "y": num(s.l_y[l]), "theta": num(s.l_theta[l]),
+                   "length": num(p.laptop_length), "width": num(p.laptop_width), "hl": opt_index(s.l_user[l])})
+        })
+        .collect();
+    let tb = e * c.tables;
+    let tables: Vec<Value> = (tb..tb + s.n_tables[e] as usize)
+        .map(|t| {
+            json!({"id": s.t_id[t], "x": num(s.t_x[t]), "y": num(s.t_y[t]), "theta": num(s.t_theta[t]),
+                   "length": num(p.table_length), "width": num(p.table_width)})
+        })
+        .collect();
+    let pb = e * c.plants;
+    let plants: Vec<Value> = (pb..pb + s.n_plants[e] as usize)
+        .map(|i| json!({"id": s.p_id[i], "x": num(s.p_x[i]), "y": num(s.p_y[i]), "radius": num(p.plant_radius)}))
+        .collect();
+    json!({
+        "tick": s.tick[e],
+        "robot": {"x": num(s.robot_x[e]), "y": num(s.robot_y[e]), "theta": num(s.robot_theta[e]),
+                  "radius": num(p.robot_radius), "goal": [num(s.goal_x[e]), num(s.goal_y[e])],
+                  "goal_radius": num(p.goal_radius), "vel": [num(s.robot_vx[e]), num(s.robot_vy[e]), num(s.robot_w[e])]},
+        "shadow_robot": {"x": num(s.shadow_x[e]), "y": num(s.shadow_y[e]), "theta": num(s.shadow_theta[e]),
+                         "vel": [num(s.shadow_vx[e]), num(s.shadow_vy[e]), num(s.shadow_w[e])],
+                         "collided": s.shadow_collided[e] != 0, "reached": s.shadow_reached[e] != 0,
+                         "reach_tick": if s.shadow_reached[e] != 0 { json!(s.shadow_reach_tick[e]) } else { Value::Null },
+                         "path_length": num(s.shadow_path_length[e])},
+        "humans": humans,
+        "groups": groups,
+        "hl_interactions": users,
+        "laptops": laptops,
+        "tables": tables,
+        "plants": plants,
+        "crowd_forming": export_crowd_forming(s, e),
+        "hl_forming": if s.lf_active[e] != 0 {
+            json!({"human": s.h_id[hb + s.lf_human[e] as usize], "laptop": s.l_id[lb + s.lf_laptop[e] as usize],
+                   "seat": [num(s.lf_seat_x[e]), num(s.lf_seat_y[e]), num(s.lf_seat_theta[e])]})
+        } else { Value::Null },
+        "metrics": {
+            "prev_goal_distance": num(s.m_prev_goal_dist[e]), "failure_to_progress": s.m_failure_to_progress[e],
+            "stalled_time": num(s.m_stalled_time[e]), "path_length": num(s.m_path_length[e]),
+            "v_min": num(s.m_v_min[e]), "v_max": num(s.m_v_max[e]), "v_avg": num(s.m_v_avg[e]),
+            "prev_vel": [num(s.m_prev_vx[e]), num(s.m_prev_vy[e])],
+            "a_min": num(s.m_a_min[e]), "a_max": num(s.m_a_max[e]), "a_avg": num(s.m_a_avg[e]),
+            "prev_a": [num(s.m_prev_ax[e]), num(s.m_prev_ay[e])],
+            "jerk_min": num(s.m_j_min[e]), "jerk_max": num(s.m_j_max[e]), "jerk_avg": num(s.m_j_avg[e]),
+            "compliant_count": s.m_compliant[e],
+        },
+        "reward_state": {
+            "prev_distance": if s.r_has_prev[e] != 0 { num(s.r_prev_dist[e]) } else { Value::Null },
+            "info": {"DISCOMFORT_SNGNN": num(s.r_discomfort_sngnn[e]), "DISCOMFORT_DSRNN": num(s.r_discomfort_dsrnn[e]),
+                     "distance_reward": num(s.r_distance[e]), "alive_reward": num(s.r_alive[e]),
+                     "sngnn_reward": num(s.r_sngnn[e])},
+        },
+        "goals": Value::Object(goals),
+    })
+}
+
+fn export_crowd_forming(s: &BatchState, e: usize) -> Value {
+    if s.cf_active[e] == 0 {
+        return Value::Null;
+    }
+    let c = &s.strides;
+    let hb = e * c.humans;
+    let sb = e * c.group_size;
+    let n = s.cf_count[e] as usize;
+    let mut slot_of = Map::new();
+    let humans: Vec<u32> = (0..n)
+        .map(|k| {
+            let id = s.h_id[hb + s.cf_human[sb + k] as usize];
+            slot_of.insert(id.to_string(), json!(k));
+            id
+        })
+        .collect();
+    let slots: Vec<Value> = (sb..sb + n)
+        .map(|k| json!([num(s.cf_slot_x[k]), num(s.cf_slot_y[k]), num(s.cf_slot_theta[k])]))
+        .collect();
+    json!({"humans": humans, "slot_of": slot_of, "slots": slots, "centre": [num(s.cf_x[e]), num(s.cf_y[e])],
+           "almost_formed_count": s.cf_close_steps[e]})
+}
+
+/// Load environment `e` of `s` from `doc`.
+pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Result<(), SimError> {
+    let r = Reader::root(doc);
+    read::room(p, &r, s, e)?;
+    read::human_params(&r.at("human_params")?, s, e)?;
+    let st = r.at("state")?;
+    read::snapshot(p, &st, s, e)?;
+    match r.opt("socnav") {
+        Some(x) => read::extras(&x, s, e)?,
+        None => {
+            // A 0.1.1 snapshot: a running episode whose per-episode sums start here.
+            s.done[e] = 0;
+            s.pending_reset[e] = 0;
+            s.ep_return[e] = 0.0;
+            s.ep_min_human_dist[e] = f32::INFINITY;
+            s.ep_min_obstacle_dist[e] = f32::INFINITY;
+            s.ep_sum_avg_obstacle_dist[e] = 0.0;
+            s.ep_sum_ttc[e] = 0.0;
+            s.ep_sum_discomfort_dsrnn[e] = 0.0;
+            s.ep_sum_sngnn[e] = 0.0;
+        }
+    }
+    // Derived: observation caches from the snapshot's poses, obstacles to rebuild.
+    let hb = e * s.strides.humans;
+    for i in hb..hb + s.n_humans[e] as usize {
+        s.h_prev_rel_theta[i] = math::wrap_angle(s.h_theta[i] - s.robot_theta[e]);
+    }
+    s.stepping[e] = 0;
+    s.obstacles_dirty[e] = 1;
+    Ok(())
+}
+
+/// The room shape code of a shape name (`room_shape::*` follows [`SHAPE_NAMES`]).
+fn shape_code(name: &str) -> Option<u32> {
+    const _: () = assert!(room_shape::SQUARE == 0 && room_shape::NO_WALLS == 3);
+    SHAPE_NAMES.iter().position(|n| *n == name).map(|i| i as u32)
+}
