@@ -30,6 +30,7 @@ mod kdtree;
 mod lines;
 mod lp;
 mod neighbors;
+mod obstacle_build;
 mod obstacles;
 mod scene;
 mod vector;
@@ -42,9 +43,8 @@ pub use neighbors::{
     Neighbor, agent_neighbors, insert_agent_neighbor, insert_obstacle_neighbor, obstacle_neighbors,
     obstacle_neighbors_tree, obstacle_range_sq,
 };
-pub use obstacles::{
-    NONE, ObstacleScratch, ObstacleSet, ObstacleTree, ObstacleVerts, RVO_EPSILON, process_obstacles,
-};
+pub use obstacle_build::process_obstacles;
+pub use obstacles::{NONE, ObstacleScratch, ObstacleSet, ObstacleTree, ObstacleVerts, RVO_EPSILON};
 pub use scene::{AgentRecord, Scene, Simulator, compute_velocities, compute_velocities_batch};
 pub use vector::{Vec2, det, dist_sq_point_segment, left_of};
 

@@ -1,7 +1,7 @@
 //! The standalone ORCA API: a [`Scene`] solved in one call, batches of scenes in parallel, and
 //! a [`Simulator`] that steps like `RVOSimulator::doStep`.
 //!
-//! Both use RVO2's k-d trees for neighbour order ([`AgentKdTree`], [`obstacle_neighbors_tree`]),
+//! Both use RVO2's k-d trees for neighbour order ([`AgentKdTree`], [`super::obstacle_neighbors_tree`]),
 //! so they reproduce RVO2 bit for bit, ties included. [`compute_velocities`] is exactly the first
 //! `doStep` of a fresh `RVOSimulator` holding the scene; a [`Simulator`] also keeps RVO2's
 //! persistent agent order across steps.
@@ -11,7 +11,8 @@ use rayon::prelude::*;
 use super::kdtree::AgentKdTree;
 use super::lines::Line;
 use super::neighbors::Neighbor;
-use super::obstacles::{ObstacleScratch, ObstacleSet, process_obstacles};
+use super::obstacle_build::process_obstacles;
+use super::obstacles::{ObstacleScratch, ObstacleSet};
 use super::{OrcaAgent, OrcaError, OrcaNeighbor, OrcaScratch, compute_new_velocity_tree};
 
 /// One ORCA problem: agents, polygon obstacles and the time step.
