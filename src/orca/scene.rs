@@ -70,7 +70,7 @@ pub fn compute_velocities(scene: &Scene) -> Result<Vec<[f32; 2]>, OrcaError> {
     }
     sim.process_obstacles()?;
     sim.compute_new_velocities();
-    Ok(sim.new_vel.clone())
+    Ok(std::mem::take(&mut sim.new_vel))
 }
 
 /// [`compute_velocities`] for many scenes, in parallel with rayon. Results are in scene order
@@ -79,7 +79,11 @@ pub fn compute_velocities(scene: &Scene) -> Result<Vec<[f32; 2]>, OrcaError> {
 /// # Errors
 /// The error of the first failing scene (in scene order).
 pub fn compute_velocities_batch(scenes: &[Scene]) -> Result<Vec<Vec<[f32; 2]>>, OrcaError> {
-    scenes.par_iter().map(compute_velocities).collect()
+    // Collect every result first: rayon's `Result` collection would report whichever error
+    // a thread hit first, not the first in scene order.
+    let results: Vec<Result<Vec<[f32; 2]>, OrcaError>> =
+        scenes.par_iter().map(compute_velocities).collect();
+    results.into_iter().collect()
 }
 
 /// What one agent's last ORCA solve saw and built (kept when recording is on).
