@@ -19,17 +19,62 @@
 //! written out as comparisons. Only `+ - * /`, `sqrt`, `abs` and comparisons are used; never
 //! `mul_add`. Units: positions in metres, velocities in m/s, times in s.
 //!
+//! # Calling the core once per agent
+//! ```
+//! use socnav::orca::*;
+//!
+//! // Once (or whenever the walls change): polygons -> processed obstacle columns.
+//! let walls = [vec![[-10.0_f32, 1.5], [10.0, 1.5]], vec![[10.0, -1.5], [-10.0, -1.5]]];
+//! let (mut set, mut obstacle_scratch) = (ObstacleSet::new(), ObstacleScratch::new());
+//! process_obstacles(&walls, &mut obstacle_scratch, &mut set)?;
+//!
+//! // Start-of-step state as columns.
+//! let agent = |x: f32| OrcaAgent {
+//!     pos: [x, 0.0], vel: [0.0, 0.0], pref_vel: [-x.signum(), 0.0], radius: 0.3,
+//!     max_speed: 1.0, neighbor_dist: 10.0, max_neighbors: 10, time_horizon: 5.0,
+//!     time_horizon_obst: 5.0,
+//! };
+//! let agents = [agent(-2.0), agent(2.0)];
+//! let xs: Vec<f32> = agents.iter().map(|a| a.pos[0]).collect();
+//! let ys: Vec<f32> = agents.iter().map(|a| a.pos[1]).collect();
+//!
+//! // Per step, per agent (buffers reused; no allocation once warm).
+//! let (mut nb, mut gathered, mut scratch) = (Vec::new(), Vec::new(), OrcaScratch::new());
+//! let mut new_vel = Vec::new();
+//! for (i, a) in agents.iter().enumerate() {
+//!     agent_neighbors(i, &xs, &ys, a.neighbor_dist, a.max_neighbors, &mut nb);
+//!     gathered.clear();
+//!     gathered.extend(nb.iter().map(|n| {
+//!         let o = &agents[n.index as usize];
+//!         OrcaNeighbor { pos: o.pos, vel: o.vel, radius: o.radius }
+//!     }));
+//!     new_vel.push(compute_new_velocity(a, &gathered, &set.as_view(), 0.25, &mut scratch));
+//! }
+//! // Then, for every agent: vel = new_vel; pos += vel * dt.
+//!
+//! // The same step through the standalone API.
+//! let scene = Scene { time_step: 0.25, agents: agents.to_vec(), obstacles: walls.to_vec() };
+//! assert_eq!(compute_velocities(&scene)?, new_vel);
+//! # Ok::<(), OrcaError>(())
+//! ```
+//!
 //! # Neighbour order and ties
 //! The neighbour order sets the line order and so the float result. Brute force (index order)
 //! equals RVO2 except when two candidate distances tie exactly: RVO2 then keeps its k-d tree's
 //! visiting order. [`AgentKdTree`] and [`obstacle_neighbors_tree`] reproduce that order; the
-//! standalone API uses them, so it matches RVO2 even in symmetric scenes.
+//! standalone API uses them, so it matches RVO2 even in symmetric scenes. Measured on the
+//! reference data: for agents, ties only decide anything with more than 10 agents (1 of 88 750
+//! Circle250 restart agent-steps); for obstacles, the edges meeting at the nearest corner tie
+//! often (34 of 2542 one-step agents get another edge order by brute force), yet the lines and
+//! velocities of all 34 stay bit-identical. In general they need not: prefer the tree walk where
+//! exact RVO2 order matters.
 
 mod error;
 mod kdtree;
 mod lines;
 mod lp;
 mod neighbors;
+mod obstacle_build;
 mod obstacles;
 mod scene;
 mod vector;
@@ -42,9 +87,8 @@ pub use neighbors::{
     Neighbor, agent_neighbors, insert_agent_neighbor, insert_obstacle_neighbor, obstacle_neighbors,
     obstacle_neighbors_tree, obstacle_range_sq,
 };
-pub use obstacles::{
-    NONE, ObstacleScratch, ObstacleSet, ObstacleTree, ObstacleVerts, RVO_EPSILON, process_obstacles,
-};
+pub use obstacle_build::process_obstacles;
+pub use obstacles::{NONE, ObstacleScratch, ObstacleSet, ObstacleTree, ObstacleVerts, RVO_EPSILON};
 pub use scene::{AgentRecord, Scene, Simulator, compute_velocities, compute_velocities_batch};
 pub use vector::{Vec2, det, dist_sq_point_segment, left_of};
 
@@ -202,6 +246,9 @@ impl OrcaScratch {
 ///
 /// Reads only start-of-step data, so calling it for every agent and then applying the results
 /// gives RVO2's Jacobi update. The lines stay readable in `scratch`.
+///
+/// Like RVO2, it does not guard against degenerate input: two agents at the same position with
+/// the same velocity, or non-positive time horizons, give NaN.
 pub fn compute_new_velocity(
     agent: &OrcaAgent,
     agent_neighbors: &[OrcaNeighbor],

@@ -1,23 +1,17 @@
-//! Obstacle preprocessing: RVO2's `addObstacle` + `processObstacles` (spec orca-sfm §1.3).
+//! Processed obstacles as columns (spec orca-sfm §1.3), filled by [`super::process_obstacles`].
 //!
 //! Input polygons list their vertices counter-clockwise (agents stay outside); a 2-vertex polygon
 //! is a two-sided segment. Every vertex starts an edge to its `next` vertex and stores a unit
-//! `direction` along that edge and a convexity flag.
-//!
-//! `processObstacles` builds a static k-d tree over the edges. Each node picks the edge that
-//! minimises `(max(L, R), min(L, R))` (first best wins), and edges that straddle its line are
-//! **split**: the new vertex gets the next id, copies the direction of the edge's start vertex,
-//! is convex, and is linked between the two end points. The processed vertex list (input
-//! vertices followed by split vertices, in creation order) is what the ORCA lines read, so this
-//! module reproduces the build exactly, recursion order included. The tree itself is kept as
-//! well, so that [`crate::orca::obstacle_neighbors_tree`] can visit edges in RVO2's order.
+//! `direction` along that edge and a convexity flag. The processed list is the input vertices
+//! followed by the vertices created by edge splits during the tree build, in creation order; it
+//! is what the ORCA lines read. The static tree is kept too, so that
+//! [`super::obstacle_neighbors_tree`] can visit edges in RVO2's order.
 //!
 //! Invariant: vertex columns all have the same length; tree columns all have one entry per node;
-//! `NONE` (`u32::MAX`) marks a missing child. Rebuilding into the same [`ObstacleSet`] with the
-//! same [`ObstacleScratch`] does not allocate once their capacity has grown.
+//! [`NONE`] marks a missing child. Rebuilding into the same [`ObstacleSet`] with the same
+//! [`ObstacleScratch`] does not allocate once their capacity has grown.
 
-use super::error::OrcaError;
-use super::vector::{Vec2, det, left_of};
+use super::vector::Vec2;
 
 /// Sentinel for "no node" in the obstacle tree columns.
 pub const NONE: u32 = u32::MAX;
@@ -111,7 +105,7 @@ impl ObstacleVerts<'_> {
     }
 }
 
-/// Borrowed view of the static obstacle k-d tree built by [`process_obstacles`].
+/// Borrowed view of the static obstacle k-d tree built by [`super::process_obstacles`].
 ///
 /// Node 0 is the root (if any). `vertex[n]` is the start vertex of node `n`'s splitting edge;
 /// `left[n]`/`right[n]` are child nodes or [`NONE`].
@@ -127,21 +121,21 @@ pub struct ObstacleTree<'a> {
 
 /// Owned processed obstacles: vertex columns plus the static k-d tree.
 ///
-/// Fill it with [`process_obstacles`]; read it through [`ObstacleSet::as_view`] and
+/// Fill it with [`super::process_obstacles`]; read it through [`ObstacleSet::as_view`] and
 /// [`ObstacleSet::tree`].
 #[derive(Clone, Debug, Default)]
 pub struct ObstacleSet {
-    x: Vec<f32>,
-    y: Vec<f32>,
-    dir_x: Vec<f32>,
-    dir_y: Vec<f32>,
-    next: Vec<u32>,
-    prev: Vec<u32>,
-    convex: Vec<u32>,
-    node_vertex: Vec<u32>,
-    node_left: Vec<u32>,
-    node_right: Vec<u32>,
-    num_input_vertices: usize,
+    pub(super) x: Vec<f32>,
+    pub(super) y: Vec<f32>,
+    pub(super) dir_x: Vec<f32>,
+    pub(super) dir_y: Vec<f32>,
+    pub(super) next: Vec<u32>,
+    pub(super) prev: Vec<u32>,
+    pub(super) convex: Vec<u32>,
+    pub(super) node_vertex: Vec<u32>,
+    pub(super) node_left: Vec<u32>,
+    pub(super) node_right: Vec<u32>,
+    pub(super) num_input_vertices: usize,
 }
 
 impl ObstacleSet {
@@ -199,7 +193,7 @@ impl ObstacleSet {
         self.x.len() - self.num_input_vertices
     }
 
-    fn clear(&mut self) {
+    pub(super) fn clear(&mut self) {
         self.x.clear();
         self.y.clear();
         self.dir_x.clear();
@@ -213,7 +207,7 @@ impl ObstacleSet {
         self.num_input_vertices = 0;
     }
 
-    fn push_vertex(&mut self, p: Vec2, dir: Vec2, next: u32, prev: u32, convex: bool) {
+    pub(super) fn push_vertex(&mut self, p: Vec2, dir: Vec2, next: u32, prev: u32, convex: bool) {
         self.x.push(p.x);
         self.y.push(p.y);
         self.dir_x.push(dir.x);
@@ -224,15 +218,15 @@ impl ObstacleSet {
     }
 
     #[inline]
-    fn point(&self, i: u32) -> Vec2 {
+    pub(super) fn point(&self, i: u32) -> Vec2 {
         Vec2::new(self.x[i as usize], self.y[i as usize])
     }
 }
 
-/// Reusable working memory for [`process_obstacles`] (the per-node edge lists of the build).
+/// Reusable working memory for [`super::process_obstacles`] (the per-node edge lists of the build).
 #[derive(Clone, Debug, Default)]
 pub struct ObstacleScratch {
-    arena: Vec<u32>,
+    pub(super) arena: Vec<u32>,
 }
 
 impl ObstacleScratch {
@@ -240,323 +234,5 @@ impl ObstacleScratch {
     #[must_use]
     pub fn new() -> Self {
         Self::default()
-    }
-}
-
-/// Validates `polygons`, links their vertices and builds the obstacle tree into `out`, exactly as
-/// RVO2's `addObstacle` (once per polygon, in order) followed by `processObstacles`.
-///
-/// Each polygon is a list of `[x, y]` vertices in metres, counter-clockwise; 2 vertices make a
-/// segment that blocks from both sides. On error `out` is left empty.
-///
-/// # Errors
-/// [`OrcaError::TooFewVertices`] for a polygon with fewer than 2 vertices,
-/// [`OrcaError::NonFiniteVertex`] for NaN/infinite coordinates, and
-/// [`OrcaError::DegenerateEdge`] for a zero-length edge (or one whose squared length is not a
-/// positive finite `f32`).
-pub fn process_obstacles<P: AsRef<[[f32; 2]]>>(
-    polygons: &[P],
-    scratch: &mut ObstacleScratch,
-    out: &mut ObstacleSet,
-) -> Result<(), OrcaError> {
-    out.clear();
-    validate_polygons(polygons)?;
-    for polygon in polygons {
-        add_polygon(out, polygon.as_ref());
-    }
-    out.num_input_vertices = out.len();
-
-    let arena = &mut scratch.arena;
-    arena.clear();
-    arena.extend(0..out.len() as u32);
-    let len = arena.len();
-    build_node(out, arena, 0, len);
-    arena.clear();
-    Ok(())
-}
-
-fn validate_polygons<P: AsRef<[[f32; 2]]>>(polygons: &[P]) -> Result<(), OrcaError> {
-    for (polygon, verts) in polygons.iter().enumerate() {
-        let verts = verts.as_ref();
-        if verts.len() < 2 {
-            return Err(OrcaError::TooFewVertices {
-                polygon,
-                count: verts.len(),
-            });
-        }
-        for (vertex, &[x, y]) in verts.iter().enumerate() {
-            if !x.is_finite() || !y.is_finite() {
-                return Err(OrcaError::NonFiniteVertex {
-                    polygon,
-                    vertex,
-                    x,
-                    y,
-                });
-            }
-        }
-        for vertex in 0..verts.len() {
-            let a = Vec2::from_array(verts[vertex]);
-            let b = Vec2::from_array(verts[(vertex + 1) % verts.len()]);
-            let len_sq = (b - a).abs_sq();
-            if !(len_sq > 0.0 && len_sq.is_finite()) {
-                return Err(OrcaError::DegenerateEdge { polygon, vertex });
-            }
-        }
-    }
-    Ok(())
-}
-
-/// RVO2's `addObstacle`: appends one polygon's vertices, linked in a ring.
-fn add_polygon(out: &mut ObstacleSet, verts: &[[f32; 2]]) {
-    let n = verts.len();
-    let first = out.len() as u32;
-    for i in 0..n {
-        let prev_i = if i == 0 { n - 1 } else { i - 1 };
-        let next_i = if i == n - 1 { 0 } else { i + 1 };
-        let p = Vec2::from_array(verts[i]);
-        let p_prev = Vec2::from_array(verts[prev_i]);
-        let p_next = Vec2::from_array(verts[next_i]);
-        let dir = (p_next - p).normalize();
-        let convex = n == 2 || left_of(p_prev, p, p_next) >= 0.0;
-        out.push_vertex(p, dir, first + next_i as u32, first + prev_i as u32, convex);
-    }
-}
-
-/// Which side of the splitting edge an edge lies on (RVO2's classification with `RVO_EPSILON`).
-#[derive(Clone, Copy, PartialEq)]
-enum Side {
-    Left,
-    Right,
-    Both,
-}
-
-#[inline]
-fn classify(s1: f32, s2: f32) -> Side {
-    if s1 >= -RVO_EPSILON && s2 >= -RVO_EPSILON {
-        Side::Left
-    } else if s1 <= RVO_EPSILON && s2 <= RVO_EPSILON {
-        Side::Right
-    } else {
-        Side::Both
-    }
-}
-
-/// Side classification of edge `j` against the line of edge `i` (vertex ids).
-#[inline]
-fn edge_sides(set: &ObstacleSet, i1: u32, j1: u32) -> (f32, f32) {
-    let a = set.point(i1);
-    let b = set.point(set.next[i1 as usize]);
-    let s1 = left_of(a, b, set.point(j1));
-    let s2 = left_of(a, b, set.point(set.next[j1 as usize]));
-    (s1, s2)
-}
-
-/// Chooses the splitting edge of the list `edges`: the first that minimises
-/// `(max(L, R), min(L, R))`, with RVO2's early exit. Returns (position in list, L, R).
-fn choose_split(set: &ObstacleSet, edges: &[u32]) -> (usize, usize, usize) {
-    let n = edges.len();
-    let (mut best, mut min_left, mut min_right) = (0, n, n);
-    for (i, &i1) in edges.iter().enumerate() {
-        let best_key = (min_left.max(min_right), min_left.min(min_right));
-        let (mut left, mut right) = (0usize, 0usize);
-        for (j, &j1) in edges.iter().enumerate() {
-            if i == j {
-                continue;
-            }
-            let (s1, s2) = edge_sides(set, i1, j1);
-            match classify(s1, s2) {
-                Side::Left => left += 1,
-                Side::Right => right += 1,
-                Side::Both => {
-                    left += 1;
-                    right += 1;
-                }
-            }
-            if (left.max(right), left.min(right)) >= best_key {
-                break;
-            }
-        }
-        if (left.max(right), left.min(right)) < best_key {
-            (best, min_left, min_right) = (i, left, right);
-        }
-    }
-    (best, min_left, min_right)
-}
-
-/// Builds the subtree for the edge list `arena[start..start + len]` and returns its node id.
-///
-/// The child lists are appended to `arena` (left list, then right list), the left subtree is
-/// built completely before the right one (so split vertices get RVO2's ids), and `arena` is
-/// truncated back to its length on entry before returning.
-fn build_node(set: &mut ObstacleSet, arena: &mut Vec<u32>, start: usize, len: usize) -> u32 {
-    if len == 0 {
-        return NONE;
-    }
-    let node = set.node_vertex.len();
-    let (split, n_left, n_right) = choose_split(set, &arena[start..start + len]);
-    let i1 = arena[start + split];
-    set.node_vertex.push(i1);
-    set.node_left.push(NONE);
-    set.node_right.push(NONE);
-
-    let left_start = arena.len();
-    let right_start = left_start + n_left;
-    arena.resize(right_start + n_right, NONE);
-    let (mut lc, mut rc) = (0usize, 0usize);
-    for j in 0..len {
-        if j == split {
-            continue;
-        }
-        let j1 = arena[start + j];
-        let (s1, s2) = edge_sides(set, i1, j1);
-        let (to_left, to_right) = match classify(s1, s2) {
-            Side::Left => (Some(j1), None),
-            Side::Right => (None, Some(j1)),
-            Side::Both => {
-                let new = split_edge(set, i1, j1);
-                if s1 > 0.0 {
-                    (Some(j1), Some(new))
-                } else {
-                    (Some(new), Some(j1))
-                }
-            }
-        };
-        if let Some(v) = to_left {
-            arena[left_start + lc] = v;
-            lc += 1;
-        }
-        if let Some(v) = to_right {
-            arena[right_start + rc] = v;
-            rc += 1;
-        }
-    }
-    assert!(
-        lc == n_left && rc == n_right,
-        "obstacle tree build: split counts changed between passes"
-    );
-
-    let left = build_node(set, arena, left_start, n_left);
-    arena.truncate(right_start + n_right);
-    let right = build_node(set, arena, right_start, n_right);
-    arena.truncate(left_start);
-    set.node_left[node] = left;
-    set.node_right[node] = right;
-    node as u32
-}
-
-/// Splits edge `j1 -> next(j1)` where it crosses the line of edge `i1 -> next(i1)`; returns the
-/// new vertex id. The new vertex copies `j1`'s direction and is convex.
-fn split_edge(set: &mut ObstacleSet, i1: u32, j1: u32) -> u32 {
-    let j2 = set.next[j1 as usize];
-    let a = set.point(i1);
-    let b = set.point(set.next[i1 as usize]);
-    let pj1 = set.point(j1);
-    let pj2 = set.point(j2);
-    let t = det(b - a, pj1 - a) / det(b - a, pj1 - pj2);
-    let split_point = pj1 + t * (pj2 - pj1);
-    let new = set.len() as u32;
-    let dir = Vec2::new(set.dir_x[j1 as usize], set.dir_y[j1 as usize]);
-    set.push_vertex(split_point, dir, j2, j1, true);
-    set.next[j1 as usize] = new;
-    set.prev[j2 as usize] = new;
-    new
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn build(polys: &[Vec<[f32; 2]>]) -> ObstacleSet {
-        let mut set = ObstacleSet::new();
-        process_obstacles(polys, &mut ObstacleScratch::new(), &mut set).unwrap();
-        set
-    }
-
-    #[test]
-    fn segment_gives_two_convex_opposite_edges() {
-        let set = build(&[vec![[0.0, 0.0], [2.0, 0.0]]]);
-        let v = set.as_view();
-        assert_eq!(v.len(), 2);
-        assert_eq!((v.next(0), v.prev(0), v.next(1), v.prev(1)), (1, 1, 0, 0));
-        assert_eq!(v.dir(0), Vec2::new(1.0, 0.0));
-        assert_eq!(v.dir(1), Vec2::new(-1.0, 0.0));
-        assert!(v.is_convex(0) && v.is_convex(1));
-        assert_eq!(set.num_split_vertices(), 0);
-    }
-
-    #[test]
-    fn concave_vertex_is_flagged() {
-        // CCW "L" shape: vertex 3 (1,1) is the reflex corner.
-        let set = build(&[vec![
-            [0.0, 0.0],
-            [2.0, 0.0],
-            [2.0, 1.0],
-            [1.0, 1.0],
-            [1.0, 2.0],
-            [0.0, 2.0],
-        ]]);
-        // The reflex corner also forces a split; split vertices are convex.
-        let convex: Vec<u32> = set.as_view().convex.to_vec();
-        assert_eq!(convex[..6], [1, 1, 1, 0, 1, 1]);
-        assert!(convex[6..].iter().all(|&c| c == 1));
-    }
-
-    #[test]
-    fn straddling_edge_is_split_and_relinked() {
-        // A long segment whose line cuts a square, and a square whose edges cross the
-        // segment's line: whichever edge the root picks, something straddles.
-        let polys = vec![
-            vec![[-5.0, 0.5], [5.0, 0.5]],
-            vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
-        ];
-        let set = build(&polys);
-        let v = set.as_view();
-        assert!(set.num_split_vertices() > 0, "expected at least one split");
-        // Every ring stays consistent, and each split vertex lies on its original edge.
-        for i in 0..v.len() {
-            assert_eq!(v.prev(v.next(i)), i);
-            assert_eq!(v.next(v.prev(i)), i);
-        }
-        for s in set.num_input_vertices()..v.len() {
-            assert!(v.is_convex(s));
-            let (a, b) = (v.point(v.prev(s)), v.point(v.next(s)));
-            let p = v.point(s);
-            assert!(left_of(a, b, p).abs() < 1e-5);
-            assert_eq!(v.dir(s), v.dir(v.prev(s)));
-        }
-        // Each node's edges are on its side: the tree has one node per processed edge.
-        assert_eq!(set.tree().vertex.len(), v.len());
-    }
-
-    #[test]
-    fn degenerate_inputs_are_errors() {
-        let mut set = ObstacleSet::new();
-        let mut scratch = ObstacleScratch::new();
-        let one = vec![vec![[0.0_f32, 0.0]]];
-        assert!(matches!(
-            process_obstacles(&one, &mut scratch, &mut set),
-            Err(OrcaError::TooFewVertices {
-                polygon: 0,
-                count: 1
-            })
-        ));
-        let zero_edge = vec![vec![[0.0, 0.0], [1.0, 0.0]], vec![[1.0, 1.0], [1.0, 1.0]]];
-        assert!(matches!(
-            process_obstacles(&zero_edge, &mut scratch, &mut set),
-            Err(OrcaError::DegenerateEdge {
-                polygon: 1,
-                vertex: 0
-            })
-        ));
-        assert!(set.is_empty());
-        let nan = vec![vec![[0.0, 0.0], [f32::NAN, 1.0], [1.0, 1.0]]];
-        assert!(matches!(
-            process_obstacles(&nan, &mut scratch, &mut set),
-            Err(OrcaError::NonFiniteVertex {
-                polygon: 0,
-                vertex: 1,
-                ..
-            })
-        ));
     }
 }

@@ -1,7 +1,7 @@
 //! The standalone ORCA API: a [`Scene`] solved in one call, batches of scenes in parallel, and
 //! a [`Simulator`] that steps like `RVOSimulator::doStep`.
 //!
-//! Both use RVO2's k-d trees for neighbour order ([`AgentKdTree`], [`obstacle_neighbors_tree`]),
+//! Both use RVO2's k-d trees for neighbour order ([`AgentKdTree`], [`super::obstacle_neighbors_tree`]),
 //! so they reproduce RVO2 bit for bit, ties included. [`compute_velocities`] is exactly the first
 //! `doStep` of a fresh `RVOSimulator` holding the scene; a [`Simulator`] also keeps RVO2's
 //! persistent agent order across steps.
@@ -11,7 +11,8 @@ use rayon::prelude::*;
 use super::kdtree::AgentKdTree;
 use super::lines::Line;
 use super::neighbors::Neighbor;
-use super::obstacles::{ObstacleScratch, ObstacleSet, process_obstacles};
+use super::obstacle_build::process_obstacles;
+use super::obstacles::{ObstacleScratch, ObstacleSet};
 use super::{OrcaAgent, OrcaError, OrcaNeighbor, OrcaScratch, compute_new_velocity_tree};
 
 /// One ORCA problem: agents, polygon obstacles and the time step.
@@ -69,7 +70,7 @@ pub fn compute_velocities(scene: &Scene) -> Result<Vec<[f32; 2]>, OrcaError> {
     }
     sim.process_obstacles()?;
     sim.compute_new_velocities();
-    Ok(sim.new_vel.clone())
+    Ok(std::mem::take(&mut sim.new_vel))
 }
 
 /// [`compute_velocities`] for many scenes, in parallel with rayon. Results are in scene order
@@ -78,7 +79,11 @@ pub fn compute_velocities(scene: &Scene) -> Result<Vec<[f32; 2]>, OrcaError> {
 /// # Errors
 /// The error of the first failing scene (in scene order).
 pub fn compute_velocities_batch(scenes: &[Scene]) -> Result<Vec<Vec<[f32; 2]>>, OrcaError> {
-    scenes.par_iter().map(compute_velocities).collect()
+    // Collect every result first: rayon's `Result` collection would report whichever error
+    // a thread hit first, not the first in scene order.
+    let results: Vec<Result<Vec<[f32; 2]>, OrcaError>> =
+        scenes.par_iter().map(compute_velocities).collect();
+    results.into_iter().collect()
 }
 
 /// What one agent's last ORCA solve saw and built (kept when recording is on).

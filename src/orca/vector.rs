@@ -168,8 +168,7 @@ mod tests {
 
     #[test]
     fn div_is_reciprocal_then_multiply() {
-        // 1/3 rounded, then multiplied: differs from the correctly rounded 1/3 * 7 division
-        // for some inputs; check that the formula is the reciprocal form.
+        // 7 * fl(1/3), which for some inputs differs from the correctly rounded 7/3.
         let v = Vec2::new(7.0, 1.0).div_scalar(3.0);
         let inv = 1.0_f32 / 3.0;
         assert_eq!(v.x.to_bits(), (7.0_f32 * inv).to_bits());
