@@ -253,6 +253,7 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
             s.ep_sum_sngnn[e] = 0.0;
         }
     }
+    derive_goal_distances(s, e);
     // Derived: observation caches from the snapshot's poses, obstacles to rebuild.
     let hb = e * s.strides.humans;
     for i in hb..hb + s.n_humans[e] as usize {
@@ -267,4 +268,21 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
 fn shape_code(name: &str) -> Option<u32> {
     const _: () = assert!(room_shape::SQUARE == 0 && room_shape::NO_WALLS == 3);
     SHAPE_NAMES.iter().position(|n| *n == name).map(|i| i as u32)
+}
+
+/// The metrics' and the reward's previous goal distances are, by definition, the distance from
+/// the current robot pose to the goal. Recomputing them in f32 (when the document agrees within
+/// rounding) keeps "did the distance grow" decisions exact for a robot that stands still: the
+/// document's value, rounded from f64, can differ from the f32 distance by an ulp.
+fn derive_goal_distances(s: &mut BatchState, e: usize) {
+    let dx = s.goal_x[e] - s.robot_x[e];
+    let dy = s.goal_y[e] - s.robot_y[e];
+    let d = (dx * dx + dy * dy).sqrt();
+    let agrees = |v: f32| (v - d).abs() <= 1e-5 * d.max(1.0);
+    if agrees(s.m_prev_goal_dist[e]) {
+        s.m_prev_goal_dist[e] = d;
+    }
+    if s.r_has_prev[e] != 0 && agrees(s.r_prev_dist[e]) {
+        s.r_prev_dist[e] = d;
+    }
 }

@@ -2,12 +2,14 @@
 //! made at reset drives to the same goal, every step (until it collides or arrives) by the ORCA
 //! velocity of a fresh simulator that holds every lone human and moving group, converted to the
 //! robot's kinematics. It "collides" when it touches a human or an object (0.1.1 tests groups and
-//! laptop users against the real robot instead; fixed, see docs/fidelity.md).
+//! laptop users against the real robot instead; fixed, see docs/fidelity.md). As in 0.1.1 it moves
+//! before the humans but is tested against them after they moved ([`shadow_outcome`]).
 
 use crate::geometry::Disc;
 use crate::math;
 use crate::params::StepParams;
 use crate::pipeline::Batch;
+use crate::state::StateChunk;
 
 use super::orca_world::{self, Others};
 
@@ -31,11 +33,20 @@ pub fn shadow_robot(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     s.shadow_vy[e] = vy;
     s.shadow_w[e] = w;
     s.shadow_path_length[e] += (vx * vx + vy * vy).sqrt() * p.dt;
-    let touch = super::world::touches(p, s, e, &Disc { x: nx, y: ny, r: p.robot_radius });
+}
+
+/// Whether the shadow robot collided or arrived, decided with the rest of the step's outcome
+/// (stage `termination`), i.e. against the humans where they stand after this step's motion.
+pub fn shadow_outcome(p: &StepParams, s: &mut StateChunk, e: usize) {
+    if s.shadow_collided[e] != 0 || s.shadow_reached[e] != 0 {
+        return;
+    }
+    let (x, y) = (s.shadow_x[e], s.shadow_y[e]);
+    let touch = super::world::touches(p, s, e, &Disc { x, y, r: p.robot_radius });
     if touch.human || touch.object {
         s.shadow_collided[e] = 1;
     }
-    let (dx, dy) = (s.goal_x[e] - nx, s.goal_y[e] - ny);
+    let (dx, dy) = (s.goal_x[e] - x, s.goal_y[e] - y);
     if (dx * dx + dy * dy).sqrt() < p.robot_radius + p.goal_radius {
         s.shadow_reached[e] = 1;
         s.shadow_reach_tick[e] = s.tick[e];

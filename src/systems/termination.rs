@@ -43,4 +43,5 @@ pub fn termination(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     b.o.terminated[e] = u32::from(terminated);
     b.o.truncated[e] = u32::from(truncated);
     s.done[e] = u32::from(terminated || truncated);
+    super::shadow_robot::shadow_outcome(p, s, e);
 }

@@ -1,0 +1,296 @@
+//! Field-by-field comparison of socnav's outputs and state with a golden step.
+//!
+//! Tolerances (each justified where it is used) come from one fact: the reference computes in
+//! f64 except where it holds float32 (RVO2, observations, the processed action, V/A/JERK), while
+//! socnav computes in f32 from the f32-rounded recorded state. One step of f32 arithmetic on
+//! metre-scale values differs from f64 by a few 1e-7; the observation went through float32 3x3
+//! matrix inverses in the reference, a few ulp of values up to ~15 m.
+
+use serde_json::Value;
+use socnav::BatchEnv;
+use socnav::spec::{ENTITY_KEYS, INFO_KEYS, RECORD, info};
+
+use super::corrected::{dsrnn_discomfort, wrapped_angular_speed};
+use super::{Episode, Step, num};
+
+/// Absolute tolerance on positions and distances (m): a few f32 ulp at 16 m is 1e-5.
+const POS: f64 = 2e-5;
+/// Absolute tolerance on velocities (m/s) and accumulated metrics.
+const VEL: f64 = 2e-6;
+/// Absolute tolerance on observation entries: the reference's float32 matrix inverses round
+/// positions of up to ~15 m by a few ulp (1e-6 each).
+const OBS: f64 = 3e-5;
+/// Contact distance of two discs that the reference's 64-gons can miss: 0.12 % of the radii sum
+/// (spec 3.2). Collisions decided within it may flip and are counted, not failed.
+const FLIP_FRACTION: f64 = 0.0013;
+/// Absolute tolerance on rewards: the distance term is 5·(d_t − d_{t−1}) for goal distances of up
+/// to ~15 m, whose f32 rounding (≤ 1e-6 each) the factor 5 and the cancellation amplify to ~1e-5.
+const REWARD: f64 = 1.2e-5;
+/// Failures listed in full before the rest are only counted.
+const SHOWN: usize = 40;
+
+/// What one or more replays found.
+#[derive(Default)]
+pub struct Report {
+    name: String,
+    compared: u64,
+    failures: Vec<String>,
+    failure_count: u64,
+    flips: u64,
+    steps: u64,
+    max_err: [(f64, String); 4],
+}
+
+impl Report {
+    pub fn new(name: &str) -> Self {
+        Self { name: name.to_string(), ..Default::default() }
+    }
+
+    pub fn summary(&self) -> String {
+        format!(
+            "{} steps, {} values compared, {} mismatches, {} near-threshold flips; max |err| pos {:.2e} ({}), vel {:.2e} ({}), obs {:.2e} ({}), reward {:.2e} ({})",
+            self.steps,
+            self.compared,
+            self.failure_count,
+            self.flips,
+            self.max_err[0].0,
+            self.max_err[0].1,
+            self.max_err[1].0,
+            self.max_err[1].1,
+            self.max_err[2].0,
+            self.max_err[2].1,
+            self.max_err[3].0,
+            self.max_err[3].1
+        )
+    }
+
+    pub fn merge(&mut self, other: &Report) {
+        self.compared += other.compared;
+        self.failure_count += other.failure_count;
+        self.flips += other.flips;
+        self.steps += other.steps;
+        for (a, b) in self.max_err.iter_mut().zip(&other.max_err) {
+            if b.0 > a.0 {
+                *a = (b.0, format!("{}: {}", other.name, b.1));
+            }
+        }
+        for f in &other.failures {
+            if self.failures.len() < SHOWN {
+                self.failures.push(format!("{}: {f}", other.name));
+            }
+        }
+    }
+
+    pub fn assert_ok(&self) {
+        assert!(self.compared > 0, "nothing was compared");
+        // Flips are rare threshold coincidences; more than 1 per 500 steps means a real difference.
+        assert!(self.flips * 500 <= self.steps.max(500), "{} near-threshold flips in {} steps", self.flips, self.steps);
+        assert!(self.failure_count == 0, "{} mismatches:\n{}", self.failure_count, self.failures.join("\n"));
+    }
+
+    fn fail(&mut self, msg: String) {
+        self.failure_count += 1;
+        if self.failures.len() < SHOWN {
+            self.failures.push(msg);
+        }
+    }
+
+    /// Compare `ours` with `theirs` within `abs` (+ `rel`·|theirs|); `kind` picks the max-error bucket.
+    fn close(&mut self, what: &str, ours: f64, theirs: f64, abs: f64, kind: usize) {
+        self.compared += 1;
+        let same = (ours.is_nan() && theirs.is_nan()) || ours == theirs;
+        let err = (ours - theirs).abs();
+        if !same && !(err <= abs) {
+            self.fail(format!("{what}: ours {ours} vs reference {theirs} (|err| {err:.3e} > {abs:.1e})"));
+        } else if err.is_finite() && err > self.max_err[kind].0 {
+            self.max_err[kind] = (err, what.to_string());
+        }
+    }
+
+    fn angle(&mut self, what: &str, ours: f64, theirs: f64) {
+        let d = (ours - theirs).sin().atan2((ours - theirs).cos());
+        self.close(what, theirs + d, theirs, POS, 0);
+    }
+
+    fn equal(&mut self, what: &str, ours: &Value, theirs: &Value) {
+        self.compared += 1;
+        if ours != theirs {
+            self.fail(format!("{what}: ours {ours} vs reference {theirs}"));
+        }
+    }
+
+    /// The observation of environment 0 against a golden observation dict.
+    pub fn compare_obs(&mut self, env: &BatchEnv, golden: &Value, at: &str) {
+        let out = env.outputs();
+        let layout = env.layout();
+        let robot = golden["robot"].as_array().expect("robot record");
+        for (k, v) in robot.iter().enumerate() {
+            self.close(&format!("{at} obs.robot[{k}]"), out.obs[k] as f64, num(v), OBS, 2);
+        }
+        for (t, key) in ENTITY_KEYS.iter().enumerate() {
+            let theirs = golden.get(*key).and_then(Value::as_array).map_or(&[][..], |v| &v[..]);
+            let count = out.obs_count[t] as usize;
+            self.compared += 1;
+            if count * RECORD != theirs.len() {
+                self.fail(format!("{at} obs.{key}: {count} records vs {} in the reference", theirs.len() / RECORD));
+                continue;
+            }
+            let ours = &out.obs[layout.offset[t]..layout.offset[t] + count * RECORD];
+            for (i, (o, g)) in ours.iter().zip(theirs).enumerate() {
+                let mut g = num(g);
+                if t == 0 && i % RECORD == 12 {
+                    // Relative angular speed: socnav wraps the heading difference (0.1.1 does not).
+                    g = wrapped_angular_speed(g, env.params().dt as f64);
+                }
+                self.close(&format!("{at} obs.{key}[{}][{}]", i / RECORD, i % RECORD), *o as f64, g, OBS, 2);
+            }
+        }
+    }
+
+    /// Outputs and state of one step.
+    pub fn compare_step(&mut self, env: &BatchEnv, ep: &Episode, step: Step<'_>, prev: &Value) {
+        self.steps += 1;
+        let at = format!("t={}", step.t());
+        let out = env.outputs();
+        let post = step.state_after_motion();
+        let (term, trunc) = (out.terminated[0] != 0, out.truncated[0] != 0);
+        let g_term = step.v["terminated"].as_bool().expect("terminated");
+        let g_trunc = step.v["truncated"].as_bool().expect("truncated");
+        if (term, trunc) != (g_term, g_trunc) {
+            if self.near_threshold(env, post) {
+                self.flips += 1;
+                println!("  flip at {at}: terminated ours {term} vs reference {g_term} (contact within {FLIP_FRACTION} of the radii sum)");
+                return;
+            }
+            self.fail(format!("{at}: terminated/truncated ours ({term}, {trunc}) vs reference ({g_term}, {g_trunc})"));
+            return;
+        }
+        if step.replayable() {
+            self.compare_obs(env, &step.v["obs"], &at);
+            self.compare_info(env, step.v, post, &at);
+        }
+        let ours = env.get_state(0).expect("get_state");
+        self.compare_state(&ours["state"], post, &step, &at);
+        let _ = (ep, prev);
+    }
+
+    /// Is the robot within the 64-gon epsilon of touching a human (or object disc)?
+    fn near_threshold(&self, env: &BatchEnv, post: &Value) -> bool {
+        let p = env.params();
+        let robot = &post["robot"];
+        let (rx, ry) = (num(&robot["x"]), num(&robot["y"]));
+        let reach = (p.robot_radius + p.human_radius) as f64;
+        post["humans"].as_array().into_iter().flatten().any(|h| {
+            let d = ((num(&h["x"]) - rx).powi(2) + (num(&h["y"]) - ry).powi(2)).sqrt();
+            (d - reach).abs() <= FLIP_FRACTION * reach
+        })
+    }
+
+    fn compare_info(&mut self, env: &BatchEnv, step: &Value, post: &Value, at: &str) {
+        let out = env.outputs();
+        let p = env.params();
+        let golden = &step["info"];
+        let terminal = step["terminated"].as_bool() == Some(true) || step["truncated"].as_bool() == Some(true);
+        let dt = p.dt as f64;
+        let (rr, hr) = (p.robot_radius as f64, p.human_radius as f64);
+        // The recorded discomfort must be what 0.1.1's formula gives (checks this reconstruction);
+        // socnav's must be the corrected one. Terminal steps repeat the previous value (persisted).
+        let mut discomfort = num(&golden["DISCOMFORT_DSRNN"]);
+        let mut reward = num(&step["reward"]);
+        let no_groups = post["groups"].as_array().is_none_or(Vec::is_empty)
+            && post["hl_interactions"].as_array().is_none_or(Vec::is_empty);
+        if !terminal {
+            if no_groups {
+                let buggy = dsrnn_discomfort(post, dt, rr, hr, true);
+                // 2e-8: the reference holds the human radius as float32 (0.36000001), which shifts d_min by 1.4e-8.
+                self.close(&format!("{at} reconstruction of 0.1.1's DISCOMFORT_DSRNN"), buggy, discomfort, 2e-8, 3);
+            }
+            let fixed = dsrnn_discomfort(post, dt, rr, hr, false);
+            reward += fixed - discomfort;
+            discomfort = fixed;
+        } else {
+            discomfort = num(&env.get_state(0).unwrap()["state"]["reward_state"]["info"]["DISCOMFORT_DSRNN"]);
+        }
+        self.close(&format!("{at} reward"), out.reward[0] as f64, reward, REWARD, 3);
+        for (k, key) in INFO_KEYS.iter().enumerate() {
+            let ours = out.info[k] as f64;
+            let theirs = if k == info::DISCOMFORT_DSRNN { discomfort } else { num(&golden[*key]) };
+            let tol = match k {
+                info::MINIMUM_DISTANCE_TO_HUMAN | info::MINIMUM_OBSTACLE_DISTANCE | info::AVERAGE_OBSTACLE_DISTANCE => POS,
+                info::PATH_LENGTH | info::STALLED_TIME => 1e-5,
+                info::DISTANCE_REWARD => REWARD,
+                info::DISCOMFORT_DSRNN => 2e-6,
+                _ => VEL,
+            };
+            self.close(&format!("{at} info.{key}"), ours, theirs, tol, 1);
+        }
+    }
+
+    fn compare_state(&mut self, ours: &Value, theirs: &Value, step: &Step<'_>, at: &str) {
+        let (resampled_humans, resampled_groups) = step.resampled();
+        for key in ["robot", "shadow_robot"] {
+            let (o, t) = (&ours[key], &theirs[key]);
+            self.close(&format!("{at} {key}.x"), num(&o["x"]), num(&t["x"]), POS, 0);
+            self.close(&format!("{at} {key}.y"), num(&o["y"]), num(&t["y"]), POS, 0);
+            self.angle(&format!("{at} {key}.theta"), num(&o["theta"]), num(&t["theta"]));
+            for k in 0..3 {
+                self.close(&format!("{at} {key}.vel[{k}]"), num(&o["vel"][k]), num(&t["vel"][k]), VEL, 1);
+            }
+        }
+        let (os, ts) = (&ours["shadow_robot"], &theirs["shadow_robot"]);
+        for key in ["collided", "reached", "reach_tick"] {
+            self.equal(&format!("{at} shadow_robot.{key}"), &os[key], &ts[key]);
+        }
+        self.close(&format!("{at} shadow_robot.path_length"), num(&os["path_length"]), num(&ts["path_length"]), 1e-5, 0);
+        let oh = ours["humans"].as_array().expect("humans");
+        let th = theirs["humans"].as_array().expect("humans");
+        self.compared += 1;
+        if oh.len() != th.len() {
+            self.fail(format!("{at}: {} humans vs {}", oh.len(), th.len()));
+            return;
+        }
+        for (k, (o, t)) in oh.iter().zip(th).enumerate() {
+            let who = format!("{at} humans[{k}] (id {})", t["id"]);
+            self.equal(&format!("{who}.id"), &o["id"], &t["id"]);
+            self.equal(&format!("{who}.role"), &o["role"], &t["role"]);
+            self.close(&format!("{who}.x"), num(&o["x"]), num(&t["x"]), POS, 0);
+            self.close(&format!("{who}.y"), num(&o["y"]), num(&t["y"]), POS, 0);
+            self.close(&format!("{who}.speed"), num(&o["speed"]), num(&t["speed"]), VEL, 1);
+            if num(&t["speed"]) > 0.0 || t["role"] != "dynamic" {
+                self.angle(&format!("{who}.theta"), num(&o["theta"]), num(&t["theta"]));
+            }
+            let id = t["id"].as_u64().expect("id");
+            if !t["goal"].is_null() && !resampled_humans.contains(&id) {
+                for c in 0..2 {
+                    self.close(&format!("{who}.goal[{c}]"), num(&o["goal"][c]), num(&t["goal"][c]), POS, 0);
+                }
+            }
+        }
+        let og = ours["groups"].as_array().expect("groups");
+        let tg = theirs["groups"].as_array().expect("groups");
+        for (k, (o, t)) in og.iter().zip(tg).enumerate() {
+            for c in 0..2 {
+                self.close(&format!("{at} groups[{k}].centre[{c}]"), num(&o["centre"][c]), num(&t["centre"][c]), POS, 0);
+                if !t["goal"].is_null() && !resampled_groups.contains(&(k as u64)) {
+                    self.close(&format!("{at} groups[{k}].goal[{c}]"), num(&o["goal"][c]), num(&t["goal"][c]), POS, 0);
+                }
+            }
+        }
+        let (om, tm) = (&ours["metrics"], &theirs["metrics"]);
+        for key in tm.as_object().expect("metrics").keys() {
+            if let Some(list) = tm[key].as_array() {
+                for (c, v) in list.iter().enumerate() {
+                    self.close(&format!("{at} metrics.{key}[{c}]"), num(&om[key][c]), num(v), VEL, 1);
+                }
+            } else {
+                let tol = if key.contains("distance") || key.contains("length") { POS } else { VEL };
+                self.close(&format!("{at} metrics.{key}"), num(&om[key]), num(&tm[key]), tol, 1);
+            }
+        }
+        let (or, tr) = (&ours["reward_state"], &theirs["reward_state"]);
+        self.close(&format!("{at} reward_state.prev_distance"), num(&or["prev_distance"]), num(&tr["prev_distance"]), POS, 0);
+        for key in ["distance_reward", "alive_reward", "sngnn_reward", "DISCOMFORT_SNGNN"] {
+            self.close(&format!("{at} reward_state.info.{key}"), num(&or["info"][key]), num(&tr["info"][key]), REWARD, 3);
+        }
+    }
+}

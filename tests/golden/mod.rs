@@ -1,0 +1,153 @@
+//! Reading the golden SocNavGym 0.1.1 episodes and comparing socnav's step with them.
+
+#![allow(dead_code, reason = "each test binary that includes this module uses a different part of it")]
+
+mod compare;
+mod corrected;
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use serde_json::{Value, json};
+use socnav::Config;
+
+pub use compare::Report;
+
+/// The golden directory: `SOCNAV_GOLDEN_DIR`, else `../shared/golden/socnavgym` beside the crate.
+pub fn golden_dir() -> PathBuf {
+    match std::env::var_os("SOCNAV_GOLDEN_DIR") {
+        Some(d) => PathBuf::from(d),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/golden/socnavgym"),
+    }
+}
+
+/// One recorded episode.
+pub struct Episode {
+    root: Value,
+}
+
+/// One recorded step.
+#[derive(Clone, Copy)]
+pub struct Step<'a> {
+    pub v: &'a Value,
+}
+
+/// Every `*.json.gz` episode of `dir` whose file name starts with `filter`, sorted by name.
+pub fn load_episodes(dir: &Path, filter: Option<&str>) -> Vec<(String, Episode)> {
+    let entries = std::fs::read_dir(dir).unwrap_or_else(|e| panic!("cannot read golden dir {}: {e}", dir.display()));
+    let mut names: Vec<String> = entries
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".json.gz") && filter.is_none_or(|f| n.starts_with(f)))
+        .collect();
+    names.sort();
+    names
+        .into_iter()
+        .map(|n| {
+            let ep = Episode::load(&dir.join(&n));
+            (n.trim_end_matches(".json.gz").to_string(), ep)
+        })
+        .collect()
+}
+
+impl Episode {
+    pub fn load(path: &Path) -> Self {
+        let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut text = String::new();
+        flate2::read::GzDecoder::new(file)
+            .read_to_string(&mut text)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let root = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        Self { root }
+    }
+
+    pub fn header(&self) -> &Value {
+        &self.root["header"]
+    }
+
+    pub fn config_name(&self) -> String {
+        self.header()["config_name"].as_str().expect("header.config_name").to_string()
+    }
+
+    pub fn initial_state(&self) -> &Value {
+        &self.root["initial"]["state"]
+    }
+
+    pub fn initial_obs(&self) -> &Value {
+        &self.root["initial"]["obs"]
+    }
+
+    pub fn steps(&self) -> impl Iterator<Item = Step<'_>> {
+        self.root["steps"].as_array().expect("steps").iter().map(|v| Step { v })
+    }
+
+    /// The state document socnav loads: the header's static part plus a snapshot.
+    pub fn document(&self, state: &Value) -> Value {
+        let h = self.header();
+        json!({
+            "room": h["room"], "walls": h["walls"], "spawn_blockers": h["spawn_blockers"],
+            "human_params": h["human_params"], "counts": h["counts"], "state": state,
+        })
+    }
+}
+
+impl<'a> Step<'a> {
+    pub fn action(&self) -> Vec<f32> {
+        self.v["action"].as_array().expect("action").iter().map(|x| x.as_f64().expect("action value") as f32).collect()
+    }
+
+    pub fn state(&self) -> &'a Value {
+        &self.v["state"]
+    }
+
+    /// The state the step's outputs describe (before the after-observation events).
+    pub fn state_after_motion(&self) -> &'a Value {
+        self.v.get("state_before_events").unwrap_or(&self.v["state"])
+    }
+
+    pub fn replayable(&self) -> bool {
+        self.v["outputs_replayable"].as_bool().unwrap_or(true)
+    }
+
+    pub fn t(&self) -> u64 {
+        self.v["t"].as_u64().expect("t")
+    }
+
+    /// Ids of humans (and group indices) whose goals were re-sampled during the step.
+    pub fn resampled(&self) -> (Vec<u64>, Vec<u64>) {
+        let mut humans = Vec::new();
+        let mut groups = Vec::new();
+        for ev in self.v["events"].as_array().into_iter().flatten() {
+            match ev["type"].as_str() {
+                Some("goal_resample") => humans.extend(ev["human"].as_u64().or(ev["id"].as_u64())),
+                Some("group_goal_resample") => groups.extend(ev["group_index"].as_u64()),
+                _ => {}
+            }
+        }
+        (humans, groups)
+    }
+}
+
+/// The socnav config of an episode: `configs/<stem>.toml` for its `config_name`, which must equal
+/// the header's YAML values.
+pub fn config_for(ep: &Episode) -> Result<Config, String> {
+    let name = ep.config_name();
+    let stem = name.replace("_no_sngnn", "").replace("_with_sngnn", "_sngnn");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs").join(format!("{stem}.toml"));
+    let ours = Config::from_file(&path).map_err(|e| e.to_string())?;
+    let theirs = Config::from_socnavgym(&ep.header()["config"]).map_err(|e| e.to_string())?;
+    if ours != theirs {
+        return Err(format!("configs/{stem}.toml differs from the golden header's config:\nours:   {ours:?}\ntheirs: {theirs:?}"));
+    }
+    Ok(ours)
+}
+
+/// A golden number: JSON number, "inf"/"-inf"/"nan", null (None → NaN) or bool.
+pub fn num(v: &Value) -> f64 {
+    match v {
+        Value::Number(n) => n.as_f64().expect("number"),
+        Value::String(s) if s == "inf" => f64::INFINITY,
+        Value::String(s) if s == "-inf" => f64::NEG_INFINITY,
+        Value::Bool(b) => f64::from(u8::from(*b)),
+        _ => f64::NAN,
+    }
+}
