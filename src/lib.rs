@@ -24,6 +24,7 @@
 pub mod backend;
 pub mod config;
 mod env;
+pub mod episodes;
 pub mod error;
 pub mod fixed;
 pub mod geometry;

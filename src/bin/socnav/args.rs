@@ -1,0 +1,121 @@
+//! Command-line arguments.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+/// GPU-batched social-navigation simulator (SocNavGym 0.1.1 semantics).
+#[derive(Debug, Parser)]
+#[command(name = "socnav", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Roll out a batch of environments and print outcome rates, metrics and throughput.
+    Run(RunArgs),
+    /// Measure env-steps/s, in total and per stage, over a table of batch sizes.
+    Bench(BenchArgs),
+    /// Validate a config and print it with every default resolved.
+    CheckConfig(CheckArgs),
+    /// Draw an episode to an animated GIF (or its first frame to a PNG).
+    Render(RenderArgs),
+}
+
+/// Which backend runs the batch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BackendChoice {
+    /// A hardware GPU when one exists, else the CPU.
+    Auto,
+    /// The CPU backend.
+    Cpu,
+}
+
+/// How actions are chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PolicyChoice {
+    /// Uniform random actions in [-1, 1] (lateral 0 for diff-drive).
+    Random,
+    /// Turn towards the goal, drive when roughly aligned.
+    Goal,
+}
+
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Config: a shipped name (exp1, exp2, exp3, lroom_mixed, corridor_mixed, stress) or a TOML path.
+    #[arg(long, default_value = "exp1")]
+    pub config: String,
+    /// Number of environments.
+    #[arg(long, default_value_t = 1024)]
+    pub envs: usize,
+    /// Steps of the whole batch.
+    #[arg(long, default_value_t = 2000)]
+    pub steps: usize,
+    /// Seed of the batch (and of the random policy).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Backend.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub backend: BackendChoice,
+    /// Policy.
+    #[arg(long, value_enum, default_value_t = PolicyChoice::Random)]
+    pub policy: PolicyChoice,
+    /// CPU threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print one JSON object on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Config name or path.
+    #[arg(long, default_value = "exp1")]
+    pub config: String,
+    /// Batch sizes, comma separated.
+    #[arg(long, value_delimiter = ',', default_values_t = vec![1usize, 64, 1024, 4096])]
+    pub envs: Vec<usize>,
+    /// Seconds of measurement per batch size (after a warm-up).
+    #[arg(long, default_value_t = 2.0)]
+    pub seconds: f64,
+    /// Backend.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub backend: BackendChoice,
+    /// CPU threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print one JSON object on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// Config file (or shipped name) to validate.
+    pub config: String,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Config name or path.
+    #[arg(long, default_value = "exp1")]
+    pub config: String,
+    /// Seed of the episode.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output file: `.gif` for the episode, `.png` for its first frame.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Policy driving the robot.
+    #[arg(long, value_enum, default_value_t = PolicyChoice::Goal)]
+    pub policy: PolicyChoice,
+    /// Longest side of the image in pixels (default: the config's `render.resolution`).
+    #[arg(long)]
+    pub size: Option<u32>,
+    /// Most steps to draw (default: the whole episode).
+    #[arg(long)]
+    pub steps: Option<usize>,
+}

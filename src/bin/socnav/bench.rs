@@ -1,0 +1,78 @@
+//! `socnav bench`: env-steps/s of the step, in total and per stage, for a table of batch sizes.
+//! Actions are fixed (forward and turning) so the policy costs nothing.
+
+use std::time::Instant;
+
+use serde_json::json;
+use socnav::{Actions, Config};
+
+use crate::args::BenchArgs;
+use crate::run::make_env;
+
+/// Steps run before timing, so every environment has reset at least once and caches are warm.
+const WARMUP_STEPS: usize = 50;
+
+pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let config = Config::from_name_or_path(&a.config)?;
+    let mut rows = Vec::new();
+    for (i, &n) in a.envs.iter().enumerate() {
+        let mut env = make_env(config.clone(), n, 0, a.backend, a.threads, a.json || i > 0)?;
+        env.reset(Some(0))?;
+        let actions: Vec<f32> = [0.8f32, 0.0, 0.3].repeat(n);
+        for _ in 0..WARMUP_STEPS {
+            env.step(Actions::Continuous(&actions))?;
+        }
+        let before: Vec<f64> = env.stage_seconds().iter().map(|s| s.1).collect();
+        let start = Instant::now();
+        let mut steps = 0usize;
+        while steps < 10 || start.elapsed().as_secs_f64() < a.seconds {
+            env.step(Actions::Continuous(&actions))?;
+            steps += 1;
+        }
+        let secs = start.elapsed().as_secs_f64();
+        let stages: Vec<(&str, f64)> =
+            env.stage_seconds().iter().zip(&before).map(|((name, s), b)| (*name, s - b)).collect();
+        let stage_total: f64 = stages.iter().map(|s| s.1).sum();
+        rows.push(json!({
+            "envs": n,
+            "steps": steps,
+            "seconds": secs,
+            "env_steps_per_s": (n * steps) as f64 / secs,
+            "state_bytes_per_env": env.state().bytes_per_env(),
+            "obs_floats_per_env": env.layout().dim,
+            // Stage time is summed over threads: each stage's share of the step's CPU time.
+            "stage_share": stages.iter().map(|(k, s)| (k.to_string(), json!(s / stage_total))).collect::<serde_json::Map<_, _>>(),
+            "stage_env_steps_per_s": stages.iter().map(|(k, s)| (k.to_string(), json!((n * steps) as f64 / s * env.threads() as f64))).collect::<serde_json::Map<_, _>>(),
+        }));
+        if !a.json {
+            print_row(rows.last().expect("row just pushed"), i == 0, env.threads());
+        }
+    }
+    if a.json {
+        let out = json!({"config": a.config, "backend": "cpu", "threads": a.threads, "rows": rows});
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    }
+    Ok(())
+}
+
+fn print_row(row: &serde_json::Value, header: bool, threads: usize) {
+    if header {
+        println!("CPU backend, {threads} threads; per-stage figures are env-steps/s if the stage ran alone");
+    }
+    println!(
+        "envs {:>6}: {:>12.0} env-steps/s   ({} steps in {:.2} s; state {} B/env; obs {} floats/env)",
+        row["envs"],
+        row["env_steps_per_s"].as_f64().unwrap_or(0.0),
+        row["steps"],
+        row["seconds"].as_f64().unwrap_or(0.0),
+        row["state_bytes_per_env"],
+        row["obs_floats_per_env"]
+    );
+    if let Some(stages) = row["stage_env_steps_per_s"].as_object() {
+        let cells: Vec<String> = stages
+            .iter()
+            .map(|(k, v)| format!("{k} {:.2e} ({:.0} %)", v.as_f64().unwrap_or(0.0), 100.0 * row["stage_share"][k].as_f64().unwrap_or(0.0)))
+            .collect();
+        println!("    {}", cells.join(" | "));
+    }
+}

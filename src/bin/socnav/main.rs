@@ -1,0 +1,31 @@
+//! `socnav`: the command-line tool. `run` rolls out a batch and prints outcome rates, the paper's
+//! metrics and throughput; `bench` measures env-steps/s per stage over batch sizes;
+//! `check-config` validates a config and prints it resolved; `render` draws an episode.
+
+mod args;
+mod bench;
+mod check;
+mod policy;
+mod render;
+mod run;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+fn main() -> ExitCode {
+    let cli = args::Cli::parse();
+    let result = match cli.command {
+        args::Command::Run(a) => run::run(&a),
+        args::Command::Bench(a) => bench::bench(&a),
+        args::Command::CheckConfig(a) => check::check(&a),
+        args::Command::Render(a) => render::render(&a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

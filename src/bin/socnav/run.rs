@@ -1,0 +1,170 @@
+//! `socnav run`: a batched rollout. Prints the outcome rates, the paper's metric means over the
+//! finished episodes (spec 8.3) and the throughput of the stepping alone (the policy's time is
+//! not counted).
+
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressStyle};
+use serde_json::{Map, Value, json};
+use socnav::episodes::Aggregate;
+use socnav::{Actions, BatchEnv, Config, EnvOptions};
+
+use crate::args::{BackendChoice, RunArgs};
+use crate::policy::Policy;
+
+/// Metric keys reported, as the info keys of spec 8.2 (plus the table's episode columns).
+const METRICS: [&str; 24] = [
+    "STL",
+    "SPL",
+    "PATH_LENGTH",
+    "PERSONAL_SPACE_COMPLIANCE",
+    "FAILURE_TO_PROGRESS",
+    "STALLED_TIME",
+    "TIME_TO_REACH_GOAL",
+    "V_MIN",
+    "V_AVG",
+    "V_MAX",
+    "A_MIN",
+    "A_AVG",
+    "A_MAX",
+    "JERK_MIN",
+    "JERK_AVG",
+    "JERK_MAX",
+    "MINIMUM_DISTANCE_TO_HUMAN",
+    "MINIMUM_OBSTACLE_DISTANCE",
+    "AVERAGE_OBSTACLE_DISTANCE",
+    "TIME_TO_COLLISION",
+    "DISCOMFORT_DSRNN",
+    "DISCOMFORT_SNGNN",
+    "time_taken",
+    "return",
+];
+
+/// Make a batch on the chosen backend, saying which one runs.
+pub fn make_env(config: Config, n_envs: usize, seed: u64, backend: BackendChoice, threads: Option<usize>, quiet: bool) -> Result<BatchEnv, socnav::SimError> {
+    let env = BatchEnv::new(config, EnvOptions { n_envs, seed, threads, ..Default::default() })?;
+    if backend == BackendChoice::Auto && !quiet {
+        eprintln!("backend auto: using the CPU backend ({} threads); this build has no GPU backend", env.threads());
+    }
+    Ok(env)
+}
+
+pub fn run(a: &RunArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let config = Config::from_name_or_path(&a.config)?;
+    let mut env = make_env(config, a.envs, a.seed, a.backend, a.threads, a.json)?;
+    env.reset(Some(a.seed))?;
+    let mut policy = Policy::new(a.policy, a.seed, &env);
+    let mut actions = vec![0.0f32; 3 * a.envs];
+    let mut agg = Aggregate::default();
+    let bar = progress_bar(a.steps as u64);
+    let mut stepping = Duration::ZERO;
+    for _ in 0..a.steps {
+        policy.act(&env, &mut actions);
+        let t = Instant::now();
+        env.step(Actions::Continuous(&actions))?;
+        stepping += t.elapsed();
+        agg.add_finished(env.outputs());
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let env_steps = (a.envs * a.steps) as f64;
+    let rate = env_steps / stepping.as_secs_f64();
+    let summary = Summary { a, env: &env, agg: &agg, rate, seconds: stepping.as_secs_f64() };
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&summary.json())?);
+    } else {
+        summary.print();
+    }
+    Ok(())
+}
+
+fn progress_bar(steps: u64) -> ProgressBar {
+    // indicatif draws only when stderr is a terminal; in CI and pipes the bar stays silent.
+    let bar = ProgressBar::new(steps);
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {wide_bar} {pos}/{len} steps  {per_sec}  eta {eta}")
+            .expect("valid progress template"),
+    );
+    bar
+}
+
+struct Summary<'a> {
+    a: &'a RunArgs,
+    env: &'a BatchEnv,
+    agg: &'a Aggregate,
+    rate: f64,
+    seconds: f64,
+}
+
+fn finite_or_null(x: f64) -> Value {
+    if x.is_finite() { json!(x) } else { Value::Null }
+}
+
+impl Summary<'_> {
+    fn json(&self) -> Value {
+        let mut metrics = Map::new();
+        for key in METRICS {
+            metrics.insert(key.to_string(), finite_or_null(self.agg.mean(key)));
+        }
+        let m = |k: &str| finite_or_null(self.agg.mean(k));
+        json!({
+            "config": self.a.config,
+            "backend": self.env.backend_name(),
+            "threads": self.env.threads(),
+            "envs": self.a.envs,
+            "steps": self.a.steps,
+            "seed": self.a.seed,
+            "policy": format!("{:?}", self.a.policy).to_lowercase(),
+            "env_steps": self.a.envs * self.a.steps,
+            "seconds": self.seconds,
+            "env_steps_per_s": self.rate,
+            "episodes": self.agg.episodes(),
+            "success_rate": m("success"),
+            "collision_rate": m("collision"),
+            "collision_human_rate": m("collision_human"),
+            "collision_object_rate": m("collision_object"),
+            "collision_wall_rate": m("collision_wall"),
+            "timeout_rate": m("timeout"),
+            "out_of_map_rate": m("out_of_map"),
+            "mean_episode_length": m("length"),
+            "metrics": metrics,
+        })
+    }
+
+    fn print(&self) {
+        let a = self.a;
+        let pct = |k: &str| 100.0 * self.agg.mean(k);
+        println!(
+            "socnav run: {} | {} envs x {} steps | seed {} | {} backend, {} threads | {} policy",
+            a.config,
+            a.envs,
+            a.steps,
+            a.seed,
+            self.env.backend_name(),
+            self.env.threads(),
+            format!("{:?}", a.policy).to_lowercase()
+        );
+        println!("episodes finished: {} (mean length {:.1} steps)", self.agg.episodes(), self.agg.mean("length"));
+        println!(
+            "outcomes: success {:.1} %, collision {:.1} % (human {:.1} %, object {:.1} %, wall {:.1} %), timeout {:.1} %, out of map {:.1} %",
+            pct("success"),
+            pct("collision"),
+            pct("collision_human"),
+            pct("collision_object"),
+            pct("collision_wall"),
+            pct("timeout"),
+            pct("out_of_map")
+        );
+        println!("metrics (means over finished episodes, as the paper's table):");
+        for chunk in METRICS.chunks(4) {
+            let cells: Vec<String> = chunk.iter().map(|k| format!("{k:>26} {:>9.4}", self.agg.mean(k))).collect();
+            println!("{}", cells.join(""));
+        }
+        println!(
+            "throughput: {:.0} env-steps/s ({} env-steps in {:.2} s of stepping)",
+            self.rate,
+            a.envs * a.steps,
+            self.seconds
+        );
+    }
+}
