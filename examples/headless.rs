@@ -11,7 +11,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let config = Config::from_name_or_path(&args.next().unwrap_or_else(|| "exp1".into()))?;
     let n_envs: usize = args.next().map_or(Ok(1024), |a| a.parse())?;
     let steps: usize = args.next().map_or(Ok(1000), |a| a.parse())?;
-    let mut env = BatchEnv::new(config, EnvOptions { n_envs, seed: 0, ..Default::default() })?;
+    let mut env = BatchEnv::new(
+        config,
+        EnvOptions {
+            n_envs,
+            seed: 0,
+            ..Default::default()
+        },
+    )?;
     env.reset(None)?;
     // A fixed pseudo-random action sequence (a tiny LCG keeps the example dependency-free).
     let mut lcg = 12345u32;
@@ -21,7 +28,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for _ in 0..steps {
         for (i, a) in actions.iter_mut().enumerate() {
             lcg = lcg.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            *a = if i % 3 == 1 { 0.0 } else { (lcg >> 8) as f32 / 8_388_608.0 - 1.0 };
+            *a = if i % 3 == 1 {
+                0.0
+            } else {
+                (lcg >> 8) as f32 / 8_388_608.0 - 1.0
+            };
         }
         env.step(Actions::Continuous(&actions))?;
         let out = env.outputs();

@@ -26,7 +26,12 @@ pub struct EnvOptions {
 
 impl Default for EnvOptions {
     fn default() -> Self {
-        Self { n_envs: 1, seed: 0, autoreset: AutoresetMode::NextStep, threads: None }
+        Self {
+            n_envs: 1,
+            seed: 0,
+            autoreset: AutoresetMode::NextStep,
+            threads: None,
+        }
     }
 }
 
@@ -74,19 +79,34 @@ impl BatchEnv {
             ]));
         }
         if options.n_envs == 0 {
-            return Err(SimError::Shape("a batch needs at least one environment, got n_envs = 0".into()));
+            return Err(SimError::Shape(
+                "a batch needs at least one environment, got n_envs = 0".into(),
+            ));
         }
         if options.threads == Some(0) {
-            return Err(SimError::Shape("`threads` must be at least 1, got 0".into()));
+            return Err(SimError::Shape(
+                "`threads` must be at least 1, got 0".into(),
+            ));
         }
         let caps = Caps::from_config(&config);
-        let layout = ObsLayout::new(&caps, config.observation.padded, config.observation.robot_velocity);
+        let layout = ObsLayout::new(
+            &caps,
+            config.observation.padded,
+            config.observation.robot_velocity,
+        );
         let params = StepParams::new(&config, options.seed, options.autoreset);
         let state = BatchState::new(options.n_envs, caps);
         let out = Outputs::new(options.n_envs, layout);
         let backend = CpuBackend::new(params, state, out, options.threads)?;
         let actions = vec![0.0; 3 * options.n_envs];
-        Ok(Self { config, params, caps, layout, backend, actions })
+        Ok(Self {
+            config,
+            params,
+            caps,
+            layout,
+            backend,
+            actions,
+        })
     }
 
     /// Number of environments.
@@ -219,7 +239,11 @@ impl BatchEnv {
 
     /// Seconds spent per stage since creation, with the stage names.
     pub fn stage_seconds(&self) -> Vec<(&'static str, f64)> {
-        STAGES.iter().map(|s| s.name).zip(self.backend.stage_seconds()).collect()
+        STAGES
+            .iter()
+            .map(|s| s.name)
+            .zip(self.backend.stage_seconds())
+            .collect()
     }
 
     /// Replay mode: the random social events are not drawn (the golden replay re-synchronises
@@ -247,7 +271,10 @@ impl BatchEnv {
 
     fn check_env(&self, env: usize) -> Result<(), SimError> {
         if env >= self.n_envs() {
-            return Err(SimError::Shape(format!("environment index {env} out of range 0..{}", self.n_envs())));
+            return Err(SimError::Shape(format!(
+                "environment index {env} out of range 0..{}",
+                self.n_envs()
+            )));
         }
         Ok(())
     }

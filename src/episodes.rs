@@ -15,14 +15,22 @@ pub struct Aggregate {
 
 impl Default for Aggregate {
     fn default() -> Self {
-        Self { episodes: 0, sums: [0.0; N_EPISODE], finite: [0; N_EPISODE] }
+        Self {
+            episodes: 0,
+            sums: [0.0; N_EPISODE],
+            finite: [0; N_EPISODE],
+        }
     }
 }
 
 impl Aggregate {
     /// Add one episode's statistics (one row of [`crate::outputs::Outputs::episode`]).
     pub fn add(&mut self, row: &[f32]) {
-        assert_eq!(row.len(), N_EPISODE, "an episode row has {N_EPISODE} values");
+        assert_eq!(
+            row.len(),
+            N_EPISODE,
+            "an episode row has {N_EPISODE} values"
+        );
         self.episodes += 1;
         for (k, &v) in row.iter().enumerate() {
             if v.is_finite() {
@@ -57,8 +65,15 @@ impl Aggregate {
 
     /// Mean of statistic `key` over the episodes where it is finite (NaN if none).
     pub fn mean(&self, key: &str) -> f64 {
-        let k = EPISODE_KEYS.iter().position(|k| *k == key).unwrap_or_else(|| panic!("unknown episode statistic {key}"));
-        if self.finite[k] == 0 { f64::NAN } else { self.sums[k] / self.finite[k] as f64 }
+        let k = EPISODE_KEYS
+            .iter()
+            .position(|k| *k == key)
+            .unwrap_or_else(|| panic!("unknown episode statistic {key}"));
+        if self.finite[k] == 0 {
+            f64::NAN
+        } else {
+            self.sums[k] / self.finite[k] as f64
+        }
     }
 
     /// Every statistic's mean, in [`EPISODE_KEYS`] order.

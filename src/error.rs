@@ -30,9 +30,12 @@ impl SimError {
     /// Prefix a configuration error with the file it came from.
     pub fn in_file(self, path: &Path) -> Self {
         match self {
-            SimError::Config(problems) => {
-                SimError::Config(problems.into_iter().map(|p| format!("{}: {p}", path.display())).collect())
-            }
+            SimError::Config(problems) => SimError::Config(
+                problems
+                    .into_iter()
+                    .map(|p| format!("{}: {p}", path.display()))
+                    .collect(),
+            ),
             other => other,
         }
     }

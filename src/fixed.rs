@@ -11,7 +11,10 @@ pub struct Fixed<T: Copy + Default, const N: usize> {
 
 impl<T: Copy + Default, const N: usize> Default for Fixed<T, N> {
     fn default() -> Self {
-        Self { items: [T::default(); N], len: 0 }
+        Self {
+            items: [T::default(); N],
+            len: 0,
+        }
     }
 }
 

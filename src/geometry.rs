@@ -37,7 +37,14 @@ impl Rect {
     /// Rectangle centred at (x, y) with heading `theta`, `length` along local x and `width` along local y.
     pub fn new(x: f32, y: f32, theta: f32, length: f32, width: f32) -> Self {
         let (s, c) = math::sin_cos(theta);
-        Self { x, y, c, s, hl: 0.5 * length, hw: 0.5 * width }
+        Self {
+            x,
+            y,
+            c,
+            s,
+            hl: 0.5 * length,
+            hw: 0.5 * width,
+        }
     }
 
     /// World point → rectangle frame.
@@ -58,7 +65,10 @@ impl Rect {
             2 => (-self.hl, -self.hw),
             _ => (self.hl, -self.hw),
         };
-        (self.x + (lx * self.c - ly * self.s), self.y + (lx * self.s + ly * self.c))
+        (
+            self.x + (lx * self.c - ly * self.s),
+            self.y + (lx * self.s + ly * self.c),
+        )
     }
 
     /// The point of the rectangle nearest to (px, py) (the point itself when inside).
@@ -67,7 +77,10 @@ impl Rect {
         let (lx, ly) = self.to_local(px, py);
         let qx = lx.clamp(-self.hl, self.hl);
         let qy = ly.clamp(-self.hw, self.hw);
-        (self.x + (qx * self.c - qy * self.s), self.y + (qx * self.s + qy * self.c))
+        (
+            self.x + (qx * self.c - qy * self.s),
+            self.y + (qx * self.s + qy * self.c),
+        )
     }
 
     /// Squared distance from (px, py) to the rectangle (0 inside).
@@ -142,7 +155,11 @@ pub fn origin_segment_distance(ax: f32, ay: f32, bx: f32, by: f32) -> f32 {
     let ex = bx - ax;
     let ey = by - ay;
     let len_sq = ex * ex + ey * ey;
-    let t = if len_sq > 0.0 { (-(ax * ex + ay * ey) / len_sq).clamp(0.0, 1.0) } else { 0.0 };
+    let t = if len_sq > 0.0 {
+        (-(ax * ex + ay * ey) / len_sq).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let px = ax + t * ex;
     let py = ay + t * ey;
     (px * px + py * py).sqrt()
@@ -154,22 +171,75 @@ mod tests {
 
     #[test]
     fn discs_touching_intersect() {
-        let a = Disc { x: 0.0, y: 0.0, r: 1.0 };
-        assert!(disc_disc(&a, &Disc { x: 2.0, y: 0.0, r: 1.0 }));
-        assert!(!disc_disc(&a, &Disc { x: 2.001, y: 0.0, r: 1.0 }));
+        let a = Disc {
+            x: 0.0,
+            y: 0.0,
+            r: 1.0,
+        };
+        assert!(disc_disc(
+            &a,
+            &Disc {
+                x: 2.0,
+                y: 0.0,
+                r: 1.0
+            }
+        ));
+        assert!(!disc_disc(
+            &a,
+            &Disc {
+                x: 2.001,
+                y: 0.0,
+                r: 1.0
+            }
+        ));
     }
 
     #[test]
     fn disc_against_rotated_rect() {
         // A 2 x 1 rectangle turned by 90°: it spans |x| <= 0.5, |y| <= 1.
         let r = Rect::new(0.0, 0.0, math::FRAC_PI_2, 2.0, 1.0);
-        assert!(disc_rect(&Disc { x: 0.0, y: 1.4, r: 0.41 }, &r));
-        assert!(!disc_rect(&Disc { x: 0.0, y: 1.4, r: 0.39 }, &r));
-        assert!(!disc_rect(&Disc { x: 0.9, y: 0.0, r: 0.39 }, &r));
+        assert!(disc_rect(
+            &Disc {
+                x: 0.0,
+                y: 1.4,
+                r: 0.41
+            },
+            &r
+        ));
+        assert!(!disc_rect(
+            &Disc {
+                x: 0.0,
+                y: 1.4,
+                r: 0.39
+            },
+            &r
+        ));
+        assert!(!disc_rect(
+            &Disc {
+                x: 0.9,
+                y: 0.0,
+                r: 0.39
+            },
+            &r
+        ));
         // Corner region: nearest point is the corner (0.5, 1).
         let d = (0.3f32 * 0.3 + 0.3 * 0.3).sqrt();
-        assert!(disc_rect(&Disc { x: 0.8, y: 1.3, r: d + 1e-4 }, &r));
-        assert!(!disc_rect(&Disc { x: 0.8, y: 1.3, r: d - 1e-4 }, &r));
+        assert!(disc_rect(
+            &Disc {
+                x: 0.8,
+                y: 1.3,
+                r: d + 1e-4
+            },
+            &r
+        ));
+        assert!(!disc_rect(
+            &Disc {
+                x: 0.8,
+                y: 1.3,
+                r: d - 1e-4
+            },
+            &r
+        ));
     }
 
     #[test]
@@ -180,7 +250,10 @@ mod tests {
         assert!(rect_rect(&a, &b), "diamond corner reaches x = 1.2929 < 1");
         let c = Rect::new(2.0 + 0.75, 0.0, math::PI / 4.0, 2.0, 2.0);
         assert!(!rect_rect(&a, &c));
-        assert!(rect_rect(&a, &Rect::new(0.0, 0.0, 0.3, 0.1, 0.1)), "containment intersects");
+        assert!(
+            rect_rect(&a, &Rect::new(0.0, 0.0, 0.3, 0.1, 0.1)),
+            "containment intersects"
+        );
     }
 
     #[test]

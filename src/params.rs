@@ -8,7 +8,6 @@ use crate::config::{
     Config, HumanPolicy, Kinematics, LaptopUserObstacle, OrcaNeighbourVelocity, RewardKind, Shape,
 };
 
-
 /// How finished environments are reset (DESIGN.md section 3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum AutoresetMode {
@@ -236,7 +235,9 @@ impl StepParams {
             reward_discomfort_factor: c.reward.discomfort_factor,
             obs_padded: u32::from(c.observation.padded),
             obs_robot_velocity: u32::from(c.observation.robot_velocity),
-            orca_actual_velocity: u32::from(c.model.orca_neighbour_velocity == OrcaNeighbourVelocity::Actual),
+            orca_actual_velocity: u32::from(
+                c.model.orca_neighbour_velocity == OrcaNeighbourVelocity::Actual,
+            ),
             group_velocity_divided: u32::from(c.model.group_velocity_divided),
             laptop_user_half_side: match c.model.laptop_user_obstacle {
                 LaptopUserObstacle::Wide => 2.0 * c.human.diameter,
@@ -289,5 +290,3 @@ pub mod count {
     /// Laptop users who never leave.
     pub const LAPTOP_USERS_ND: usize = 11;
 }
-
-

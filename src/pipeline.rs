@@ -29,10 +29,24 @@ impl<'a> Batch<'a> {
         let (s0, s1) = self.s.split_at(mid);
         let (o0, o1) = self.o.split_at(mid);
         // Resets run without actions: both halves then get none.
-        let (a0, a1) = if self.actions.is_empty() { (self.actions, self.actions) } else { self.actions.split_at(3 * mid) };
+        let (a0, a1) = if self.actions.is_empty() {
+            (self.actions, self.actions)
+        } else {
+            self.actions.split_at(3 * mid)
+        };
         (
-            Batch { s: s0, o: o0, actions: a0, error: None },
-            Batch { s: s1, o: o1, actions: a1, error: self.error },
+            Batch {
+                s: s0,
+                o: o0,
+                actions: a0,
+                error: None,
+            },
+            Batch {
+                s: s1,
+                o: o1,
+                actions: a1,
+                error: self.error,
+            },
         )
     }
 
@@ -59,17 +73,56 @@ pub struct Stage {
 /// The stages of a step, in order. Crowd and laptop-use formation progress (after `goals`) and
 /// the random social events (after `observation`) take their places here with social structure.
 pub const STAGES: [Stage; 13] = [
-    Stage { name: "begin_step", run: systems::begin_step::begin_step },
-    Stage { name: "robot_motion", run: systems::robot_motion::robot_motion },
-    Stage { name: "shadow_robot", run: systems::shadow_robot::shadow_robot },
-    Stage { name: "group_velocities", run: systems::group_velocities::group_velocities },
-    Stage { name: "human_motion", run: systems::human_motion::human_motion },
-    Stage { name: "group_motion", run: systems::group_motion::group_motion },
-    Stage { name: "goals", run: systems::goals::goals },
-    Stage { name: "contacts", run: systems::contacts::contacts },
-    Stage { name: "termination", run: systems::termination::termination },
-    Stage { name: "reward", run: systems::reward::reward },
-    Stage { name: "metrics", run: systems::metrics::metrics },
-    Stage { name: "observation", run: systems::observation::observation },
-    Stage { name: "autoreset", run: systems::autoreset::autoreset },
+    Stage {
+        name: "begin_step",
+        run: systems::begin_step::begin_step,
+    },
+    Stage {
+        name: "robot_motion",
+        run: systems::robot_motion::robot_motion,
+    },
+    Stage {
+        name: "shadow_robot",
+        run: systems::shadow_robot::shadow_robot,
+    },
+    Stage {
+        name: "group_velocities",
+        run: systems::group_velocities::group_velocities,
+    },
+    Stage {
+        name: "human_motion",
+        run: systems::human_motion::human_motion,
+    },
+    Stage {
+        name: "group_motion",
+        run: systems::group_motion::group_motion,
+    },
+    Stage {
+        name: "goals",
+        run: systems::goals::goals,
+    },
+    Stage {
+        name: "contacts",
+        run: systems::contacts::contacts,
+    },
+    Stage {
+        name: "termination",
+        run: systems::termination::termination,
+    },
+    Stage {
+        name: "reward",
+        run: systems::reward::reward,
+    },
+    Stage {
+        name: "metrics",
+        run: systems::metrics::metrics,
+    },
+    Stage {
+        name: "observation",
+        run: systems::observation::observation,
+    },
+    Stage {
+        name: "autoreset",
+        run: systems::autoreset::autoreset,
+    },
 ];

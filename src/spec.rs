@@ -75,7 +75,12 @@ impl ObsLayout {
             *o = at;
             at += n * RECORD;
         }
-        Self { robot, capacity, offset, dim: at }
+        Self {
+            robot,
+            capacity,
+            offset,
+            dim: at,
+        }
     }
 }
 
@@ -119,7 +124,10 @@ pub const INFO_KEYS: [&str; 32] = [
 
 /// Index of each key in [`INFO_KEYS`].
 pub mod info {
-    #![expect(missing_docs, reason = "each constant is the index of the info key of the same name")]
+    #![expect(
+        missing_docs,
+        reason = "each constant is the index of the info key of the same name"
+    )]
     pub const OUT_OF_MAP: usize = 0;
     pub const SUCCESS: usize = 1;
     pub const COLLISION: usize = 2;

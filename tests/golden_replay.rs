@@ -29,13 +29,19 @@ fn golden_replay() {
     let dir = golden_dir();
     let filter = std::env::var("SOCNAV_GOLDEN_FILTER").ok();
     let episodes = load_episodes(&dir, filter.as_deref());
-    assert!(!episodes.is_empty(), "no golden episodes in {} (filter {filter:?})", dir.display());
+    assert!(
+        !episodes.is_empty(),
+        "no golden episodes in {} (filter {filter:?})",
+        dir.display()
+    );
     let mut total = Report::default();
     let mut replayed = 0;
     for (name, ep) in &episodes {
         let config_name = ep.config_name();
         if !REPLAYABLE.contains(&config_name.as_str()) {
-            println!("SKIP {name}: config `{config_name}` needs features this build does not replay yet (social events)");
+            println!(
+                "SKIP {name}: config `{config_name}` needs features this build does not replay yet (social events)"
+            );
             continue;
         }
         let report = replay(name, ep);
@@ -44,23 +50,36 @@ fn golden_replay() {
         replayed += 1;
     }
     println!("TOTAL over {replayed} episodes: {}", total.summary());
-    assert!(replayed > 0, "no replayable episode matched the filter {filter:?}");
+    assert!(
+        replayed > 0,
+        "no replayable episode matched the filter {filter:?}"
+    );
     total.assert_ok();
 }
 
 /// Replay one episode step by step.
 fn replay(name: &str, ep: &Episode) -> Report {
     let config = config_for(ep).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let mut env = BatchEnv::new(config, EnvOptions { n_envs: 1, seed: 0, ..Default::default() })
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let mut env = BatchEnv::new(
+        config,
+        EnvOptions {
+            n_envs: 1,
+            seed: 0,
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"));
     env.set_replay(true);
     let mut report = Report::new(name);
-    env.set_state(0, &ep.document(ep.initial_state())).unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
+    env.set_state(0, &ep.document(ep.initial_state()))
+        .unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
     report.compare_obs(&env, ep.initial_obs(), "initial");
     let mut prev = ep.initial_state();
     for step in ep.steps() {
-        env.set_state(0, &ep.document(prev)).unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
-        env.step(Actions::Continuous(&step.action())).unwrap_or_else(|e| panic!("{name}: step: {e}"));
+        env.set_state(0, &ep.document(prev))
+            .unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
+        env.step(Actions::Continuous(&step.action()))
+            .unwrap_or_else(|e| panic!("{name}: step: {e}"));
         report.compare_step(&env, ep, step, prev);
         prev = step.state();
     }

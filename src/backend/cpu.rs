@@ -31,16 +31,28 @@ pub struct CpuBackend {
 
 impl CpuBackend {
     /// A backend over `state` and `out` running on `threads` threads (all cores when `None`).
-    pub fn new(params: StepParams, state: BatchState, out: Outputs, threads: Option<usize>) -> Result<Self, SimError> {
-        let mut builder = rayon::ThreadPoolBuilder::new().thread_name(|i| format!("socnav-cpu-{i}"));
+    pub fn new(
+        params: StepParams,
+        state: BatchState,
+        out: Outputs,
+        threads: Option<usize>,
+    ) -> Result<Self, SimError> {
+        let mut builder =
+            rayon::ThreadPoolBuilder::new().thread_name(|i| format!("socnav-cpu-{i}"));
         if let Some(n) = threads {
             builder = builder.num_threads(n);
         }
-        let pool = builder
-            .build()
-            .map_err(|e| SimError::BackendUnavailable(format!("cannot start the CPU thread pool: {e}")))?;
+        let pool = builder.build().map_err(|e| {
+            SimError::BackendUnavailable(format!("cannot start the CPU thread pool: {e}"))
+        })?;
         let stage_nanos = STAGES.iter().map(|_| AtomicU64::new(0)).collect();
-        Ok(Self { params, state, out, pool, stage_nanos })
+        Ok(Self {
+            params,
+            state,
+            out,
+            pool,
+            stage_nanos,
+        })
     }
 
     /// The step constants.
@@ -59,8 +71,17 @@ impl CpuBackend {
     }
 
     /// Run `work` over every environment of the batch, in parallel chunks.
-    fn run(&mut self, actions: &[f32], work: &(dyn Fn(&StepParams, &mut Batch<'_>, &[AtomicU64]) + Sync)) -> Result<(), SimError> {
-        let batch = Batch { s: self.state.chunk(), o: self.out.chunk(), actions, error: None };
+    fn run(
+        &mut self,
+        actions: &[f32],
+        work: &(dyn Fn(&StepParams, &mut Batch<'_>, &[AtomicU64]) + Sync),
+    ) -> Result<(), SimError> {
+        let batch = Batch {
+            s: self.state.chunk(),
+            o: self.out.chunk(),
+            actions,
+            error: None,
+        };
         let params = &self.params;
         let nanos = &self.stage_nanos;
         let err = self.pool.install(|| split(params, batch, nanos, work));
@@ -120,7 +141,11 @@ impl Backend for CpuBackend {
     }
 
     fn step(&mut self, actions: &[f32]) -> Result<(), SimError> {
-        assert_eq!(actions.len(), 3 * self.state.n_envs, "actions are validated by BatchEnv::step");
+        assert_eq!(
+            actions.len(),
+            3 * self.state.n_envs,
+            "actions are validated by BatchEnv::step"
+        );
         self.run(actions, &step_chunk)
     }
 
@@ -147,7 +172,10 @@ impl Backend for CpuBackend {
     }
 
     fn stage_seconds(&self) -> Vec<f64> {
-        self.stage_nanos.iter().map(|n| n.load(Ordering::Relaxed) as f64 * 1e-9).collect()
+        self.stage_nanos
+            .iter()
+            .map(|n| n.load(Ordering::Relaxed) as f64 * 1e-9)
+            .collect()
     }
 
     fn name(&self) -> &'static str {

@@ -62,7 +62,10 @@ pub struct Episode {
 
 impl Default for Episode {
     fn default() -> Self {
-        Self { length: 200, time_step: 1.0 }
+        Self {
+            length: 200,
+            time_step: 1.0,
+        }
     }
 }
 
@@ -169,7 +172,11 @@ pub struct Group {
 
 impl Default for Group {
     fn default() -> Self {
-        Self { radius: 0.72, goal_radius: 1.44, velocity_noise_std: 0.005 }
+        Self {
+            radius: 0.72,
+            goal_radius: 1.44,
+            velocity_noise_std: 0.005,
+        }
     }
 }
 
@@ -184,7 +191,9 @@ pub struct LaptopUse {
 
 impl Default for LaptopUse {
     fn default() -> Self {
-        Self { human_distance: 0.3 }
+        Self {
+            human_distance: 0.3,
+        }
     }
 }
 
@@ -330,12 +339,21 @@ impl Counts {
             ("plants", self.plants),
             ("laptops", self.laptops),
             ("moving_groups", self.moving_groups),
-            ("moving_groups_non_dispersing", self.moving_groups_non_dispersing),
+            (
+                "moving_groups_non_dispersing",
+                self.moving_groups_non_dispersing,
+            ),
             ("standing_groups", self.standing_groups),
-            ("standing_groups_non_dispersing", self.standing_groups_non_dispersing),
+            (
+                "standing_groups_non_dispersing",
+                self.standing_groups_non_dispersing,
+            ),
             ("group_size", self.group_size),
             ("laptop_users", self.laptop_users),
-            ("laptop_users_non_dispersing", self.laptop_users_non_dispersing),
+            (
+                "laptop_users_non_dispersing",
+                self.laptop_users_non_dispersing,
+            ),
         ]
     }
 
@@ -433,7 +451,10 @@ pub struct Observation {
 
 impl Default for Observation {
     fn default() -> Self {
-        Self { padded: false, robot_velocity: false }
+        Self {
+            padded: false,
+            robot_velocity: false,
+        }
     }
 }
 
@@ -495,7 +516,10 @@ pub struct Render {
 
 impl Default for Render {
     fn default() -> Self {
-        Self { resolution: 1000, frame_ms: 30 }
+        Self {
+            resolution: 1000,
+            frame_ms: 30,
+        }
     }
 }
 
@@ -503,12 +527,20 @@ impl Config {
     /// Parse a TOML document, then validate it; every problem is reported at once.
     pub fn from_toml_str(text: &str) -> Result<Self, SimError> {
         let mut unknown = Vec::new();
-        let de = toml::Deserializer::parse(text).map_err(|e| SimError::Config(vec![e.to_string()]))?;
+        let de =
+            toml::Deserializer::parse(text).map_err(|e| SimError::Config(vec![e.to_string()]))?;
         let config: Config = serde_ignored::deserialize(de, |path| unknown.push(path.to_string()))
             .map_err(|e| SimError::Config(vec![e.to_string()]))?;
-        let mut problems: Vec<String> = unknown.into_iter().map(|k| format!("unknown key `{k}`")).collect();
+        let mut problems: Vec<String> = unknown
+            .into_iter()
+            .map(|k| format!("unknown key `{k}`"))
+            .collect();
         problems.extend(validate(&config));
-        if problems.is_empty() { Ok(config) } else { Err(SimError::Config(problems)) }
+        if problems.is_empty() {
+            Ok(config)
+        } else {
+            Err(SimError::Config(problems))
+        }
     }
 
     /// Read and validate a TOML file.
@@ -525,7 +557,9 @@ impl Config {
         if path.exists() {
             return Self::from_file(path);
         }
-        let builtin = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs").join(format!("{name}.toml"));
+        let builtin = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("configs")
+            .join(format!("{name}.toml"));
         if builtin.exists() {
             return Self::from_file(builtin);
         }
@@ -544,6 +578,10 @@ impl Config {
     pub fn from_socnavgym(yaml: &serde_json::Value) -> Result<Self, SimError> {
         let config = socnavgym::convert(yaml)?;
         let problems = validate(&config);
-        if problems.is_empty() { Ok(config) } else { Err(SimError::Config(problems)) }
+        if problems.is_empty() {
+            Ok(config)
+        } else {
+            Err(SimError::Config(problems))
+        }
     }
 }

@@ -17,7 +17,8 @@ impl<'a> Reader<'a> {
     fn get(&mut self, section: &str, key: &str) -> Option<&'a Value> {
         let value = self.root.get(section).and_then(|s| s.get(key));
         if value.is_none() {
-            self.problems.push(format!("SocNavGym config lacks `{section}.{key}`"));
+            self.problems
+                .push(format!("SocNavGym config lacks `{section}.{key}`"));
         }
         value
     }
@@ -26,7 +27,8 @@ impl<'a> Reader<'a> {
         match self.get(section, key).map(Value::as_f64) {
             Some(Some(x)) => x as f32,
             Some(None) => {
-                self.problems.push(format!("SocNavGym `{section}.{key}` must be a number"));
+                self.problems
+                    .push(format!("SocNavGym `{section}.{key}` must be a number"));
                 0.0
             }
             None => 0.0,
@@ -37,7 +39,8 @@ impl<'a> Reader<'a> {
         match self.get(section, key).map(Value::as_i64) {
             Some(Some(x)) => x as i32,
             Some(None) => {
-                self.problems.push(format!("SocNavGym `{section}.{key}` must be an integer"));
+                self.problems
+                    .push(format!("SocNavGym `{section}.{key}` must be an integer"));
                 0
             }
             None => 0,
@@ -45,14 +48,18 @@ impl<'a> Reader<'a> {
     }
 
     fn range(&mut self, key: &str) -> [i32; 2] {
-        [self.int("env", &format!("min_{key}")), self.int("env", &format!("max_{key}"))]
+        [
+            self.int("env", &format!("min_{key}")),
+            self.int("env", &format!("max_{key}")),
+        ]
     }
 
     fn string(&mut self, section: &str, key: &str) -> String {
         match self.get(section, key).map(Value::as_str) {
             Some(Some(s)) => s.to_string(),
             Some(None) => {
-                self.problems.push(format!("SocNavGym `{section}.{key}` must be a string"));
+                self.problems
+                    .push(format!("SocNavGym `{section}.{key}` must be a string"));
                 String::new()
             }
             None => String::new(),
@@ -63,7 +70,8 @@ impl<'a> Reader<'a> {
         match self.get(section, key).map(Value::as_bool) {
             Some(Some(b)) => b,
             Some(None) => {
-                self.problems.push(format!("SocNavGym `{section}.{key}` must be true or false"));
+                self.problems
+                    .push(format!("SocNavGym `{section}.{key}` must be true or false"));
                 false
             }
             None => false,
@@ -73,7 +81,10 @@ impl<'a> Reader<'a> {
 
 /// Convert the 0.1.1 dict; validation is left to the caller.
 pub(super) fn convert(yaml: &Value) -> Result<Config, SimError> {
-    let mut r = Reader { root: yaml, problems: Vec::new() };
+    let mut r = Reader {
+        root: yaml,
+        problems: Vec::new(),
+    };
     let mut c = Config::default();
     c.render.resolution = r.int("rendering", "resolution_view").max(0) as u32;
     c.render.frame_ms = r.int("rendering", "milliseconds").max(0) as u32;
@@ -85,7 +96,9 @@ pub(super) fn convert(yaml: &Value) -> Result<Config, SimError> {
         "diff-drive" => Kinematics::DiffDrive,
         "holonomic" => Kinematics::Holonomic,
         other => {
-            r.problems.push(format!("SocNavGym `robot.robot_type` {other:?} is not diff-drive or holonomic"));
+            r.problems.push(format!(
+                "SocNavGym `robot.robot_type` {other:?} is not diff-drive or holonomic"
+            ));
             Kinematics::DiffDrive
         }
     };
@@ -96,7 +109,9 @@ pub(super) fn convert(yaml: &Value) -> Result<Config, SimError> {
         "orca" => HumanPolicy::Orca,
         "sfm" => HumanPolicy::Sfm,
         other => {
-            r.problems.push(format!("SocNavGym `human.human_policy` {other:?} is not random, orca or sfm"));
+            r.problems.push(format!(
+                "SocNavGym `human.human_policy` {other:?} is not random, orca or sfm"
+            ));
             HumanPolicy::Random
         }
     };
@@ -156,12 +171,18 @@ pub(super) fn convert(yaml: &Value) -> Result<Config, SimError> {
         "no-walls" => Shape::NoWalls,
         "random" => Shape::Random,
         other => {
-            r.problems.push(format!("SocNavGym `env.set_shape` {other:?} is not a known shape"));
+            r.problems.push(format!(
+                "SocNavGym `env.set_shape` {other:?} is not a known shape"
+            ));
             Shape::Square
         }
     };
     c.room.corridors = r.bool("env", "add_corridors");
     c.room.size_x = r.range("map_x");
     c.room.size_y = r.range("map_y");
-    if r.problems.is_empty() { Ok(c) } else { Err(SimError::Config(r.problems)) }
+    if r.problems.is_empty() {
+        Ok(c)
+    } else {
+        Err(SimError::Config(r.problems))
+    }
 }

@@ -4,8 +4,10 @@
 use super::{Config, Shape};
 
 /// Fraction of the sampling area that the footprints of the largest entity counts may cover.
-/// Above it, rejection sampling spends most attempts failing; 0.1.1's paper rooms use about 10 %.
-const MAX_FILL_FRACTION: f32 = 0.5;
+/// Random sequential placement of discs jams at about 55 % coverage (the random sequential
+/// adsorption limit), so beyond it a reset cannot succeed; 0.1.1's paper rooms use about 5 %,
+/// its largest derived configs about 42 %.
+const MAX_FILL_FRACTION: f32 = 0.55;
 
 /// Every problem of `config`, as human-readable lines naming the key and value (empty if valid).
 pub fn validate(config: &Config) -> Vec<String> {
@@ -24,31 +26,40 @@ struct Problems(Vec<String>);
 impl Problems {
     fn positive(&mut self, key: &str, x: f32) {
         if !(x.is_finite() && x > 0.0) {
-            self.0.push(format!("`{key}` must be a finite number > 0, got {x}"));
+            self.0
+                .push(format!("`{key}` must be a finite number > 0, got {x}"));
         }
     }
     fn non_negative(&mut self, key: &str, x: f32) {
         if !(x.is_finite() && x >= 0.0) {
-            self.0.push(format!("`{key}` must be a finite number >= 0, got {x}"));
+            self.0
+                .push(format!("`{key}` must be a finite number >= 0, got {x}"));
         }
     }
     fn probability(&mut self, key: &str, p: f32) {
         if !(0.0..=1.0).contains(&p) {
-            self.0.push(format!("`{key}` is a probability and must lie in [0, 1], got {p}"));
+            self.0.push(format!(
+                "`{key}` is a probability and must lie in [0, 1], got {p}"
+            ));
         }
     }
     fn angle(&mut self, key: &str, a: f32) {
         // 2π rounded up to f32 plus slack: SocNavGym configs write 6.2831853 for "see everything".
         if !(a.is_finite() && a > 0.0 && a <= 6.2832) {
-            self.0.push(format!("`{key}` must lie in (0, 2π] rad, got {a}"));
+            self.0
+                .push(format!("`{key}` must lie in (0, 2π] rad, got {a}"));
         }
     }
     fn range(&mut self, key: &str, r: [i32; 2]) {
         if r[0] < 0 {
-            self.0.push(format!("`{key}` minimum must be >= 0, got {}", r[0]));
+            self.0
+                .push(format!("`{key}` minimum must be >= 0, got {}", r[0]));
         }
         if r[0] > r[1] {
-            self.0.push(format!("`{key}` minimum {} is greater than its maximum {}", r[0], r[1]));
+            self.0.push(format!(
+                "`{key}` minimum {} is greater than its maximum {}",
+                r[0], r[1]
+            ));
         }
     }
 }
@@ -83,10 +94,22 @@ fn check_scalars(c: &Config, v: &mut Problems) {
     v.positive("objects.wall_segment_size", o.wall_segment_size);
     v.non_negative("room.margin", c.room.margin);
     let e = &c.events;
-    v.probability("events.crowd_dispersal_probability", e.crowd_dispersal_probability);
-    v.probability("events.laptop_dispersal_probability", e.laptop_dispersal_probability);
-    v.probability("events.crowd_formation_probability", e.crowd_formation_probability);
-    v.probability("events.laptop_formation_probability", e.laptop_formation_probability);
+    v.probability(
+        "events.crowd_dispersal_probability",
+        e.crowd_dispersal_probability,
+    );
+    v.probability(
+        "events.laptop_dispersal_probability",
+        e.laptop_dispersal_probability,
+    );
+    v.probability(
+        "events.crowd_formation_probability",
+        e.crowd_formation_probability,
+    );
+    v.probability(
+        "events.laptop_formation_probability",
+        e.laptop_formation_probability,
+    );
     let r = &c.reward;
     for (key, x) in [
         ("reward.reach", r.reach),
@@ -103,7 +126,10 @@ fn check_scalars(c: &Config, v: &mut Problems) {
     }
     v.non_negative("reward.discomfort_distance", r.discomfort_distance);
     if c.render.resolution < 16 {
-        v.0.push(format!("`render.resolution` must be >= 16 pixels, got {}", c.render.resolution));
+        v.0.push(format!(
+            "`render.resolution` must be >= 16 pixels, got {}",
+            c.render.resolution
+        ));
     }
 }
 
@@ -111,10 +137,16 @@ fn check_counts(c: &Config, v: &mut Problems) {
     v.range("room.size_x", c.room.size_x);
     v.range("room.size_y", c.room.size_y);
     if c.room.size_x[0] <= 0 {
-        v.0.push(format!("`room.size_x` must be at least 1 m, got {:?}", c.room.size_x));
+        v.0.push(format!(
+            "`room.size_x` must be at least 1 m, got {:?}",
+            c.room.size_x
+        ));
     }
     if uses_independent_y(c.room.shape) && c.room.size_y[0] <= 0 {
-        v.0.push(format!("`room.size_y` must be at least 1 m, got {:?}", c.room.size_y));
+        v.0.push(format!(
+            "`room.size_y` must be at least 1 m, got {:?}",
+            c.room.size_y
+        ));
     }
     for (key, range) in c.counts.named() {
         v.range(&format!("counts.{key}"), range);
@@ -136,7 +168,10 @@ fn check_counts(c: &Config, v: &mut Problems) {
             c.counts.tables[0]
         ));
     }
-    if c.counts.dynamic_humans[1] + c.counts.static_humans[1] + c.counts.max_laptop_users() + c.counts.max_groups()
+    if c.counts.dynamic_humans[1]
+        + c.counts.static_humans[1]
+        + c.counts.max_laptop_users()
+        + c.counts.max_groups()
         > 0
         && c.human.diameter <= 0.0
     {
@@ -153,7 +188,11 @@ fn uses_independent_y(shape: Shape) -> bool {
 /// their footprints together must leave room for rejection sampling.
 fn check_room_fits(c: &Config, v: &mut Problems) {
     let smallest_x = c.room.size_x[0] as f32;
-    let smallest_y = if uses_independent_y(c.room.shape) { c.room.size_y[0] as f32 } else { smallest_x };
+    let smallest_y = if uses_independent_y(c.room.shape) {
+        c.room.size_y[0] as f32
+    } else {
+        smallest_x
+    };
     let box_x = smallest_x - 2.0 * c.room.margin;
     let box_y = smallest_y - 2.0 * c.room.margin;
     if box_x <= 0.0 || box_y <= 0.0 {
@@ -165,7 +204,8 @@ fn check_room_fits(c: &Config, v: &mut Problems) {
         return;
     }
     let o = &c.objects;
-    let table_circumradius = (0.25 * o.table_length * o.table_length + 0.25 * o.table_width * o.table_width).sqrt();
+    let table_circumradius =
+        (0.25 * o.table_length * o.table_length + 0.25 * o.table_width * o.table_width).sqrt();
     let group_radius = c.group.radius + 0.5 * c.human.diameter;
     let side = box_x.min(box_y);
     for (what, radius, asked) in [
@@ -185,19 +225,28 @@ fn check_room_fits(c: &Config, v: &mut Problems) {
     let n = &c.counts;
     let disc = |r: f32| std::f32::consts::PI * r * r;
     let max_group_members = n.max_groups() * n.group_size[1];
-    let humans = n.static_humans[1] + n.dynamic_humans[1] + n.max_laptop_users() + max_group_members;
-    let footprint = disc(c.robot.radius + c.robot.goal_radius)
-        + humans as f32 * disc(0.5 * c.human.diameter + c.human.goal_radius)
+    let humans =
+        n.static_humans[1] + n.dynamic_humans[1] + n.max_laptop_users() + max_group_members;
+    // Entities only (goals may lie anywhere free); a group's disc covers its members; laptops on
+    // tables take no floor space.
+    let lone_humans = humans - max_group_members;
+    let free_laptops = if n.tables[0] > 0 { 0 } else { n.laptops[1] };
+    let footprint = disc(c.robot.radius)
+        + lone_humans as f32 * disc(0.5 * c.human.diameter)
         + n.max_groups() as f32 * disc(group_radius)
         + n.plants[1] as f32 * disc(o.plant_radius)
         + n.tables[1] as f32 * o.table_length * o.table_width
-        + n.laptops[1] as f32 * o.laptop_length * o.laptop_width;
-    let l_fraction = if c.room.shape == Shape::L { 7.0 / 9.0 } else { 1.0 };
+        + free_laptops as f32 * o.laptop_length * o.laptop_width;
+    let l_fraction = if c.room.shape == Shape::L {
+        7.0 / 9.0
+    } else {
+        1.0
+    };
     let area = box_x * box_y * l_fraction;
     if footprint > MAX_FILL_FRACTION * area {
         v.0.push(format!(
-            "room too small: the largest counts need about {footprint:.1} m² of free space but the smallest room \
-             offers {area:.1} m² to sample in (at most {:.0} % may be covered)",
+            "room too small: the largest counts cover about {footprint:.1} m² but the smallest room offers \
+             {area:.1} m² to sample in; random placement jams beyond {:.0} % coverage",
             MAX_FILL_FRACTION * 100.0
         ));
     }

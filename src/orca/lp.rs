@@ -123,7 +123,9 @@ pub fn lp3(
             // `result` violates line i by more than the current maximum.
             proj.clear();
             proj.extend_from_slice(&lines[..num_obst_lines]);
-            for lj in &lines[num_obst_lines..i] {
+            // RVO2 loops j from numObstLines to i: empty when LP2 failed on an obstacle line
+            // (an agent inside overlapping obstacles), so i may be below num_obst_lines.
+            for lj in &lines[num_obst_lines.min(i)..i] {
                 let determinant = det(li.direction, lj.direction);
                 let point = if determinant.abs() <= RVO_EPSILON {
                     // Parallel lines.

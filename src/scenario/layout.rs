@@ -41,9 +41,32 @@ pub struct RoomLayout {
     pub blockers: Fixed<(u32, Piece), MAX_BLOCKERS>,
 }
 
+/// How the observation splits a wall of `length` (m) into segments of `step` (m): `full` segments
+/// of length `step` from the wall's left end, then one of length `rest` if `rest > 0`.
+#[inline]
+pub fn segments(length: f32, step: f32) -> (u32, f32) {
+    let full = (length / step).floor();
+    (full as u32, length - full * step)
+}
+
+/// Number of observed segments of a wall of `length` (m).
+#[inline]
+pub fn segment_count(length: f32, step: f32) -> u32 {
+    let (full, rest) = segments(length, step);
+    full + u32::from(rest > 0.0)
+}
+
 /// Build the walls of an `x` by `y` room (m) of shape `shape` (`state::room_shape::*`); `l_location`
 /// (0 top-right, 1 top-left, 2 bottom-right, 3 bottom-left) picks the L room's removed corner.
-pub fn build(p: &StepParams, rng: &mut RngStream, shape: u32, x: f32, y: f32, l_location: u32, out: &mut RoomLayout) {
+pub fn build(
+    p: &StepParams,
+    rng: &mut RngStream,
+    shape: u32,
+    x: f32,
+    y: f32,
+    l_location: u32,
+    out: &mut RoomLayout,
+) {
     use crate::state::room_shape;
     out.walls.clear();
     out.blockers.clear();
@@ -69,7 +92,13 @@ pub fn build(p: &StepParams, rng: &mut RngStream, shape: u32, x: f32, y: f32, l_
 }
 
 fn wall(out: &mut RoomLayout, t: f32, x: f32, y: f32, theta: f32, length: f32) {
-    out.walls.push(Piece { x, y, theta, length, width: t });
+    out.walls.push(Piece {
+        x,
+        y,
+        theta,
+        length,
+        width: t,
+    });
 }
 
 /// The four walls of a rectangular room: right, bottom, left, top.
@@ -84,7 +113,11 @@ fn box_walls(t: f32, x: f32, y: f32, out: &mut RoomLayout) {
 /// The eight walls of an L room, walking its outline; returns the removed block's size.
 fn l_room(t: f32, x: f32, y: f32, loc: u32, out: &mut RoomLayout) -> (f32, f32) {
     let (hx, hy, ht) = (0.5 * x, 0.5 * y, 0.5 * t);
-    let (lx, ly) = if loc == 0 || loc == 3 { (2.0 * x / 3.0, y / 3.0) } else { (x / 3.0, 2.0 * y / 3.0) };
+    let (lx, ly) = if loc == 0 || loc == 3 {
+        (2.0 * x / 3.0, y / 3.0)
+    } else {
+        (x / 3.0, 2.0 * y / 3.0)
+    };
     let (block_x, block_y) = match loc {
         0 => {
             wall(out, t, hx - lx, hy - 0.5 * ly, FRAC_PI_2, ly);
@@ -132,14 +165,33 @@ fn l_room(t: f32, x: f32, y: f32, loc: u32, out: &mut RoomLayout) -> (f32, f32) 
             (-hx + 0.5 * lx, -hy + 0.5 * ly)
         }
     };
-    let block = Piece { x: block_x, y: block_y, theta: 0.0, length: lx, width: ly };
-    out.blockers.push((crate::state::blocker_kind::L_BLOCK, block));
+    let block = Piece {
+        x: block_x,
+        y: block_y,
+        theta: 0.0,
+        length: lx,
+        width: ly,
+    };
+    out.blockers
+        .push((crate::state::blocker_kind::L_BLOCK, block));
     (lx, ly)
 }
 
 /// Corridors of an L room: the removed block's two inner edges extended across the room.
-#[expect(clippy::too_many_arguments, reason = "room geometry is passed as plain numbers")]
-fn l_corridors(p: &StepParams, rng: &mut RngStream, x: f32, y: f32, lx: f32, ly: f32, loc: u32, out: &mut RoomLayout) {
+#[expect(
+    clippy::too_many_arguments,
+    reason = "room geometry is passed as plain numbers"
+)]
+fn l_corridors(
+    p: &StepParams,
+    rng: &mut RngStream,
+    x: f32,
+    y: f32,
+    lx: f32,
+    ly: f32,
+    loc: u32,
+    out: &mut RoomLayout,
+) {
     let (hx, hy) = (0.5 * x, 0.5 * y);
     // Signs of the removed corner: +x for locations 0 and 2, +y for 0 and 1.
     let sx = if loc == 0 || loc == 2 { 1.0 } else { -1.0 };
@@ -156,7 +208,15 @@ fn l_corridors(p: &StepParams, rng: &mut RngStream, x: f32, y: f32, lx: f32, ly:
 /// A straight internal wall of `length` centred at (cx, cy) along `theta`, with one door: width
 /// g = u·m + m (m = max(robot diameter, human diameter) + 0.5) centred at offset U[0,1)·(L/2 − g/2)
 /// from the middle (0.1.1 only samples the positive half). Pushes the two pieces and the door blocker.
-fn corridor_wall(p: &StepParams, rng: &mut RngStream, cx: f32, cy: f32, theta: f32, length: f32, out: &mut RoomLayout) {
+fn corridor_wall(
+    p: &StepParams,
+    rng: &mut RngStream,
+    cx: f32,
+    cy: f32,
+    theta: f32,
+    length: f32,
+    out: &mut RoomLayout,
+) {
     let m = (2.0 * p.robot_radius).max(2.0 * p.human_radius) + 0.5;
     let g = rng.next_f32() * m + m;
     let c = rng.next_f32() * (0.5 * length - 0.5 * g);
@@ -171,7 +231,16 @@ fn corridor_wall(p: &StepParams, rng: &mut RngStream, cx: f32, cy: f32, theta: f
     let (rx, ry) = at(half - 0.5 * right_len);
     wall(out, t, rx, ry, theta, right_len);
     let (dx, dy) = at(c);
-    out.blockers.push((crate::state::blocker_kind::DOOR, Piece { x: dx, y: dy, theta, length: g, width: t }));
+    out.blockers.push((
+        crate::state::blocker_kind::DOOR,
+        Piece {
+            x: dx,
+            y: dy,
+            theta,
+            length: g,
+            width: t,
+        },
+    ));
 }
 
 #[cfg(test)]
@@ -187,9 +256,30 @@ mod tests {
         // exp1/exp2 golden headers: (4.9, 0, -π/2, 10), (0, -4.9, -π, 10), (-4.9, 0, π/2, 10), (0, 4.9, 0, 10).
         let mut out = RoomLayout::default();
         let mut rng = RngStream::new(0, 0, 0, 0);
-        build(&params(), &mut rng, crate::state::room_shape::SQUARE, 10.0, 10.0, 0, &mut out);
-        let got: Vec<_> = out.walls.as_slice().iter().map(|w| (w.x, w.y, w.theta, w.length)).collect();
-        assert_eq!(got, vec![(4.9, 0.0, -FRAC_PI_2, 10.0), (0.0, -4.9, -PI, 10.0), (-4.9, 0.0, FRAC_PI_2, 10.0), (0.0, 4.9, 0.0, 10.0)]);
+        build(
+            &params(),
+            &mut rng,
+            crate::state::room_shape::SQUARE,
+            10.0,
+            10.0,
+            0,
+            &mut out,
+        );
+        let got: Vec<_> = out
+            .walls
+            .as_slice()
+            .iter()
+            .map(|w| (w.x, w.y, w.theta, w.length))
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                (4.9, 0.0, -FRAC_PI_2, 10.0),
+                (0.0, -4.9, -PI, 10.0),
+                (-4.9, 0.0, FRAC_PI_2, 10.0),
+                (0.0, 4.9, 0.0, 10.0)
+            ]
+        );
         assert!(out.blockers.is_empty());
     }
 
@@ -198,7 +288,15 @@ mod tests {
         // lroom_mixed seed 2: 11 m room, block removed top-right (7.333 x 3.667).
         let mut out = RoomLayout::default();
         let mut rng = RngStream::new(0, 0, 0, 0);
-        build(&params(), &mut rng, crate::state::room_shape::L, 11.0, 11.0, 0, &mut out);
+        build(
+            &params(),
+            &mut rng,
+            crate::state::room_shape::L,
+            11.0,
+            11.0,
+            0,
+            &mut out,
+        );
         let expected = [
             (-1.833_333_3, 3.666_666_7, FRAC_PI_2, 3.666_666_5),
             (-3.666_666_5, 5.4, PI, 3.666_667),
@@ -212,7 +310,10 @@ mod tests {
         assert_eq!(out.walls.len(), 8);
         for (w, e) in out.walls.as_slice().iter().zip(expected) {
             // Golden values are f64; 1e-5 m covers their rounding to f32 and our f32 arithmetic.
-            assert!((w.x - e.0).abs() < 1e-5 && (w.y - e.1).abs() < 1e-5, "{w:?} vs {e:?}");
+            assert!(
+                (w.x - e.0).abs() < 1e-5 && (w.y - e.1).abs() < 1e-5,
+                "{w:?} vs {e:?}"
+            );
             assert_eq!(w.theta, e.2);
             assert!((w.length - e.3).abs() < 1e-5, "{w:?} vs {e:?}");
         }
@@ -228,7 +329,15 @@ mod tests {
         for k in 0..50 {
             let mut out = RoomLayout::default();
             let mut rng = RngStream::new(7, k, 0, 0);
-            build(&p, &mut rng, crate::state::room_shape::RECTANGLE, 14.0, 11.0, 0, &mut out);
+            build(
+                &p,
+                &mut rng,
+                crate::state::room_shape::RECTANGLE,
+                14.0,
+                11.0,
+                0,
+                &mut out,
+            );
             assert_eq!(out.walls.len(), 8);
             assert_eq!(out.blockers.len(), 2);
             for (i, (_, door)) in out.blockers.as_slice().iter().enumerate() {
@@ -237,7 +346,11 @@ mod tests {
                 // The three pieces tile the 14 m line: left piece, door, right piece.
                 let total = left.length + door.length + right.length;
                 assert!((total - 14.0).abs() < 1e-4, "pieces sum to {total}");
-                assert!((1.9..3.8).contains(&door.length), "door width {}", door.length);
+                assert!(
+                    (1.9..3.8).contains(&door.length),
+                    "door width {}",
+                    door.length
+                );
                 assert!(door.x >= 0.0, "0.1.1 only places doors in the right half");
                 assert!((left.x + 0.5 * left.length - (door.x - 0.5 * door.length)).abs() < 1e-4);
             }

@@ -28,11 +28,21 @@ type Attempt = Result<(), &'static str>;
 
 /// Generate a new episode for environment `e` of the chunk (batch index `env_index`), then count
 /// the episode. Errors when no attempt could place everything.
-pub fn reset_env(p: &StepParams, s: &mut StateChunk, e: usize, env_index: u32) -> Result<(), SimError> {
+pub fn reset_env(
+    p: &StepParams,
+    s: &mut StateChunk,
+    e: usize,
+    env_index: u32,
+) -> Result<(), SimError> {
     let episode = s.episode[e];
     let mut last = "";
     for attempt in 0..MAX_SCENARIO_ATTEMPTS {
-        let mut rng = RngStream::new(p.seed(), env_index, episode, stream_id(STREAM_SCENARIO, attempt));
+        let mut rng = RngStream::new(
+            p.seed(),
+            env_index,
+            episode,
+            stream_id(STREAM_SCENARIO, attempt),
+        );
         match generate(p, s, e, &mut rng) {
             Ok(()) => {
                 s.episode[e] = episode.wrapping_add(1);
@@ -93,7 +103,14 @@ fn generate(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngStream) -
     let mut spawn = SpawnList::default();
     write_room(s, e, shape, x, y, &room, &mut spawn);
     let area = SamplingBox::new(p, x, y);
-    let mut g = Gen { p, rng, spawn, area, next_id: 1, e };
+    let mut g = Gen {
+        p,
+        rng,
+        spawn,
+        area,
+        next_id: 1,
+        e,
+    };
     g.place_all(s, &n)
 }
 
@@ -109,8 +126,16 @@ fn draw_room(p: &StepParams, rng: &mut RngStream) -> (u32, f32, f32, u32) {
     let x = rng.randint(p.size_x_min, p.size_x_max) as f32;
     // Square and L rooms have y = x (0.1.1 decides this from the previous episode's shape; socnav
     // from the current one, see docs/fidelity.md).
-    let y = if matches!(shape, room_shape::SQUARE | room_shape::L) { x } else { rng.randint(p.size_y_min, p.size_y_max) as f32 };
-    let l_location = if shape == room_shape::L { rng.below(4) } else { 0 };
+    let y = if matches!(shape, room_shape::SQUARE | room_shape::L) {
+        x
+    } else {
+        rng.randint(p.size_y_min, p.size_y_max) as f32
+    };
+    let l_location = if shape == room_shape::L {
+        rng.below(4)
+    } else {
+        0
+    };
     (shape, x, y, l_location)
 }
 
@@ -130,7 +155,15 @@ fn draw_human_params(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut Rng
 }
 
 /// Write walls and blockers into the state and the spawn list.
-fn write_room(s: &mut StateChunk, e: usize, shape: u32, x: f32, y: f32, room: &RoomLayout, spawn: &mut SpawnList) {
+fn write_room(
+    s: &mut StateChunk,
+    e: usize,
+    shape: u32,
+    x: f32,
+    y: f32,
+    room: &RoomLayout,
+    spawn: &mut SpawnList,
+) {
     s.room_shape[e] = shape;
     s.map_x[e] = x;
     s.map_y[e] = y;
@@ -140,7 +173,10 @@ fn write_room(s: &mut StateChunk, e: usize, shape: u32, x: f32, y: f32, room: &R
         s.w_y[wb + i] = w.y;
         s.w_theta[wb + i] = w.theta;
         s.w_length[wb + i] = w.length;
-        spawn.add(Kind::Solid, Shape::Rect(Rect::new(w.x, w.y, w.theta, w.length, w.width)));
+        spawn.add(
+            Kind::Solid,
+            Shape::Rect(Rect::new(w.x, w.y, w.theta, w.length, w.width)),
+        );
     }
     s.n_walls[e] = room.walls.len() as u32;
     let bb = e * s.strides.blockers;
@@ -152,8 +188,15 @@ fn write_room(s: &mut StateChunk, e: usize, shape: u32, x: f32, y: f32, room: &R
         s.b_length[bb + i] = b.length;
         s.b_width[bb + i] = b.width;
         // 0.1.1 adds the L block as a laptop-typed object: laptops on tables are checked against it.
-        let k = if *kind == blocker_kind::L_BLOCK { Kind::Laptop } else { Kind::Solid };
-        spawn.add(k, Shape::Rect(Rect::new(b.x, b.y, b.theta, b.length, b.width)));
+        let k = if *kind == blocker_kind::L_BLOCK {
+            Kind::Laptop
+        } else {
+            Kind::Solid
+        };
+        spawn.add(
+            k,
+            Shape::Rect(Rect::new(b.x, b.y, b.theta, b.length, b.width)),
+        );
     }
     s.n_blockers[e] = room.blockers.len() as u32;
 }
@@ -219,7 +262,11 @@ impl Gen<'_, '_> {
         let mut slot = n.static_humans + n.dynamic_humans;
         let mut gi = 0usize;
         for (set, &count) in n.group_sets.iter().enumerate() {
-            let kind = if set < 2 { group_kind::MOVING } else { group_kind::STANDING };
+            let kind = if set < 2 {
+                group_kind::MOVING
+            } else {
+                group_kind::STANDING
+            };
             let dispersable = u32::from(set % 2 == 0);
             for _ in 0..count {
                 let [lo, hi] = self.p.count_range(count::GROUP_SIZE);
@@ -232,7 +279,14 @@ impl Gen<'_, '_> {
         let mut ui = 0usize;
         for (set, &count) in n.laptop_users.iter().enumerate() {
             for _ in 0..count {
-                self.place_laptop_user(s, ui, slot as usize, n.laptops as usize + ui, n.tables, u32::from(set == 0))?;
+                self.place_laptop_user(
+                    s,
+                    ui,
+                    slot as usize,
+                    n.laptops as usize + ui,
+                    n.tables,
+                    u32::from(set == 0),
+                )?;
                 slot += 1;
                 ui += 1;
             }
@@ -246,7 +300,8 @@ impl Gen<'_, '_> {
     }
 
     fn place_robot(&mut self, s: &mut StateChunk) -> Attempt {
-        let d = place::free_disc(self.rng, &self.area, &self.spawn, self.p.robot_radius).ok_or("the robot")?;
+        let d = place::free_disc(self.rng, &self.area, &self.spawn, self.p.robot_radius)
+            .ok_or("the robot")?;
         let e = self.e;
         s.robot_x[e] = d.x;
         s.robot_y[e] = d.y;
@@ -256,12 +311,17 @@ impl Gen<'_, '_> {
     }
 
     fn place_lone_human(&mut self, s: &mut StateChunk, i: usize, r: u32) -> Attempt {
-        let d = place::free_disc(self.rng, &self.area, &self.spawn, self.p.human_radius).ok_or("a lone human")?;
+        let d = place::free_disc(self.rng, &self.area, &self.spawn, self.p.human_radius)
+            .ok_or("a lone human")?;
         s.h_id[i] = self.id();
         s.h_x[i] = d.x;
         s.h_y[i] = d.y;
         s.h_theta[i] = place::heading(self.rng);
-        s.h_speed[i] = if r == role::DYNAMIC { self.rng.uniform(0.0, self.p.human_max_speed) } else { 0.0 };
+        s.h_speed[i] = if r == role::DYNAMIC {
+            self.rng.uniform(0.0, self.p.human_max_speed)
+        } else {
+            0.0
+        };
         s.h_policy[i] = self.policy();
         set_role(s, i, r, NONE, NONE);
         self.spawn.add(Kind::Solid, Shape::Disc(d));
@@ -269,7 +329,8 @@ impl Gen<'_, '_> {
     }
 
     fn place_plant(&mut self, s: &mut StateChunk, k: usize) -> Attempt {
-        let d = place::free_disc(self.rng, &self.area, &self.spawn, self.p.plant_radius).ok_or("a plant")?;
+        let d = place::free_disc(self.rng, &self.area, &self.spawn, self.p.plant_radius)
+            .ok_or("a plant")?;
         let i = self.e * s.strides.plants + k;
         s.p_id[i] = self.id();
         s.p_x[i] = d.x;
@@ -280,13 +341,15 @@ impl Gen<'_, '_> {
 
     fn place_table(&mut self, s: &mut StateChunk, k: usize) -> Attempt {
         let (l, w) = (self.p.table_length, self.p.table_width);
-        let (x, y, theta) = place::free_rect(self.rng, &self.area, &self.spawn, l, w).ok_or("a table")?;
+        let (x, y, theta) =
+            place::free_rect(self.rng, &self.area, &self.spawn, l, w).ok_or("a table")?;
         let i = self.e * s.strides.tables + k;
         s.t_id[i] = self.id();
         s.t_x[i] = x;
         s.t_y[i] = y;
         s.t_theta[i] = theta;
-        self.spawn.add(Kind::Solid, Shape::Rect(Rect::new(x, y, theta, l, w)));
+        self.spawn
+            .add(Kind::Solid, Shape::Rect(Rect::new(x, y, theta, l, w)));
         Ok(())
     }
 
@@ -303,7 +366,8 @@ impl Gen<'_, '_> {
         let i = self.e * s.strides.laptops + k;
         s.l_id[i] = self.id();
         write_laptop(s, i, x, y, theta, NONE);
-        self.spawn.add(Kind::Laptop, Shape::Rect(Rect::new(x, y, theta, l, w)));
+        self.spawn
+            .add(Kind::Laptop, Shape::Rect(Rect::new(x, y, theta, l, w)));
         Ok(())
     }
 
@@ -318,22 +382,40 @@ impl Gen<'_, '_> {
         (0..place::MAX_TRIES).find_map(|_| {
             let t = tb + self.rng.below(tables) as usize;
             let edge = self.rng.below(4);
-            let (x, y, theta) = place::laptop_on_table(self.p, s.t_x[t], s.t_y[t], s.t_theta[t], edge);
-            let shape = Shape::Rect(Rect::new(x, y, theta, self.p.laptop_length, self.p.laptop_width));
+            let (x, y, theta) =
+                place::laptop_on_table(self.p, s.t_x[t], s.t_y[t], s.t_theta[t], edge);
+            let shape = Shape::Rect(Rect::new(
+                x,
+                y,
+                theta,
+                self.p.laptop_length,
+                self.p.laptop_width,
+            ));
             (!free(&self.spawn, &shape)).then_some((x, y, theta))
         })
     }
 
     /// A group of `size` members on a circle around a free centre (spec 4.4); rejected if any
     /// member touches something placed.
-    fn place_group(&mut self, s: &mut StateChunk, gi: usize, first: u32, size: u32, kind: u32, dispersable: u32) -> Attempt {
+    fn place_group(
+        &mut self,
+        s: &mut StateChunk,
+        gi: usize,
+        first: u32,
+        size: u32,
+        kind: u32,
+        dispersable: u32,
+    ) -> Attempt {
         let p = self.p;
         let hb = self.e * s.strides.humans;
         let jitter = PI / 14.0;
         let mut members = [Disc::default(); 64];
         let mut thetas = [0.0f32; 64];
         let n = size as usize;
-        assert!(n <= members.len(), "group of {n} members exceeds the 64 a group may have");
+        assert!(
+            n <= members.len(),
+            "group of {n} members exceeds the 64 a group may have"
+        );
         let found = (0..place::MAX_TRIES).any(|_| {
             let (cx, cy) = self.area.point(self.rng);
             let shared_theta = place::heading(self.rng);
@@ -343,20 +425,34 @@ impl Gen<'_, '_> {
                 let d2 = self.rng.uniform(-jitter, jitter);
                 let x = cx + p.group_radius * math::cos(phi + d1);
                 let y = cy + p.group_radius * math::sin(phi + d2);
-                members[k] = Disc { x, y, r: p.human_radius };
+                members[k] = Disc {
+                    x,
+                    y,
+                    r: p.human_radius,
+                };
                 thetas[k] = if kind == group_kind::STANDING {
                     phi - PI + self.rng.uniform(-jitter, jitter)
                 } else {
                     shared_theta
                 };
             }
-            members[..n].iter().all(|d| !self.spawn.blocked(&Shape::Disc(*d)))
+            members[..n]
+                .iter()
+                .all(|d| !self.spawn.blocked(&Shape::Disc(*d)))
         });
         if !found {
             return Err("a group");
         }
-        let speed = if kind == group_kind::MOVING { self.rng.uniform(0.0, p.human_max_speed) } else { 0.0 };
-        let member_role = if kind == group_kind::MOVING { role::MOVING_GROUP } else { role::STANDING_GROUP };
+        let speed = if kind == group_kind::MOVING {
+            self.rng.uniform(0.0, p.human_max_speed)
+        } else {
+            0.0
+        };
+        let member_role = if kind == group_kind::MOVING {
+            role::MOVING_GROUP
+        } else {
+            role::STANDING_GROUP
+        };
         let (mut sx, mut sy) = (0.0f32, 0.0f32);
         for k in 0..n {
             let i = hb + first as usize + k;
@@ -385,7 +481,15 @@ impl Gen<'_, '_> {
 
     /// A laptop on a table edge free of other laptops, and its user seated in front of it; both
     /// are drawn again when the seat touches anything placed.
-    fn place_laptop_user(&mut self, s: &mut StateChunk, ui: usize, slot: usize, laptop: usize, tables: u32, dispersable: u32) -> Attempt {
+    fn place_laptop_user(
+        &mut self,
+        s: &mut StateChunk,
+        ui: usize,
+        slot: usize,
+        laptop: usize,
+        tables: u32,
+        dispersable: u32,
+    ) -> Attempt {
         let p = self.p;
         let tb = self.e * s.strides.tables;
         let found = (0..place::MAX_TRIES).find_map(|_| {
@@ -397,8 +501,17 @@ impl Gen<'_, '_> {
                 return None;
             }
             let seat = place::seat(p, lx, ly, lt);
-            let human = Disc { x: seat.0, y: seat.1, r: p.human_radius };
-            (!self.spawn.blocked(&Shape::Disc(human))).then_some(((lx, ly, lt), seat, laptop, human))
+            let human = Disc {
+                x: seat.0,
+                y: seat.1,
+                r: p.human_radius,
+            };
+            (!self.spawn.blocked(&Shape::Disc(human))).then_some((
+                (lx, ly, lt),
+                seat,
+                laptop,
+                human,
+            ))
         });
         let ((lx, ly, lt), seat, laptop_shape, human) = found.ok_or("a laptop user")?;
         let li = self.e * s.strides.laptops + laptop;
@@ -427,7 +540,8 @@ impl Gen<'_, '_> {
         let hb = self.e * s.strides.humans;
         for k in 0..n.dynamic_humans {
             let i = hb + (n.static_humans + k) as usize;
-            let g = place::free_goal(self.rng, &self.area, &self.spawn, p.human_goal_radius).ok_or("a human goal")?;
+            let g = place::free_goal(self.rng, &self.area, &self.spawn, p.human_goal_radius)
+                .ok_or("a human goal")?;
             s.h_goal_x[i] = g.x;
             s.h_goal_y[i] = g.y;
             self.spawn.add_goal(g);
@@ -436,16 +550,22 @@ impl Gen<'_, '_> {
             let i = hb + k;
             s.h_goal_x[i] = s.h_x[i];
             s.h_goal_y[i] = s.h_y[i];
-            self.spawn.add_goal(Disc { x: s.h_x[i], y: s.h_y[i], r: p.human_goal_radius });
+            self.spawn.add_goal(Disc {
+                x: s.h_x[i],
+                y: s.h_y[i],
+                r: p.human_goal_radius,
+            });
         }
-        let g = place::free_goal(self.rng, &self.area, &self.spawn, p.goal_radius).ok_or("the robot goal")?;
+        let g = place::free_goal(self.rng, &self.area, &self.spawn, p.goal_radius)
+            .ok_or("the robot goal")?;
         s.goal_x[self.e] = g.x;
         s.goal_y[self.e] = g.y;
         self.spawn.add_goal(g);
         let gb = self.e * s.strides.groups;
         let moving = (n.group_sets[0] + n.group_sets[1]) as usize;
         for gi in gb..gb + moving {
-            let g = place::free_goal(self.rng, &self.area, &self.spawn, p.group_goal_radius).ok_or("a group goal")?;
+            let g = place::free_goal(self.rng, &self.area, &self.spawn, p.group_goal_radius)
+                .ok_or("a group goal")?;
             s.g_goal_x[gi] = g.x;
             s.g_goal_y[gi] = g.y;
             self.spawn.add_goal(g);

@@ -33,13 +33,21 @@ pub struct SpawnList {
 
 impl Default for Shape {
     fn default() -> Self {
-        Shape::Disc(Disc { x: 0.0, y: 0.0, r: 0.0 })
+        Shape::Disc(Disc {
+            x: 0.0,
+            y: 0.0,
+            r: 0.0,
+        })
     }
 }
 
 impl Default for Disc {
     fn default() -> Self {
-        Disc { x: 0.0, y: 0.0, r: 0.0 }
+        Disc {
+            x: 0.0,
+            y: 0.0,
+            r: 0.0,
+        }
     }
 }
 
@@ -62,18 +70,29 @@ impl SpawnList {
 
     /// Does `shape` intersect anything placed?
     pub fn blocked(&self, shape: &Shape) -> bool {
-        self.shapes.as_slice().iter().any(|(_, s)| s.intersects(shape))
+        self.shapes
+            .as_slice()
+            .iter()
+            .any(|(_, s)| s.intersects(shape))
     }
 
     /// Does `shape` intersect a placed laptop?
     pub fn blocked_by_laptop(&self, shape: &Shape) -> bool {
-        self.shapes.as_slice().iter().any(|(k, s)| *k == Kind::Laptop && s.intersects(shape))
+        self.shapes
+            .as_slice()
+            .iter()
+            .any(|(k, s)| *k == Kind::Laptop && s.intersects(shape))
     }
 
     /// Does the goal disc intersect anything placed or another goal?
     pub fn goal_blocked(&self, goal: &Disc) -> bool {
         let shape = Shape::Disc(*goal);
-        self.blocked(&shape) || self.goals.as_slice().iter().any(|g| crate::geometry::disc_disc(g, goal))
+        self.blocked(&shape)
+            || self
+                .goals
+                .as_slice()
+                .iter()
+                .any(|g| crate::geometry::disc_disc(g, goal))
     }
 }
 
@@ -89,7 +108,10 @@ pub struct SamplingBox {
 impl SamplingBox {
     /// The box of an `x` by `y` room (m).
     pub fn new(p: &StepParams, x: f32, y: f32) -> Self {
-        Self { hx: 0.5 * x - p.margin, hy: 0.5 * y - p.margin }
+        Self {
+            hx: 0.5 * x - p.margin,
+            hy: 0.5 * y - p.margin,
+        }
     }
 
     /// A uniform point of the box.
@@ -106,7 +128,12 @@ pub fn heading(rng: &mut RngStream) -> f32 {
 }
 
 /// Sample a free disc of radius `r`; `None` after [`MAX_TRIES`] attempts.
-pub fn free_disc(rng: &mut RngStream, area: &SamplingBox, spawn: &SpawnList, r: f32) -> Option<Disc> {
+pub fn free_disc(
+    rng: &mut RngStream,
+    area: &SamplingBox,
+    spawn: &SpawnList,
+    r: f32,
+) -> Option<Disc> {
     (0..MAX_TRIES).find_map(|_| {
         let (x, y) = area.point(rng);
         let d = Disc { x, y, r };
@@ -115,7 +142,12 @@ pub fn free_disc(rng: &mut RngStream, area: &SamplingBox, spawn: &SpawnList, r: 
 }
 
 /// Sample a free goal disc of radius `r` (free of placed shapes and other goals).
-pub fn free_goal(rng: &mut RngStream, area: &SamplingBox, spawn: &SpawnList, r: f32) -> Option<Disc> {
+pub fn free_goal(
+    rng: &mut RngStream,
+    area: &SamplingBox,
+    spawn: &SpawnList,
+    r: f32,
+) -> Option<Disc> {
     (0..MAX_TRIES).find_map(|_| {
         let (x, y) = area.point(rng);
         let d = Disc { x, y, r };
@@ -124,7 +156,13 @@ pub fn free_goal(rng: &mut RngStream, area: &SamplingBox, spawn: &SpawnList, r: 
 }
 
 /// Sample a free rectangle with a uniform heading.
-pub fn free_rect(rng: &mut RngStream, area: &SamplingBox, spawn: &SpawnList, length: f32, width: f32) -> Option<(f32, f32, f32)> {
+pub fn free_rect(
+    rng: &mut RngStream,
+    area: &SamplingBox,
+    spawn: &SpawnList,
+    length: f32,
+    width: f32,
+) -> Option<(f32, f32, f32)> {
     (0..MAX_TRIES).find_map(|_| {
         let (x, y) = area.point(rng);
         let theta = heading(rng);
@@ -137,7 +175,13 @@ pub fn free_rect(rng: &mut RngStream, area: &SamplingBox, spawn: &SpawnList, len
 /// (table_width - laptop_width)/2 from the table centre along ±local y, or
 /// (table_length - laptop_length)/2 along ±local x, turned so that its −y axis points away from
 /// the table (where its user sits).
-pub fn laptop_on_table(p: &StepParams, tx: f32, ty: f32, ttheta: f32, edge: u32) -> (f32, f32, f32) {
+pub fn laptop_on_table(
+    p: &StepParams,
+    tx: f32,
+    ty: f32,
+    ttheta: f32,
+    edge: u32,
+) -> (f32, f32, f32) {
     let across = 0.5 * (p.table_width - p.laptop_width);
     let along = 0.5 * (p.table_length - p.laptop_length);
     let (lx, ly, turn) = match edge {
@@ -147,7 +191,11 @@ pub fn laptop_on_table(p: &StepParams, tx: f32, ty: f32, ttheta: f32, edge: u32)
         _ => (along, 0.0, 0.5 * PI),
     };
     let (s, c) = math::sin_cos(ttheta);
-    (tx + (lx * c - ly * s), ty + (lx * s + ly * c), ttheta + turn)
+    (
+        tx + (lx * c - ly * s),
+        ty + (lx * s + ly * c),
+        ttheta + turn,
+    )
 }
 
 /// Seat of a laptop's user (spec 3.4 step 8): `laptop_width + human_laptop_distance` from the
@@ -170,11 +218,23 @@ mod tests {
         let p = StepParams::new(&crate::config::Config::default(), 0, Default::default());
         let (x, y, t) = laptop_on_table(&p, 4.512_035_6, -3.411_653, -1.356_166_7, 3);
         // 1e-5: the golden values are f64, ours f32.
-        assert!((x - 4.767_618_3).abs() < 1e-5 && (y + 4.584_119_4).abs() < 1e-5 && (t - 0.214_629_63).abs() < 1e-5);
+        assert!(
+            (x - 4.767_618_3).abs() < 1e-5
+                && (y + 4.584_119_4).abs() < 1e-5
+                && (t - 0.214_629_63).abs() < 1e-5
+        );
         let (hx, hy, ht) = seat(&p, x, y, t);
-        assert!((hx - 4.916_708).abs() < 1e-5 && (hy + 5.268_058).abs() < 1e-5 && (ht - 1.785_426).abs() < 1e-5);
+        assert!(
+            (hx - 4.916_708).abs() < 1e-5
+                && (hy + 5.268_058).abs() < 1e-5
+                && (ht - 1.785_426).abs() < 1e-5
+        );
         // The free laptop of the same scene sits on edge 2 of the same table.
         let (x, y, t) = laptop_on_table(&p, 4.512_035_6, -3.411_653, -1.356_166_7, 2);
-        assert!((x - 3.974_655_2).abs() < 1e-5 && (y + 3.528_795).abs() < 1e-5 && (t + 1.356_166_7).abs() < 1e-6);
+        assert!(
+            (x - 3.974_655_2).abs() < 1e-5
+                && (y + 3.528_795).abs() < 1e-5
+                && (t + 1.356_166_7).abs() < 1e-6
+        );
     }
 }

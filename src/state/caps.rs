@@ -35,6 +35,57 @@ pub struct Caps {
 /// `tests/scenario_props.rs` checks the largest count seen over many scenarios stays below this.
 const SPLIT_VERTICES_PER_VERTEX: usize = 1;
 
+/// The most observed wall segments any room of the config can have: exact for the outer walls
+/// (every room size, shape and L location is built), bounded for corridor walls (their doors are
+/// continuous draws: each corridor line gives at most ceil(L / s) + 2 segments).
+fn max_wall_segments(c: &Config) -> usize {
+    use crate::params::StepParams;
+    use crate::scenario::layout::{self, RoomLayout};
+    use crate::state::room_shape;
+    let mut p = StepParams::new(c, 0, Default::default());
+    p.corridors = 0;
+    let step = c.objects.wall_segment_size;
+    let shapes: &[u32] = match c.room.shape {
+        Shape::Square => &[room_shape::SQUARE],
+        Shape::Rectangle => &[room_shape::RECTANGLE],
+        Shape::L => &[room_shape::L],
+        Shape::NoWalls => return 0,
+        Shape::Random => &[room_shape::RECTANGLE, room_shape::SQUARE, room_shape::L],
+    };
+    let mut rng = crate::rng::RngStream::new(0, 0, 0, 0);
+    let mut room = RoomLayout::default();
+    let mut most = 0u32;
+    for &shape in shapes {
+        let square = shape != room_shape::RECTANGLE;
+        for x in c.room.size_x[0]..=c.room.size_x[1] {
+            let ys = if square {
+                x..=x
+            } else {
+                c.room.size_y[0]..=c.room.size_y[1]
+            };
+            for y in ys {
+                let locations = if shape == room_shape::L { 0..4 } else { 0..1 };
+                for loc in locations {
+                    let (x, y) = (x as f32, y as f32);
+                    layout::build(&p, &mut rng, shape, x, y, loc, &mut room);
+                    let mut n: u32 = room
+                        .walls
+                        .as_slice()
+                        .iter()
+                        .map(|w| layout::segment_count(w.length, step))
+                        .sum();
+                    if c.room.corridors {
+                        let line = x.max(y);
+                        n += 2 * ((line / step).ceil() as u32 + 2);
+                    }
+                    most = most.max(n);
+                }
+            }
+        }
+    }
+    most as usize
+}
+
 impl Caps {
     /// Capacities for `config`.
     pub fn from_config(c: &Config) -> Self {
@@ -43,8 +94,10 @@ impl Caps {
         let group_size = max(n.group_size);
         let configured_groups = n.max_groups().max(0) as usize;
         let configured_users = n.max_laptop_users().max(0) as usize;
-        let humans =
-            max(n.static_humans) + max(n.dynamic_humans) + configured_users + configured_groups * group_size;
+        let humans = max(n.static_humans)
+            + max(n.dynamic_humans)
+            + configured_users
+            + configured_groups * group_size;
         // Crowd formation turns lone walkers into new groups of at least 2 members.
         let groups = if c.events.crowd_formation_probability > 0.0 {
             configured_groups.max(humans / 2)
@@ -53,22 +106,25 @@ impl Caps {
         };
         let laptops = max(n.laptops) + configured_users;
         // Laptop-use formation seats walkers at free laptops: at most one user per laptop.
-        let laptop_users =
-            if c.events.laptop_formation_probability > 0.0 { laptops } else { configured_users };
+        let laptop_users = if c.events.laptop_formation_probability > 0.0 {
+            laptops
+        } else {
+            configured_users
+        };
         let base_walls = match c.room.shape {
             Shape::NoWalls => 0,
             Shape::Square | Shape::Rectangle => 4,
             Shape::L | Shape::Random => 8,
         };
-        let corridor_walls = if c.room.corridors && base_walls > 0 { 4 } else { 0 };
+        let corridor_walls = if c.room.corridors && base_walls > 0 {
+            4
+        } else {
+            0
+        };
         let walls = base_walls + corridor_walls;
-        let x = c.room.size_x[1].max(0) as f32;
-        let y = if matches!(c.room.shape, Shape::Square | Shape::L) { x } else { c.room.size_y[1].max(0) as f32 };
-        let perimeter = if base_walls > 0 { 2.0 * (x + y) } else { 0.0 };
-        let corridor_length = if corridor_walls > 0 { 2.0 * x.max(y) } else { 0.0 };
-        // Each wall gives floor(L / s) full segments plus one remainder segment.
-        let wall_segments = ((perimeter + corridor_length) / c.objects.wall_segment_size).ceil() as usize + walls;
-        let blockers = usize::from(matches!(c.room.shape, Shape::L | Shape::Random)) + if corridor_walls > 0 { 2 } else { 0 };
+        let wall_segments = max_wall_segments(c);
+        let blockers = usize::from(matches!(c.room.shape, Shape::L | Shape::Random))
+            + if corridor_walls > 0 { 2 } else { 0 };
         let polygons = walls + max(n.tables) + laptops + max(n.plants) + laptop_users + groups;
         let obstacle_vertices = 4 * polygons * (1 + SPLIT_VERTICES_PER_VERTEX);
         Self {

@@ -55,7 +55,11 @@ pub fn export(p: &StepParams, s: &BatchState, e: usize) -> Value {
     let bb = e * c.blockers;
     let blockers: Vec<Value> = (bb..bb + s.n_blockers[e] as usize)
         .map(|b| {
-            let kind = if s.b_kind[b] == blocker_kind::L_BLOCK { "laptop" } else { "wall" };
+            let kind = if s.b_kind[b] == blocker_kind::L_BLOCK {
+                "laptop"
+            } else {
+                "wall"
+            };
             json!({"kind": kind, "x": num(s.b_x[b]), "y": num(s.b_y[b]), "theta": num(s.b_theta[b]),
                    "length": num(s.b_length[b]), "width": num(s.b_width[b])})
         })
@@ -91,19 +95,31 @@ fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
     let c = &s.strides;
     let hb = e * c.humans;
     let mut goals = Map::new();
-    goals.insert("0".into(), json!([num(s.goal_x[e]), num(s.goal_y[e]), num(p.goal_radius)]));
+    goals.insert(
+        "0".into(),
+        json!([num(s.goal_x[e]), num(s.goal_y[e]), num(p.goal_radius)]),
+    );
     let humans: Vec<Value> = (0..s.n_humans[e] as usize)
         .map(|k| {
             let i = hb + k;
             let r = s.h_role[i];
             let group_goal = r == role::MOVING_GROUP;
             let goal = match r {
-                role::STATIC | role::DYNAMIC | role::MOVING_GROUP => json!([num(s.h_goal_x[i]), num(s.h_goal_y[i])]),
+                role::STATIC | role::DYNAMIC | role::MOVING_GROUP => {
+                    json!([num(s.h_goal_x[i]), num(s.h_goal_y[i])])
+                }
                 _ => Value::Null,
             };
-            let goal_radius = if group_goal { p.group_goal_radius } else { p.human_goal_radius };
+            let goal_radius = if group_goal {
+                p.group_goal_radius
+            } else {
+                p.human_goal_radius
+            };
             if !goal.is_null() {
-                goals.insert(s.h_id[i].to_string(), json!([goal[0], goal[1], num(goal_radius)]));
+                goals.insert(
+                    s.h_id[i].to_string(),
+                    json!([goal[0], goal[1], num(goal_radius)]),
+                );
             }
             let mut h = json!({
                 "id": s.h_id[i], "x": num(s.h_x[i]), "y": num(s.h_y[i]), "theta": num(s.h_theta[i]),
@@ -119,7 +135,9 @@ fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
                 h["hl"] = json!(s.h_laptop_user[i]);
             }
             if s.h_forming[i] != 0 {
-                let crowd = s.cf_active[e] != 0 && (0..s.cf_count[e] as usize).any(|k| s.cf_human[e * c.group_size + k] as usize == i - hb);
+                let crowd = s.cf_active[e] != 0
+                    && (0..s.cf_count[e] as usize)
+                        .any(|k| s.cf_human[e * c.group_size + k] as usize == i - hb);
                 h[if crowd { "forming_crowd" } else { "forming_hl" }] = json!(true);
             }
             h
@@ -225,7 +243,13 @@ fn export_crowd_forming(s: &BatchState, e: usize) -> Value {
         })
         .collect();
     let slots: Vec<Value> = (sb..sb + n)
-        .map(|k| json!([num(s.cf_slot_x[k]), num(s.cf_slot_y[k]), num(s.cf_slot_theta[k])]))
+        .map(|k| {
+            json!([
+                num(s.cf_slot_x[k]),
+                num(s.cf_slot_y[k]),
+                num(s.cf_slot_theta[k])
+            ])
+        })
         .collect();
     json!({"humans": humans, "slot_of": slot_of, "slots": slots, "centre": [num(s.cf_x[e]), num(s.cf_y[e])],
            "almost_formed_count": s.cf_close_steps[e]})
@@ -267,7 +291,10 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
 /// The room shape code of a shape name (`room_shape::*` follows [`SHAPE_NAMES`]).
 fn shape_code(name: &str) -> Option<u32> {
     const _: () = assert!(room_shape::SQUARE == 0 && room_shape::NO_WALLS == 3);
-    SHAPE_NAMES.iter().position(|n| *n == name).map(|i| i as u32)
+    SHAPE_NAMES
+        .iter()
+        .position(|n| *n == name)
+        .map(|i| i as u32)
 }
 
 /// The metrics' and the reward's previous goal distances are, by definition, the distance from

@@ -13,7 +13,8 @@ pub fn autoreset(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     if p.autoreset == AutoresetMode::SameStep.code() {
         let (obs, info, counts) = (b.o.strides.obs(), b.o.strides.info(), b.o.strides.counts());
         b.o.final_obs[e * obs..(e + 1) * obs].copy_from_slice(&b.o.obs[e * obs..(e + 1) * obs]);
-        b.o.final_info[e * info..(e + 1) * info].copy_from_slice(&b.o.info[e * info..(e + 1) * info]);
+        b.o.final_info[e * info..(e + 1) * info]
+            .copy_from_slice(&b.o.info[e * info..(e + 1) * info]);
         b.o.final_obs_count[e * counts..(e + 1) * counts]
             .copy_from_slice(&b.o.obs_count[e * counts..(e + 1) * counts]);
         b.o.has_final[e] = 1;

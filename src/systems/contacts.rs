@@ -33,7 +33,11 @@ fn push_out(p: &StepParams, s: &mut StateChunk, e: usize, i: usize) {
     let r = p.human_radius;
     let pb = e * s.strides.plants;
     for k in pb..pb + s.n_plants[e] as usize {
-        let plant = Disc { x: s.p_x[k], y: s.p_y[k], r: p.plant_radius };
+        let plant = Disc {
+            x: s.p_x[k],
+            y: s.p_y[k],
+            r: p.plant_radius,
+        };
         if disc_disc(&human(p, s, i), &plant) {
             let (dx, dy) = (s.h_x[i] - plant.x, s.h_y[i] - plant.y);
             push(p, s, i, dx, dy, r + plant.r);
@@ -61,7 +65,11 @@ fn push_out(p: &StepParams, s: &mut StateChunk, e: usize, i: usize) {
 
 #[inline]
 fn human(p: &StepParams, s: &StateChunk, i: usize) -> Disc {
-    Disc { x: s.h_x[i], y: s.h_y[i], r: p.human_radius }
+    Disc {
+        x: s.h_x[i],
+        y: s.h_y[i],
+        r: p.human_radius,
+    }
 }
 
 fn push_from_rect(p: &StepParams, s: &mut StateChunk, i: usize, rect: &Rect) {

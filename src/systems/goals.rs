@@ -21,12 +21,18 @@ pub fn goals(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     }
     let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = RngStream::new(p.seed(), env, s.episode[e], stream_id(STREAM_GOALS, s.tick[e]));
+    let mut rng = RngStream::new(
+        p.seed(),
+        env,
+        s.episode[e],
+        stream_id(STREAM_GOALS, s.tick[e]),
+    );
     let hb = e * s.strides.humans;
     let first = hb + s.n_static[e] as usize;
     for i in first..first + s.n_dynamic[e] as usize {
         let reach = p.human_radius + p.human_goal_radius;
-        if s.h_forming[i] == 0 && distance(s.h_x[i], s.h_y[i], s.h_goal_x[i], s.h_goal_y[i]) < reach {
+        if s.h_forming[i] == 0 && distance(s.h_x[i], s.h_y[i], s.h_goal_x[i], s.h_goal_y[i]) < reach
+        {
             if let Some(g) = sample_goal(p, s, e, &mut rng, p.human_goal_radius) {
                 s.h_goal_x[i] = g.x;
                 s.h_goal_y[i] = g.y;
@@ -40,7 +46,9 @@ pub fn goals(p: &StepParams, b: &mut Batch<'_>, e: usize) {
         }
         let reach = p.human_radius + p.group_goal_radius;
         let members = hb + s.g_first[g] as usize..hb + (s.g_first[g] + s.g_count[g]) as usize;
-        let arrived = members.clone().all(|i| distance(s.h_x[i], s.h_y[i], s.g_goal_x[g], s.g_goal_y[g]) < reach);
+        let arrived = members
+            .clone()
+            .all(|i| distance(s.h_x[i], s.h_y[i], s.g_goal_x[g], s.g_goal_y[g]) < reach);
         if arrived {
             if let Some(goal) = sample_goal(p, s, e, &mut rng, p.group_goal_radius) {
                 s.g_goal_x[g] = goal.x;
@@ -61,29 +69,59 @@ fn distance(ax: f32, ay: f32, bx: f32, by: f32) -> f32 {
 }
 
 /// A goal disc of radius `r` free of every entity and every current goal, or `None`.
-pub fn sample_goal(p: &StepParams, s: &StateChunk, e: usize, rng: &mut RngStream, r: f32) -> Option<Disc> {
+pub fn sample_goal(
+    p: &StepParams,
+    s: &StateChunk,
+    e: usize,
+    rng: &mut RngStream,
+    r: f32,
+) -> Option<Disc> {
     let area = SamplingBox::new(p, s.map_x[e], s.map_y[e]);
     (0..MAX_TRIES).find_map(|_| {
         let (x, y) = area.point(rng);
         let d = Disc { x, y, r };
-        let free = !super::world::blocks_goal(p, s, e, &Shape::Disc(d)) && !touches_goal(p, s, e, &d);
+        let free =
+            !super::world::blocks_goal(p, s, e, &Shape::Disc(d)) && !touches_goal(p, s, e, &d);
         free.then_some(d)
     })
 }
 
 /// Does the disc touch a current goal: the robot's, a lone human's or a moving group's?
 fn touches_goal(p: &StepParams, s: &StateChunk, e: usize, d: &Disc) -> bool {
-    if disc_disc(d, &Disc { x: s.goal_x[e], y: s.goal_y[e], r: p.goal_radius }) {
+    if disc_disc(
+        d,
+        &Disc {
+            x: s.goal_x[e],
+            y: s.goal_y[e],
+            r: p.goal_radius,
+        },
+    ) {
         return true;
     }
     let hb = e * s.strides.humans;
     let lone = hb..hb + (s.n_static[e] + s.n_dynamic[e]) as usize;
-    if lone.into_iter().any(|i| disc_disc(d, &Disc { x: s.h_goal_x[i], y: s.h_goal_y[i], r: p.human_goal_radius })) {
+    if lone.into_iter().any(|i| {
+        disc_disc(
+            d,
+            &Disc {
+                x: s.h_goal_x[i],
+                y: s.h_goal_y[i],
+                r: p.human_goal_radius,
+            },
+        )
+    }) {
         return true;
     }
     let gb = e * s.strides.groups;
     (gb..gb + s.n_groups[e] as usize).any(|g| {
         s.g_kind[g] == group_kind::MOVING
-            && disc_disc(d, &Disc { x: s.g_goal_x[g], y: s.g_goal_y[g], r: p.group_goal_radius })
+            && disc_disc(
+                d,
+                &Disc {
+                    x: s.g_goal_x[g],
+                    y: s.g_goal_y[g],
+                    r: p.group_goal_radius,
+                },
+            )
     })
 }

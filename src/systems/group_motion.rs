@@ -19,7 +19,12 @@ pub fn group_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     }
     let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = RngStream::new(p.seed(), env, s.episode[e], stream_id(STREAM_GROUP_NOISE, s.tick[e]));
+    let mut rng = RngStream::new(
+        p.seed(),
+        env,
+        s.episode[e],
+        stream_id(STREAM_GROUP_NOISE, s.tick[e]),
+    );
     let hb = e * s.strides.humans;
     let gb = e * s.strides.groups;
     for g in gb..gb + s.n_groups[e] as usize {
@@ -27,7 +32,11 @@ pub fn group_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
             continue;
         }
         let n = s.g_count[g];
-        let scale = if p.group_velocity_divided != 0 { 1.0 / n as f32 } else { 1.0 };
+        let scale = if p.group_velocity_divided != 0 {
+            1.0 / n as f32
+        } else {
+            1.0
+        };
         let (gvx, gvy) = (s.g_vx[g] * scale, s.g_vy[g] * scale);
         let first = hb + s.g_first[g] as usize;
         let (mut cx, mut cy) = (0.0f32, 0.0f32);

@@ -23,10 +23,18 @@ pub fn group_velocities(p: &StepParams, b: &mut Batch<'_>, e: usize) {
         let (x, y) = (s.g_x[g], s.g_y[g]);
         let pref = orca_world::preferred(x, y, s.g_goal_x[g], s.g_goal_y[g], p.human_max_speed);
         let radius = orca_world::group_agent_radius(p);
-        let vel = if p.orca_actual_velocity != 0 { [s.g_vx[g], s.g_vy[g]] } else { [0.0, 0.0] };
+        let vel = if p.orca_actual_velocity != 0 {
+            [s.g_vx[g], s.g_vy[g]]
+        } else {
+            [0.0, 0.0]
+        };
         let mut agent = orca_world::agent(s, e, [x, y], vel, pref, radius);
         agent.neighbor_dist = 2.0 * radius;
-        let others = Others { skip_human: None, skip_group: Some(g), robot: false };
+        let others = Others {
+            skip_human: None,
+            skip_group: Some(g),
+            robot: false,
+        };
         let v = orca_world::with_world(|w| w.velocity(p, s, e, &agent, others));
         s.g_vx[g] = v[0];
         s.g_vy[g] = v[1];

@@ -22,7 +22,12 @@ pub fn human_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     }
     let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = RngStream::new(p.seed(), env, s.episode[e], stream_id(STREAM_AVOID_ROBOT, s.tick[e]));
+    let mut rng = RngStream::new(
+        p.seed(),
+        env,
+        s.episode[e],
+        stream_id(STREAM_AVOID_ROBOT, s.tick[e]),
+    );
     let first = e * s.strides.humans + s.n_static[e] as usize;
     for i in first..first + s.n_dynamic[e] as usize {
         let avoid_robot = rng.chance(p.prob_avoid_robot);
@@ -38,7 +43,13 @@ pub fn human_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
 /// The ORCA velocity (m/s) of lone walker `i`: itself at rest (or at its velocity) wanting to go
 /// to its goal at the human speed, in a fresh simulator with the other lone humans, the moving
 /// groups and, if it avoids it, the robot.
-fn orca_velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, avoid_robot: bool) -> (f32, f32) {
+fn orca_velocity(
+    p: &StepParams,
+    s: &StateChunk,
+    e: usize,
+    i: usize,
+    avoid_robot: bool,
+) -> (f32, f32) {
     let (x, y) = (s.h_x[i], s.h_y[i]);
     let pref = orca_world::preferred(x, y, s.h_goal_x[i], s.h_goal_y[i], p.human_max_speed);
     let vel = if p.orca_actual_velocity != 0 {
@@ -48,7 +59,11 @@ fn orca_velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, avoid_robot
         [0.0, 0.0]
     };
     let agent = orca_world::agent(s, e, [x, y], vel, pref, p.human_radius);
-    let others = Others { skip_human: Some(i), skip_group: None, robot: avoid_robot };
+    let others = Others {
+        skip_human: Some(i),
+        skip_group: None,
+        robot: avoid_robot,
+    };
     let v = orca_world::with_world(|w| w.velocity(p, s, e, &agent, others));
     (v[0], v[1])
 }

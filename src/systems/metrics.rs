@@ -60,8 +60,11 @@ fn progress(p: &StepParams, s: &mut StateChunk, e: usize, row: &mut [f32]) {
     s.m_path_length[e] += p.dt * v;
     row[info::FAILURE_TO_PROGRESS] = s.m_failure_to_progress[e] as f32;
     row[info::STALLED_TIME] = s.m_stalled_time[e];
-    row[info::TIME_TO_REACH_GOAL] =
-        if row[info::SUCCESS] != 0.0 { s.tick[e] as f32 * p.dt } else { f32::NAN };
+    row[info::TIME_TO_REACH_GOAL] = if row[info::SUCCESS] != 0.0 {
+        s.tick[e] as f32 * p.dt
+    } else {
+        f32::NAN
+    };
     row[info::PATH_LENGTH] = s.m_path_length[e];
 }
 
@@ -85,9 +88,27 @@ fn motion_statistics(p: &StepParams, s: &mut StateChunk, e: usize, tick: f32, ro
     let ay = (vy - s.m_prev_vy[e]) / p.dt;
     let jx = (ax - s.m_prev_ax[e]) / p.dt;
     let jy = (ay - s.m_prev_ay[e]) / p.dt;
-    running(&mut s.m_v_min[e], &mut s.m_v_avg[e], &mut s.m_v_max[e], speed(vx, vy), tick);
-    running(&mut s.m_a_min[e], &mut s.m_a_avg[e], &mut s.m_a_max[e], speed(ax, ay), tick);
-    running(&mut s.m_j_min[e], &mut s.m_j_avg[e], &mut s.m_j_max[e], speed(jx, jy), tick);
+    running(
+        &mut s.m_v_min[e],
+        &mut s.m_v_avg[e],
+        &mut s.m_v_max[e],
+        speed(vx, vy),
+        tick,
+    );
+    running(
+        &mut s.m_a_min[e],
+        &mut s.m_a_avg[e],
+        &mut s.m_a_max[e],
+        speed(ax, ay),
+        tick,
+    );
+    running(
+        &mut s.m_j_min[e],
+        &mut s.m_j_avg[e],
+        &mut s.m_j_max[e],
+        speed(jx, jy),
+        tick,
+    );
     s.m_prev_vx[e] = vx;
     s.m_prev_vy[e] = vy;
     s.m_prev_ax[e] = ax;
@@ -160,12 +181,20 @@ fn obstacle_distances(p: &StepParams, s: &StateChunk, e: usize) -> (f32, f32) {
         add(speed(s.p_x[i] - rx, s.p_y[i] - ry) - p.plant_radius);
     }
     for t in 0..s.n_tables[e] as usize {
-        add(super::world::table_rect(p, s, e, t).distance_sq(rx, ry).sqrt());
+        add(super::world::table_rect(p, s, e, t)
+            .distance_sq(rx, ry)
+            .sqrt());
     }
     for w in 0..s.n_walls[e] as usize {
-        add(super::world::wall_rect(p, s, e, w).distance_sq(rx, ry).sqrt());
+        add(super::world::wall_rect(p, s, e, w)
+            .distance_sq(rx, ry)
+            .sqrt());
     }
-    if n == 0 { (f32::INFINITY, f32::NAN) } else { (min, sum / n as f32) }
+    if n == 0 {
+        (f32::INFINITY, f32::NAN)
+    } else {
+        (min, sum / n as f32)
+    }
 }
 
 /// STL and SPL: 0 unless this step succeeded; then 1 when the shadow robot collided or has not
@@ -194,7 +223,11 @@ fn accumulate_episode(p: &StepParams, s: &mut StateChunk, e: usize, reward: f32,
         s.ep_sum_avg_obstacle_dist[e] += avg;
     }
     let ttc = row[info::TIME_TO_COLLISION];
-    s.ep_sum_ttc[e] += if ttc < 0.0 { p.episode_length as f32 } else { ttc };
+    s.ep_sum_ttc[e] += if ttc < 0.0 {
+        p.episode_length as f32
+    } else {
+        ttc
+    };
     s.ep_sum_discomfort_dsrnn[e] += row[info::DISCOMFORT_DSRNN];
     s.ep_sum_sngnn[e] += row[info::SNGNN_REWARD];
 }
@@ -261,12 +294,28 @@ fn write_episode(p: &StepParams, s: &StateChunk, e: usize, row: &[f32], out: &mu
     set(out, "collision_wall", row[info::COLLISION_WALL]);
     set(out, "timeout", row[info::TIMEOUT]);
     set(out, "out_of_map", row[info::OUT_OF_MAP]);
-    set(out, "time_taken", if collision != 0.0 { p.episode_length as f32 } else { length });
-    let ttrg = if success != 0.0 { row[info::TIME_TO_REACH_GOAL] } else { p.episode_length as f32 };
+    set(
+        out,
+        "time_taken",
+        if collision != 0.0 {
+            p.episode_length as f32
+        } else {
+            length
+        },
+    );
+    let ttrg = if success != 0.0 {
+        row[info::TIME_TO_REACH_GOAL]
+    } else {
+        p.episode_length as f32
+    };
     set(out, "TIME_TO_REACH_GOAL", ttrg);
     set(out, "MINIMUM_DISTANCE_TO_HUMAN", s.ep_min_human_dist[e]);
     set(out, "MINIMUM_OBSTACLE_DISTANCE", s.ep_min_obstacle_dist[e]);
-    set(out, "AVERAGE_OBSTACLE_DISTANCE", s.ep_sum_avg_obstacle_dist[e] / length);
+    set(
+        out,
+        "AVERAGE_OBSTACLE_DISTANCE",
+        s.ep_sum_avg_obstacle_dist[e] / length,
+    );
     set(out, "TIME_TO_COLLISION", s.ep_sum_ttc[e] / length);
     set(out, "DISCOMFORT_DSRNN", s.ep_sum_discomfort_dsrnn[e]);
     set(out, "DISCOMFORT_SNGNN", s.ep_sum_sngnn[e]);
@@ -285,7 +334,13 @@ mod tests {
         let (mut amin, mut aavg, mut amax) = (f32::INFINITY, 0.0, 0.0);
         for t in 1..=5 {
             running(&mut vmin, &mut vavg, &mut vmax, v, t as f32);
-            running(&mut amin, &mut aavg, &mut amax, if t == 1 { v } else { 0.0 }, t as f32);
+            running(
+                &mut amin,
+                &mut aavg,
+                &mut amax,
+                if t == 1 { v } else { 0.0 },
+                t as f32,
+            );
         }
         assert!((vavg - v).abs() < 1e-8);
         assert!((aavg - v / 5.0).abs() < 1e-8, "{aavg}");

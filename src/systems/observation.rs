@@ -158,16 +158,29 @@ fn gaze(p: &StepParams, hx: f32, hy: f32, hc: f32, hs: f32, f: &Frame) -> f32 {
     let dy = f.y - hy;
     let bearing = math::atan2(hc * dy - hs * dx, hc * dx + hs * dy);
     let half = 0.5 * p.gaze_angle;
-    if bearing >= -half && bearing <= half { 1.0 } else { 0.0 }
+    if bearing >= -half && bearing <= half {
+        1.0
+    } else {
+        0.0
+    }
 }
 
 fn laptops(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
     let lb = e * s.strides.laptops;
     let n = s.n_laptops[e] as usize;
-    let radius = (0.25 * p.laptop_length * p.laptop_length + 0.25 * p.laptop_width * p.laptop_width).sqrt();
+    let radius =
+        (0.25 * p.laptop_length * p.laptop_length + 0.25 * p.laptop_width * p.laptop_width).sqrt();
     for k in 0..n {
         let i = lb + k;
-        object_record(&mut out[k * RECORD..], one_hot::LAPTOP, f, s.l_x[i], s.l_y[i], s.l_theta[i], radius);
+        object_record(
+            &mut out[k * RECORD..],
+            one_hot::LAPTOP,
+            f,
+            s.l_x[i],
+            s.l_y[i],
+            s.l_theta[i],
+            radius,
+        );
     }
     n as u32
 }
@@ -175,10 +188,19 @@ fn laptops(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32])
 fn tables(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
     let tb = e * s.strides.tables;
     let n = s.n_tables[e] as usize;
-    let radius = (0.25 * p.table_length * p.table_length + 0.25 * p.table_width * p.table_width).sqrt();
+    let radius =
+        (0.25 * p.table_length * p.table_length + 0.25 * p.table_width * p.table_width).sqrt();
     for k in 0..n {
         let i = tb + k;
-        object_record(&mut out[k * RECORD..], one_hot::TABLE, f, s.t_x[i], s.t_y[i], s.t_theta[i], radius);
+        object_record(
+            &mut out[k * RECORD..],
+            one_hot::TABLE,
+            f,
+            s.t_x[i],
+            s.t_y[i],
+            s.t_theta[i],
+            radius,
+        );
     }
     n as u32
 }
@@ -188,7 +210,15 @@ fn plants(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) 
     let n = s.n_plants[e] as usize;
     for k in 0..n {
         let i = pb + k;
-        object_record(&mut out[k * RECORD..], one_hot::PLANT, f, s.p_x[i], s.p_y[i], 0.0, p.plant_radius);
+        object_record(
+            &mut out[k * RECORD..],
+            one_hot::PLANT,
+            f,
+            s.p_x[i],
+            s.p_y[i],
+            0.0,
+            p.plant_radius,
+        );
     }
     n as u32
 }
@@ -204,18 +234,33 @@ fn walls(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -
         let (sn, c) = math::sin_cos(theta);
         let left_x = s.w_x[w] - 0.5 * length * c;
         let left_y = s.w_y[w] - 0.5 * length * sn;
-        let full = (length / step).floor();
-        let rest = length - full * step;
-        for j in 0..full as u32 {
+        let (full, rest) = crate::scenario::layout::segments(length, step);
+        for j in 0..full {
             let along = (j as f32 + 0.5) * step;
             let r = &mut out[k * RECORD..];
-            object_record(r, one_hot::WALL, f, left_x + along * c, left_y + along * sn, theta, 0.5 * step);
+            object_record(
+                r,
+                one_hot::WALL,
+                f,
+                left_x + along * c,
+                left_y + along * sn,
+                theta,
+                0.5 * step,
+            );
             k += 1;
         }
         if rest > 0.0 {
-            let along = full * step + 0.5 * rest;
+            let along = full as f32 * step + 0.5 * rest;
             let r = &mut out[k * RECORD..];
-            object_record(r, one_hot::WALL, f, left_x + along * c, left_y + along * sn, theta, 0.5 * rest);
+            object_record(
+                r,
+                one_hot::WALL,
+                f,
+                left_x + along * c,
+                left_y + along * sn,
+                theta,
+                0.5 * rest,
+            );
             k += 1;
         }
     }

@@ -46,7 +46,14 @@ fn collect(p: &StepParams, s: &StateChunk, e: usize, out: &mut Fixed<Polygon, MA
             [x, y]
         })
     };
-    let square = |x: f32, y: f32, h: f32| -> Polygon { [[x + h, y + h], [x - h, y + h], [x - h, y - h], [x + h, y - h]] };
+    let square = |x: f32, y: f32, h: f32| -> Polygon {
+        [
+            [x + h, y + h],
+            [x - h, y + h],
+            [x - h, y - h],
+            [x + h, y - h],
+        ]
+    };
     for t in 0..s.n_tables[e] as usize {
         out.push(rect(super::world::table_rect(p, s, e, t)));
     }

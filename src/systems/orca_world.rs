@@ -11,7 +11,8 @@ use std::cell::RefCell;
 
 use crate::math;
 use crate::orca::{
-    Neighbor, ObstacleVerts, OrcaAgent, OrcaNeighbor, OrcaScratch, compute_new_velocity, insert_agent_neighbor,
+    Neighbor, ObstacleVerts, OrcaAgent, OrcaNeighbor, OrcaScratch, compute_new_velocity,
+    insert_agent_neighbor,
 };
 use crate::params::StepParams;
 use crate::state::{StateChunk, group_kind};
@@ -56,7 +57,11 @@ pub fn group_agent_radius(p: &StepParams) -> f32 {
 pub fn preferred(x: f32, y: f32, gx: f32, gy: f32, speed: f32) -> [f32; 2] {
     let (dx, dy) = (gx - x, gy - y);
     let l = (dx * dx + dy * dy).sqrt();
-    if l > 0.0 { [speed * (dx / l), speed * (dy / l)] } else { [0.0, 0.0] }
+    if l > 0.0 {
+        [speed * (dx / l), speed * (dy / l)]
+    } else {
+        [0.0, 0.0]
+    }
 }
 
 /// The processed ORCA obstacles of environment `e`.
@@ -75,7 +80,14 @@ pub fn obstacles<'s>(s: &'s StateChunk, e: usize) -> ObstacleVerts<'s> {
 }
 
 /// An ORCA agent with the environment's per-episode parameters.
-pub fn agent(s: &StateChunk, e: usize, pos: [f32; 2], vel: [f32; 2], pref: [f32; 2], radius: f32) -> OrcaAgent {
+pub fn agent(
+    s: &StateChunk,
+    e: usize,
+    pos: [f32; 2],
+    vel: [f32; 2],
+    pref: [f32; 2],
+    radius: f32,
+) -> OrcaAgent {
     OrcaAgent {
         pos,
         vel,
@@ -91,10 +103,23 @@ pub fn agent(s: &StateChunk, e: usize, pos: [f32; 2], vel: [f32; 2], pref: [f32;
 
 impl OrcaWorld {
     /// The new velocity (m/s) of `first` in a simulator holding `others` of environment `e`.
-    pub fn velocity(&mut self, p: &StepParams, s: &StateChunk, e: usize, first: &OrcaAgent, others: Others) -> [f32; 2] {
+    pub fn velocity(
+        &mut self,
+        p: &StepParams,
+        s: &StateChunk,
+        e: usize,
+        first: &OrcaAgent,
+        others: Others,
+    ) -> [f32; 2] {
         self.gather(p, s, e, others);
         self.select(first);
-        compute_new_velocity(first, &self.neighbors, &obstacles(s, e), p.dt, &mut self.scratch)
+        compute_new_velocity(
+            first,
+            &self.neighbors,
+            &obstacles(s, e),
+            p.dt,
+            &mut self.scratch,
+        )
     }
 
     /// The other agents in 0.1.1's order: lone humans, the robot, moving groups.
@@ -112,7 +137,11 @@ impl OrcaWorld {
             } else {
                 [0.0, 0.0]
             };
-            self.candidates.push(OrcaNeighbor { pos: [s.h_x[i], s.h_y[i]], vel, radius: p.human_radius });
+            self.candidates.push(OrcaNeighbor {
+                pos: [s.h_x[i], s.h_y[i]],
+                vel,
+                radius: p.human_radius,
+            });
         }
         if others.robot {
             let vel = if actual {
@@ -121,15 +150,27 @@ impl OrcaWorld {
             } else {
                 [0.0, 0.0]
             };
-            self.candidates.push(OrcaNeighbor { pos: [s.robot_x[e], s.robot_y[e]], vel, radius: p.robot_radius });
+            self.candidates.push(OrcaNeighbor {
+                pos: [s.robot_x[e], s.robot_y[e]],
+                vel,
+                radius: p.robot_radius,
+            });
         }
         let gb = e * s.strides.groups;
         for g in gb..gb + s.n_groups[e] as usize {
             if s.g_kind[g] != group_kind::MOVING || others.skip_group == Some(g) {
                 continue;
             }
-            let vel = if actual { [s.g_vx[g], s.g_vy[g]] } else { [0.0, 0.0] };
-            self.candidates.push(OrcaNeighbor { pos: [s.g_x[g], s.g_y[g]], vel, radius: group_agent_radius(p) });
+            let vel = if actual {
+                [s.g_vx[g], s.g_vy[g]]
+            } else {
+                [0.0, 0.0]
+            };
+            self.candidates.push(OrcaNeighbor {
+                pos: [s.g_x[g], s.g_y[g]],
+                vel,
+                radius: group_agent_radius(p),
+            });
         }
     }
 
@@ -140,8 +181,16 @@ impl OrcaWorld {
         for (j, c) in self.candidates.iter().enumerate() {
             let dx = first.pos[0] - c.pos[0];
             let dy = first.pos[1] - c.pos[1];
-            let candidate = Neighbor { dist_sq: dx * dx + dy * dy, index: j as u32 };
-            insert_agent_neighbor(&mut self.selected, first.max_neighbors as usize, candidate, &mut range_sq);
+            let candidate = Neighbor {
+                dist_sq: dx * dx + dy * dy,
+                index: j as u32,
+            };
+            insert_agent_neighbor(
+                &mut self.selected,
+                first.max_neighbors as usize,
+                candidate,
+                &mut range_sq,
+            );
         }
         self.neighbors.clear();
         for n in &self.selected {

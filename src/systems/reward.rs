@@ -47,7 +47,11 @@ fn step_reward(p: &StepParams, s: &mut StateChunk, e: usize) -> f32 {
     let dy = s.goal_y[e] - s.robot_y[e];
     let d = (dx * dx + dy * dy).sqrt();
     // 0 on the first step: the previous distance is unknown to the reward (0.1.1).
-    let r_dist = if s.r_has_prev[e] != 0 { -(p.reward_distance_scale * (d - s.r_prev_dist[e])) } else { 0.0 };
+    let r_dist = if s.r_has_prev[e] != 0 {
+        -(p.reward_distance_scale * (d - s.r_prev_dist[e]))
+    } else {
+        0.0
+    };
     let d_min = min_predicted_clearance(p, s, e);
     let r_disc = if d_min < p.reward_discomfort_distance {
         (d_min - p.reward_discomfort_distance) * p.reward_discomfort_factor * p.dt
@@ -69,7 +73,10 @@ pub fn robot_world_velocity(s: &StateChunk, e: usize) -> (f32, f32) {
     let theta = s.robot_theta[e];
     let (sn, c) = math::sin_cos(theta);
     let (sn2, c2) = math::sin_cos(theta + FRAC_PI_2);
-    (s.robot_vx[e] * c + s.robot_vy[e] * c2, s.robot_vx[e] * sn + s.robot_vy[e] * sn2)
+    (
+        s.robot_vx[e] * c + s.robot_vy[e] * c2,
+        s.robot_vx[e] * sn + s.robot_vy[e] * sn2,
+    )
 }
 
 /// The smallest clearance (m) between the robot and any human over the next dt, assuming
@@ -84,7 +91,9 @@ pub fn min_predicted_clearance(p: &StepParams, s: &StateChunk, e: usize) -> f32 
         let py = y - ry;
         let vx = speed * c - vrx;
         let vy = speed * sn - vry;
-        origin_segment_distance(px, py, px + vx * p.dt, py + vy * p.dt) - p.human_radius - p.robot_radius
+        origin_segment_distance(px, py, px + vx * p.dt, py + vy * p.dt)
+            - p.human_radius
+            - p.robot_radius
     };
     let hb = e * s.strides.humans;
     let mut d_min = f32::INFINITY;

@@ -13,7 +13,11 @@ pub fn command(p: &StepParams, a: &[f32]) -> (f32, f32, f32) {
     let v = p.robot_max_speed;
     let w = p.robot_max_rotation;
     let vx = (a[0] * v).clamp(-v, v);
-    let vy = if p.holonomic != 0 { (a[1] * v).clamp(-v, v) } else { 0.0 };
+    let vy = if p.holonomic != 0 {
+        (a[1] * v).clamp(-v, v)
+    } else {
+        0.0
+    };
     let wz = (a[2] * w).clamp(-w, w);
     (vx, vy, wz)
 }
@@ -40,7 +44,15 @@ pub fn robot_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     s.robot_vx[e] = vx;
     s.robot_vy[e] = vy;
     s.robot_w[e] = w;
-    let (x, y, theta) = integrate(p.dt, s.robot_x[e], s.robot_y[e], s.robot_theta[e], vx, vy, w);
+    let (x, y, theta) = integrate(
+        p.dt,
+        s.robot_x[e],
+        s.robot_y[e],
+        s.robot_theta[e],
+        vx,
+        vy,
+        w,
+    );
     s.robot_x[e] = x;
     s.robot_y[e] = y;
     s.robot_theta[e] = theta;

@@ -23,7 +23,13 @@ struct Params {
 /// The SFM velocity (m/s, world frame) of human slot `i` of environment `e`; `robot` says whether
 /// this human takes the robot into account this step.
 pub fn velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, robot: bool) -> (f32, f32) {
-    let sp = Params { r0: s.sfm_r0[e], gamma: s.sfm_gamma[e], n: s.sfm_n[e], n_prime: s.sfm_n_prime[e], lambda: s.sfm_lambda[e] };
+    let sp = Params {
+        r0: s.sfm_r0[e],
+        gamma: s.sfm_gamma[e],
+        n: s.sfm_n[e],
+        n_prime: s.sfm_n_prime[e],
+        lambda: s.sfm_lambda[e],
+    };
     let (x, y) = (s.h_x[i], s.h_y[i]);
     let (dx, dy) = unit(s.h_goal_x[i] - x, s.h_goal_y[i] - y);
     let (mut fdx, mut fdy) = (p.human_max_speed * dx, p.human_max_speed * dy);
@@ -38,7 +44,11 @@ pub fn velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, robot: bool)
     let disc_gap = |ox: f32, oy: f32, ro: f32| length(x - ox, y - oy) - ro - r;
     let pb = e * s.strides.plants;
     for k in pb..pb + s.n_plants[e] as usize {
-        obstacle(s.p_x[k], s.p_y[k], disc_gap(s.p_x[k], s.p_y[k], p.plant_radius));
+        obstacle(
+            s.p_x[k],
+            s.p_y[k],
+            disc_gap(s.p_x[k], s.p_y[k], p.plant_radius),
+        );
     }
     let mut rect = |rc: Rect| {
         let (qx, qy) = rc.nearest_point(x, y);
@@ -59,7 +69,11 @@ pub fn velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, robot: bool)
     let gb = e * s.strides.groups;
     for g in gb..gb + s.n_groups[e] as usize {
         if s.g_kind[g] == group_kind::STANDING {
-            obstacle(s.g_x[g], s.g_y[g], disc_gap(s.g_x[g], s.g_y[g], p.group_radius));
+            obstacle(
+                s.g_x[g],
+                s.g_y[g],
+                disc_gap(s.g_x[g], s.g_y[g], p.group_radius),
+            );
         }
     }
     if robot {
@@ -99,7 +113,11 @@ fn pedestrian_forces(s: &StateChunk, e: usize, i: usize, sp: &Params) -> (f32, f
         let dy = sp.lambda * (vjy - viy) + ey;
         let d_len = length(dx, dy);
         let b = sp.gamma * d_len;
-        let (tx, ty) = if d_len > 0.0 { (dx / d_len, dy / d_len) } else { (0.0, 0.0) };
+        let (tx, ty) = if d_len > 0.0 {
+            (dx / d_len, dy / d_len)
+        } else {
+            (0.0, 0.0)
+        };
         let theta = math::acos((ex * tx + ey * ty).clamp(-1.0, 1.0));
         let (nx, ny) = (-ey, ex);
         let d = length(xi - s.h_x[j], yi - s.h_y[j]);

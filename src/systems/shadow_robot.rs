@@ -22,7 +22,11 @@ pub fn shadow_robot(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     let (x, y, theta) = (s.shadow_x[e], s.shadow_y[e], s.shadow_theta[e]);
     let pref = orca_world::preferred(x, y, s.goal_x[e], s.goal_y[e], p.robot_max_speed);
     let agent = orca_world::agent(s, e, [x, y], [0.0, 0.0], pref, p.human_radius);
-    let others = Others { skip_human: None, skip_group: None, robot: false };
+    let others = Others {
+        skip_human: None,
+        skip_group: None,
+        robot: false,
+    };
     let v = orca_world::with_world(|w| w.velocity(p, s, e, &agent, others));
     let (vx, vy, w) = command_from_velocity(p, theta, v[0], v[1]);
     let (nx, ny, nt) = super::robot_motion::integrate(p.dt, x, y, theta, vx, vy, w);
@@ -42,7 +46,16 @@ pub fn shadow_outcome(p: &StepParams, s: &mut StateChunk, e: usize) {
         return;
     }
     let (x, y) = (s.shadow_x[e], s.shadow_y[e]);
-    let touch = super::world::touches(p, s, e, &Disc { x, y, r: p.robot_radius });
+    let touch = super::world::touches(
+        p,
+        s,
+        e,
+        &Disc {
+            x,
+            y,
+            r: p.robot_radius,
+        },
+    );
     if touch.human || touch.object {
         s.shadow_collided[e] = 1;
     }

@@ -19,7 +19,16 @@ pub fn termination(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     let dx = s.goal_x[e] - x;
     let dy = s.goal_y[e] - y;
     let success = (dx * dx + dy * dy).sqrt() < p.robot_radius + p.goal_radius;
-    let t = super::world::touches(p, s, e, &Disc { x, y, r: p.robot_radius });
+    let t = super::world::touches(
+        p,
+        s,
+        e,
+        &Disc {
+            x,
+            y,
+            r: p.robot_radius,
+        },
+    );
     let timeout = s.tick[e] > p.episode_length;
     let mut flags = [false; 7];
     if out_of_map {

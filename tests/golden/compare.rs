@@ -43,7 +43,10 @@ pub struct Report {
 
 impl Report {
     pub fn new(name: &str) -> Self {
-        Self { name: name.to_string(), ..Default::default() }
+        Self {
+            name: name.to_string(),
+            ..Default::default()
+        }
     }
 
     pub fn summary(&self) -> String {
@@ -84,8 +87,18 @@ impl Report {
     pub fn assert_ok(&self) {
         assert!(self.compared > 0, "nothing was compared");
         // Flips are rare threshold coincidences; more than 1 per 500 steps means a real difference.
-        assert!(self.flips * 500 <= self.steps.max(500), "{} near-threshold flips in {} steps", self.flips, self.steps);
-        assert!(self.failure_count == 0, "{} mismatches:\n{}", self.failure_count, self.failures.join("\n"));
+        assert!(
+            self.flips * 500 <= self.steps.max(500),
+            "{} near-threshold flips in {} steps",
+            self.flips,
+            self.steps
+        );
+        assert!(
+            self.failure_count == 0,
+            "{} mismatches:\n{}",
+            self.failure_count,
+            self.failures.join("\n")
+        );
     }
 
     fn fail(&mut self, msg: String) {
@@ -101,7 +114,9 @@ impl Report {
         let same = (ours.is_nan() && theirs.is_nan()) || ours == theirs;
         let err = (ours - theirs).abs();
         if !same && !(err <= abs) {
-            self.fail(format!("{what}: ours {ours} vs reference {theirs} (|err| {err:.3e} > {abs:.1e})"));
+            self.fail(format!(
+                "{what}: ours {ours} vs reference {theirs} (|err| {err:.3e} > {abs:.1e})"
+            ));
         } else if err.is_finite() && err > self.max_err[kind].0 {
             self.max_err[kind] = (err, what.to_string());
         }
@@ -125,14 +140,26 @@ impl Report {
         let layout = env.layout();
         let robot = golden["robot"].as_array().expect("robot record");
         for (k, v) in robot.iter().enumerate() {
-            self.close(&format!("{at} obs.robot[{k}]"), out.obs[k] as f64, num(v), OBS, 2);
+            self.close(
+                &format!("{at} obs.robot[{k}]"),
+                out.obs[k] as f64,
+                num(v),
+                OBS,
+                2,
+            );
         }
         for (t, key) in ENTITY_KEYS.iter().enumerate() {
-            let theirs = golden.get(*key).and_then(Value::as_array).map_or(&[][..], |v| &v[..]);
+            let theirs = golden
+                .get(*key)
+                .and_then(Value::as_array)
+                .map_or(&[][..], |v| &v[..]);
             let count = out.obs_count[t] as usize;
             self.compared += 1;
             if count * RECORD != theirs.len() {
-                self.fail(format!("{at} obs.{key}: {count} records vs {} in the reference", theirs.len() / RECORD));
+                self.fail(format!(
+                    "{at} obs.{key}: {count} records vs {} in the reference",
+                    theirs.len() / RECORD
+                ));
                 continue;
             }
             let ours = &out.obs[layout.offset[t]..layout.offset[t] + count * RECORD];
@@ -142,7 +169,13 @@ impl Report {
                     // Relative angular speed: socnav wraps the heading difference (0.1.1 does not).
                     g = wrapped_angular_speed(g, env.params().dt as f64);
                 }
-                self.close(&format!("{at} obs.{key}[{}][{}]", i / RECORD, i % RECORD), *o as f64, g, OBS, 2);
+                self.close(
+                    &format!("{at} obs.{key}[{}][{}]", i / RECORD, i % RECORD),
+                    *o as f64,
+                    g,
+                    OBS,
+                    2,
+                );
             }
         }
     }
@@ -159,7 +192,9 @@ impl Report {
         if (term, trunc) != (g_term, g_trunc) {
             if self.near_threshold(env, post) {
                 self.flips += 1;
-                println!("  flip at {at}: terminated ours {term} vs reference {g_term} (contact within {FLIP_FRACTION} of the radii sum)");
+                println!(
+                    "  flip at {at}: terminated ours {term} vs reference {g_term} (contact within {FLIP_FRACTION} of the radii sum)"
+                );
                 return;
             }
             self.fail(format!("{at}: terminated/truncated ours ({term}, {trunc}) vs reference ({g_term}, {g_trunc})"));
@@ -190,7 +225,8 @@ impl Report {
         let out = env.outputs();
         let p = env.params();
         let golden = &step["info"];
-        let terminal = step["terminated"].as_bool() == Some(true) || step["truncated"].as_bool() == Some(true);
+        let terminal =
+            step["terminated"].as_bool() == Some(true) || step["truncated"].as_bool() == Some(true);
         let dt = p.dt as f64;
         let (rr, hr) = (p.robot_radius as f64, p.human_radius as f64);
         // The recorded discomfort must be what 0.1.1's formula gives (checks this reconstruction);
@@ -203,20 +239,40 @@ impl Report {
             if no_groups {
                 let buggy = dsrnn_discomfort(post, dt, rr, hr, true);
                 // 2e-8: the reference holds the human radius as float32 (0.36000001), which shifts d_min by 1.4e-8.
-                self.close(&format!("{at} reconstruction of 0.1.1's DISCOMFORT_DSRNN"), buggy, discomfort, 2e-8, 3);
+                self.close(
+                    &format!("{at} reconstruction of 0.1.1's DISCOMFORT_DSRNN"),
+                    buggy,
+                    discomfort,
+                    2e-8,
+                    3,
+                );
             }
             let fixed = dsrnn_discomfort(post, dt, rr, hr, false);
             reward += fixed - discomfort;
             discomfort = fixed;
         } else {
-            discomfort = num(&env.get_state(0).unwrap()["state"]["reward_state"]["info"]["DISCOMFORT_DSRNN"]);
+            discomfort = num(
+                &env.get_state(0).unwrap()["state"]["reward_state"]["info"]["DISCOMFORT_DSRNN"],
+            );
         }
-        self.close(&format!("{at} reward"), out.reward[0] as f64, reward, REWARD, 3);
+        self.close(
+            &format!("{at} reward"),
+            out.reward[0] as f64,
+            reward,
+            REWARD,
+            3,
+        );
         for (k, key) in INFO_KEYS.iter().enumerate() {
             let ours = out.info[k] as f64;
-            let theirs = if k == info::DISCOMFORT_DSRNN { discomfort } else { num(&golden[*key]) };
+            let theirs = if k == info::DISCOMFORT_DSRNN {
+                discomfort
+            } else {
+                num(&golden[*key])
+            };
             let tol = match k {
-                info::MINIMUM_DISTANCE_TO_HUMAN | info::MINIMUM_OBSTACLE_DISTANCE | info::AVERAGE_OBSTACLE_DISTANCE => POS,
+                info::MINIMUM_DISTANCE_TO_HUMAN
+                | info::MINIMUM_OBSTACLE_DISTANCE
+                | info::AVERAGE_OBSTACLE_DISTANCE => POS,
                 info::PATH_LENGTH | info::STALLED_TIME => 1e-5,
                 info::DISTANCE_REWARD => REWARD,
                 info::DISCOMFORT_DSRNN => 2e-6,
@@ -232,16 +288,32 @@ impl Report {
             let (o, t) = (&ours[key], &theirs[key]);
             self.close(&format!("{at} {key}.x"), num(&o["x"]), num(&t["x"]), POS, 0);
             self.close(&format!("{at} {key}.y"), num(&o["y"]), num(&t["y"]), POS, 0);
-            self.angle(&format!("{at} {key}.theta"), num(&o["theta"]), num(&t["theta"]));
+            self.angle(
+                &format!("{at} {key}.theta"),
+                num(&o["theta"]),
+                num(&t["theta"]),
+            );
             for k in 0..3 {
-                self.close(&format!("{at} {key}.vel[{k}]"), num(&o["vel"][k]), num(&t["vel"][k]), VEL, 1);
+                self.close(
+                    &format!("{at} {key}.vel[{k}]"),
+                    num(&o["vel"][k]),
+                    num(&t["vel"][k]),
+                    VEL,
+                    1,
+                );
             }
         }
         let (os, ts) = (&ours["shadow_robot"], &theirs["shadow_robot"]);
         for key in ["collided", "reached", "reach_tick"] {
             self.equal(&format!("{at} shadow_robot.{key}"), &os[key], &ts[key]);
         }
-        self.close(&format!("{at} shadow_robot.path_length"), num(&os["path_length"]), num(&ts["path_length"]), 1e-5, 0);
+        self.close(
+            &format!("{at} shadow_robot.path_length"),
+            num(&os["path_length"]),
+            num(&ts["path_length"]),
+            1e-5,
+            0,
+        );
         let oh = ours["humans"].as_array().expect("humans");
         let th = theirs["humans"].as_array().expect("humans");
         self.compared += 1;
@@ -255,14 +327,26 @@ impl Report {
             self.equal(&format!("{who}.role"), &o["role"], &t["role"]);
             self.close(&format!("{who}.x"), num(&o["x"]), num(&t["x"]), POS, 0);
             self.close(&format!("{who}.y"), num(&o["y"]), num(&t["y"]), POS, 0);
-            self.close(&format!("{who}.speed"), num(&o["speed"]), num(&t["speed"]), VEL, 1);
+            self.close(
+                &format!("{who}.speed"),
+                num(&o["speed"]),
+                num(&t["speed"]),
+                VEL,
+                1,
+            );
             if num(&t["speed"]) > 0.0 || t["role"] != "dynamic" {
                 self.angle(&format!("{who}.theta"), num(&o["theta"]), num(&t["theta"]));
             }
             let id = t["id"].as_u64().expect("id");
             if !t["goal"].is_null() && !resampled_humans.contains(&id) {
                 for c in 0..2 {
-                    self.close(&format!("{who}.goal[{c}]"), num(&o["goal"][c]), num(&t["goal"][c]), POS, 0);
+                    self.close(
+                        &format!("{who}.goal[{c}]"),
+                        num(&o["goal"][c]),
+                        num(&t["goal"][c]),
+                        POS,
+                        0,
+                    );
                 }
             }
         }
@@ -270,9 +354,21 @@ impl Report {
         let tg = theirs["groups"].as_array().expect("groups");
         for (k, (o, t)) in og.iter().zip(tg).enumerate() {
             for c in 0..2 {
-                self.close(&format!("{at} groups[{k}].centre[{c}]"), num(&o["centre"][c]), num(&t["centre"][c]), POS, 0);
+                self.close(
+                    &format!("{at} groups[{k}].centre[{c}]"),
+                    num(&o["centre"][c]),
+                    num(&t["centre"][c]),
+                    POS,
+                    0,
+                );
                 if !t["goal"].is_null() && !resampled_groups.contains(&(k as u64)) {
-                    self.close(&format!("{at} groups[{k}].goal[{c}]"), num(&o["goal"][c]), num(&t["goal"][c]), POS, 0);
+                    self.close(
+                        &format!("{at} groups[{k}].goal[{c}]"),
+                        num(&o["goal"][c]),
+                        num(&t["goal"][c]),
+                        POS,
+                        0,
+                    );
                 }
             }
         }
@@ -280,17 +376,50 @@ impl Report {
         for key in tm.as_object().expect("metrics").keys() {
             if let Some(list) = tm[key].as_array() {
                 for (c, v) in list.iter().enumerate() {
-                    self.close(&format!("{at} metrics.{key}[{c}]"), num(&om[key][c]), num(v), VEL, 1);
+                    self.close(
+                        &format!("{at} metrics.{key}[{c}]"),
+                        num(&om[key][c]),
+                        num(v),
+                        VEL,
+                        1,
+                    );
                 }
             } else {
-                let tol = if key.contains("distance") || key.contains("length") { POS } else { VEL };
-                self.close(&format!("{at} metrics.{key}"), num(&om[key]), num(&tm[key]), tol, 1);
+                let tol = if key.contains("distance") || key.contains("length") {
+                    POS
+                } else {
+                    VEL
+                };
+                self.close(
+                    &format!("{at} metrics.{key}"),
+                    num(&om[key]),
+                    num(&tm[key]),
+                    tol,
+                    1,
+                );
             }
         }
         let (or, tr) = (&ours["reward_state"], &theirs["reward_state"]);
-        self.close(&format!("{at} reward_state.prev_distance"), num(&or["prev_distance"]), num(&tr["prev_distance"]), POS, 0);
-        for key in ["distance_reward", "alive_reward", "sngnn_reward", "DISCOMFORT_SNGNN"] {
-            self.close(&format!("{at} reward_state.info.{key}"), num(&or["info"][key]), num(&tr["info"][key]), REWARD, 3);
+        self.close(
+            &format!("{at} reward_state.prev_distance"),
+            num(&or["prev_distance"]),
+            num(&tr["prev_distance"]),
+            POS,
+            0,
+        );
+        for key in [
+            "distance_reward",
+            "alive_reward",
+            "sngnn_reward",
+            "DISCOMFORT_SNGNN",
+        ] {
+            self.close(
+                &format!("{at} reward_state.info.{key}"),
+                num(&or["info"][key]),
+                num(&tr["info"][key]),
+                REWARD,
+                3,
+            );
         }
     }
 }

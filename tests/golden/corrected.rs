@@ -13,7 +13,13 @@ const DISCOMFORT_FACTOR: f64 = 0.5;
 /// The discomfort term of a step whose post-motion snapshot is `state`.
 /// `bug` reproduces 0.1.1's robot velocity at heading θ + ω·dt; groups and laptop users count as
 /// pseudo-humans at their centres (the modelling choice kept by default) with their own heading.
-pub fn dsrnn_discomfort(state: &Value, dt: f64, robot_radius: f64, human_radius: f64, bug: bool) -> f64 {
+pub fn dsrnn_discomfort(
+    state: &Value,
+    dt: f64,
+    robot_radius: f64,
+    human_radius: f64,
+    bug: bool,
+) -> f64 {
     let robot = &state["robot"];
     let (rx, ry, theta) = (num(&robot["x"]), num(&robot["y"]), num(&robot["theta"]));
     let vel = &robot["vel"];
@@ -27,14 +33,23 @@ pub fn dsrnn_discomfort(state: &Value, dt: f64, robot_radius: f64, human_radius:
         let (qx, qy) = (speed * th.cos() - vrx, speed * th.sin() - vry);
         let (ex, ey) = (qx * dt, qy * dt);
         let len_sq = ex * ex + ey * ey;
-        let t = if len_sq > 0.0 { (-(px * ex + py * ey) / len_sq).clamp(0.0, 1.0) } else { 0.0 };
+        let t = if len_sq > 0.0 {
+            (-(px * ex + py * ey) / len_sq).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         let (cx, cy) = (px + t * ex, py + t * ey);
         (cx * cx + cy * cy).sqrt() - human_radius - robot_radius
     };
     let humans = state["humans"].as_array().expect("humans");
     let mut d_min = f64::INFINITY;
     for h in humans {
-        d_min = d_min.min(clearance(num(&h["x"]), num(&h["y"]), num(&h["speed"]), num(&h["theta"])));
+        d_min = d_min.min(clearance(
+            num(&h["x"]),
+            num(&h["y"]),
+            num(&h["speed"]),
+            num(&h["theta"]),
+        ));
     }
     for g in state["groups"].as_array().into_iter().flatten() {
         let members: Vec<&Value> = g["members"]
@@ -43,15 +58,25 @@ pub fn dsrnn_discomfort(state: &Value, dt: f64, robot_radius: f64, human_radius:
             .iter()
             .map(|id| humans.iter().find(|h| h["id"] == *id).expect("member"))
             .collect();
-        let mean_speed = members.iter().map(|h| num(&h["speed"])).sum::<f64>() / members.len() as f64;
+        let mean_speed =
+            members.iter().map(|h| num(&h["speed"])).sum::<f64>() / members.len() as f64;
         let centre = &g["centre"];
-        d_min = d_min.min(clearance(num(&centre[0]), num(&centre[1]), mean_speed, num(&members[0]["theta"])));
+        d_min = d_min.min(clearance(
+            num(&centre[0]),
+            num(&centre[1]),
+            mean_speed,
+            num(&members[0]["theta"]),
+        ));
     }
     for u in state["hl_interactions"].as_array().into_iter().flatten() {
         let centre = &u["centre"];
         d_min = d_min.min(clearance(num(&centre[0]), num(&centre[1]), 0.0, 0.0));
     }
-    if d_min < DISCOMFORT_DISTANCE { (d_min - DISCOMFORT_DISTANCE) * DISCOMFORT_FACTOR * dt } else { 0.0 }
+    if d_min < DISCOMFORT_DISTANCE {
+        (d_min - DISCOMFORT_DISTANCE) * DISCOMFORT_FACTOR * dt
+    } else {
+        0.0
+    }
 }
 
 /// The relative angular speed 0.1.1 observes, with its heading difference wrapped (socnav's fix).

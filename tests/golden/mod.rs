@@ -1,6 +1,9 @@
 //! Reading the golden SocNavGym 0.1.1 episodes and comparing socnav's step with them.
 
-#![allow(dead_code, reason = "each test binary that includes this module uses a different part of it")]
+#![allow(
+    dead_code,
+    reason = "each test binary that includes this module uses a different part of it"
+)]
 
 mod compare;
 mod corrected;
@@ -34,7 +37,8 @@ pub struct Step<'a> {
 
 /// Every `*.json.gz` episode of `dir` whose file name starts with `filter`, sorted by name.
 pub fn load_episodes(dir: &Path, filter: Option<&str>) -> Vec<(String, Episode)> {
-    let entries = std::fs::read_dir(dir).unwrap_or_else(|e| panic!("cannot read golden dir {}: {e}", dir.display()));
+    let entries = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("cannot read golden dir {}: {e}", dir.display()));
     let mut names: Vec<String> = entries
         .filter_map(|e| e.ok()?.file_name().into_string().ok())
         .filter(|n| n.ends_with(".json.gz") && filter.is_none_or(|f| n.starts_with(f)))
@@ -56,7 +60,8 @@ impl Episode {
         flate2::read::GzDecoder::new(file)
             .read_to_string(&mut text)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let root = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let root =
+            serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         Self { root }
     }
 
@@ -65,7 +70,10 @@ impl Episode {
     }
 
     pub fn config_name(&self) -> String {
-        self.header()["config_name"].as_str().expect("header.config_name").to_string()
+        self.header()["config_name"]
+            .as_str()
+            .expect("header.config_name")
+            .to_string()
     }
 
     pub fn initial_state(&self) -> &Value {
@@ -77,7 +85,11 @@ impl Episode {
     }
 
     pub fn steps(&self) -> impl Iterator<Item = Step<'_>> {
-        self.root["steps"].as_array().expect("steps").iter().map(|v| Step { v })
+        self.root["steps"]
+            .as_array()
+            .expect("steps")
+            .iter()
+            .map(|v| Step { v })
     }
 
     /// The state document socnav loads: the header's static part plus a snapshot.
@@ -92,7 +104,12 @@ impl Episode {
 
 impl<'a> Step<'a> {
     pub fn action(&self) -> Vec<f32> {
-        self.v["action"].as_array().expect("action").iter().map(|x| x.as_f64().expect("action value") as f32).collect()
+        self.v["action"]
+            .as_array()
+            .expect("action")
+            .iter()
+            .map(|x| x.as_f64().expect("action value") as f32)
+            .collect()
     }
 
     pub fn state(&self) -> &'a Value {
@@ -101,7 +118,9 @@ impl<'a> Step<'a> {
 
     /// The state the step's outputs describe (before the after-observation events).
     pub fn state_after_motion(&self) -> &'a Value {
-        self.v.get("state_before_events").unwrap_or(&self.v["state"])
+        self.v
+            .get("state_before_events")
+            .unwrap_or(&self.v["state"])
     }
 
     pub fn replayable(&self) -> bool {
@@ -131,12 +150,18 @@ impl<'a> Step<'a> {
 /// the header's YAML values.
 pub fn config_for(ep: &Episode) -> Result<Config, String> {
     let name = ep.config_name();
-    let stem = name.replace("_no_sngnn", "").replace("_with_sngnn", "_sngnn");
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs").join(format!("{stem}.toml"));
+    let stem = name
+        .replace("_no_sngnn", "")
+        .replace("_with_sngnn", "_sngnn");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(format!("{stem}.toml"));
     let ours = Config::from_file(&path).map_err(|e| e.to_string())?;
     let theirs = Config::from_socnavgym(&ep.header()["config"]).map_err(|e| e.to_string())?;
     if ours != theirs {
-        return Err(format!("configs/{stem}.toml differs from the golden header's config:\nours:   {ours:?}\ntheirs: {theirs:?}"));
+        return Err(format!(
+            "configs/{stem}.toml differs from the golden header's config:\nours:   {ours:?}\ntheirs: {theirs:?}"
+        ));
     }
     Ok(ours)
 }

@@ -30,8 +30,12 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             steps += 1;
         }
         let secs = start.elapsed().as_secs_f64();
-        let stages: Vec<(&str, f64)> =
-            env.stage_seconds().iter().zip(&before).map(|((name, s), b)| (*name, s - b)).collect();
+        let stages: Vec<(&str, f64)> = env
+            .stage_seconds()
+            .iter()
+            .zip(&before)
+            .map(|((name, s), b)| (*name, s - b))
+            .collect();
         let stage_total: f64 = stages.iter().map(|s| s.1).sum();
         rows.push(json!({
             "envs": n,
@@ -57,7 +61,9 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
 
 fn print_row(row: &serde_json::Value, header: bool, threads: usize) {
     if header {
-        println!("CPU backend, {threads} threads; per-stage figures are env-steps/s if the stage ran alone");
+        println!(
+            "CPU backend, {threads} threads; per-stage figures are env-steps/s if the stage ran alone"
+        );
     }
     println!(
         "envs {:>6}: {:>12.0} env-steps/s   ({} steps in {:.2} s; state {} B/env; obs {} floats/env)",
@@ -71,7 +77,13 @@ fn print_row(row: &serde_json::Value, header: bool, threads: usize) {
     if let Some(stages) = row["stage_env_steps_per_s"].as_object() {
         let cells: Vec<String> = stages
             .iter()
-            .map(|(k, v)| format!("{k} {:.2e} ({:.0} %)", v.as_f64().unwrap_or(0.0), 100.0 * row["stage_share"][k].as_f64().unwrap_or(0.0)))
+            .map(|(k, v)| {
+                format!(
+                    "{k} {:.2e} ({:.0} %)",
+                    v.as_f64().unwrap_or(0.0),
+                    100.0 * row["stage_share"][k].as_f64().unwrap_or(0.0)
+                )
+            })
             .collect();
         println!("    {}", cells.join(" | "));
     }

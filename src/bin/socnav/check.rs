@@ -10,11 +10,19 @@ use crate::args::CheckArgs;
 pub fn check(a: &CheckArgs) -> Result<(), Box<dyn std::error::Error>> {
     let config = Config::from_name_or_path(&a.config)?;
     let caps = Caps::from_config(&config);
-    let layout = ObsLayout::new(&caps, config.observation.padded, config.observation.robot_velocity);
+    let layout = ObsLayout::new(
+        &caps,
+        config.observation.padded,
+        config.observation.robot_velocity,
+    );
     println!("# {}: valid. Resolved configuration:\n", a.config);
     println!("{}", config.to_toml_string());
     println!("# Capacities per environment: {caps:?}");
-    let per_type: Vec<String> = ENTITY_KEYS.iter().zip(layout.capacity).map(|(k, n)| format!("{k} {n}")).collect();
+    let per_type: Vec<String> = ENTITY_KEYS
+        .iter()
+        .zip(layout.capacity)
+        .map(|(k, n)| format!("{k} {n}"))
+        .collect();
     println!(
         "# Observation: {} floats per environment (robot {}, records of 14 floats: {})",
         layout.dim,

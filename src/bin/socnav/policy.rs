@@ -19,7 +19,11 @@ impl Policy {
     pub fn new(choice: PolicyChoice, seed: u64, env: &BatchEnv) -> Self {
         let holonomic = env.config().robot.kinematics == Kinematics::Holonomic;
         // The policy's randomness is outside the simulation: a host RNG, seeded apart from the batch.
-        Self { choice, rng: StdRng::seed_from_u64(seed ^ 0x5eed_0f_9011c7), holonomic }
+        Self {
+            choice,
+            rng: StdRng::seed_from_u64(seed ^ 0x5eed_0f_9011c7),
+            holonomic,
+        }
     }
 
     /// Fill `actions` (3 per environment) from the batch's current observations.
@@ -28,7 +32,11 @@ impl Policy {
             PolicyChoice::Random => {
                 for a in actions.chunks_exact_mut(3) {
                     a[0] = self.rng.random_range(-1.0..=1.0);
-                    a[1] = if self.holonomic { self.rng.random_range(-1.0..=1.0) } else { 0.0 };
+                    a[1] = if self.holonomic {
+                        self.rng.random_range(-1.0..=1.0)
+                    } else {
+                        0.0
+                    };
                     a[2] = self.rng.random_range(-1.0..=1.0);
                 }
             }

@@ -41,10 +41,28 @@ const METRICS: [&str; 24] = [
 ];
 
 /// Make a batch on the chosen backend, saying which one runs.
-pub fn make_env(config: Config, n_envs: usize, seed: u64, backend: BackendChoice, threads: Option<usize>, quiet: bool) -> Result<BatchEnv, socnav::SimError> {
-    let env = BatchEnv::new(config, EnvOptions { n_envs, seed, threads, ..Default::default() })?;
+pub fn make_env(
+    config: Config,
+    n_envs: usize,
+    seed: u64,
+    backend: BackendChoice,
+    threads: Option<usize>,
+    quiet: bool,
+) -> Result<BatchEnv, socnav::SimError> {
+    let env = BatchEnv::new(
+        config,
+        EnvOptions {
+            n_envs,
+            seed,
+            threads,
+            ..Default::default()
+        },
+    )?;
     if backend == BackendChoice::Auto && !quiet {
-        eprintln!("backend auto: using the CPU backend ({} threads); this build has no GPU backend", env.threads());
+        eprintln!(
+            "backend auto: using the CPU backend ({} threads); this build has no GPU backend",
+            env.threads()
+        );
     }
     Ok(env)
 }
@@ -69,7 +87,13 @@ pub fn run(a: &RunArgs) -> Result<(), Box<dyn std::error::Error>> {
     bar.finish_and_clear();
     let env_steps = (a.envs * a.steps) as f64;
     let rate = env_steps / stepping.as_secs_f64();
-    let summary = Summary { a, env: &env, agg: &agg, rate, seconds: stepping.as_secs_f64() };
+    let summary = Summary {
+        a,
+        env: &env,
+        agg: &agg,
+        rate,
+        seconds: stepping.as_secs_f64(),
+    };
     if a.json {
         println!("{}", serde_json::to_string_pretty(&summary.json())?);
     } else {
@@ -82,8 +106,10 @@ fn progress_bar(steps: u64) -> ProgressBar {
     // indicatif draws only when stderr is a terminal; in CI and pipes the bar stays silent.
     let bar = ProgressBar::new(steps);
     bar.set_style(
-        ProgressStyle::with_template("{spinner} {wide_bar} {pos}/{len} steps  {per_sec}  eta {eta}")
-            .expect("valid progress template"),
+        ProgressStyle::with_template(
+            "{spinner} {wide_bar} {pos}/{len} steps  {per_sec}  eta {eta}",
+        )
+        .expect("valid progress template"),
     );
     bar
 }
@@ -144,7 +170,11 @@ impl Summary<'_> {
             self.env.threads(),
             format!("{:?}", a.policy).to_lowercase()
         );
-        println!("episodes finished: {} (mean length {:.1} steps)", self.agg.episodes(), self.agg.mean("length"));
+        println!(
+            "episodes finished: {} (mean length {:.1} steps)",
+            self.agg.episodes(),
+            self.agg.mean("length")
+        );
         println!(
             "outcomes: success {:.1} %, collision {:.1} % (human {:.1} %, object {:.1} %, wall {:.1} %), timeout {:.1} %, out of map {:.1} %",
             pct("success"),
@@ -157,7 +187,10 @@ impl Summary<'_> {
         );
         println!("metrics (means over finished episodes, as the paper's table):");
         for chunk in METRICS.chunks(4) {
-            let cells: Vec<String> = chunk.iter().map(|k| format!("{k:>26} {:>9.4}", self.agg.mean(k))).collect();
+            let cells: Vec<String> = chunk
+                .iter()
+                .map(|k| format!("{k:>26} {:>9.4}", self.agg.mean(k)))
+                .collect();
             println!("{}", cells.join(""));
         }
         println!(

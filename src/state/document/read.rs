@@ -21,27 +21,48 @@ fn err(path: &str, what: impl std::fmt::Display) -> SimError {
 
 impl<'a> Reader<'a> {
     pub(super) fn root(value: &'a Value) -> Self {
-        Self { value, path: String::new() }
+        Self {
+            value,
+            path: String::new(),
+        }
     }
 
     fn child_path(&self, key: &str) -> String {
-        if self.path.is_empty() { key.to_string() } else { format!("{}.{key}", self.path) }
+        if self.path.is_empty() {
+            key.to_string()
+        } else {
+            format!("{}.{key}", self.path)
+        }
     }
 
     pub(super) fn at(&self, key: &str) -> Result<Reader<'a>, SimError> {
-        self.opt(key).ok_or_else(|| err(&self.child_path(key), "is missing"))
+        self.opt(key)
+            .ok_or_else(|| err(&self.child_path(key), "is missing"))
     }
 
     pub(super) fn opt(&self, key: &str) -> Option<Reader<'a>> {
         self.value
             .get(key)
             .filter(|v| !v.is_null())
-            .map(|value| Reader { value, path: self.child_path(key) })
+            .map(|value| Reader {
+                value,
+                path: self.child_path(key),
+            })
     }
 
     fn items(&self) -> Result<Vec<Reader<'a>>, SimError> {
-        let list = self.value.as_array().ok_or_else(|| err(&self.path, "must be a list"))?;
-        Ok(list.iter().enumerate().map(|(i, value)| Reader { value, path: format!("{}[{i}]", self.path) }).collect())
+        let list = self
+            .value
+            .as_array()
+            .ok_or_else(|| err(&self.path, "must be a list"))?;
+        Ok(list
+            .iter()
+            .enumerate()
+            .map(|(i, value)| Reader {
+                value,
+                path: format!("{}[{i}]", self.path),
+            })
+            .collect())
     }
 
     fn list(&self, key: &str) -> Result<Vec<Reader<'a>>, SimError> {
@@ -54,7 +75,10 @@ impl<'a> Reader<'a> {
     /// A number; "inf", "-inf" and "nan" strings stand for the non-finite values.
     fn as_f32(&self) -> Result<f32, SimError> {
         match self.value {
-            Value::Number(n) => n.as_f64().map(|x| x as f32).ok_or_else(|| err(&self.path, "is not a number")),
+            Value::Number(n) => n
+                .as_f64()
+                .map(|x| x as f32)
+                .ok_or_else(|| err(&self.path, "is not a number")),
             Value::String(s) if s == "inf" => Ok(f32::INFINITY),
             Value::String(s) if s == "-inf" => Ok(f32::NEG_INFINITY),
             Value::String(s) if s == "nan" => Ok(f32::NAN),
@@ -71,20 +95,29 @@ impl<'a> Reader<'a> {
         let r = self.at(key)?;
         match r.value {
             Value::Bool(b) => Ok(u32::from(*b)),
-            v => v.as_u64().map(|x| x as u32).ok_or_else(|| err(&r.path, format!("must be a non-negative integer, got {v}"))),
+            v => v
+                .as_u64()
+                .map(|x| x as u32)
+                .ok_or_else(|| err(&r.path, format!("must be a non-negative integer, got {v}"))),
         }
     }
 
     fn flag(&self, key: &str) -> Result<u32, SimError> {
         match self.opt(key) {
-            Some(r) => r.value.as_bool().map(u32::from).ok_or_else(|| err(&r.path, "must be true or false")),
+            Some(r) => r
+                .value
+                .as_bool()
+                .map(u32::from)
+                .ok_or_else(|| err(&r.path, "must be true or false")),
             None => Ok(0),
         }
     }
 
     fn text(&self, key: &str) -> Result<&'a str, SimError> {
         let r = self.at(key)?;
-        r.value.as_str().ok_or_else(|| err(&r.path, "must be a string"))
+        r.value
+            .as_str()
+            .ok_or_else(|| err(&r.path, "must be a string"))
     }
 
     /// A list of exactly `N` numbers.
@@ -92,7 +125,10 @@ impl<'a> Reader<'a> {
         let r = self.at(key)?;
         let items = r.items()?;
         if items.len() != N {
-            return Err(err(&r.path, format!("must hold {N} numbers, got {}", items.len())));
+            return Err(err(
+                &r.path,
+                format!("must hold {N} numbers, got {}", items.len()),
+            ));
         }
         let mut out = [0.0; N];
         for (o, item) in out.iter_mut().zip(&items) {
@@ -106,7 +142,10 @@ impl<'a> Reader<'a> {
         if let Some(r) = self.opt(key) {
             let v = r.as_f32()?;
             if (v - expected).abs() > 1e-5 * expected.abs().max(1.0) {
-                return Err(err(&r.path, format!("is {v} but this batch's config has `{config_key}` = {expected}")));
+                return Err(err(
+                    &r.path,
+                    format!("is {v} but this batch's config has `{config_key}` = {expected}"),
+                ));
             }
         }
         Ok(())
@@ -122,14 +161,29 @@ fn capacity(what: &str, n: usize, cap: usize, why: &str) -> Result<(), SimError>
     Ok(())
 }
 
-pub(super) fn room(p: &StepParams, r: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimError> {
+pub(super) fn room(
+    p: &StepParams,
+    r: &Reader<'_>,
+    s: &mut BatchState,
+    e: usize,
+) -> Result<(), SimError> {
     let room = r.at("room")?;
     s.map_x[e] = room.f("map_x")?;
     s.map_y[e] = room.f("map_y")?;
     let shape = room.text("shape")?;
-    s.room_shape[e] = shape_code(shape).ok_or_else(|| err(&room.child_path("shape"), format!("{shape:?} is not a room shape")))?;
+    s.room_shape[e] = shape_code(shape).ok_or_else(|| {
+        err(
+            &room.child_path("shape"),
+            format!("{shape:?} is not a room shape"),
+        )
+    })?;
     let walls = r.list("walls")?;
-    capacity("walls", walls.len(), s.strides.walls, "room shape and corridors")?;
+    capacity(
+        "walls",
+        walls.len(),
+        s.strides.walls,
+        "room shape and corridors",
+    )?;
     let wb = e * s.strides.walls;
     for (k, w) in walls.iter().enumerate() {
         w.matches("thickness", p.wall_thickness, "objects.wall_thickness")?;
@@ -141,13 +195,23 @@ pub(super) fn room(p: &StepParams, r: &Reader<'_>, s: &mut BatchState, e: usize)
     }
     s.n_walls[e] = walls.len() as u32;
     let blockers = r.list("spawn_blockers")?;
-    capacity("spawn blockers", blockers.len(), s.strides.blockers, "room shape and corridors")?;
+    capacity(
+        "spawn blockers",
+        blockers.len(),
+        s.strides.blockers,
+        "room shape and corridors",
+    )?;
     let bb = e * s.strides.blockers;
     for (k, b) in blockers.iter().enumerate() {
         s.b_kind[bb + k] = match b.text("kind")? {
             "laptop" => blocker_kind::L_BLOCK,
             "wall" => blocker_kind::DOOR,
-            other => return Err(err(&b.child_path("kind"), format!("{other:?} is not \"laptop\" or \"wall\""))),
+            other => {
+                return Err(err(
+                    &b.child_path("kind"),
+                    format!("{other:?} is not \"laptop\" or \"wall\""),
+                ));
+            }
         };
         s.b_x[bb + k] = b.f("x")?;
         s.b_y[bb + k] = b.f("y")?;
@@ -172,7 +236,12 @@ pub(super) fn human_params(r: &Reader<'_>, s: &mut BatchState, e: usize) -> Resu
     Ok(())
 }
 
-pub(super) fn snapshot(p: &StepParams, st: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimError> {
+pub(super) fn snapshot(
+    p: &StepParams,
+    st: &Reader<'_>,
+    s: &mut BatchState,
+    e: usize,
+) -> Result<(), SimError> {
     s.tick[e] = st.u("tick")?;
     robot(p, &st.at("robot")?, s, e)?;
     shadow(&st.at("shadow_robot")?, s, e)?;
@@ -203,15 +272,29 @@ fn shadow(r: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimError> 
     [s.shadow_vx[e], s.shadow_vy[e], s.shadow_w[e]] = r.vec::<3>("vel")?;
     s.shadow_collided[e] = r.flag("collided")?;
     s.shadow_reached[e] = r.flag("reached")?;
-    s.shadow_reach_tick[e] = if r.opt("reach_tick").is_some() { r.u("reach_tick")? } else { 0 };
+    s.shadow_reach_tick[e] = if r.opt("reach_tick").is_some() {
+        r.u("reach_tick")?
+    } else {
+        0
+    };
     s.shadow_path_length[e] = r.f("path_length")?;
     Ok(())
 }
 
 /// Humans in observation order; returns their ids by slot.
-fn humans(p: &StepParams, st: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<Vec<u32>, SimError> {
+fn humans(
+    p: &StepParams,
+    st: &Reader<'_>,
+    s: &mut BatchState,
+    e: usize,
+) -> Result<Vec<u32>, SimError> {
     let list = st.list("humans")?;
-    capacity("humans", list.len(), s.strides.humans, "the configured maximum humans of every role")?;
+    capacity(
+        "humans",
+        list.len(),
+        s.strides.humans,
+        "the configured maximum humans of every role",
+    )?;
     let hb = e * s.strides.humans;
     let mut ids = Vec::with_capacity(list.len());
     let (mut n_static, mut n_dynamic, mut last_rank) = (0u32, 0u32, 0u32);
@@ -222,7 +305,12 @@ fn humans(p: &StepParams, st: &Reader<'_>, s: &mut BatchState, e: usize) -> Resu
         let r = ROLE_NAMES
             .iter()
             .position(|n| *n == role_name)
-            .ok_or_else(|| err(&h.child_path("role"), format!("{role_name:?} is not a human role")))? as u32;
+            .ok_or_else(|| {
+                err(
+                    &h.child_path("role"),
+                    format!("{role_name:?} is not a human role"),
+                )
+            })? as u32;
         // Observation order: static, dynamic, group members (any group kind), laptop users.
         let rank = match r {
             role::STATIC => 0,
@@ -231,7 +319,10 @@ fn humans(p: &StepParams, st: &Reader<'_>, s: &mut BatchState, e: usize) -> Resu
             _ => 3,
         };
         if rank < last_rank {
-            return Err(err(&h.path, "is out of observation order (lone static, lone walking, group members, laptop users)"));
+            return Err(err(
+                &h.path,
+                "is out of observation order (lone static, lone walking, group members, laptop users)",
+            ));
         }
         last_rank = rank;
         n_static += u32::from(r == role::STATIC);
@@ -242,15 +333,32 @@ fn humans(p: &StepParams, st: &Reader<'_>, s: &mut BatchState, e: usize) -> Resu
         s.h_y[i] = h.f("y")?;
         s.h_theta[i] = h.f("theta")?;
         s.h_speed[i] = h.f("speed")?;
-        [s.h_goal_x[i], s.h_goal_y[i]] = if h.opt("goal").is_some() { h.vec::<2>("goal")? } else { [s.h_x[i], s.h_y[i]] };
+        [s.h_goal_x[i], s.h_goal_y[i]] = if h.opt("goal").is_some() {
+            h.vec::<2>("goal")?
+        } else {
+            [s.h_x[i], s.h_y[i]]
+        };
         s.h_policy[i] = match h.text("policy")? {
             "orca" => policy::ORCA,
             "sfm" => policy::SFM,
-            other => return Err(err(&h.child_path("policy"), format!("{other:?} is not \"orca\" or \"sfm\""))),
+            other => {
+                return Err(err(
+                    &h.child_path("policy"),
+                    format!("{other:?} is not \"orca\" or \"sfm\""),
+                ));
+            }
         };
         s.h_role[i] = r;
-        s.h_group[i] = if h.opt("group").is_some() { h.u("group")? } else { NONE };
-        s.h_laptop_user[i] = if h.opt("hl").is_some() { h.u("hl")? } else { NONE };
+        s.h_group[i] = if h.opt("group").is_some() {
+            h.u("group")?
+        } else {
+            NONE
+        };
+        s.h_laptop_user[i] = if h.opt("hl").is_some() {
+            h.u("hl")?
+        } else {
+            NONE
+        };
         s.h_forming[i] = h.flag("forming_crowd")? | h.flag("forming_hl")?;
     }
     s.n_humans[e] = list.len() as u32;
@@ -260,9 +368,19 @@ fn humans(p: &StepParams, st: &Reader<'_>, s: &mut BatchState, e: usize) -> Resu
 }
 
 /// Laptops, tables and plants; returns the laptops' ids by slot.
-fn objects(p: &StepParams, st: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<Vec<u32>, SimError> {
+fn objects(
+    p: &StepParams,
+    st: &Reader<'_>,
+    s: &mut BatchState,
+    e: usize,
+) -> Result<Vec<u32>, SimError> {
     let laptops = st.list("laptops")?;
-    capacity("laptops", laptops.len(), s.strides.laptops, "counts.laptops plus laptop users")?;
+    capacity(
+        "laptops",
+        laptops.len(),
+        s.strides.laptops,
+        "counts.laptops plus laptop users",
+    )?;
     let lb = e * s.strides.laptops;
     let mut ids = Vec::with_capacity(laptops.len());
     for (k, l) in laptops.iter().enumerate() {
@@ -273,7 +391,11 @@ fn objects(p: &StepParams, st: &Reader<'_>, s: &mut BatchState, e: usize) -> Res
         s.l_x[lb + k] = l.f("x")?;
         s.l_y[lb + k] = l.f("y")?;
         s.l_theta[lb + k] = l.f("theta")?;
-        s.l_user[lb + k] = if l.opt("hl").is_some() { l.u("hl")? } else { NONE };
+        s.l_user[lb + k] = if l.opt("hl").is_some() {
+            l.u("hl")?
+        } else {
+            NONE
+        };
     }
     s.n_laptops[e] = laptops.len() as u32;
     let tables = st.list("tables")?;
@@ -302,12 +424,19 @@ fn objects(p: &StepParams, st: &Reader<'_>, s: &mut BatchState, e: usize) -> Res
 }
 
 fn slot_of(ids: &[u32], id: u32, path: &str) -> Result<usize, SimError> {
-    ids.iter().position(|&x| x == id).ok_or_else(|| err(path, format!("names id {id}, which is not in the list")))
+    ids.iter()
+        .position(|&x| x == id)
+        .ok_or_else(|| err(path, format!("names id {id}, which is not in the list")))
 }
 
 fn groups(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32]) -> Result<(), SimError> {
     let list = st.list("groups")?;
-    capacity("groups", list.len(), s.strides.groups, "the configured maximum groups, or humans / 2 with crowd formation")?;
+    capacity(
+        "groups",
+        list.len(),
+        s.strides.groups,
+        "the configured maximum groups, or humans / 2 with crowd formation",
+    )?;
     let gb = e * s.strides.groups;
     let hb = e * s.strides.humans;
     for (k, g) in list.iter().enumerate() {
@@ -315,26 +444,45 @@ fn groups(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32]) -> Result<
         let items = members.items()?;
         let mut first = 0;
         for (m, item) in items.iter().enumerate() {
-            let id = item.value.as_u64().ok_or_else(|| err(&item.path, "must be a human id"))? as u32;
+            let id = item
+                .value
+                .as_u64()
+                .ok_or_else(|| err(&item.path, "must be a human id"))? as u32;
             let slot = slot_of(ids, id, &item.path)?;
             if m == 0 {
                 first = slot;
             } else if slot != first + m {
-                return Err(err(&members.path, "must list consecutive humans of the `humans` list, in order"));
+                return Err(err(
+                    &members.path,
+                    "must list consecutive humans of the `humans` list, in order",
+                ));
             }
             s.h_group[hb + slot] = k as u32;
         }
         let moving = match g.text("kind")? {
             "moving" => true,
             "standing" => false,
-            other => return Err(err(&g.child_path("kind"), format!("{other:?} is not \"moving\" or \"standing\""))),
+            other => {
+                return Err(err(
+                    &g.child_path("kind"),
+                    format!("{other:?} is not \"moving\" or \"standing\""),
+                ));
+            }
         };
-        s.g_kind[gb + k] = if moving { group_kind::MOVING } else { group_kind::STANDING };
+        s.g_kind[gb + k] = if moving {
+            group_kind::MOVING
+        } else {
+            group_kind::STANDING
+        };
         s.g_dispersable[gb + k] = g.flag("dispersable")?;
         s.g_first[gb + k] = first as u32;
         s.g_count[gb + k] = items.len() as u32;
         [s.g_x[gb + k], s.g_y[gb + k]] = g.vec::<2>("centre")?;
-        [s.g_goal_x[gb + k], s.g_goal_y[gb + k]] = if g.opt("goal").is_some() { g.vec::<2>("goal")? } else { [0.0, 0.0] };
+        [s.g_goal_x[gb + k], s.g_goal_y[gb + k]] = if g.opt("goal").is_some() {
+            g.vec::<2>("goal")?
+        } else {
+            [0.0, 0.0]
+        };
         s.g_vx[gb + k] = 0.0;
         s.g_vy[gb + k] = 0.0;
     }
@@ -342,9 +490,20 @@ fn groups(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32]) -> Result<
     Ok(())
 }
 
-fn laptop_users(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32], laptop_ids: &[u32]) -> Result<(), SimError> {
+fn laptop_users(
+    st: &Reader<'_>,
+    s: &mut BatchState,
+    e: usize,
+    ids: &[u32],
+    laptop_ids: &[u32],
+) -> Result<(), SimError> {
     let list = st.list("hl_interactions")?;
-    capacity("laptop users", list.len(), s.strides.laptop_users, "counts.laptop_users, or all laptops with laptop-use formation")?;
+    capacity(
+        "laptop users",
+        list.len(),
+        s.strides.laptop_users,
+        "counts.laptop_users, or all laptops with laptop-use formation",
+    )?;
     let ub = e * s.strides.laptop_users;
     for (k, u) in list.iter().enumerate() {
         s.lu_human[ub + k] = slot_of(ids, u.u("human")?, &u.child_path("human"))? as u32;
@@ -355,13 +514,24 @@ fn laptop_users(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32], lapt
     Ok(())
 }
 
-fn forming(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32], laptop_ids: &[u32]) -> Result<(), SimError> {
+fn forming(
+    st: &Reader<'_>,
+    s: &mut BatchState,
+    e: usize,
+    ids: &[u32],
+    laptop_ids: &[u32],
+) -> Result<(), SimError> {
     s.cf_active[e] = 0;
     s.cf_count[e] = 0;
     s.cf_close_steps[e] = 0;
     if let Some(cf) = st.opt("crowd_forming") {
         let slots = cf.at("slots")?.items()?;
-        capacity("forming crowd slots", slots.len(), s.strides.group_size, "counts.group_size")?;
+        capacity(
+            "forming crowd slots",
+            slots.len(),
+            s.strides.group_size,
+            "counts.group_size",
+        )?;
         let sb = e * s.strides.group_size;
         for (k, slot) in slots.iter().enumerate() {
             let items = slot.items()?;
@@ -373,11 +543,23 @@ fn forming(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32], laptop_id
             s.cf_slot_theta[sb + k] = items[2].as_f32()?;
         }
         let slot_map = cf.at("slot_of")?;
-        for (id, k) in slot_map.value.as_object().ok_or_else(|| err(&slot_map.path, "must be an object"))? {
-            let id: u32 = id.parse().map_err(|_| err(&slot_map.path, format!("key {id:?} is not a human id")))?;
-            let k = k.as_u64().ok_or_else(|| err(&slot_map.path, "values must be slot indices"))? as usize;
+        for (id, k) in slot_map
+            .value
+            .as_object()
+            .ok_or_else(|| err(&slot_map.path, "must be an object"))?
+        {
+            let id: u32 = id
+                .parse()
+                .map_err(|_| err(&slot_map.path, format!("key {id:?} is not a human id")))?;
+            let k = k
+                .as_u64()
+                .ok_or_else(|| err(&slot_map.path, "values must be slot indices"))?
+                as usize;
             if k >= slots.len() {
-                return Err(err(&slot_map.path, format!("slot {k} out of range 0..{}", slots.len())));
+                return Err(err(
+                    &slot_map.path,
+                    format!("slot {k} out of range 0..{}", slots.len()),
+                ));
             }
             s.cf_human[sb + k] = slot_of(ids, id, &slot_map.path)? as u32;
         }
