@@ -172,6 +172,7 @@ fn write_room(
         s.w_x[wb + i] = w.x;
         s.w_y[wb + i] = w.y;
         s.w_theta[wb + i] = w.theta;
+        (s.w_sin[wb + i], s.w_cos[wb + i]) = math::sin_cos(w.theta);
         s.w_length[wb + i] = w.length;
         spawn.add(
             Kind::Solid,
@@ -348,6 +349,7 @@ impl Gen<'_, '_> {
         s.t_x[i] = x;
         s.t_y[i] = y;
         s.t_theta[i] = theta;
+        (s.t_sin[i], s.t_cos[i]) = math::sin_cos(theta);
         self.spawn
             .add(Kind::Solid, Shape::Rect(Rect::new(x, y, theta, l, w)));
         Ok(())
@@ -589,5 +591,6 @@ fn write_laptop(s: &mut StateChunk, i: usize, x: f32, y: f32, theta: f32, user: 
     s.l_x[i] = x;
     s.l_y[i] = y;
     s.l_theta[i] = theta;
+    (s.l_sin[i], s.l_cos[i]) = math::sin_cos(theta);
     s.l_user[i] = user;
 }

@@ -344,6 +344,10 @@ soa! {
         laptop.l_y: f32,
         /// Heading (rad).
         laptop.l_theta: f32,
+        /// cos of the heading (laptops never move; cached for the many rectangle tests).
+        laptop.l_cos: f32,
+        /// sin of the heading.
+        laptop.l_sin: f32,
         /// Laptop-user index or `NONE` when free.
         laptop.l_user: u32,
 
@@ -356,6 +360,10 @@ soa! {
         table.t_y: f32,
         /// Heading (rad).
         table.t_theta: f32,
+        /// cos of the heading (tables never move; cached for the many rectangle tests).
+        table.t_cos: f32,
+        /// sin of the heading.
+        table.t_sin: f32,
 
         // ---- plants ----
         /// Entity id.
@@ -374,6 +382,10 @@ soa! {
         wall.w_y: f32,
         /// Heading of the wall's long axis (rad).
         wall.w_theta: f32,
+        /// cos of the heading (walls never move; cached for the many rectangle tests).
+        wall.w_cos: f32,
+        /// sin of the heading.
+        wall.w_sin: f32,
         /// Length (m).
         wall.w_length: f32,
 

@@ -107,10 +107,17 @@ fn robot_record(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [
 /// and the robot's negated speed and angular speed.
 #[inline]
 fn object_record(out: &mut [f32], kind: usize, f: &Frame, x: f32, y: f32, theta: f32, radius: f32) {
-    out[..6].fill(0.0);
-    out[kind] = 1.0;
     let (lx, ly) = f.local(x, y);
     let (sn, c) = math::sin_cos(theta - f.theta);
+    local_record(out, kind, f, lx, ly, sn, c, radius);
+}
+
+/// A non-human record from a robot-frame position (m) and the relative heading's sin and cos.
+#[inline]
+#[expect(clippy::too_many_arguments, reason = "one record's fields, written in one place")]
+fn local_record(out: &mut [f32], kind: usize, f: &Frame, lx: f32, ly: f32, sn: f32, c: f32, radius: f32) {
+    out[..6].fill(0.0);
+    out[kind] = 1.0;
     out[6] = lx;
     out[7] = ly;
     out[8] = sn;
@@ -224,43 +231,27 @@ fn plants(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) 
 }
 
 /// Wall segments: for each wall, floor(L/s) segments of length s from its left end
-/// (centre − L/2·(cos θ, sin θ)), then one remainder segment if L is not a multiple of s.
+/// (centre − L/2·(cos θ, sin θ)), then one remainder segment if L is not a multiple of s. The
+/// left end and the wall direction are brought into the robot frame once per wall.
 fn walls(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
     let wb = e * s.strides.walls;
     let step = p.wall_segment_size;
     let mut k = 0usize;
     for w in wb..wb + s.n_walls[e] as usize {
-        let (theta, length) = (s.w_theta[w], s.w_length[w]);
-        let (sn, c) = math::sin_cos(theta);
-        let left_x = s.w_x[w] - 0.5 * length * c;
-        let left_y = s.w_y[w] - 0.5 * length * sn;
+        let length = s.w_length[w];
+        let (wc, ws) = (s.w_cos[w], s.w_sin[w]);
+        let (lx, ly) = f.local(s.w_x[w] - 0.5 * length * wc, s.w_y[w] - 0.5 * length * ws);
+        let (dx, dy) = (f.cos * wc + f.sin * ws, f.cos * ws - f.sin * wc);
+        let (sn, c) = math::sin_cos(s.w_theta[w] - f.theta);
         let (full, rest) = crate::scenario::layout::segments(length, step);
         for j in 0..full {
             let along = (j as f32 + 0.5) * step;
-            let r = &mut out[k * RECORD..];
-            object_record(
-                r,
-                one_hot::WALL,
-                f,
-                left_x + along * c,
-                left_y + along * sn,
-                theta,
-                0.5 * step,
-            );
+            local_record(&mut out[k * RECORD..], one_hot::WALL, f, lx + along * dx, ly + along * dy, sn, c, 0.5 * step);
             k += 1;
         }
         if rest > 0.0 {
             let along = full as f32 * step + 0.5 * rest;
-            let r = &mut out[k * RECORD..];
-            object_record(
-                r,
-                one_hot::WALL,
-                f,
-                left_x + along * c,
-                left_y + along * sn,
-                theta,
-                0.5 * rest,
-            );
+            local_record(&mut out[k * RECORD..], one_hot::WALL, f, lx + along * dx, ly + along * dy, sn, c, 0.5 * rest);
             k += 1;
         }
     }

@@ -191,6 +191,7 @@ pub(super) fn room(
         s.w_x[wb + k] = w.f("x")?;
         s.w_y[wb + k] = w.f("y")?;
         s.w_theta[wb + k] = w.f("theta")?;
+        (s.w_sin[wb + k], s.w_cos[wb + k]) = crate::math::sin_cos(s.w_theta[wb + k]);
         s.w_length[wb + k] = w.f("length")?;
     }
     s.n_walls[e] = walls.len() as u32;
@@ -391,6 +392,7 @@ fn objects(
         s.l_x[lb + k] = l.f("x")?;
         s.l_y[lb + k] = l.f("y")?;
         s.l_theta[lb + k] = l.f("theta")?;
+        (s.l_sin[lb + k], s.l_cos[lb + k]) = crate::math::sin_cos(s.l_theta[lb + k]);
         s.l_user[lb + k] = if l.opt("hl").is_some() {
             l.u("hl")?
         } else {
@@ -408,6 +410,7 @@ fn objects(
         s.t_x[tb + k] = t.f("x")?;
         s.t_y[tb + k] = t.f("y")?;
         s.t_theta[tb + k] = t.f("theta")?;
+        (s.t_sin[tb + k], s.t_cos[tb + k]) = crate::math::sin_cos(s.t_theta[tb + k]);
     }
     s.n_tables[e] = tables.len() as u32;
     let plants = st.list("plants")?;
