@@ -50,7 +50,14 @@ impl Rect {
     /// Rectangle from its heading's cosine and sine (cached by callers whose rectangles never turn).
     #[inline]
     pub fn with_trig(x: f32, y: f32, c: f32, s: f32, length: f32, width: f32) -> Self {
-        Self { x, y, c, s, hl: 0.5 * length, hw: 0.5 * width }
+        Self {
+            x,
+            y,
+            c,
+            s,
+            hl: 0.5 * length,
+            hw: 0.5 * width,
+        }
     }
 
     /// World point → rectangle frame.

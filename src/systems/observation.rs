@@ -114,8 +114,20 @@ fn object_record(out: &mut [f32], kind: usize, f: &Frame, x: f32, y: f32, theta:
 
 /// A non-human record from a robot-frame position (m) and the relative heading's sin and cos.
 #[inline]
-#[expect(clippy::too_many_arguments, reason = "one record's fields, written in one place")]
-fn local_record(out: &mut [f32], kind: usize, f: &Frame, lx: f32, ly: f32, sn: f32, c: f32, radius: f32) {
+#[expect(
+    clippy::too_many_arguments,
+    reason = "one record's fields, written in one place"
+)]
+fn local_record(
+    out: &mut [f32],
+    kind: usize,
+    f: &Frame,
+    lx: f32,
+    ly: f32,
+    sn: f32,
+    c: f32,
+    radius: f32,
+) {
     out[..6].fill(0.0);
     out[kind] = 1.0;
     out[6] = lx;
@@ -246,12 +258,30 @@ fn walls(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -
         let (full, rest) = crate::scenario::layout::segments(length, step);
         for j in 0..full {
             let along = (j as f32 + 0.5) * step;
-            local_record(&mut out[k * RECORD..], one_hot::WALL, f, lx + along * dx, ly + along * dy, sn, c, 0.5 * step);
+            local_record(
+                &mut out[k * RECORD..],
+                one_hot::WALL,
+                f,
+                lx + along * dx,
+                ly + along * dy,
+                sn,
+                c,
+                0.5 * step,
+            );
             k += 1;
         }
         if rest > 0.0 {
             let along = full as f32 * step + 0.5 * rest;
-            local_record(&mut out[k * RECORD..], one_hot::WALL, f, lx + along * dx, ly + along * dy, sn, c, 0.5 * rest);
+            local_record(
+                &mut out[k * RECORD..],
+                one_hot::WALL,
+                f,
+                lx + along * dx,
+                ly + along * dy,
+                sn,
+                c,
+                0.5 * rest,
+            );
             k += 1;
         }
     }

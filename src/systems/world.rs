@@ -21,21 +21,42 @@ pub struct Touches {
 #[inline]
 pub fn wall_rect(p: &StepParams, s: &StateChunk, e: usize, w: usize) -> Rect {
     let i = e * s.strides.walls + w;
-    Rect::with_trig(s.w_x[i], s.w_y[i], s.w_cos[i], s.w_sin[i], s.w_length[i], p.wall_thickness)
+    Rect::with_trig(
+        s.w_x[i],
+        s.w_y[i],
+        s.w_cos[i],
+        s.w_sin[i],
+        s.w_length[i],
+        p.wall_thickness,
+    )
 }
 
 /// Table `t` of environment `e` as a rectangle.
 #[inline]
 pub fn table_rect(p: &StepParams, s: &StateChunk, e: usize, t: usize) -> Rect {
     let i = e * s.strides.tables + t;
-    Rect::with_trig(s.t_x[i], s.t_y[i], s.t_cos[i], s.t_sin[i], p.table_length, p.table_width)
+    Rect::with_trig(
+        s.t_x[i],
+        s.t_y[i],
+        s.t_cos[i],
+        s.t_sin[i],
+        p.table_length,
+        p.table_width,
+    )
 }
 
 /// Laptop `l` of environment `e` as a rectangle.
 #[inline]
 pub fn laptop_rect(p: &StepParams, s: &StateChunk, e: usize, l: usize) -> Rect {
     let i = e * s.strides.laptops + l;
-    Rect::with_trig(s.l_x[i], s.l_y[i], s.l_cos[i], s.l_sin[i], p.laptop_length, p.laptop_width)
+    Rect::with_trig(
+        s.l_x[i],
+        s.l_y[i],
+        s.l_cos[i],
+        s.l_sin[i],
+        p.laptop_length,
+        p.laptop_width,
+    )
 }
 
 /// Blocker `b` of environment `e` as a rectangle.
