@@ -33,6 +33,8 @@ pub mod orca;
 pub mod outputs;
 pub mod params;
 pub mod pipeline;
+#[cfg(feature = "render")]
+pub mod render;
 pub mod rng;
 pub mod scenario;
 pub mod spec;
