@@ -13,11 +13,12 @@
 //!   unfused Horner schemes `((c3 * x + c2) * x + c1) * x + c0`. Do not "simplify" an expression
 //!   here without changing the WGSL in the same commit.
 //! - Constants that are not small exact decimals are given by their bits (`f32::from_bits`), and
-//!   the twin uses `bitcast<f32>` of the same bits; `tests/shaders_validate.rs` checks that both
-//!   files use the same set of hexadecimal literals.
+//!   the twin writes the same values as exact hexadecimal floats (`0x1.921fb6p1f`);
+//!   `tests/shaders_validate.rs` checks that both files denote the same set of bit patterns.
 //! - Float-to-integer conversions only ever see finite, in-range values (out-of-range and NaN
 //!   conversions are not portable to WGSL); special inputs are routed around them and selected at
-//!   the end. `f32::min`/`max` are only used where neither operand can be NaN or a signed zero tie.
+//!   the end. `min`/`max`/`clamp` (whose NaN and ±0 handling is not portable) only see operands
+//!   that are neither NaN nor a signed-zero tie, or their result is discarded for NaN inputs.
 //!
 //! Accuracy is given per function as the maximum distance, in units in the last place, from the
 //! correctly rounded result, measured by `tests/math_accuracy.rs` over the domain stated.
@@ -40,9 +41,19 @@ pub const SIN_COS_MAX_ARG: f32 = 1048576.0;
 /// `acos` returns NaN like `f32::acos`.
 pub const ACOS_DOMAIN_MAX: f32 = f32::from_bits(0x3f800800);
 
-const NAN: f32 = f32::from_bits(0x7fc00000);
-const INF: f32 = f32::from_bits(0x7f800000);
+const NAN_BITS: u32 = 0x7fc00000;
+const INF_BITS: u32 = 0x7f800000;
+const NAN: f32 = f32::from_bits(NAN_BITS);
+const INF: f32 = f32::from_bits(INF_BITS);
 const SIGN_MASK: u32 = 0x80000000;
+const ABS_MASK: u32 = 0x7fffffff;
+
+/// NaN test on the bits, as the WGSL twin does it (a float self-comparison could be folded away
+/// by a shader compiler that assumes no NaNs).
+#[inline]
+fn is_nan_bits(x: f32) -> bool {
+    (x.to_bits() & ABS_MASK) > INF_BITS
+}
 
 // ---- sin / cos -------------------------------------------------------------------------------
 
@@ -244,8 +255,8 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     let sp = if neg { -p } else { p };
     let theta = c_hi + (c_lo + sp);
     let theta = xor_sign(theta, y);
-    if x.is_nan() || y.is_nan() {
-        x + y
+    if is_nan_bits(x) || is_nan_bits(y) {
+        NAN
     } else {
         theta
     }
@@ -337,7 +348,7 @@ fn pow2i(n: i32) -> f32 {
 /// (x < about -103.97), `exp(-∞) = 0`, `exp(+∞) = +∞`, NaN → NaN.
 #[inline]
 pub fn exp(x: f32) -> f32 {
-    let nan = x.is_nan();
+    let nan = is_nan_bits(x);
     let xc = if nan { 0.0 } else { x };
     let xc = xc.clamp(EXP_ARG_MIN, EXP_ARG_MAX);
     let n = (xc * LOG2E + 0.5).floor();
@@ -352,7 +363,7 @@ pub fn exp(x: f32) -> f32 {
     let n1 = ni >> 1;
     let n2 = ni - n1;
     let y = y * pow2i(n1) * pow2i(n2);
-    if nan { x } else { y }
+    if nan { NAN } else { y }
 }
 
 const SQRT_HALF: f32 = f32::from_bits(0x3f3504f3);

@@ -152,10 +152,11 @@ impl RngStream {
         (0.0 - 2.0 * math::ln(u1)).sqrt() * math::cos(math::TAU * u2)
     }
 
-    /// `mean + std * normal()` (two draws).
+    /// Normal with the given mean and standard deviation, exactly `mean + std_dev * normal()`
+    /// (two draws), as numpy's `random.normal(mean, std_dev)`.
     #[inline]
-    pub fn gauss(&mut self, mean: f32, std: f32) -> f32 {
-        mean + std * self.normal()
+    pub fn gauss(&mut self, mean: f32, std_dev: f32) -> f32 {
+        mean + std_dev * self.normal()
     }
 
     /// Uniform integer in [0, n) for 1 ≤ n ≤ 2^24 (one draw).
