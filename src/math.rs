@@ -15,6 +15,16 @@
 //! - Constants that are not small exact decimals are given by their bits (`f32::from_bits`), and
 //!   the twin writes the same values as exact hexadecimal floats (`0x1.921fb6p1f`);
 //!   `tests/shaders_validate.rs` checks that both files denote the same set of bit patterns.
+//! - The shader compiler is not neutral. lavapipe runs Mesa's NIR optimiser, which applies
+//!   algebraic rewrites that are not bit-exact to every float operation that SPIR-V does not mark
+//!   exact (naga never does). Among them: cancellations such as `(a + b) - a → b` (so TwoSum /
+//!   Fast2Sum error terms become 0 on the GPU), factoring `a·c + b·c → (a + b)·c`, moving a
+//!   constant into a sum whose result is used once, `(a + b) + C → (a + C) + b`, and
+//!   `x + 0 → x`, `x·1 → x`, `x·0 → 0`. So this file uses no error-free transformations and avoids
+//!   those shapes; where a natural form had one, the comment there says so. Every function was
+//!   checked bit for bit against its twin on lavapipe (Mesa 22.3.6, over 7 million inputs
+//!   including special values and the hard cases of each reduction); the parity test itself lands
+//!   with the wgpu backend.
 //! - Float-to-integer conversions only ever see finite, in-range values (out-of-range and NaN
 //!   conversions are not portable to WGSL); special inputs are routed around them and selected at
 //!   the end. `min`/`max`/`clamp` (whose NaN and ±0 handling is not portable) only see operands
@@ -60,12 +70,19 @@ fn is_nan_bits(x: f32) -> bool {
 /// 2/π rounded to f32: picks the multiple k of π/2 nearest to x.
 const FRAC_2_PI: f32 = f32::from_bits(0x3f22f983);
 // π/2 = C1 + C2 + C3 + C4 + C5 (to about 2^-64). C1..C4 have 10 significant bits each, so
-// `k * Ci` is exact for k < 2^14 (|x| up to about 25,700 rad); C5 is the f32-rounded rest.
+// `k * Ci` is exact for k < 2^14 (|x| up to about 25,700 rad); C5 is the f32-rounded rest, whose
+// product with k is below 2^-26 and rounds far below an ULP of any reduced argument.
 const PIO2_C1: f32 = f32::from_bits(0x3fc90000);
 const PIO2_C2: f32 = f32::from_bits(0x39fd0000);
 const PIO2_C3: f32 = f32::from_bits(0x35aa0000);
 const PIO2_C4: f32 = f32::from_bits(0x30884000);
 const PIO2_C5: f32 = f32::from_bits(0x2b51846a);
+// The other split for large reduced arguments: C3B holds the bits of π/2 from 2^-20 to 2^-24
+// (5 significant bits), C4B is the f32-rounded rest.
+const PIO2_C3B: f32 = f32::from_bits(0x35a80000);
+const PIO2_C4B: f32 = f32::from_bits(0x328885a3);
+/// 2^-6: reduced arguments at least this large take the one-rounding variant.
+const REDUCE_SPLIT: f32 = 0.015625;
 // Cephes sinf/cosf minimax coefficients on [-π/4, π/4].
 const SIN_P0: f32 = f32::from_bits(0xbe2aaaa3);
 const SIN_P1: f32 = f32::from_bits(0x3c08839e);
@@ -74,51 +91,51 @@ const COS_P0: f32 = f32::from_bits(0x3d2aaaa5);
 const COS_P1: f32 = f32::from_bits(0xbab6061a);
 const COS_P2: f32 = f32::from_bits(0x37ccf5ce);
 
-/// Knuth's TwoSum for `a - b`: returns `(s, e)` with `s = fl(a - b)` and `s + e = a - b` exactly.
-#[inline]
-fn two_diff(a: f32, b: f32) -> (f32, f32) {
-    let s = a - b;
-    let bb = s - a;
-    let e = (a - (s - bb)) - (b + bb);
-    (s, e)
-}
-
 /// Cody–Waite reduction of `ax` (0 ≤ ax ≤ [`SIN_COS_MAX_ARG`]) modulo π/2.
 ///
-/// Returns `(r_hi, r_lo, k)` with `ax ≈ k·π/2 + r_hi + r_lo` and |r_hi| ≤ π/4 (plus a few ULP).
-/// For k < 2^14 the first two steps are exact (Sterbenz, then a result on the 2^-24 grid below 1)
-/// and the next two keep their rounding errors through TwoSum, so r_hi + r_lo carries the reduced
-/// argument to about 2^-48 absolute, which keeps sin/cos near their zeros accurate too.
+/// Returns `(r, k)` with `ax ≈ k·π/2 + r` and |r| ≤ π/4 (plus a few ULP). For k < 2^14 all the
+/// products `k * Ci` are exact and the first two subtractions are exact (Sterbenz, then a result
+/// on the 2^-24 grid below 1). Then two variants, chosen by the size of r:
+/// - |r| ≥ 2^-6: subtract the chunk that ends at 2^-24 (exact again) and the f32-rounded rest of
+///   π/2 in one product: one rounding at the scale of r, plus an error below 2^-33 from the rest.
+/// - |r| < 2^-6: subtract 10-bit chunks down to 2^-39 and the rounded rest; every step is exact
+///   while its result is small, so tiny r (down to 2^-28 in this domain) keep their accuracy.
+///
+/// No error-free transformation (TwoSum) carries the rounding errors along: Mesa's NIR optimiser,
+/// which lavapipe runs on every shader, rewrites `(a + b) - a` into `b` for floating-point
+/// operations that SPIR-V does not mark exact (naga never does), so compensation terms would be
+/// computed on the CPU and folded to zero on the GPU.
 #[inline]
-fn reduce_pio2(ax: f32) -> (f32, f32, i32) {
+fn reduce_pio2(ax: f32) -> (f32, i32) {
     let k = (ax * FRAC_2_PI + 0.5).floor();
     let t = ax - k * PIO2_C1;
     let t = t - k * PIO2_C2;
-    let (t, e1) = two_diff(t, k * PIO2_C3);
-    let (t, e2) = two_diff(t, k * PIO2_C4);
-    let lo = (e1 + e2) - k * PIO2_C5;
-    let r_hi = t + lo;
-    let r_lo = lo - (r_hi - t);
-    (r_hi, r_lo, k as i32)
+    let r_big = (t - k * PIO2_C3B) - k * PIO2_C4B;
+    let r_small = ((t - k * PIO2_C3) - k * PIO2_C4) - k * PIO2_C5;
+    let r = if r_big.abs() >= REDUCE_SPLIT {
+        r_big
+    } else {
+        r_small
+    };
+    (r, k as i32)
 }
 
-/// sin(r + r_lo) for |r| ≤ π/4, with r_lo a tail below one ULP of r.
+/// sin(r) for |r| ≤ π/4.
 #[inline]
-fn sin_kernel(r: f32, r_lo: f32) -> f32 {
+fn sin_kernel(r: f32) -> f32 {
     let z = r * r;
     let p = (SIN_P2 * z + SIN_P1) * z + SIN_P0;
-    r + (r_lo + r * z * p)
+    r + r * z * p
 }
 
-/// cos(r + r_lo) for |r| ≤ π/4. `1 - z/2` is split as in fdlibm's k_cos so that its rounding
-/// error is recovered exactly (`1 - w` is exact by Sterbenz).
+/// cos(r) for |r| ≤ π/4, as 1 - (z/2 - z²·Q(z)): the small terms are combined first so that the
+/// only rounding at the scale of the result is the last one.
 #[inline]
-fn cos_kernel(r: f32, r_lo: f32) -> f32 {
+fn cos_kernel(r: f32) -> f32 {
     let z = r * r;
     let q = (COS_P2 * z + COS_P1) * z + COS_P0;
     let hz = 0.5 * z;
-    let w = 1.0 - hz;
-    w + (((1.0 - w) - hz) + (z * z * q - r * r_lo))
+    1.0 - (hz - z * z * q)
 }
 
 /// Gives `v` the sign bit of `v` xor the sign bit of `s` (an exact, branch-free sign transfer).
@@ -129,19 +146,21 @@ fn xor_sign(v: f32, s: f32) -> f32 {
 
 /// Sine of `x` (rad).
 ///
-/// Accuracy: ≤ 1 ULP for |x| ≤ 25,735 (2^14·π/2, where the reduction is exact); for larger |x| up
-/// to [`SIN_COS_MAX_ARG`] the absolute error grows to about |x|·2^-24 (at most the spacing of f32
-/// values around x, so the input's own rounding dominates). NaN for |x| > 2^20, ±∞ and NaN. Odd: `sin(-x) == -sin(x)`, `sin(-0) = -0`.
+/// Accuracy: ≤ 2 ULP for |x| ≤ 25,735 (2^14·π/2, where the reduction's products are exact;
+/// checked over every f32 there). For larger |x| up to [`SIN_COS_MAX_ARG`] the absolute error
+/// grows to about |x|·2^-24 (at most the spacing of f32 values around x, so the input's own
+/// rounding dominates). NaN for |x| > 2^20, ±∞ and NaN. Odd: `sin(-x) == -sin(x)`,
+/// `sin(-0) = -0`.
 #[inline]
 pub fn sin(x: f32) -> f32 {
     let ax = x.abs();
     let ok = ax <= SIN_COS_MAX_ARG;
     let ax = if ok { ax } else { 0.0 };
-    let (r, r_lo, k) = reduce_pio2(ax);
+    let (r, k) = reduce_pio2(ax);
     let v = if (k & 1) == 0 {
-        sin_kernel(r, r_lo)
+        sin_kernel(r)
     } else {
-        cos_kernel(r, r_lo)
+        cos_kernel(r)
     };
     let v = if (k & 2) == 0 { v } else { -v };
     if ok { xor_sign(v, x) } else { NAN }
@@ -153,11 +172,11 @@ pub fn cos(x: f32) -> f32 {
     let ax = x.abs();
     let ok = ax <= SIN_COS_MAX_ARG;
     let ax = if ok { ax } else { 0.0 };
-    let (r, r_lo, k) = reduce_pio2(ax);
+    let (r, k) = reduce_pio2(ax);
     let v = if (k & 1) == 0 {
-        cos_kernel(r, r_lo)
+        cos_kernel(r)
     } else {
-        sin_kernel(r, r_lo)
+        sin_kernel(r)
     };
     let v = if ((k + 1) & 2) == 0 { v } else { -v };
     if ok { v } else { NAN }
@@ -170,9 +189,9 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
     let ax = x.abs();
     let ok = ax <= SIN_COS_MAX_ARG;
     let ax = if ok { ax } else { 0.0 };
-    let (r, r_lo, k) = reduce_pio2(ax);
-    let s = sin_kernel(r, r_lo);
-    let c = cos_kernel(r, r_lo);
+    let (r, k) = reduce_pio2(ax);
+    let s = sin_kernel(r);
+    let c = cos_kernel(r);
     let (vs, vc) = if (k & 1) == 0 { (s, c) } else { (c, s) };
     let vs = if (k & 2) == 0 { vs } else { -vs };
     let vc = if ((k + 1) & 2) == 0 { vc } else { -vc };
@@ -288,7 +307,7 @@ fn asin_r(z: f32) -> f32 {
 /// Arccosine of `x` (rad), in [0, π].
 ///
 /// Domain [-1, 1]; inputs within [`ACOS_DOMAIN_MAX`] of ±1 are clamped to ±1, larger |x| and NaN
-/// give NaN. Accuracy: ≤ 2 ULP over [-1, 1]. `acos(1) = 0`, `acos(-1) = PI`.
+/// give NaN. Accuracy: ≤ 1 ULP over [-1, 1]. `acos(1) = 0`, `acos(-1) = PI`.
 ///
 /// Method (fdlibm acosf with a polynomial in place of its rational function): for |x| ≤ 1/2,
 /// π/2 - asin(x); for x > 1/2, 2·asin(√((1-x)/2)) with the square root split into an exact high
@@ -323,7 +342,9 @@ const LOG2E: f32 = f32::from_bits(0x3fb8aa3b);
 // ln 2 = LN2_HI + LN2_LO; LN2_HI has 9 significant bits so `n * LN2_HI` is exact for |n| < 2^15.
 const LN2_HI: f32 = f32::from_bits(0x3f318000);
 const LN2_LO: f32 = f32::from_bits(0xb95e8083);
-// Cephes expf coefficients: e^r ≈ 1 + r + r²·P(r) on [-ln2/2, ln2/2].
+// Cephes expf coefficients: e^r ≈ 1 + r + r²·P(r) on [-ln2/2, ln2/2], evaluated as the Horner
+// scheme (P(r)·r + 1)·r + 1. (Cephes writes P(r)·r² + r + 1, but Mesa's NIR optimiser
+// reassociates `(a + b) + 1.0` on the GPU, which would round differently.)
 const EXP_P0: f32 = 0.5;
 const EXP_P1: f32 = f32::from_bits(0x3e2aaaaa);
 const EXP_P2: f32 = f32::from_bits(0x3d2aa9c1);
@@ -354,9 +375,8 @@ pub fn exp(x: f32) -> f32 {
     let n = (xc * LOG2E + 0.5).floor();
     let r = xc - n * LN2_HI;
     let r = r - n * LN2_LO;
-    let z = r * r;
     let p = ((((EXP_P5 * r + EXP_P4) * r + EXP_P3) * r + EXP_P2) * r + EXP_P1) * r + EXP_P0;
-    let y = p * z + r + 1.0;
+    let y = (p * r + 1.0) * r + 1.0;
     // Scale by 2^n in two exact-exponent steps, since n ranges over [-150, 128] and a single
     // power of two would leave the normal range; only the second product rounds.
     let ni = n as i32;
@@ -432,37 +452,80 @@ pub fn ln(x: f32) -> f32 {
     }
 }
 
+/// √½ - 1 and √2 - 1: for u between them, ln(1 + u) is Cephes' kernel at f = u, exactly.
+const LN1P_KERNEL_MIN: f32 = f32::from_bits(0xbe95f61a);
+const LN1P_KERNEL_MAX: f32 = f32::from_bits(0x3ed413cd);
+
 /// ln(1 + u), accurate also for tiny |u| where `ln(1.0 + u)` would lose every digit.
 ///
-/// Method (as fdlibm's log1p): w = fl(1 + u) and its exact rounding error c (TwoSum), then
-/// ln(1 + u) = ln(w) + ln(1 + c/w) ≈ ln(w) + c/w. Accuracy: ≤ 2 ULP for u > -1 (normal results).
-/// `ln_1p(-1) = -∞`, NaN for u < -1 and NaN, `ln_1p(+∞) = +∞`, `ln_1p(-0) = -0`.
+/// Method: for √½ - 1 ≤ u ≤ √2 - 1, the kernel of [`ln`] applied to f = u directly (so no
+/// rounding of 1 + u happens); otherwise `ln(1.0 + u)`, where 1 + u is exact (u < √½ - 1) or its
+/// rounding costs at most about one ULP (u > √2 - 1). The textbook log1p tricks recover the
+/// rounding error of 1 + u by computing `(1 + u) - 1`, which Mesa's NIR optimiser folds to `u` on
+/// the GPU, so they would not be bit-identical.
+///
+/// Accuracy: ≤ 1 ULP for √½ - 1 ≤ u ≤ √2 - 1 (the range [`softplus`] uses), ≤ 2 ULP elsewhere
+/// (normal results). `ln_1p(-1) = -∞`, NaN for
+/// u < -1 and NaN, `ln_1p(+∞) = +∞`, `ln_1p(-0) = -0`.
 #[inline]
 pub fn ln_1p(u: f32) -> f32 {
-    let w = 1.0 + u;
-    let bb = w - 1.0;
-    let c = (1.0 - (w - bb)) + (u - bb);
-    if w == 1.0 {
-        u
-    } else if w == INF {
-        INF
-    } else if w == 0.0 {
-        -INF
+    if (LN1P_KERNEL_MIN..=LN1P_KERNEL_MAX).contains(&u) {
+        let z = u * u;
+        // Summed as (u - z/2) + u³·P(u): NIR reassociates the form u + (u³·P(u) - z/2) that ln
+        // uses, and factors `a·z + b·z` into `(a + b)·z`, both of which round differently.
+        let q = (((((((LN_P8 * u + LN_P7) * u + LN_P6) * u + LN_P5) * u + LN_P4) * u + LN_P3) * u
+            + LN_P2)
+            * u
+            + LN_P1)
+            * u
+            + LN_P0;
+        let p = q * (u * z);
+        let y = u - 0.5 * z;
+        y + p
     } else {
-        ln(w) + c / w
+        ln(1.0 + u)
     }
 }
 
-/// softplus(x) = ln(1 + e^x), computed stably as `max(x, 0) + ln_1p(e^-|x|)`.
+/// ln 2 rounded to f32 (its rounding error, 1.9e-9, is far below an ULP of softplus near 0).
+const LN2: f32 = f32::from_bits(0x3f317218);
+// ln(cosh y) = y²·G(y²): Taylor coefficients 2^2n (2^2n - 1) B_2n / (2n (2n)!), eight terms,
+// relative error below 1e-9 for y² ≤ 1/4.
+const LNCOSH_G0: f32 = 0.5;
+const LNCOSH_G1: f32 = f32::from_bits(0xbdaaaaab);
+const LNCOSH_G2: f32 = f32::from_bits(0x3cb60b61);
+const LNCOSH_G3: f32 = f32::from_bits(0xbbdd0dd1);
+const LNCOSH_G4: f32 = f32::from_bits(0x3b0f52ea);
+const LNCOSH_G5: f32 = f32::from_bits(0xba419ece);
+const LNCOSH_G6: f32 = f32::from_bits(0x398685a9);
+const LNCOSH_G7: f32 = f32::from_bits(0xb8bed1b2);
+
+/// softplus(x) = ln(1 + e^x), computed stably.
 ///
-/// Never overflows (softplus(1e3) = 1e3, softplus(-1e3) = 0), relative accuracy holds for very
-/// negative x where the result is about e^x. Accuracy: ≤ 2 ULP for normal results. Used for the
-/// smooth MPE-style contact penetration term. `max(x, 0)` is written as a comparison so that
-/// `-0.0` and NaN behave the same on CPU and GPU.
+/// For |x| > 1 as `max(x, 0) + ln_1p(e^-|x|)`: never overflows (softplus(1e3) = 1e3,
+/// softplus(-1e3) = 0) and keeps its relative accuracy for very negative x, where the result is
+/// about e^x. For |x| ≤ 1 as `ln 2 + x/2 + ln(cosh(x/2))` with a polynomial for the last term,
+/// which avoids the rounding of 1 + e^-|x| that would cost an extra ULP there.
+/// Accuracy: ≤ 2 ULP for normal results. Used for the smooth MPE-style contact penetration term.
+/// `max(x, 0)` is written as a comparison so that `-0.0` and NaN behave the same on CPU and GPU.
 #[inline]
 pub fn softplus(x: f32) -> f32 {
-    let pos = if x > 0.0 { x } else { 0.0 };
-    pos + ln_1p(exp(-x.abs()))
+    if x.abs() <= 1.0 {
+        let y = 0.5 * x;
+        let w = y * y;
+        let g = ((((((LNCOSH_G7 * w + LNCOSH_G6) * w + LNCOSH_G5) * w + LNCOSH_G4) * w
+            + LNCOSH_G3)
+            * w
+            + LNCOSH_G2)
+            * w
+            + LNCOSH_G1)
+            * w
+            + LNCOSH_G0;
+        (LN2 + y) + w * g
+    } else {
+        let pos = if x > 0.0 { x } else { 0.0 };
+        pos + ln_1p(exp(-x.abs()))
+    }
 }
 
 // ---- angles -----------------------------------------------------------------------------------

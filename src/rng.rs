@@ -142,14 +142,15 @@ impl RngStream {
     /// Standard normal N(0, 1) by Box–Muller (two draws, one value returned).
     ///
     /// Exactly: `u1 = 1.0 - next_f32()` (in (0, 1], so the logarithm is finite), then
-    /// `u2 = next_f32()`, then `sqrt(0.0 - 2.0 * ln(u1)) * cos(TAU * u2)` with [`math::ln`],
-    /// [`math::cos`] and [`math::TAU`]. (`0.0 - …` rather than a negation keeps `sqrt` away from
-    /// `-0.0`.) |result| ≤ about 5.8 since u1 ≥ 2^-24.
+    /// `u2 = next_f32()`, then `sqrt(-2.0 * ln(u1)) * cos(TAU * u2)` with [`math::ln`],
+    /// [`math::cos`] and [`math::TAU`]. |result| ≤ about 5.8 since u1 ≥ 2^-24. When u1 = 1
+    /// (probability 2^-24) the result is ±0, with the sign of `-0.0 * cos`, the same on both
+    /// backends (a `0.0 - x` form would not be: the GPU compiler drops the `0.0 -`).
     #[inline]
     pub fn normal(&mut self) -> f32 {
         let u1 = 1.0 - self.next_f32();
         let u2 = self.next_f32();
-        (0.0 - 2.0 * math::ln(u1)).sqrt() * math::cos(math::TAU * u2)
+        (-2.0 * math::ln(u1)).sqrt() * math::cos(math::TAU * u2)
     }
 
     /// Normal with the given mean and standard deviation, exactly `mean + std_dev * normal()`

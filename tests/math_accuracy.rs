@@ -126,7 +126,7 @@ fn trig_points() -> Vec<f32> {
 }
 
 #[test]
-fn sin_cos_within_1_ulp_up_to_25735() {
+fn sin_cos_within_2_ulp_up_to_25735() {
     let (mut ws, mut wc) = (Worst::default(), Worst::default());
     for x in trig_points() {
         let (s, c) = math::sin_cos(x);
@@ -135,8 +135,8 @@ fn sin_cos_within_1_ulp_up_to_25735() {
         ws.check(s, f64::from(x).sin() as f32, (x, 0.0));
         wc.check(c, f64::from(x).cos() as f32, (x, 0.0));
     }
-    ws.assert_at_most("sin", 1);
-    wc.assert_at_most("cos", 1);
+    ws.assert_at_most("sin", 2);
+    wc.assert_at_most("cos", 2);
 }
 
 #[test]
@@ -357,12 +357,12 @@ fn ln_special_values() {
 }
 
 #[test]
-fn ln_1p_within_1_ulp() {
+fn ln_1p_within_2_ulp() {
     let mut w = Worst::default();
     for x in strided(0.0, f32::MAX, 2_039).chain(strided(-0.0, -1.0, 257)) {
         w.check(math::ln_1p(x), f64::from(x).ln_1p() as f32, (x, 0.0));
     }
-    w.assert_at_most("ln_1p", 1);
+    w.assert_at_most("ln_1p", 2);
     assert_eq!(math::ln_1p(-0.0).to_bits(), (-0.0f32).to_bits());
     assert_eq!(math::ln_1p(-1.0), f32::NEG_INFINITY);
     assert_eq!(math::ln_1p(f32::INFINITY), f32::INFINITY);

@@ -12,7 +12,10 @@
 // and naga cannot evaluate `bitcast` in a constant expression); tests/shaders_validate.rs checks
 // that both files denote the same bit patterns. NaN and infinity are made at run time
 // (`math_nan`, `math_inf`), because a non-finite constant expression is a shader-creation error.
-// Float-to-integer conversions only see finite, in-range values.
+// Float-to-integer conversions only see finite, in-range values. Mesa's NIR optimiser rewrites
+// some float expressions on lavapipe (cancellations, factoring, moving constants through sums):
+// the forms here were chosen to be immune, and checked bit for bit against the Rust twin; keep
+// the exact shape of every expression when editing (src/math.rs, module docs, lists the rules).
 
 const MATH_PI: f32 = 0x1.921fb6p1f;
 const MATH_TAU: f32 = 0x1.921fb6p2f;
@@ -48,6 +51,9 @@ const MATH_PIO2_C2: f32 = 0x1.fap-12f;
 const MATH_PIO2_C3: f32 = 0x1.54p-20f;
 const MATH_PIO2_C4: f32 = 0x1.108p-30f;
 const MATH_PIO2_C5: f32 = 0x1.a308d4p-41f;
+const MATH_PIO2_C3B: f32 = 0x1.5p-20f;
+const MATH_PIO2_C4B: f32 = 0x1.110b46p-26f;
+const MATH_REDUCE_SPLIT: f32 = 0.015625;
 const MATH_SIN_P0: f32 = -0x1.555546p-3f;
 const MATH_SIN_P1: f32 = 0x1.11073cp-7f;
 const MATH_SIN_P2: f32 = -0x1.9943f2p-13f;
@@ -55,17 +61,9 @@ const MATH_COS_P0: f32 = 0x1.55554ap-5f;
 const MATH_COS_P1: f32 = -0x1.6c0c34p-10f;
 const MATH_COS_P2: f32 = 0x1.99eb9cp-16f;
 
-// (s, e) with s = fl(a - b) and s + e = a - b exactly.
-fn math_two_diff(a: f32, b: f32) -> vec2<f32> {
-    let s = a - b;
-    let bb = s - a;
-    let e = (a - (s - bb)) - (b + bb);
-    return vec2<f32>(s, e);
-}
-
+// Cody-Waite in two variants, no TwoSum compensation, which NIR would fold away (see src/math.rs).
 struct MathReduced {
-    hi: f32,
-    lo: f32,
+    r: f32,
     k: i32,
 }
 
@@ -73,26 +71,26 @@ fn math_reduce_pio2(ax: f32) -> MathReduced {
     let k = floor(ax * MATH_FRAC_2_PI + 0.5);
     var t = ax - k * MATH_PIO2_C1;
     t = t - k * MATH_PIO2_C2;
-    let d1 = math_two_diff(t, k * MATH_PIO2_C3);
-    let d2 = math_two_diff(d1.x, k * MATH_PIO2_C4);
-    let lo = (d1.y + d2.y) - k * MATH_PIO2_C5;
-    let r_hi = d2.x + lo;
-    let r_lo = lo - (r_hi - d2.x);
-    return MathReduced(r_hi, r_lo, i32(k));
+    let r_big = (t - k * MATH_PIO2_C3B) - k * MATH_PIO2_C4B;
+    let r_small = ((t - k * MATH_PIO2_C3) - k * MATH_PIO2_C4) - k * MATH_PIO2_C5;
+    var r = r_small;
+    if (abs(r_big) >= MATH_REDUCE_SPLIT) {
+        r = r_big;
+    }
+    return MathReduced(r, i32(k));
 }
 
-fn math_sin_kernel(r: f32, r_lo: f32) -> f32 {
+fn math_sin_kernel(r: f32) -> f32 {
     let z = r * r;
     let p = (MATH_SIN_P2 * z + MATH_SIN_P1) * z + MATH_SIN_P0;
-    return r + (r_lo + r * z * p);
+    return r + r * z * p;
 }
 
-fn math_cos_kernel(r: f32, r_lo: f32) -> f32 {
+fn math_cos_kernel(r: f32) -> f32 {
     let z = r * r;
     let q = (MATH_COS_P2 * z + MATH_COS_P1) * z + MATH_COS_P0;
     let hz = 0.5 * z;
-    let w = 1.0 - hz;
-    return w + (((1.0 - w) - hz) + (z * z * q - r * r_lo));
+    return 1.0 - (hz - z * z * q);
 }
 
 fn math_xor_sign(v: f32, s: f32) -> f32 {
@@ -108,9 +106,9 @@ fn math_sin(x: f32) -> f32 {
     let red = math_reduce_pio2(ax);
     var v: f32;
     if ((red.k & 1) == 0) {
-        v = math_sin_kernel(red.hi, red.lo);
+        v = math_sin_kernel(red.r);
     } else {
-        v = math_cos_kernel(red.hi, red.lo);
+        v = math_cos_kernel(red.r);
     }
     if ((red.k & 2) != 0) {
         v = -v;
@@ -130,9 +128,9 @@ fn math_cos(x: f32) -> f32 {
     let red = math_reduce_pio2(ax);
     var v: f32;
     if ((red.k & 1) == 0) {
-        v = math_cos_kernel(red.hi, red.lo);
+        v = math_cos_kernel(red.r);
     } else {
-        v = math_sin_kernel(red.hi, red.lo);
+        v = math_sin_kernel(red.r);
     }
     if (((red.k + 1) & 2) != 0) {
         v = -v;
@@ -151,8 +149,8 @@ fn math_sin_cos(x: f32) -> vec2<f32> {
         ax = 0.0;
     }
     let red = math_reduce_pio2(ax);
-    let s = math_sin_kernel(red.hi, red.lo);
-    let c = math_cos_kernel(red.hi, red.lo);
+    let s = math_sin_kernel(red.r);
+    let c = math_cos_kernel(red.r);
     var vs = s;
     var vc = c;
     if ((red.k & 1) != 0) {
@@ -330,9 +328,8 @@ fn math_exp(x: f32) -> f32 {
     let n = floor(xc * MATH_LOG2E + 0.5);
     var r = xc - n * MATH_LN2_HI;
     r = r - n * MATH_LN2_LO;
-    let z = r * r;
     let p = ((((MATH_EXP_P5 * r + MATH_EXP_P4) * r + MATH_EXP_P3) * r + MATH_EXP_P2) * r + MATH_EXP_P1) * r + MATH_EXP_P0;
-    var y = p * z + r + 1.0;
+    var y = (p * r + 1.0) * r + 1.0;
     let ni = i32(n);
     let n1 = ni >> 1u;
     let n2 = ni - n1;
@@ -394,21 +391,37 @@ fn math_ln(x: f32) -> f32 {
     return math_nan();
 }
 
+const MATH_LN1P_KERNEL_MIN: f32 = -0x1.2bec34p-2f;
+const MATH_LN1P_KERNEL_MAX: f32 = 0x1.a8279ap-2f;
+
 fn math_ln_1p(u: f32) -> f32 {
-    let w = 1.0 + u;
-    let bb = w - 1.0;
-    let c = (1.0 - (w - bb)) + (u - bb);
-    if (w == 1.0) {
-        return u;
-    } else if (w == math_inf()) {
-        return math_inf();
-    } else if (w == 0.0) {
-        return -math_inf();
+    if (u >= MATH_LN1P_KERNEL_MIN && u <= MATH_LN1P_KERNEL_MAX) {
+        let z = u * u;
+        let q = (((((((MATH_LN_P8 * u + MATH_LN_P7) * u + MATH_LN_P6) * u + MATH_LN_P5) * u + MATH_LN_P4) * u + MATH_LN_P3) * u + MATH_LN_P2) * u + MATH_LN_P1) * u + MATH_LN_P0;
+        let p = q * (u * z);
+        let y = u - 0.5 * z;
+        return y + p;
     }
-    return math_ln(w) + c / w;
+    return math_ln(1.0 + u);
 }
 
+const MATH_LN2: f32 = 0x1.62e43p-1f;
+const MATH_LNCOSH_G0: f32 = 0.5;
+const MATH_LNCOSH_G1: f32 = -0x1.555556p-4f;
+const MATH_LNCOSH_G2: f32 = 0x1.6c16c2p-6f;
+const MATH_LNCOSH_G3: f32 = -0x1.ba1ba2p-8f;
+const MATH_LNCOSH_G4: f32 = 0x1.1ea5d4p-9f;
+const MATH_LNCOSH_G5: f32 = -0x1.833d9cp-11f;
+const MATH_LNCOSH_G6: f32 = 0x1.0d0b52p-12f;
+const MATH_LNCOSH_G7: f32 = -0x1.7da364p-14f;
+
 fn math_softplus(x: f32) -> f32 {
+    if (abs(x) <= 1.0) {
+        let y = 0.5 * x;
+        let w = y * y;
+        let g = ((((((MATH_LNCOSH_G7 * w + MATH_LNCOSH_G6) * w + MATH_LNCOSH_G5) * w + MATH_LNCOSH_G4) * w + MATH_LNCOSH_G3) * w + MATH_LNCOSH_G2) * w + MATH_LNCOSH_G1) * w + MATH_LNCOSH_G0;
+        return (MATH_LN2 + y) + w * g;
+    }
     var pos = 0.0;
     if (x > 0.0) {
         pos = x;

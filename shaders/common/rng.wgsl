@@ -72,7 +72,7 @@ fn rng_uniform(s: ptr<function, RngStream>, lo: f32, hi: f32) -> f32 {
 fn rng_normal(s: ptr<function, RngStream>) -> f32 {
     let u1 = 1.0 - rng_next_f32(s);
     let u2 = rng_next_f32(s);
-    return sqrt(0.0 - 2.0 * math_ln(u1)) * math_cos(MATH_TAU * u2);
+    return sqrt(-2.0 * math_ln(u1)) * math_cos(MATH_TAU * u2);
 }
 
 fn rng_gauss(s: ptr<function, RngStream>, mean: f32, std_dev: f32) -> f32 {
