@@ -1,0 +1,235 @@
+//! Every `.wgsl` file under `shaders/` parses and validates with naga (no GPU needed), and the
+//! common libraries stay in step with their Rust twins.
+//!
+//! Library files declare what they build on with header lines `// requires: <path>` (relative to
+//! `shaders/`), before the first non-comment line. A file is validated with its requirements
+//! prepended (recursively, each once, dependencies first), the way the stage shaders will be
+//! assembled.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+fn shaders_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders")
+}
+
+fn wgsl_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.expect("directory entry").path())
+        .collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            wgsl_files(&p, out);
+        } else if p.extension().is_some_and(|x| x == "wgsl") {
+            out.push(p);
+        }
+    }
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The `// requires: <path>` lines of a file's leading comment block.
+fn requires(src: &str) -> Vec<String> {
+    src.lines()
+        .map(str::trim)
+        .take_while(|l| l.is_empty() || l.starts_with("//"))
+        .filter_map(|l| l.strip_prefix("// requires:"))
+        .map(|r| r.trim().to_owned())
+        .collect()
+}
+
+/// Appends `path`'s requirements (recursively) and then `path` itself to `order`, each once.
+fn resolve(path: &Path, order: &mut Vec<PathBuf>, visiting: &mut Vec<PathBuf>) {
+    if order.iter().any(|p| p == path) {
+        return;
+    }
+    assert!(
+        !visiting.iter().any(|p| p == path),
+        "require cycle through {}",
+        path.display()
+    );
+    visiting.push(path.to_owned());
+    for r in requires(&read(path)) {
+        let dep = shaders_dir().join(&r);
+        assert!(
+            dep.is_file(),
+            "{}: requires {r}, which does not exist",
+            path.display()
+        );
+        resolve(&dep, order, visiting);
+    }
+    visiting.pop();
+    order.push(path.to_owned());
+}
+
+/// Parses and validates `path` with its requirements prepended.
+fn validate(path: &Path) -> Result<(), String> {
+    let mut order = Vec::new();
+    resolve(path, &mut order, &mut Vec::new());
+    let src: String = order.iter().map(|p| read(p) + "\n").collect();
+    let label = order
+        .iter()
+        .map(|p| {
+            p.strip_prefix(shaders_dir())
+                .unwrap_or(p)
+                .display()
+                .to_string()
+        })
+        .collect::<Vec<_>>()
+        .join(" + ");
+    let module =
+        naga::front::wgsl::parse_str(&src).map_err(|e| e.emit_to_string_with_path(&src, &label))?;
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .map_err(|e| e.emit_to_string_with_path(&src, &label))?;
+    Ok(())
+}
+
+#[test]
+fn all_wgsl_shaders_validate() {
+    let mut files = Vec::new();
+    wgsl_files(&shaders_dir(), &mut files);
+    assert!(!files.is_empty(), "no .wgsl files under shaders/");
+    let errors: Vec<String> = files.iter().filter_map(|p| validate(p).err()).collect();
+    println!("validated {} shaders", files.len());
+    assert!(errors.is_empty(), "{}", errors.join("\n"));
+}
+
+/// The 32-bit pattern of every hexadecimal literal in `src`: integers as written (without `_`
+/// separators or WGSL suffixes), and WGSL hexadecimal floats (`-0x1.921fb6p1f`) as the bits of
+/// the f32 they denote. Rust gives float constants as `f32::from_bits(0x...)`, WGSL as exact
+/// hexadecimal floats (naga cannot evaluate `bitcast` in a constant expression), so both sides
+/// reduce to the same patterns.
+fn hex_literals(src: &str) -> BTreeSet<u32> {
+    let b = src.as_bytes();
+    let mut out = BTreeSet::new();
+    let mut i = 0;
+    while i + 1 < b.len() {
+        let starts_token = i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_');
+        if !(starts_token && b[i] == b'0' && (b[i + 1] == b'x' || b[i + 1] == b'X')) {
+            i += 1;
+            continue;
+        }
+        let negative = i > 0 && b[i - 1] == b'-';
+        let mut j = i + 2;
+        let take_hex = |j: &mut usize| {
+            let mut digits = String::new();
+            while *j < b.len() && (b[*j].is_ascii_hexdigit() || b[*j] == b'_') {
+                if b[*j] != b'_' {
+                    digits.push(b[*j] as char);
+                }
+                *j += 1;
+            }
+            digits
+        };
+        let int_digits = take_hex(&mut j);
+        let is_float = j < b.len() && (b[j] == b'.' || b[j] == b'p' || b[j] == b'P');
+        if !is_float {
+            if !int_digits.is_empty() {
+                let v = u64::from_str_radix(&int_digits, 16).expect("hex digits");
+                out.insert(u32::try_from(v).expect("hex literal wider than 32 bits"));
+            }
+            i = j;
+            continue;
+        }
+        let mut frac_digits = String::new();
+        if b[j] == b'.' {
+            j += 1;
+            frac_digits = take_hex(&mut j);
+        }
+        assert!(b[j] == b'p' || b[j] == b'P', "hex float without exponent");
+        j += 1;
+        let exp_start = j;
+        while j < b.len() && (b[j] == b'-' || b[j] == b'+' || b[j].is_ascii_digit()) {
+            j += 1;
+        }
+        let exp: i32 = src[exp_start..j].parse().expect("hex float exponent");
+        // Mantissa as an integer, scaled by 2^(exp - 4·fraction digits): exact in f64 for the
+        // 24-bit mantissas of f32 constants, then exact again in f32.
+        let mantissa = u64::from_str_radix(&format!("{int_digits}{frac_digits}"), 16)
+            .expect("hex float digits");
+        let value = mantissa as f64 * 2f64.powi(exp - 4 * frac_digits.len() as i32);
+        let value = if negative { -value } else { value };
+        let f = value as f32;
+        assert_eq!(f64::from(f), value, "inexact hex float in WGSL");
+        out.insert(f.to_bits());
+        i = j;
+    }
+    out
+}
+
+fn repo_file(rel: &str) -> String {
+    read(&Path::new(env!("CARGO_MANIFEST_DIR")).join(rel))
+}
+
+/// A constant changed on one side only (a coefficient, a mask, a mixer multiplier) shows up as a
+/// literal that the other side lacks.
+#[test]
+fn wgsl_twins_use_the_same_hex_constants() {
+    for (rust, wgsl) in [
+        ("src/math.rs", "shaders/common/math.wgsl"),
+        ("src/rng.rs", "shaders/common/rng.wgsl"),
+    ] {
+        let r = hex_literals(&repo_file(rust));
+        let w = hex_literals(&repo_file(wgsl));
+        assert!(r.len() >= 4, "{rust}: only {} hex literals found", r.len());
+        let hex =
+            |set: BTreeSet<&u32>| set.iter().map(|v| format!("{v:#010x}")).collect::<Vec<_>>();
+        let only_rust = hex(r.difference(&w).collect());
+        let only_wgsl = hex(w.difference(&r).collect());
+        assert!(
+            only_rust.is_empty() && only_wgsl.is_empty(),
+            "{rust} vs {wgsl}: only in Rust {only_rust:?}, only in WGSL {only_wgsl:?}"
+        );
+    }
+}
+
+/// Names of `pub fn` and `pub const` items in a Rust source (top level and impl blocks).
+fn rust_pub_items(src: &str, keyword: &str) -> BTreeSet<String> {
+    src.lines()
+        .filter_map(|l| l.trim().strip_prefix(keyword))
+        .map(|rest| {
+            rest.chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect()
+        })
+        .collect()
+}
+
+/// Every public function and constant of the Rust twins exists in WGSL under its prefixed name.
+#[test]
+fn wgsl_twins_define_every_public_item() {
+    let math_wgsl = repo_file("shaders/common/math.wgsl");
+    let math_rs = repo_file("src/math.rs");
+    for f in rust_pub_items(&math_rs, "pub fn ") {
+        assert!(
+            math_wgsl.contains(&format!("fn math_{f}(")),
+            "math.wgsl lacks math_{f}"
+        );
+    }
+    for c in rust_pub_items(&math_rs, "pub const ") {
+        assert!(
+            math_wgsl.contains(&format!("const MATH_{c}:")),
+            "math.wgsl lacks MATH_{c}"
+        );
+    }
+    let rng_wgsl = repo_file("shaders/common/rng.wgsl");
+    for f in rust_pub_items(&repo_file("src/rng.rs"), "pub fn ") {
+        // `new` takes the u64 seed, which WGSL cannot hold: its twin is `from_seed_words`.
+        let twin = match f.as_str() {
+            "new" | "from_seed_words" => "new".to_owned(),
+            other => other.to_owned(),
+        };
+        assert!(
+            rng_wgsl.contains(&format!("fn rng_{twin}(")),
+            "rng.wgsl lacks rng_{twin} (twin of {f})"
+        );
+    }
+}
