@@ -259,9 +259,9 @@ mod tests {
     fn rect_rect_separating_axes() {
         let a = Rect::new(0.0, 0.0, 0.0, 2.0, 2.0);
         // A diamond whose corner points at a's right edge.
-        let b = Rect::new(2.0 + 0.70, 0.0, math::PI / 4.0, 2.0, 2.0);
-        assert!(rect_rect(&a, &b), "diamond corner reaches x = 1.2929 < 1");
-        let c = Rect::new(2.0 + 0.75, 0.0, math::PI / 4.0, 2.0, 2.0);
+        let b = Rect::new(2.40, 0.0, math::PI / 4.0, 2.0, 2.0);
+        assert!(rect_rect(&a, &b), "the diamond's corner reaches x = 2.40 - √2 = 0.986 < 1");
+        let c = Rect::new(2.45, 0.0, math::PI / 4.0, 2.0, 2.0);
         assert!(!rect_rect(&a, &c));
         assert!(
             rect_rect(&a, &Rect::new(0.0, 0.0, 0.3, 0.1, 0.1)),

@@ -168,7 +168,7 @@ pub struct StepParams {
     pub _pad: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<StepParams>() % 16 == 0);
+const _: () = assert!(std::mem::size_of::<StepParams>().is_multiple_of(16));
 
 impl StepParams {
     /// Flatten `config` for a batch seeded with `seed`.

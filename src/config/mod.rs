@@ -148,7 +148,14 @@ impl Default for Human {
             diameter: 0.72,
             goal_radius: 0.25,
             policy: HumanPolicy::Random,
+            // 0.1.1's configs write these truncated decimals of π and 2π; the exact values matter
+            // for gaze and field-of-view boundary decisions, so they are kept as written.
+            #[expect(clippy::approx_constant, reason = "0.1.1's configs write π as 3.14159")]
             gaze_angle: 3.14159,
+            #[expect(
+                clippy::approx_constant,
+                reason = "0.1.1's configs write 2π as 6.2831853"
+            )]
             fov_angle: 6.283_185_3,
             prob_to_avoid_robot: 0.0,
             max_speed: 0.1,
@@ -439,7 +446,7 @@ impl Default for Reward {
 }
 
 /// What the observation contains (spec section 5).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(default, deny_unknown_fields)]
 pub struct Observation {
     /// Pad every entity type to its capacity and omit the walls (`get_padded_observations`).
@@ -447,15 +454,6 @@ pub struct Observation {
     pub padded: bool,
     /// Append the robot's commanded velocity (v_x, v_y, omega) to the robot record (not in 0.1.1).
     pub robot_velocity: bool,
-}
-
-impl Default for Observation {
-    fn default() -> Self {
-        Self {
-            padded: false,
-            robot_velocity: false,
-        }
-    }
 }
 
 /// Which velocity the neighbours of an ORCA agent have.

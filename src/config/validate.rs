@@ -44,8 +44,8 @@ impl Problems {
         }
     }
     fn angle(&mut self, key: &str, a: f32) {
-        // 2π rounded up to f32 plus slack: SocNavGym configs write 6.2831853 for "see everything".
-        if !(a.is_finite() && a > 0.0 && a <= 6.2832) {
+        // SocNavGym configs write 6.2831853 for "see everything"; allow 2π plus rounding slack.
+        if !(a.is_finite() && a > 0.0 && a <= std::f32::consts::TAU + 1e-4) {
             self.0
                 .push(format!("`{key}` must lie in (0, 2π] rad, got {a}"));
         }

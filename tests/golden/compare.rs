@@ -118,7 +118,9 @@ impl Report {
         self.compared += 1;
         let same = (ours.is_nan() && theirs.is_nan()) || ours == theirs;
         let err = (ours - theirs).abs();
-        if !same && !(err <= abs) {
+        // A NaN error (one side NaN) must fail, hence the explicit comparison.
+        let within = err.partial_cmp(&abs).is_some_and(|o| o.is_le());
+        if !same && !within {
             self.fail(format!(
                 "{what}: ours {ours} vs reference {theirs} (|err| {err:.3e} > {abs:.1e})"
             ));

@@ -21,7 +21,7 @@ impl Policy {
         // The policy's randomness is outside the simulation: a host RNG, seeded apart from the batch.
         Self {
             choice,
-            rng: StdRng::seed_from_u64(seed ^ 0x5eed_0f_9011c7),
+            rng: StdRng::seed_from_u64(seed ^ 0x5eed_0f90_11c7),
             holonomic,
         }
     }
