@@ -261,10 +261,19 @@ impl BatchEnv {
 
     /// Load environment `env` from a JSON document as [`BatchEnv::get_state`] writes it (or a
     /// golden episode's header and snapshot); its observation is rewritten from the loaded state.
+    /// A rejected document leaves the environment as it was.
     pub fn set_state(&mut self, env: usize, doc: &serde_json::Value) -> Result<(), SimError> {
         self.check_env(env)?;
         let params = self.params;
-        document::import(&params, self.backend.state_mut(), env, doc)?;
+        let state = self.backend.state_mut();
+        // A document can fail half-way through (a missing key, a capacity): keep a copy to
+        // restore, so that a failed load changes nothing.
+        let mut backup = BatchState::new(1, self.caps);
+        backup.copy_env_from(0, state, env);
+        if let Err(err) = document::import(&params, state, env, doc) {
+            state.copy_env_from(env, &backup, 0);
+            return Err(err);
+        }
         self.backend.state_changed(env);
         Ok(())
     }

@@ -3,7 +3,9 @@
 //!
 //! Defaults live in one place: the `Default` impls below, which reproduce the paper's
 //! experiment 1 (`configs/exp1.toml`). A TOML file only needs the keys it changes. Loading
-//! reports every problem at once: unknown keys and the value checks of [`validate`].
+//! reports every problem at once: unknown keys and the value checks of [`validate`]. Unknown keys
+//! are collected with `serde_ignored` rather than refused by serde's `deny_unknown_fields`, which
+//! would stop at the first one and hide every other problem.
 //! `configs/README.md` documents every key with its unit, default and valid range.
 
 mod socnavgym;
@@ -19,7 +21,7 @@ pub use validate::validate;
 
 /// The whole configuration of a batch of environments: what a SocNavGym 0.1.1 YAML file says.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Config {
     /// Episode length and time step.
     pub episode: Episode,
@@ -51,7 +53,7 @@ pub struct Config {
 
 /// Episode length and time step.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Episode {
     /// Maximum number of steps; the episode is truncated when the tick counter exceeds it
     /// (0.1.1 `episode_length`, so 200 gives 201 steps).
@@ -82,7 +84,7 @@ pub enum Kinematics {
 
 /// The robot.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Robot {
     /// Disc radius (m) (`robot_radius`).
     pub radius: f32,
@@ -122,7 +124,7 @@ pub enum HumanPolicy {
 
 /// Humans.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Human {
     /// Disc diameter (m); the collision radius is half of it (`human_diameter`).
     pub diameter: f32,
@@ -166,7 +168,7 @@ impl Default for Human {
 
 /// Groups of humans (0.1.1 `human-human-interaction`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Group {
     /// Radius of the circle the members stand on (m) (`interaction_radius`).
     pub radius: f32,
@@ -189,7 +191,7 @@ impl Default for Group {
 
 /// Humans working at laptops (0.1.1 `human-laptop-interaction`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct LaptopUse {
     /// Gap between the laptop and the seated human (m): the human sits
     /// `laptop.width + human_distance` from the laptop centre (`human_laptop_distance`).
@@ -206,7 +208,7 @@ impl Default for LaptopUse {
 
 /// Sizes of static objects (m).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Objects {
     /// Laptop extent along its local y axis (m) (`laptop_width`).
     pub laptop_width: f32,
@@ -260,7 +262,7 @@ pub enum Shape {
 
 /// Room shape and size.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Room {
     /// Room shape (`set_shape`).
     pub shape: Shape,
@@ -289,7 +291,7 @@ impl Default for Room {
 
 /// Entity counts drawn at every reset, each an inclusive `[min, max]` range.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Counts {
     /// Lone humans that never move (`min/max_static_humans`).
     pub static_humans: [i32; 2],
@@ -380,7 +382,7 @@ impl Counts {
 
 /// Per-step probabilities of the social events, evaluated after the observation (spec 4.5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Events {
     /// Probability per step of dispersing one dispersable group (`crowd_dispersal_probability`).
     pub crowd_dispersal_probability: f32,
@@ -404,7 +406,7 @@ pub enum RewardKind {
 
 /// The reward and its constants (spec 6.2; the defaults are 0.1.1's).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Reward {
     /// Reward function (`reward_file`).
     pub kind: RewardKind,
@@ -447,7 +449,7 @@ impl Default for Reward {
 
 /// What the observation contains (spec section 5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Observation {
     /// Pad every entity type to its capacity and omit the walls (`get_padded_observations`).
     /// Off, the wall segments are observed; the batch layout is fixed either way.
@@ -479,7 +481,7 @@ pub enum LaptopUserObstacle {
 /// Modelling choices of 0.1.1 that socnav keeps by default under a named option
 /// (DESIGN.md section 5; every row is in `docs/fidelity.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Model {
     /// Velocity of ORCA neighbours.
     pub orca_neighbour_velocity: OrcaNeighbourVelocity,
@@ -504,7 +506,7 @@ impl Default for Model {
 
 /// Rendering settings (0.1.1 `rendering`), used only by `socnav render`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Render {
     /// Size of the longer image side in pixels (`resolution_view`).
     pub resolution: u32,

@@ -14,10 +14,22 @@ pub fn validate(config: &Config) -> Vec<String> {
     let mut v = Problems::default();
     check_scalars(config, &mut v);
     check_counts(config, &mut v);
-    if v.0.is_empty() {
-        check_room_fits(config, &mut v);
+    // The room checks run alongside the others, so that a room too small for what it must hold
+    // is reported together with every other problem; they only need usable room sizes.
+    if room_sizes_usable(config) {
+        let other_problems = !v.0.is_empty();
+        check_room_fits(config, other_problems, &mut v);
     }
     v.0
+}
+
+/// Whether the room size ranges and the margin are valid, so that the room checks can use them.
+fn room_sizes_usable(c: &Config) -> bool {
+    let range_ok = |r: [i32; 2]| r[0] >= 1 && r[0] <= r[1];
+    range_ok(c.room.size_x)
+        && (!uses_independent_y(c.room.shape) || range_ok(c.room.size_y))
+        && c.room.margin.is_finite()
+        && c.room.margin >= 0.0
 }
 
 #[derive(Default)]
@@ -185,8 +197,10 @@ fn uses_independent_y(shape: Shape) -> bool {
 }
 
 /// The room must hold the largest entity counts: each entity must fit in the sampling box, and
-/// their footprints together must leave room for rejection sampling.
-fn check_room_fits(c: &Config, v: &mut Problems) {
+/// their footprints together must leave room for rejection sampling. The footprint estimate is
+/// skipped when `other_problems` were found: it combines every size and count, and one invalid
+/// value would make it meaningless.
+fn check_room_fits(c: &Config, other_problems: bool, v: &mut Problems) {
     let smallest_x = c.room.size_x[0] as f32;
     let smallest_y = if uses_independent_y(c.room.shape) {
         c.room.size_y[0] as f32
@@ -195,11 +209,19 @@ fn check_room_fits(c: &Config, v: &mut Problems) {
     };
     let box_x = smallest_x - 2.0 * c.room.margin;
     let box_y = smallest_y - 2.0 * c.room.margin;
+    let y_key = if uses_independent_y(c.room.shape) {
+        format!(", `room.size_y` minimum {}", c.room.size_y[0])
+    } else {
+        String::new()
+    };
+    let room = format!(
+        "the smallest room ({smallest_x} x {smallest_y} m: `room.size_x` minimum {}{y_key}) minus \
+         `room.margin` {} m on each side",
+        c.room.size_x[0], c.room.margin
+    );
     if box_x <= 0.0 || box_y <= 0.0 {
         v.0.push(format!(
-            "room too small: the smallest room ({smallest_x} x {smallest_y} m) minus `room.margin` {} on each side \
-             leaves no area to place anything",
-            c.room.margin
+            "room too small: {room} leaves no area to place anything"
         ));
         return;
     }
@@ -214,13 +236,18 @@ fn check_room_fits(c: &Config, v: &mut Problems) {
         ("a group", group_radius, c.counts.max_groups() > 0),
         ("a plant", o.plant_radius, c.counts.plants[1] > 0),
     ] {
-        if asked && 2.0 * radius >= side {
+        // A size that is not a positive number is reported by the scalar checks.
+        let usable = radius.is_finite() && radius > 0.0;
+        if asked && usable && 2.0 * radius >= side {
             v.0.push(format!(
                 "room too small: {what} ({:.2} m across) does not fit in the {box_x:.2} x {box_y:.2} m sampling box \
-                 of the smallest room",
+                 of {room}",
                 2.0 * radius
             ));
         }
+    }
+    if other_problems {
+        return;
     }
     let n = &c.counts;
     let disc = |r: f32| std::f32::consts::PI * r * r;
@@ -245,7 +272,7 @@ fn check_room_fits(c: &Config, v: &mut Problems) {
     let area = box_x * box_y * l_fraction;
     if footprint > MAX_FILL_FRACTION * area {
         v.0.push(format!(
-            "room too small: the largest counts cover about {footprint:.1} m² but the smallest room offers \
+            "room too small: the largest counts cover about {footprint:.1} m² but {room} offers \
              {area:.1} m² to sample in; random placement jams beyond {:.0} % coverage",
             MAX_FILL_FRACTION * 100.0
         ));

@@ -95,6 +95,8 @@ fn draw_counts(p: &StepParams, rng: &mut RngStream) -> Counts {
 
 /// Draw the room, then place everything; writes the environment's slots.
 fn generate(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngStream) -> Attempt {
+    // Unused slots hold zeros (crate::state): nothing of an earlier episode or attempt remains.
+    s.clear_slots(e);
     let n = draw_counts(p, rng);
     let (shape, x, y, l_location) = draw_room(p, rng);
     draw_human_params(p, s, e, rng);
@@ -464,6 +466,10 @@ impl Gen<'_, '_> {
             s.h_theta[i] = thetas[k];
             s.h_speed[i] = speed;
             s.h_policy[i] = self.policy();
+            // Standing members have no goal: their own position, as a loaded document gives
+            // them (moving members get the group goal in `place_goals`).
+            s.h_goal_x[i] = members[k].x;
+            s.h_goal_y[i] = members[k].y;
             set_role(s, i, member_role, gi as u32, NONE);
             sx += members[k].x;
             sy += members[k].y;
@@ -525,6 +531,9 @@ impl Gen<'_, '_> {
         s.h_y[i] = seat.1;
         s.h_theta[i] = seat.2;
         s.h_speed[i] = 0.0;
+        // A laptop user has no goal: its own position, as a loaded document gives it.
+        s.h_goal_x[i] = seat.0;
+        s.h_goal_y[i] = seat.1;
         s.h_policy[i] = self.policy();
         set_role(s, i, role::LAPTOP_USER, NONE, ui as u32);
         let u = self.e * s.strides.laptop_users + ui;

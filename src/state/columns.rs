@@ -114,6 +114,17 @@ macro_rules! soa {
                 h
             }
 
+            /// Zero every per-slot column (all kinds but `env`) of environment `env`, so that
+            /// the slots a new episode or a loaded document does not use hold zeros.
+            pub fn clear_slots(&mut self, env: usize) {
+                $(
+                    if stringify!($kind) != "env" {
+                        let s = self.strides.$kind();
+                        self.$col[env * s..(env + 1) * s].fill(<$ty>::default());
+                    }
+                )*
+            }
+
             /// Copy every column of environment `from` of `src` into environment `to` of `self`.
             pub fn copy_env_from(&mut self, to: usize, src: &Self, from: usize) {
                 $(
@@ -124,6 +135,16 @@ macro_rules! soa {
         }
 
         impl<'a> $chunk<'a> {
+            /// Zero every per-slot column (all kinds but `env`) of local environment `env`.
+            pub fn clear_slots(&mut self, env: usize) {
+                $(
+                    if stringify!($kind) != "env" {
+                        let s = self.strides.$kind();
+                        self.$col[env * s..(env + 1) * s].fill(<$ty>::default());
+                    }
+                )*
+            }
+
             /// Split into the first `mid` environments and the rest.
             pub fn split_at(self, mid: usize) -> ($chunk<'a>, $chunk<'a>) {
                 assert!(mid <= self.n_envs, "split point {mid} beyond chunk of {} envs", self.n_envs);

@@ -258,6 +258,9 @@ fn export_crowd_forming(s: &BatchState, e: usize) -> Value {
 /// Load environment `e` of `s` from `doc`.
 pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Result<(), SimError> {
     let r = Reader::root(doc);
+    // Unused slots hold zeros (crate::state): nothing of the environment's previous contents
+    // remains beyond what the document fills.
+    s.clear_slots(e);
     read::room(p, &r, s, e)?;
     read::human_params(&r.at("human_params")?, s, e)?;
     let st = r.at("state")?;

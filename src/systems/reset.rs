@@ -13,6 +13,8 @@ pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize) {
     s.tick[e] = 0;
     s.done[e] = 0;
     s.pending_reset[e] = 0;
+    // No dynamics ran for this environment since its reset.
+    s.stepping[e] = 0;
     s.robot_vx[e] = 0.0;
     s.robot_vy[e] = 0.0;
     s.robot_w[e] = 0.0;

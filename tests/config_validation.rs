@@ -1,0 +1,343 @@
+//! Configuration loading and validation (DESIGN.md section 2, STYLE.md rule 8, spec section 2).
+//!
+//! Contracts checked here:
+//! - every shipped `configs/*.toml` parses and validates, and `Config::default()` is exactly
+//!   `configs/exp1.toml` (the defaults reproduce the paper's experiment 1);
+//! - a config with many mistakes is rejected with *every* problem listed at once, each message
+//!   naming the key and the offending value;
+//! - a partial TOML file takes the defaults for every key it does not set;
+//! - `Config::from_socnavgym` turns a SocNavGym 0.1.1 config dict into exactly the shipped TOML
+//!   of the same stem (checked on the golden episode headers), and reports missing 0.1.1 keys.
+//!
+//! Environment: `SOCNAV_GOLDEN_DIR` (default `../shared/golden/socnavgym`); without that
+//! directory the golden part is skipped with a printed reason.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use serde_json::{Value, json};
+use socnav::{Config, SimError};
+
+fn configs_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("configs")
+}
+
+fn golden_dir() -> PathBuf {
+    match std::env::var_os("SOCNAV_GOLDEN_DIR") {
+        Some(d) => PathBuf::from(d),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/golden/socnavgym"),
+    }
+}
+
+/// Every `configs/*.toml`, sorted by name.
+fn shipped_configs() -> Vec<PathBuf> {
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(configs_dir())
+        .expect("configs/ exists")
+        .map(|e| e.expect("readable configs/ entry").path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    paths.sort();
+    paths
+}
+
+/// The problems of a rejected config, or a panic naming what was returned instead.
+fn config_problems(result: Result<Config, SimError>) -> Vec<String> {
+    match result {
+        Err(SimError::Config(problems)) => problems,
+        other => panic!("expected SimError::Config, got {other:?}"),
+    }
+}
+
+/// Contract: every shipped config file loads without a single problem.
+#[test]
+fn every_shipped_config_parses_and_validates() {
+    let paths = shipped_configs();
+    for path in &paths {
+        let config = Config::from_file(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(
+            socnav::config::validate(&config).is_empty(),
+            "{}",
+            path.display()
+        );
+        // The name-based lookup the CLI and Python use finds the same file.
+        let stem = path.file_stem().unwrap().to_str().unwrap();
+        assert_eq!(Config::from_name_or_path(stem).unwrap(), config, "{stem}");
+    }
+    // The paper's three experiments and the golden set's two derived configs at least.
+    assert!(
+        paths.len() >= 5,
+        "only {} configs found in configs/",
+        paths.len()
+    );
+}
+
+/// Contract: the defaults are the paper's experiment 1, key for key.
+#[test]
+fn default_config_is_exp1() {
+    let exp1 = Config::from_file(configs_dir().join("exp1.toml")).unwrap();
+    assert_eq!(Config::default(), exp1);
+    // Serialising the defaults and reading them back is the identity (every key has a name).
+    assert_eq!(
+        Config::from_toml_str(&Config::default().to_toml_string()).unwrap(),
+        exp1
+    );
+}
+
+/// Contract (STYLE.md rule 8): every problem is reported at once, each naming its key and value.
+/// The file below has seven independent mistakes; each must appear in the one error.
+#[test]
+fn every_problem_is_listed_at_once() {
+    let text = r#"
+        [robot]
+        wheel_base = 0.3            # unknown key
+
+        [objects]
+        plant_radius = -0.4         # negative size
+
+        [events]
+        laptop_dispersal_probability = 1.5   # not a probability
+
+        [room]
+        size_x = [2, 12]            # the smallest (2 m) square room cannot hold a table
+
+        [counts]
+        static_humans = [3, 1]      # min > max
+        standing_groups = [1, 1]
+        group_size = [1, 2]         # groups of one
+        tables = [0, 1]
+        laptop_users = [1, 1]       # laptop users, but maybe no table
+    "#;
+    let problems = config_problems(Config::from_toml_str(text));
+    let all = problems.join("\n");
+    println!("reported problems:\n{all}");
+    // (what, substrings that the message of that problem must contain)
+    let expected: [(&str, &[&str]); 7] = [
+        ("unknown key", &["robot.wheel_base"]),
+        ("negative size", &["objects.plant_radius", "-0.4"]),
+        (
+            "probability 1.5",
+            &["events.laptop_dispersal_probability", "1.5"],
+        ),
+        ("min > max", &["counts.static_humans", "3", "1"]),
+        ("group of one", &["counts.group_size", "got 1"]),
+        (
+            "laptop users without tables",
+            &["counts.tables", "laptop_users", "got 0"],
+        ),
+        ("room too small for a table", &["room.size_x", "2", "table"]),
+    ];
+    for (what, needles) in expected {
+        let hit = problems
+            .iter()
+            .any(|p| needles.iter().all(|n| p.contains(n)));
+        assert!(
+            hit,
+            "no message about {what} containing all of {needles:?}; got:\n{all}"
+        );
+    }
+    // One message per problem: the seven mistakes above, plus at most a few consequences
+    // (e.g. a group that does not fit either), never one message hiding the others.
+    assert!(
+        problems.len() >= expected.len(),
+        "{} messages for {} problems",
+        problems.len(),
+        expected.len()
+    );
+}
+
+/// Contract: `BatchEnv::new` applies the same validation to a `Config` built in code.
+#[test]
+fn batch_rejects_an_invalid_config_built_in_code() {
+    let mut config = Config::default();
+    config.robot.radius = -1.0;
+    config.events.crowd_formation_probability = 2.0;
+    let err = socnav::BatchEnv::new(config, socnav::EnvOptions::default()).unwrap_err();
+    let SimError::Config(problems) = err else {
+        panic!("expected SimError::Config, got {err:?}")
+    };
+    assert!(
+        problems
+            .iter()
+            .any(|p| p.contains("robot.radius") && p.contains("-1")),
+        "{problems:?}"
+    );
+    assert!(
+        problems
+            .iter()
+            .any(|p| p.contains("events.crowd_formation_probability") && p.contains('2'))
+    );
+}
+
+/// Contract: a partial TOML file takes the defaults for every key it does not set.
+#[test]
+fn partial_toml_fills_defaults() {
+    assert_eq!(Config::from_toml_str("").unwrap(), Config::default());
+    let config =
+        Config::from_toml_str("[robot]\nradius = 0.3\n\n[counts]\nplants = [0, 2]\n").unwrap();
+    let mut expected = Config::default();
+    expected.robot.radius = 0.3;
+    expected.counts.plants = [0, 2];
+    assert_eq!(config, expected);
+    // A section that sets one key keeps the section's other defaults.
+    assert_eq!(
+        config.robot.goal_radius,
+        Config::default().robot.goal_radius
+    );
+}
+
+/// Contract: a file that is not TOML at all is a config error, not a panic.
+#[test]
+fn malformed_toml_is_a_config_error() {
+    let problems = config_problems(Config::from_toml_str("[robot\nradius = "));
+    assert!(!problems.is_empty());
+}
+
+/// SocNavGym 0.1.1's `exp1_no_sngnn.yaml` as a JSON dict (spec section 2.1), written out by hand
+/// so that the import is tested without the golden files.
+fn exp1_socnavgym_dict() -> Value {
+    serde_json::from_str(
+        r#"{
+        "rendering": {"resolution_view": 1000, "milliseconds": 30},
+        "episode": {"episode_length": 200, "time_step": 1},
+        "robot": {"robot_radius": 0.25, "goal_radius": 0.35, "robot_type": "diff-drive"},
+        "human": {"human_diameter": 0.72, "human_goal_radius": 0.25, "human_policy": "random",
+                  "gaze_angle": 3.14159, "fov_angle": 6.2831853, "prob_to_avoid_robot": 0.0},
+        "laptop": {"laptop_width": 0.4, "laptop_length": 0.6},
+        "plant": {"plant_radius": 0.4},
+        "table": {"table_width": 1.5, "table_length": 3.0},
+        "wall": {"wall_thickness": 0.2},
+        "human-human-interaction": {"interaction_radius": 0.72, "interaction_goal_radius": 1.44,
+                                    "noise_variance": 0.005},
+        "human-laptop-interaction": {"human_laptop_distance": 0.3},
+        "env": {
+            "margin": 0.5, "max_advance_human": 0.1, "max_advance_robot": 0.1, "max_rotation": 0.387596899,
+            "wall_segment_size": 1.0, "speed_threshold": 0.005, "crowd_dispersal_probability": 0.0,
+            "human_laptop_dispersal_probability": 0.0, "crowd_formation_probability": 0.0,
+            "human_laptop_formation_probability": 0.0, "reward_file": "dsrnn", "cuda_device": 0,
+            "min_static_humans": 0, "max_static_humans": 0, "min_dynamic_humans": 1, "max_dynamic_humans": 1,
+            "min_tables": 0, "max_tables": 0, "min_plants": 1, "max_plants": 1, "min_laptops": 0,
+            "max_laptops": 0, "min_h_h_dynamic_interactions": 0, "max_h_h_dynamic_interactions": 0,
+            "min_h_h_dynamic_interactions_non_dispersing": 0, "max_h_h_dynamic_interactions_non_dispersing": 0,
+            "min_h_h_static_interactions": 0, "max_h_h_static_interactions": 0,
+            "min_h_h_static_interactions_non_dispersing": 0, "max_h_h_static_interactions_non_dispersing": 0,
+            "min_human_in_h_h_interactions": 0, "max_human_in_h_h_interactions": 0,
+            "min_h_l_interactions": 0, "max_h_l_interactions": 0,
+            "min_h_l_interactions_non_dispersing": 0, "max_h_l_interactions_non_dispersing": 0,
+            "get_padded_observations": false, "set_shape": "square", "add_corridors": false,
+            "min_map_x": 10, "max_map_x": 10, "min_map_y": 10, "max_map_y": 10
+        }
+    }"#,
+    )
+    .expect("valid JSON")
+}
+
+/// Contract: the 0.1.1 import of experiment 1's YAML is the default config.
+#[test]
+fn socnavgym_exp1_dict_imports_as_default() {
+    assert_eq!(
+        Config::from_socnavgym(&exp1_socnavgym_dict()).unwrap(),
+        Config::default()
+    );
+}
+
+/// Contract (spec section 2: every 0.1.1 key is mandatory): each missing key is reported, by its
+/// `section.key` name, all in one error.
+#[test]
+fn socnavgym_missing_keys_are_reported() {
+    let mut dict = exp1_socnavgym_dict();
+    dict["env"]
+        .as_object_mut()
+        .unwrap()
+        .remove("max_advance_robot");
+    dict["robot"]
+        .as_object_mut()
+        .unwrap()
+        .remove("robot_radius");
+    dict["env"].as_object_mut().unwrap().remove("min_tables");
+    let problems = config_problems(Config::from_socnavgym(&dict));
+    for key in [
+        "env.max_advance_robot",
+        "robot.robot_radius",
+        "env.min_tables",
+    ] {
+        assert!(
+            problems.iter().any(|p| p.contains(key)),
+            "`{key}` not reported in {problems:?}"
+        );
+    }
+    // A whole missing section names its keys too.
+    let mut dict = exp1_socnavgym_dict();
+    dict.as_object_mut().unwrap().remove("plant");
+    let problems = config_problems(Config::from_socnavgym(&dict));
+    assert!(
+        problems.iter().any(|p| p.contains("plant.plant_radius")),
+        "{problems:?}"
+    );
+    // A value of the wrong type is reported with its key.
+    let mut dict = exp1_socnavgym_dict();
+    dict["robot"]["robot_type"] = json!("tank");
+    let problems = config_problems(Config::from_socnavgym(&dict));
+    assert!(
+        problems
+            .iter()
+            .any(|p| p.contains("robot.robot_type") && p.contains("tank")),
+        "{problems:?}"
+    );
+}
+
+/// The `header.config` dict of the first golden episode of `config_name`, if the golden
+/// directory holds one.
+fn golden_header_config(dir: &Path, config_name: &str) -> Option<Value> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .ok()?
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with(&format!("{config_name}_seed")) && n.ends_with(".json.gz"))
+        .collect();
+    names.sort();
+    let path = dir.join(names.first()?);
+    let mut text = String::new();
+    flate2::read::GzDecoder::new(std::fs::File::open(&path).unwrap())
+        .read_to_string(&mut text)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let root: Value =
+        serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    Some(root["header"]["config"].clone())
+}
+
+/// Contract (DESIGN.md section 5, replay rules): the config a golden episode was recorded with,
+/// imported with `Config::from_socnavgym`, is exactly `configs/<stem>.toml`.
+#[test]
+fn golden_socnavgym_configs_equal_shipped_tomls() {
+    let dir = golden_dir();
+    if !dir.is_dir() {
+        println!(
+            "SKIP golden_socnavgym_configs_equal_shipped_tomls: no golden directory at {}",
+            dir.display()
+        );
+        return;
+    }
+    let pairs = [
+        ("exp1_no_sngnn", "exp1"),
+        ("exp2_no_sngnn", "exp2"),
+        ("exp3_no_sngnn", "exp3"),
+        ("lroom_mixed", "lroom_mixed"),
+        ("corridor_mixed", "corridor_mixed"),
+    ];
+    let mut checked = 0;
+    for (golden, stem) in pairs {
+        let Some(dict) = golden_header_config(&dir, golden) else {
+            panic!(
+                "the golden directory {} has no `{golden}` episode",
+                dir.display()
+            );
+        };
+        let theirs = Config::from_socnavgym(&dict).unwrap_or_else(|e| panic!("{golden}: {e}"));
+        let ours = Config::from_file(configs_dir().join(format!("{stem}.toml"))).unwrap();
+        assert_eq!(
+            ours, theirs,
+            "configs/{stem}.toml differs from the golden `{golden}` header"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, pairs.len());
+}
