@@ -260,7 +260,10 @@ mod tests {
         let a = Rect::new(0.0, 0.0, 0.0, 2.0, 2.0);
         // A diamond whose corner points at a's right edge.
         let b = Rect::new(2.40, 0.0, math::PI / 4.0, 2.0, 2.0);
-        assert!(rect_rect(&a, &b), "the diamond's corner reaches x = 2.40 - √2 = 0.986 < 1");
+        assert!(
+            rect_rect(&a, &b),
+            "the diamond's corner reaches x = 2.40 - √2 = 0.986 < 1"
+        );
         let c = Rect::new(2.45, 0.0, math::PI / 4.0, 2.0, 2.0);
         assert!(!rect_rect(&a, &c));
         assert!(

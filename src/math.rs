@@ -67,6 +67,25 @@ fn is_nan_bits(x: f32) -> bool {
 
 // ---- sin / cos -------------------------------------------------------------------------------
 
+/// floor(v), exactly as `f32::floor` and WGSL's `floor` for every input (±0, ±∞ and NaN
+/// included), without a call: on the x86-64 baseline (no SSE4.1) `f32::floor` is a libm call,
+/// which took 5 % of a step.
+#[inline]
+fn floor(v: f32) -> f32 {
+    // |v| ≥ 2^23 is already an integer (or ±∞); NaN passes through.
+    if v.is_nan() || v.abs() >= 8_388_608.0 {
+        return v;
+    }
+    let t = (v as i32) as f32;
+    if t > v {
+        t - 1.0
+    } else if t < v {
+        t
+    } else {
+        v // v is an integer: keeps the sign of -0.0
+    }
+}
+
 /// 2/π rounded to f32: picks the multiple k of π/2 nearest to x.
 const FRAC_2_PI: f32 = f32::from_bits(0x3f22f983);
 // π/2 = C1 + C2 + C3 + C4 + C5 (to about 2^-64). C1..C4 have 10 significant bits each, so
@@ -107,7 +126,7 @@ const COS_P2: f32 = f32::from_bits(0x37ccf5ce);
 /// computed on the CPU and folded to zero on the GPU.
 #[inline]
 fn reduce_pio2(ax: f32) -> (f32, i32) {
-    let k = (ax * FRAC_2_PI + 0.5).floor();
+    let k = floor(ax * FRAC_2_PI + 0.5);
     let t = ax - k * PIO2_C1;
     let t = t - k * PIO2_C2;
     let r_big = (t - k * PIO2_C3B) - k * PIO2_C4B;
@@ -372,7 +391,7 @@ pub fn exp(x: f32) -> f32 {
     let nan = is_nan_bits(x);
     let xc = if nan { 0.0 } else { x };
     let xc = xc.clamp(EXP_ARG_MIN, EXP_ARG_MAX);
-    let n = (xc * LOG2E + 0.5).floor();
+    let n = floor(xc * LOG2E + 0.5);
     let r = xc - n * LN2_HI;
     let r = r - n * LN2_LO;
     let p = ((((EXP_P5 * r + EXP_P4) * r + EXP_P3) * r + EXP_P2) * r + EXP_P1) * r + EXP_P0;
@@ -557,7 +576,7 @@ const TAU_LO: f32 = f32::from_bits(0x338885a3);
 /// `wrap_angle(-0.0)` is `-0.0`; ±∞ and NaN give NaN.
 #[inline]
 pub fn wrap_angle(a: f32) -> f32 {
-    let k = (a * FRAC_1_TAU + 0.5).floor();
+    let k = floor(a * FRAC_1_TAU + 0.5);
     let t = (a - k * TAU_HI) - k * TAU_MID;
     let kl = k * TAU_LO;
     // The rounded a/2π can pick a neighbouring k right at the boundary, and r = t - kl can round
@@ -575,4 +594,62 @@ pub fn wrap_angle(a: f32) -> f32 {
     };
     let r = ((a - k * TAU_HI) - k * TAU_MID) - k * TAU_LO;
     if r <= -PI { PI } else { r }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::floor;
+
+    /// The inlined floor equals `f32::floor` bit for bit: specials, integers, halves, values
+    /// next to integers, and a sweep of bit patterns over the whole f32 range.
+    #[test]
+    fn floor_equals_std_floor_bit_for_bit() {
+        let mut checked = 0u32;
+        let mut check = |v: f32| {
+            let (ours, std) = (floor(v), v.floor());
+            assert!(
+                ours.to_bits() == std.to_bits() || (ours.is_nan() && std.is_nan()),
+                "floor({v:e}) = {ours:e}, std {std:e}"
+            );
+            checked += 1;
+        };
+        for v in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.5,
+            -2.5,
+            8_388_607.5,
+            -8_388_607.5,
+            8_388_608.0,
+            1e30,
+            -1e30,
+        ] {
+            check(v);
+        }
+        for v in [
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::MIN,
+        ] {
+            check(v);
+        }
+        for k in -2000..2000 {
+            let v = k as f32 * 0.25;
+            check(v);
+            check(f32::from_bits(v.to_bits().wrapping_add(1)));
+            check(f32::from_bits(v.to_bits().wrapping_sub(1)));
+        }
+        for bits in (0..u32::MAX).step_by(65_537) {
+            check(f32::from_bits(bits));
+        }
+        assert!(checked > 70_000);
+    }
 }

@@ -142,9 +142,18 @@ pub fn obstacle_neighbors(
 ) {
     out.clear();
     let pos = Vec2::from_array(pos);
+    // Edges whose bounding box is out of range cannot be within range: the box contains the
+    // segment. The margin keeps f32 rounding of the box distance from rejecting an edge the exact
+    // test below would accept, so the prefilter changes no result, only skips work.
+    let reject_sq = range_sq * (1.0 + 1e-3);
     for v in 0..obstacles.len() {
         let a = obstacles.point(v);
         let b = obstacles.point(obstacles.next(v));
+        let dx = (a.x.min(b.x) - pos.x).max(pos.x - a.x.max(b.x)).max(0.0);
+        let dy = (a.y.min(b.y) - pos.y).max(pos.y - a.y.max(b.y)).max(0.0);
+        if dx * dx + dy * dy > reject_sq {
+            continue;
+        }
         let s = left_of(a, b, pos);
         if s < 0.0 && s * s / (b - a).abs_sq() < range_sq {
             insert_obstacle_neighbor(out, obstacles, v, pos, range_sq);

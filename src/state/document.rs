@@ -281,6 +281,11 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
         }
     }
     derive_goal_distances(s, e);
+    (s.robot_wvx[e], s.robot_wvy[e]) = crate::systems::robot_motion::world_velocity(
+        s.robot_theta[e],
+        s.robot_vx[e],
+        s.robot_vy[e],
+    );
     // Derived: observation caches from the snapshot's poses, obstacles to rebuild.
     let hb = e * s.strides.humans;
     for i in hb..hb + s.n_humans[e] as usize {

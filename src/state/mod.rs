@@ -131,6 +131,10 @@ soa! {
         env.robot_vy: f32,
         /// Last commanded angular velocity (rad/s).
         env.robot_w: f32,
+        /// World-frame velocity x (m/s) of the last command at the current heading (derived).
+        env.robot_wvx: f32,
+        /// World-frame velocity y (m/s) (derived).
+        env.robot_wvy: f32,
         /// Robot goal x (m).
         env.goal_x: f32,
         /// Robot goal y (m).

@@ -18,6 +18,8 @@ pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize) {
     s.robot_vx[e] = 0.0;
     s.robot_vy[e] = 0.0;
     s.robot_w[e] = 0.0;
+    s.robot_wvx[e] = 0.0;
+    s.robot_wvy[e] = 0.0;
     s.shadow_x[e] = s.robot_x[e];
     s.shadow_y[e] = s.robot_y[e];
     s.shadow_theta[e] = s.robot_theta[e];

@@ -7,7 +7,7 @@
 //! leaked loop variable).
 
 use crate::geometry::origin_segment_distance;
-use crate::math::{self, FRAC_PI_2};
+use crate::math;
 use crate::params::StepParams;
 use crate::pipeline::Batch;
 use crate::spec::info;
@@ -67,16 +67,11 @@ fn step_reward(p: &StepParams, s: &mut StateChunk, e: usize) -> f32 {
     r_disc + r_dist + p.reward_alive
 }
 
-/// The robot's world-frame velocity (m/s) from its command and heading.
+/// The robot's world-frame velocity (m/s): its command turned by its heading, computed with the
+/// motion (`robot_wvx`, `robot_wvy`).
 #[inline]
 pub fn robot_world_velocity(s: &StateChunk, e: usize) -> (f32, f32) {
-    let theta = s.robot_theta[e];
-    let (sn, c) = math::sin_cos(theta);
-    let (sn2, c2) = math::sin_cos(theta + FRAC_PI_2);
-    (
-        s.robot_vx[e] * c + s.robot_vy[e] * c2,
-        s.robot_vx[e] * sn + s.robot_vy[e] * sn2,
-    )
+    (s.robot_wvx[e], s.robot_wvy[e])
 }
 
 /// The smallest clearance (m) between the robot and any human over the next dt, assuming

@@ -29,10 +29,10 @@ pub fn shadow_robot(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     };
     let v = orca_world::with_world(|w| w.velocity(p, s, e, &agent, others));
     let (vx, vy, w) = command_from_velocity(p, theta, v[0], v[1]);
-    let (nx, ny, nt) = super::robot_motion::integrate(p.dt, x, y, theta, vx, vy, w);
-    s.shadow_x[e] = nx;
-    s.shadow_y[e] = ny;
-    s.shadow_theta[e] = nt;
+    let m = super::robot_motion::integrate(p.dt, x, y, theta, vx, vy, w);
+    s.shadow_x[e] = m.x;
+    s.shadow_y[e] = m.y;
+    s.shadow_theta[e] = m.theta;
     s.shadow_vx[e] = vx;
     s.shadow_vy[e] = vy;
     s.shadow_w[e] = w;
