@@ -290,6 +290,9 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
     let hb = e * s.strides.humans;
     for i in hb..hb + s.n_humans[e] as usize {
         s.h_prev_rel_theta[i] = math::wrap_angle(s.h_theta[i] - s.robot_theta[e]);
+        let (sn, c) = math::sin_cos(s.h_theta[i]);
+        s.h_vx[i] = s.h_speed[i] * c;
+        s.h_vy[i] = s.h_speed[i] * sn;
     }
     s.stepping[e] = 0;
     s.obstacles_dirty[e] = 1;

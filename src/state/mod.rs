@@ -281,6 +281,10 @@ soa! {
         human.h_theta: f32,
         /// Speed along the heading (m/s).
         human.h_speed: f32,
+        /// World-frame velocity x (m/s): speed · cos(heading) (derived, set with speed and heading).
+        human.h_vx: f32,
+        /// World-frame velocity y (m/s): speed · sin(heading) (derived).
+        human.h_vy: f32,
         /// Goal x (m); static humans' goal is their own position.
         human.h_goal_x: f32,
         /// Goal y (m).

@@ -101,6 +101,8 @@ fn push(p: &StepParams, s: &mut StateChunk, i: usize, dx: f32, dy: f32, reach: f
     let (sn, c) = math::sin_cos(theta);
     s.h_theta[i] = theta;
     s.h_speed[i] = speed;
+    s.h_vx[i] = speed * c;
+    s.h_vy[i] = speed * sn;
     s.h_x[i] += speed * p.dt * c;
     s.h_y[i] += speed * p.dt * sn;
 }

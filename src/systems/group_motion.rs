@@ -41,13 +41,25 @@ pub fn group_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
         let first = hb + s.g_first[g] as usize;
         let (mut cx, mut cy) = (0.0f32, 0.0f32);
         for i in first..first + n as usize {
-            let vx = gvx + p.group_noise_std * rng.normal();
-            let vy = gvy + p.group_noise_std * rng.normal();
+            // Without noise there is nothing to draw (0.1.1 draws zeros; the counter-based streams
+            // of later draws do not depend on it).
+            let (nx, ny) = if p.group_noise_std > 0.0 {
+                (
+                    p.group_noise_std * rng.normal(),
+                    p.group_noise_std * rng.normal(),
+                )
+            } else {
+                (0.0, 0.0)
+            };
+            let vx = gvx + nx;
+            let vy = gvy + ny;
             let speed = (vx * vx + vy * vy).sqrt();
             let theta = math::atan2(vy, vx);
             let (sn, c) = math::sin_cos(theta);
             s.h_speed[i] = speed;
             s.h_theta[i] = theta;
+            s.h_vx[i] = speed * c;
+            s.h_vy[i] = speed * sn;
             s.h_x[i] += speed * p.dt * c;
             s.h_y[i] += speed * p.dt * sn;
             cx += s.h_x[i];

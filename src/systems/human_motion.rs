@@ -53,8 +53,7 @@ fn orca_velocity(
     let (x, y) = (s.h_x[i], s.h_y[i]);
     let pref = orca_world::preferred(x, y, s.h_goal_x[i], s.h_goal_y[i], p.human_max_speed);
     let vel = if p.orca_actual_velocity != 0 {
-        let (sn, c) = math::sin_cos(s.h_theta[i]);
-        [s.h_speed[i] * c, s.h_speed[i] * sn]
+        [s.h_vx[i], s.h_vy[i]]
     } else {
         [0.0, 0.0]
     };
@@ -78,6 +77,8 @@ pub fn walk(p: &StepParams, s: &mut StateChunk, i: usize, vx: f32, vy: f32) {
     let (sn, c) = math::sin_cos(theta);
     s.h_speed[i] = speed;
     s.h_theta[i] = theta;
+    s.h_vx[i] = speed * c;
+    s.h_vy[i] = speed * sn;
     s.h_x[i] += speed * p.dt * c;
     s.h_y[i] += speed * p.dt * sn;
 }

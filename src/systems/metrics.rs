@@ -141,8 +141,7 @@ pub fn time_to_collision(p: &StepParams, s: &StateChunk, e: usize) -> f32 {
     let hb = e * s.strides.humans;
     let mut best = f32::INFINITY;
     for i in hb..hb + s.n_humans[e] as usize {
-        let (sn, c) = crate::math::sin_cos(s.h_theta[i]);
-        let (vhx, vhy) = (s.h_speed[i] * c, s.h_speed[i] * sn);
+        let (vhx, vhy) = (s.h_vx[i], s.h_vy[i]);
         let (px, py) = (rx - s.h_x[i], ry - s.h_y[i]);
         let dist = speed(px, py);
         let t = if dist <= reach {

@@ -153,8 +153,8 @@ fn humans(p: &StepParams, s: &mut StateChunk, e: usize, f: &Frame, out: &mut [f3
         let rel = theta - f.theta;
         let (sn, c) = math::sin_cos(rel);
         let (hs, hc) = math::sin_cos(theta);
-        let dvx = s.h_speed[i] * hc - f.vx;
-        let dvy = s.h_speed[i] * hs - f.vy;
+        let dvx = s.h_vx[i] - f.vx;
+        let dvy = s.h_vy[i] - f.vy;
         let wrapped = math::wrap_angle(rel);
         r[6] = lx;
         r[7] = ly;

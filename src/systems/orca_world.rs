@@ -9,7 +9,6 @@
 
 use std::cell::RefCell;
 
-use crate::math;
 use crate::orca::{
     Neighbor, ObstacleVerts, OrcaAgent, OrcaNeighbor, OrcaScratch, compute_new_velocity,
     insert_agent_neighbor,
@@ -132,8 +131,7 @@ impl OrcaWorld {
                 continue;
             }
             let vel = if actual {
-                let (sn, c) = math::sin_cos(s.h_theta[i]);
-                [s.h_speed[i] * c, s.h_speed[i] * sn]
+                [s.h_vx[i], s.h_vy[i]]
             } else {
                 [0.0, 0.0]
             };

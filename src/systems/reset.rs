@@ -49,6 +49,9 @@ pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize) {
     let n = s.n_humans[e] as usize;
     for i in hb..hb + n {
         s.h_prev_rel_theta[i] = math::wrap_angle(s.h_theta[i] - s.robot_theta[e]);
+        let (sn, c) = math::sin_cos(s.h_theta[i]);
+        s.h_vx[i] = s.h_speed[i] * c;
+        s.h_vy[i] = s.h_speed[i] * sn;
     }
     s.obstacles_dirty[e] = 1;
     super::orca_obstacles::rebuild_if_dirty(p, s, e);

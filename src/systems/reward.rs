@@ -80,12 +80,12 @@ pub fn robot_world_velocity(s: &StateChunk, e: usize) -> (f32, f32) {
 pub fn min_predicted_clearance(p: &StepParams, s: &StateChunk, e: usize) -> f32 {
     let (vrx, vry) = robot_world_velocity(s, e);
     let (rx, ry) = (s.robot_x[e], s.robot_y[e]);
-    let clearance = |x: f32, y: f32, speed: f32, theta: f32| {
-        let (sn, c) = math::sin_cos(theta);
+    // (x, y): the human's position (m); (hvx, hvy): its world velocity (m/s).
+    let clearance = |x: f32, y: f32, hvx: f32, hvy: f32| {
         let px = x - rx;
         let py = y - ry;
-        let vx = speed * c - vrx;
-        let vy = speed * sn - vry;
+        let vx = hvx - vrx;
+        let vy = hvy - vry;
         origin_segment_distance(px, py, px + vx * p.dt, py + vy * p.dt)
             - p.human_radius
             - p.robot_radius
@@ -93,7 +93,7 @@ pub fn min_predicted_clearance(p: &StepParams, s: &StateChunk, e: usize) -> f32 
     let hb = e * s.strides.humans;
     let mut d_min = f32::INFINITY;
     for i in hb..hb + s.n_humans[e] as usize {
-        d_min = d_min.min(clearance(s.h_x[i], s.h_y[i], s.h_speed[i], s.h_theta[i]));
+        d_min = d_min.min(clearance(s.h_x[i], s.h_y[i], s.h_vx[i], s.h_vy[i]));
     }
     if p.dsrnn_pseudo_humans != 0 {
         let gb = e * s.strides.groups;
@@ -101,7 +101,13 @@ pub fn min_predicted_clearance(p: &StepParams, s: &StateChunk, e: usize) -> f32 
             let first = hb + s.g_first[g] as usize;
             let n = s.g_count[g] as usize;
             let mean_speed = s.h_speed[first..first + n].iter().sum::<f32>() / n as f32;
-            d_min = d_min.min(clearance(s.g_x[g], s.g_y[g], mean_speed, s.h_theta[first]));
+            let (sn, c) = math::sin_cos(s.h_theta[first]);
+            d_min = d_min.min(clearance(
+                s.g_x[g],
+                s.g_y[g],
+                mean_speed * c,
+                mean_speed * sn,
+            ));
         }
         let ub = e * s.strides.laptop_users;
         let lb = e * s.strides.laptops;

@@ -99,15 +99,13 @@ pub fn velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, robot: bool)
 fn pedestrian_forces(s: &StateChunk, e: usize, i: usize, sp: &Params) -> (f32, f32) {
     let hb = e * s.strides.humans;
     let (xi, yi) = (s.h_x[i], s.h_y[i]);
-    let (si, ci) = math::sin_cos(s.h_theta[i]);
-    let (vix, viy) = (s.h_speed[i] * ci, s.h_speed[i] * si);
+    let (vix, viy) = (s.h_vx[i], s.h_vy[i]);
     let (mut fx, mut fy) = (0.0f32, 0.0f32);
     for j in hb..hb + s.n_humans[e] as usize {
         if j == i || s.h_role[j] == role::STANDING_GROUP {
             continue;
         }
-        let (sj, cj) = math::sin_cos(s.h_theta[j]);
-        let (vjx, vjy) = (s.h_speed[j] * cj, s.h_speed[j] * sj);
+        let (vjx, vjy) = (s.h_vx[j], s.h_vy[j]);
         let (ex, ey) = unit(s.h_x[j] - xi, s.h_y[j] - yi);
         let dx = sp.lambda * (vjx - vix) + ex;
         let dy = sp.lambda * (vjy - viy) + ey;
