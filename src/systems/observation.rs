@@ -128,16 +128,17 @@ fn local_record(
     c: f32,
     radius: f32,
 ) {
-    out[..6].fill(0.0);
-    out[kind] = 1.0;
-    out[6] = lx;
-    out[7] = ly;
-    out[8] = sn;
-    out[9] = c;
-    out[10] = radius;
-    out[11] = f.neg_speed;
-    out[12] = f.neg_w;
-    out[13] = 0.0;
+    let mut r = [0.0f32; RECORD];
+    r[kind] = 1.0;
+    r[6] = lx;
+    r[7] = ly;
+    r[8] = sn;
+    r[9] = c;
+    r[10] = radius;
+    r[11] = f.neg_speed;
+    r[12] = f.neg_w;
+    // One bounds check and one block store per record.
+    out[..RECORD].copy_from_slice(&r);
 }
 
 fn humans(p: &StepParams, s: &mut StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
@@ -145,8 +146,7 @@ fn humans(p: &StepParams, s: &mut StateChunk, e: usize, f: &Frame, out: &mut [f3
     let n = s.n_humans[e] as usize;
     for k in 0..n {
         let i = hb + k;
-        let r = &mut out[k * RECORD..(k + 1) * RECORD];
-        r[..6].fill(0.0);
+        let mut r = [0.0f32; RECORD];
         r[one_hot::HUMAN] = 1.0;
         let theta = s.h_theta[i];
         let (lx, ly) = f.local(s.h_x[i], s.h_y[i]);
@@ -164,6 +164,7 @@ fn humans(p: &StepParams, s: &mut StateChunk, e: usize, f: &Frame, out: &mut [f3
         r[11] = (dvx * dvx + dvy * dvy).sqrt();
         r[12] = math::wrap_angle(wrapped - s.h_prev_rel_theta[i]) / p.dt;
         r[13] = gaze(p, s.h_x[i], s.h_y[i], hc, hs, f);
+        out[k * RECORD..(k + 1) * RECORD].copy_from_slice(&r);
         s.h_prev_rel_theta[i] = wrapped;
     }
     n as u32
