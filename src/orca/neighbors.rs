@@ -118,18 +118,17 @@ pub fn agent_neighbors(
     }
 }
 
-/// Distance (m) from `p` to the interval between `a` and `b` on one axis (0 inside), written with
-/// plain comparisons: `f32::min`/`max` add NaN fix-ups this hot loop does not need.
+/// Distance (m) from `p` to the interval between `a` and `b` on one axis (0 inside). Branch-free
+/// comparisons (`maxss`/`minss`): `f32::min`/`max` add NaN fix-ups, and branches on the side of `p`
+/// mispredict in this hot loop.
 #[inline]
 fn gap(p: f32, a: f32, b: f32) -> f32 {
-    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-    if p < lo {
-        lo - p
-    } else if p > hi {
-        p - hi
-    } else {
-        0.0
-    }
+    let lo = if a < b { a } else { b };
+    let hi = if a > b { a } else { b };
+    let below = lo - p;
+    let above = p - hi;
+    let d = if below > above { below } else { above };
+    if d > 0.0 { d } else { 0.0 }
 }
 
 /// The obstacle search range RVO2 uses: `(time_horizon_obst * max_speed + radius)²` (m²).

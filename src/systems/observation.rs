@@ -128,7 +128,8 @@ fn local_record(
     c: f32,
     radius: f32,
 ) {
-    let mut r = [0.0f32; RECORD];
+    let r = record(out);
+    *r = [0.0; RECORD];
     r[kind] = 1.0;
     r[6] = lx;
     r[7] = ly;
@@ -137,8 +138,14 @@ fn local_record(
     r[10] = radius;
     r[11] = f.neg_speed;
     r[12] = f.neg_w;
-    // One bounds check and one block store per record.
-    out[..RECORD].copy_from_slice(&r);
+}
+
+/// The first record of `out` as a fixed-size array: one bounds check, then plain stores.
+#[inline]
+fn record(out: &mut [f32]) -> &mut [f32; RECORD] {
+    (&mut out[..RECORD])
+        .try_into()
+        .expect("a slice of RECORD floats")
 }
 
 fn humans(p: &StepParams, s: &mut StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
@@ -146,7 +153,8 @@ fn humans(p: &StepParams, s: &mut StateChunk, e: usize, f: &Frame, out: &mut [f3
     let n = s.n_humans[e] as usize;
     for k in 0..n {
         let i = hb + k;
-        let mut r = [0.0f32; RECORD];
+        let r = record(&mut out[k * RECORD..]);
+        *r = [0.0; RECORD];
         r[one_hot::HUMAN] = 1.0;
         let theta = s.h_theta[i];
         let (lx, ly) = f.local(s.h_x[i], s.h_y[i]);
@@ -164,7 +172,6 @@ fn humans(p: &StepParams, s: &mut StateChunk, e: usize, f: &Frame, out: &mut [f3
         r[11] = (dvx * dvx + dvy * dvy).sqrt();
         r[12] = math::wrap_angle(wrapped - s.h_prev_rel_theta[i]) / p.dt;
         r[13] = gaze(p, s.h_x[i], s.h_y[i], hc, hs, f);
-        out[k * RECORD..(k + 1) * RECORD].copy_from_slice(&r);
         s.h_prev_rel_theta[i] = wrapped;
     }
     n as u32
