@@ -99,8 +99,10 @@ impl CpuBackend {
         };
         let params = &self.params;
         let nanos = &self.stage_nanos[..];
-        let Some(pool) = &self.pool else {
-            return sequential(params, batch, nanos, work).map_or(Ok(()), Err);
+        let pool = match &self.pool {
+            // One chunk is not worth a hand-over to another thread.
+            Some(pool) if batch.n_envs() > CHUNK_ENVS => pool,
+            _ => return sequential(params, batch, nanos, work).map_or(Ok(()), Err),
         };
         let share = batch.n_envs().div_ceil(self.threads);
         let (mine, rest) = batch.split_at(share);
