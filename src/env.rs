@@ -237,7 +237,12 @@ impl BatchEnv {
         self.backend.state()
     }
 
-    /// Seconds spent per stage since creation, with the stage names.
+    /// Time each stage of the following steps ([`BatchEnv::stage_seconds`]); off by default.
+    pub fn set_stage_timing(&mut self, on: bool) {
+        self.backend.set_stage_timing(on);
+    }
+
+    /// Seconds spent per stage while stage timing was on, with the stage names.
     pub fn stage_seconds(&self) -> Vec<(&'static str, f64)> {
         STAGES
             .iter()

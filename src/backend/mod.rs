@@ -23,7 +23,10 @@ pub trait Backend: Send {
     /// Re-derive what depends on a state edited through [`Backend::state_mut`] for environment
     /// `env` (ORCA obstacles, observation) without stepping.
     fn state_changed(&mut self, env: usize);
-    /// Seconds spent in each stage since the backend was made (order of `STAGES`).
+    /// Time each stage of the following steps (off by default: it costs two clock reads per stage
+    /// and chunk).
+    fn set_stage_timing(&mut self, on: bool);
+    /// Seconds spent in each stage while timing was on (order of `STAGES`).
     fn stage_seconds(&self) -> Vec<f64>;
     /// Short name, e.g. "cpu".
     fn name(&self) -> &'static str;
