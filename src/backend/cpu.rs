@@ -3,11 +3,12 @@
 //! across stages. Environments never read each other, so results do not depend on the number of
 //! threads or on the chunking.
 //!
-//! Threads: the calling thread works too. It takes the first 1/T of the batch and hands the rest
-//! to a pool of T − 1 workers (`rayon`, split recursively in halves with `join`, no allocation),
-//! so no step waits for a parked caller to be woken up: on virtual machines that wake-up cost
-//! up to a third of a 1 ms step.
+//! Threads: the calling thread works too, beside a pool of T − 1 workers; all of them take chunks
+//! from a shared queue (no allocation) until the batch is done. A caller that only waited would be
+//! woken at the end of every step, which on virtual machines cost up to a third of a 1 ms step;
+//! a fixed share per thread would leave threads idle behind one slowed by resets.
 
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
@@ -87,8 +88,9 @@ impl CpuBackend {
         self.threads
     }
 
-    /// Run `work` over every environment of the batch: the caller's share on this thread, the
-    /// rest on the pool.
+    /// Run `work` over every environment of the batch: the caller and the pool's workers take
+    /// chunks from a shared queue until none is left, so a thread slowed by resets (or by a noisy
+    /// neighbour on a virtual machine) takes fewer chunks instead of holding the others up.
     fn run(
         &mut self,
         actions: &[f32],
@@ -105,53 +107,81 @@ impl CpuBackend {
         let pool = match &self.pool {
             // One chunk is not worth a hand-over to another thread.
             Some(pool) if batch.n_envs() > CHUNK_ENVS => pool,
-            _ => return sequential(params, batch, nanos, work).map_or(Ok(()), Err),
+            _ => {
+                let queue = ChunkQueue::new(batch);
+                queue.drain(params, nanos, work);
+                return queue.result();
+            }
         };
-        let share = batch.n_envs().div_ceil(self.threads);
-        let (mine, rest) = batch.split_at(share);
-        let mut rest_err = None;
-        let mut mine_err = None;
+        let queue = ChunkQueue::new(batch);
         pool.in_place_scope(|scope| {
-            scope.spawn(|_| rest_err = split(params, rest, nanos, work));
-            mine_err = sequential(params, mine, nanos, work);
+            for _ in 0..pool.current_num_threads() {
+                scope.spawn(|_| queue.drain(params, nanos, work));
+            }
+            queue.drain(params, nanos, work);
         });
-        mine_err.or(rest_err).map_or(Ok(()), Err)
+        queue.result()
     }
 }
 
-/// `work` over the batch chunk by chunk on this thread.
-fn sequential(
-    p: &StepParams,
-    mut batch: Batch<'_>,
-    nanos: &[AtomicU64],
-    work: &(dyn Fn(&StepParams, &mut Batch<'_>, &[AtomicU64]) + Sync),
-) -> Option<SimError> {
-    let mut first_error = None;
-    while batch.n_envs() > 0 {
+/// The chunks of a batch still to step, handed out one at a time (safe: each chunk is split off
+/// the remainder under the lock, so every thread holds disjoint environments).
+struct ChunkQueue<'a> {
+    rest: Mutex<Option<Batch<'a>>>,
+    error: Mutex<Option<SimError>>,
+}
+
+impl<'a> ChunkQueue<'a> {
+    fn new(batch: Batch<'a>) -> Self {
+        Self {
+            rest: Mutex::new(Some(batch)),
+            error: Mutex::new(None),
+        }
+    }
+
+    /// The next chunk of at most [`CHUNK_ENVS`] environments, if any is left.
+    fn pull(&self) -> Option<Batch<'a>> {
+        let mut rest = self
+            .rest
+            .lock()
+            .expect("a thread stepping the batch panicked");
+        let batch = rest.take()?;
+        if batch.n_envs() == 0 {
+            return None;
+        }
         let size = batch.n_envs().min(CHUNK_ENVS);
-        let (mut chunk, rest) = batch.split_at(size);
-        work(p, &mut chunk, nanos);
-        first_error = first_error.or(chunk.error);
-        batch = rest;
+        let (chunk, remainder) = batch.split_at(size);
+        *rest = Some(remainder);
+        Some(chunk)
     }
-    first_error
-}
 
-/// `work` over the batch on the pool: halves in parallel down to chunks.
-fn split(
-    p: &StepParams,
-    mut batch: Batch<'_>,
-    nanos: &[AtomicU64],
-    work: &(dyn Fn(&StepParams, &mut Batch<'_>, &[AtomicU64]) + Sync),
-) -> Option<SimError> {
-    if batch.n_envs() > CHUNK_ENVS {
-        let mid = batch.n_envs() / 2;
-        let (a, b) = batch.split_at(mid);
-        let (ea, eb) = rayon::join(|| split(p, a, nanos, work), || split(p, b, nanos, work));
-        ea.or(eb)
-    } else {
-        work(p, &mut batch, nanos);
-        batch.error
+    /// Step chunks until the queue is empty, keeping the first error.
+    fn drain(
+        &self,
+        p: &StepParams,
+        nanos: &[AtomicU64],
+        work: &(dyn Fn(&StepParams, &mut Batch<'_>, &[AtomicU64]) + Sync),
+    ) {
+        while let Some(mut chunk) = self.pull() {
+            work(p, &mut chunk, nanos);
+            if let Some(e) = chunk.error {
+                self.error
+                    .lock()
+                    .expect("a thread stepping the batch panicked")
+                    .get_or_insert(e);
+            }
+        }
+    }
+
+    fn result(self) -> Result<(), SimError> {
+        match self
+            .error
+            .into_inner()
+            .expect("a thread stepping the batch panicked")
+        {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
     }
 }
 

@@ -264,32 +264,25 @@ fn walls(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -
         let (dx, dy) = (f.cos * wc + f.sin * ws, f.cos * ws - f.sin * wc);
         let (sn, c) = math::sin_cos(s.w_theta[w] - f.theta);
         let (full, rest) = crate::scenario::layout::segments(length, step);
+        // Every segment of a wall shares its record but for the position: write the template,
+        // then the two coordinates.
+        let mut template = [0.0f32; RECORD];
+        local_record(&mut template, one_hot::WALL, f, 0.0, 0.0, sn, c, 0.5 * step);
         for j in 0..full {
             let along = (j as f32 + 0.5) * step;
-            local_record(
-                &mut out[k * RECORD..],
-                one_hot::WALL,
-                f,
-                lx + along * dx,
-                ly + along * dy,
-                sn,
-                c,
-                0.5 * step,
-            );
+            let r = record(&mut out[k * RECORD..]);
+            *r = template;
+            r[6] = lx + along * dx;
+            r[7] = ly + along * dy;
             k += 1;
         }
         if rest > 0.0 {
             let along = full as f32 * step + 0.5 * rest;
-            local_record(
-                &mut out[k * RECORD..],
-                one_hot::WALL,
-                f,
-                lx + along * dx,
-                ly + along * dy,
-                sn,
-                c,
-                0.5 * rest,
-            );
+            template[10] = 0.5 * rest;
+            let r = record(&mut out[k * RECORD..]);
+            *r = template;
+            r[6] = lx + along * dx;
+            r[7] = ly + along * dy;
             k += 1;
         }
     }
