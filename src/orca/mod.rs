@@ -210,6 +210,15 @@ impl OrcaScratch {
         }
     }
 
+    /// Make room for `lines` ORCA lines and `obstacle_neighbors` obstacle edges now, so that no
+    /// later call allocates (a no-op when the capacity is already there).
+    pub fn reserve(&mut self, lines: usize, obstacle_neighbors: usize) {
+        self.lines.reserve(lines.saturating_sub(self.lines.len()));
+        self.proj.reserve(lines.saturating_sub(self.proj.len()));
+        self.obstacle_neighbors
+            .reserve(obstacle_neighbors.saturating_sub(self.obstacle_neighbors.len()));
+    }
+
     /// The last agent's ORCA lines: obstacle lines, then one per agent neighbour.
     #[must_use]
     pub fn lines(&self) -> &[Line] {

@@ -145,6 +145,24 @@ impl ObstacleSet {
         Self::default()
     }
 
+    /// Make room for `vertices` processed vertices (and as many tree nodes) now, so that no later
+    /// [`super::process_obstacles`] of at most that many vertices allocates.
+    pub fn reserve(&mut self, vertices: usize) {
+        for column in [&mut self.x, &mut self.y, &mut self.dir_x, &mut self.dir_y] {
+            column.reserve(vertices.saturating_sub(column.len()));
+        }
+        for column in [&mut self.next, &mut self.prev, &mut self.convex] {
+            column.reserve(vertices.saturating_sub(column.len()));
+        }
+        for column in [
+            &mut self.node_vertex,
+            &mut self.node_left,
+            &mut self.node_right,
+        ] {
+            column.reserve(vertices.saturating_sub(column.len()));
+        }
+    }
+
     /// The processed vertex columns.
     #[must_use]
     pub fn as_view(&self) -> ObstacleVerts<'_> {
@@ -234,5 +252,12 @@ impl ObstacleScratch {
     #[must_use]
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Make room for a build over `vertices` vertices now. The build keeps the edge lists of every
+    /// level of the tree: at most `vertices` per level, and a level per vertex in the worst case.
+    pub fn reserve(&mut self, vertices: usize) {
+        let worst = vertices * (vertices + 1);
+        self.arena.reserve(worst.saturating_sub(self.arena.len()));
     }
 }

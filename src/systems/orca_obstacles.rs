@@ -32,6 +32,9 @@ pub fn rebuild_if_dirty(p: &StepParams, s: &mut StateChunk, e: usize) {
     collect(p, s, e, &mut polygons);
     BUILD.with(|b| {
         let (scratch, set) = &mut *b.borrow_mut();
+        // Reserved from the capacities on a thread's first build, so no later build allocates.
+        set.reserve(s.strides.obstacle_vertices);
+        scratch.reserve(s.strides.obstacle_vertices);
         process_obstacles(polygons.as_slice(), scratch, set)
             .unwrap_or_else(|err| panic!("scenario produced a degenerate obstacle: {err}"));
         store(s, e, set);

@@ -110,6 +110,7 @@ impl OrcaWorld {
         first: &OrcaAgent,
         others: Others,
     ) -> [f32; 2] {
+        self.reserve(&s.strides);
         self.gather(p, s, e, others);
         self.select(first);
         compute_new_velocity(
@@ -119,6 +120,20 @@ impl OrcaWorld {
             p.dt,
             &mut self.scratch,
         )
+    }
+
+    /// Room for the largest simulator the capacities allow, reserved on a thread's first call so
+    /// that no later call allocates: every human and group plus the robot as candidates, and one
+    /// ORCA line per candidate and per obstacle edge.
+    fn reserve(&mut self, caps: &crate::state::Caps) {
+        let agents = caps.humans + caps.groups + 1;
+        for v in [&mut self.candidates, &mut self.neighbors] {
+            v.reserve(agents.saturating_sub(v.len()));
+        }
+        self.selected
+            .reserve(agents.saturating_sub(self.selected.len()));
+        self.scratch
+            .reserve(caps.obstacle_vertices + agents, caps.obstacle_vertices);
     }
 
     /// The other agents in 0.1.1's order: lone humans, the robot, moving groups.

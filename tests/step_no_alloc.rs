@@ -1,0 +1,88 @@
+//! `BatchEnv::step` does not allocate once warm (STYLE.md rule 4), resets inside the step included:
+//! scenario generation uses stack lists, the ORCA and obstacle buffers are thread-local and keep
+//! their capacity, outputs are overwritten in place. A counting global allocator checks it.
+//!
+//! On more than one thread the pool's workers are handed one small job each per step (rayon's
+//! `spawn` boxes it), and a worker reserves its thread-local buffers the first time it meets a
+//! kind of work (which may fall after the warm-up); those are the only allocations, bounded here.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use socnav::{Actions, BatchEnv, Config, EnvOptions};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+#[expect(
+    unsafe_code,
+    reason = "a GlobalAlloc impl is unsafe by definition; it only counts"
+)]
+// SAFETY: forwards every call unchanged to the system allocator.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations during `steps` steps of a warm batch (250 warm-up steps cross the 201-step
+/// episode end, so every environment has reset inside a step at least once before counting).
+fn allocations_per_run(config: &str, n_envs: usize, threads: usize, steps: usize) -> usize {
+    let config = Config::from_name_or_path(config).unwrap();
+    let mut env = BatchEnv::new(
+        config,
+        EnvOptions {
+            n_envs,
+            seed: 3,
+            threads: Some(threads),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    env.reset(None).unwrap();
+    let actions = [0.8f32, 0.0, 0.3].repeat(n_envs);
+    for _ in 0..250 {
+        env.step(Actions::Continuous(&actions)).unwrap();
+    }
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    for _ in 0..steps {
+        env.step(Actions::Continuous(&actions)).unwrap();
+    }
+    ALLOCATIONS.load(Ordering::Relaxed) - before
+}
+
+/// One test function: the counter is process-wide, so the cases must not run concurrently.
+#[test]
+fn a_warm_step_does_not_allocate() {
+    for config in ["exp1", "exp2", "lroom_mixed", "corridor_mixed"] {
+        let n = allocations_per_run(config, 64, 1, 250);
+        assert_eq!(
+            n, 0,
+            "{config}: {n} allocations in 250 warm steps on one thread"
+        );
+    }
+    let steps = 250;
+    let n = allocations_per_run("exp2", 256, 2, steps);
+    // One worker beside the caller: one boxed job per step, plus its thread-local buffers
+    // (ORCA world, obstacle build: a handful) on their first use.
+    assert!(
+        n <= steps + 8,
+        "{n} allocations in {steps} warm steps on two threads"
+    );
+    println!("two threads: {n} allocations in {steps} steps");
+}
