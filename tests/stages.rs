@@ -877,3 +877,87 @@ fn contact_pushes_a_human_out_of_a_plant() {
         "a static human is never moved"
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// 0.1.1 bugs that socnav fixes (docs/fidelity.md)
+// ---------------------------------------------------------------------------------------------
+
+/// Contract (fixed 0.1.1 bug): TIME_TO_COLLISION evaluates laptop users too. 0.1.1 re-evaluates
+/// a leaked loop variable for them and raises NameError when they are the only humans.
+#[test]
+fn time_to_collision_covers_a_lone_laptop_user() {
+    let mut c = scene_config();
+    c.counts.tables = [1, 1];
+    c.counts.laptop_users = [0, 1];
+    // The robot at the origin drives at 0.1 m/s towards a laptop user 2 m ahead: a laptop at
+    // (2.0, 0.7) heading 0, its user 0.7 m along the laptop's −y axis, at (2.0, 0.0).
+    let mut doc = scene(false, [0.0, 0.0, 0.0], [-3.0, -3.0]);
+    push(
+        &mut doc,
+        "tables",
+        json!({"id": 1, "x": 3.0, "y": 3.0, "theta": 0.0}),
+    );
+    push(
+        &mut doc,
+        "laptops",
+        json!({"id": 2, "x": 2.0, "y": 0.7, "theta": 0.0, "hl": 0}),
+    );
+    push(
+        &mut doc,
+        "humans",
+        json!({"id": 3, "x": 2.0, "y": 0.0, "theta": std::f64::consts::FRAC_PI_2, "speed": 0.0,
+               "policy": "orca", "role": "hl", "hl": 0}),
+    );
+    push(
+        &mut doc,
+        "hl_interactions",
+        json!({"human": 3, "laptop": 2, "dispersable": false}),
+    );
+    let mut env = load(c, &[doc]);
+    step(&mut env, &[[1.0, 0.0, 0.0]]);
+    // After the step the robot is at 0.1 m: 1.9 m closing at 0.1 m/s, centres meet at t = 19 s.
+    assert_eq!(info_of(&env, 0, info::TIME_TO_COLLISION), 19.0);
+    close(
+        "MINIMUM_DISTANCE_TO_HUMAN",
+        info_of(&env, 0, info::MINIMUM_DISTANCE_TO_HUMAN),
+        1.9,
+        1e-6,
+    );
+}
+
+/// Contract (fixed 0.1.1 bug): the ORCA shadow robot collides with group members it touches.
+/// 0.1.1 tests groups and laptop users against the real robot instead, which here stands far
+/// away, so it would never flag this collision.
+#[test]
+fn shadow_robot_collides_with_a_group_member_it_touches() {
+    let mut doc = scene(false, [-3.0, -3.0, 0.0], [4.0, 4.0]);
+    // A standing group of two; the shadow robot 0.1 m from its first member (contact at 0.61 m;
+    // at 0.08 m/s it cannot get clear in one step).
+    for (k, (x, y)) in [(1.0, 0.0), (1.0, 0.9)].into_iter().enumerate() {
+        push(
+            &mut doc,
+            "humans",
+            json!({"id": 10 + k, "x": x, "y": y, "theta": 0.0, "speed": 0.0, "policy": "orca",
+                   "role": "standing_group", "group": 0}),
+        );
+    }
+    push(
+        &mut doc,
+        "groups",
+        json!({"kind": "standing", "dispersable": false, "members": [10, 11], "centre": [1.0, 0.45]}),
+    );
+    doc["state"]["shadow_robot"] =
+        json!({"x": 0.9, "y": 0.0, "theta": 0.0, "vel": [0.0, 0.0, 0.0], "path_length": 0.0});
+    let mut env = load(scene_config(), &[doc]);
+    step(&mut env, &[[0.0, 0.0, 0.0]]);
+    let s = env.state();
+    assert_eq!(
+        s.shadow_collided[0], 1,
+        "the shadow robot touches a group member"
+    );
+    assert_eq!(
+        env.outputs().terminated[0],
+        0,
+        "the real robot, far away, touches nothing"
+    );
+}
