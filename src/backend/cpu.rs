@@ -256,11 +256,9 @@ impl Backend for CpuBackend {
 
     fn state_changed(&mut self, env: usize) {
         let p = self.params;
-        let (_, rest) = self.state.chunk().split_at(env);
-        let (mut s, _) = rest.split_at(1);
+        let mut s = self.state.env_chunk(env);
         crate::systems::orca_obstacles::rebuild_if_dirty(&p, &mut s, 0);
-        let (_, orest) = self.out.chunk().split_at(env);
-        let (mut o, _) = orest.split_at(1);
+        let mut o = self.out.env_chunk(env);
         crate::systems::observation::write_observation(&p, &mut s, &mut o, 0);
     }
 

@@ -89,6 +89,12 @@ macro_rules! soa {
                 }
             }
 
+            /// Environment `env` alone as a chunk.
+            pub fn env_chunk(&mut self, env: usize) -> $chunk<'_> {
+                let (_, rest) = self.chunk().split_at(env);
+                rest.split_at(1).0
+            }
+
             /// Column metadata: name, element kind, stride.
             pub fn columns(&self) -> Vec<(&'static str, $crate::state::columns::Elem, usize)> {
                 vec![$( (

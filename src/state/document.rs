@@ -271,13 +271,7 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
             // A 0.1.1 snapshot: a running episode whose per-episode sums start here.
             s.done[e] = 0;
             s.pending_reset[e] = 0;
-            s.ep_return[e] = 0.0;
-            s.ep_min_human_dist[e] = f32::INFINITY;
-            s.ep_min_obstacle_dist[e] = f32::INFINITY;
-            s.ep_sum_avg_obstacle_dist[e] = 0.0;
-            s.ep_sum_ttc[e] = 0.0;
-            s.ep_sum_discomfort_dsrnn[e] = 0.0;
-            s.ep_sum_sngnn[e] = 0.0;
+            crate::systems::reset::init_episode_sums(&mut s.env_chunk(e), 0);
         }
     }
     derive_goal_distances(s, e);

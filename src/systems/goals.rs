@@ -7,7 +7,7 @@
 use crate::geometry::{Disc, Shape, disc_disc};
 use crate::params::StepParams;
 use crate::pipeline::Batch;
-use crate::rng::{RngStream, stream_id};
+use crate::rng::RngStream;
 use crate::scenario::place::{MAX_TRIES, SamplingBox};
 use crate::state::{StateChunk, group_kind};
 
@@ -21,12 +21,7 @@ pub fn goals(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     }
     let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = RngStream::new(
-        p.seed(),
-        env,
-        s.episode[e],
-        stream_id(STREAM_GOALS, s.tick[e]),
-    );
+    let mut rng = super::step_stream(p, s, e, env, STREAM_GOALS);
     let hb = e * s.strides.humans;
     let first = hb + s.n_static[e] as usize;
     for i in first..first + s.n_dynamic[e] as usize {

@@ -6,7 +6,6 @@
 use crate::math;
 use crate::params::StepParams;
 use crate::pipeline::Batch;
-use crate::rng::{RngStream, stream_id};
 use crate::state::group_kind;
 
 /// RNG stream kind of the group velocity noise (`sub` = tick).
@@ -19,12 +18,7 @@ pub fn group_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     }
     let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = RngStream::new(
-        p.seed(),
-        env,
-        s.episode[e],
-        stream_id(STREAM_GROUP_NOISE, s.tick[e]),
-    );
+    let mut rng = super::step_stream(p, s, e, env, STREAM_GROUP_NOISE);
     let hb = e * s.strides.humans;
     let gb = e * s.strides.groups;
     for g in gb..gb + s.n_groups[e] as usize {

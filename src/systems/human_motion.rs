@@ -7,7 +7,6 @@
 use crate::math;
 use crate::params::StepParams;
 use crate::pipeline::Batch;
-use crate::rng::{RngStream, stream_id};
 use crate::state::{StateChunk, policy};
 
 use super::orca_world::{self, Others};
@@ -22,12 +21,7 @@ pub fn human_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     }
     let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = RngStream::new(
-        p.seed(),
-        env,
-        s.episode[e],
-        stream_id(STREAM_AVOID_ROBOT, s.tick[e]),
-    );
+    let mut rng = super::step_stream(p, s, e, env, STREAM_AVOID_ROBOT);
     let first = e * s.strides.humans + s.n_static[e] as usize;
     for i in first..first + s.n_dynamic[e] as usize {
         let avoid_robot = rng.chance(p.prob_avoid_robot);

@@ -1,6 +1,17 @@
 //! The stages of the step, one file each (named in [`crate::pipeline::STAGES`]), plus the shared
 //! pieces they use: world queries, the ORCA glue, the social force model and resets.
 
+use crate::params::StepParams;
+use crate::rng::{RngStream, stream_id};
+use crate::state::StateChunk;
+
+/// The random stream of kind `kind` for this step of environment `e` (batch index `env`): keyed by
+/// the batch seed, the environment, its episode and the tick, so draws never depend on other
+/// environments, other stages or the order of work.
+pub fn step_stream(p: &StepParams, s: &StateChunk, e: usize, env: u32, kind: u32) -> RngStream {
+    RngStream::new(p.seed(), env, s.episode[e], stream_id(kind, s.tick[e]))
+}
+
 pub mod autoreset;
 pub mod begin_step;
 pub mod contacts;

@@ -193,39 +193,66 @@ fn gaze(p: &StepParams, hx: f32, hy: f32, hc: f32, hs: f32, f: &Frame) -> f32 {
 }
 
 fn laptops(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
-    let lb = e * s.strides.laptops;
-    let n = s.n_laptops[e] as usize;
-    let radius =
-        (0.25 * p.laptop_length * p.laptop_length + 0.25 * p.laptop_width * p.laptop_width).sqrt();
-    for k in 0..n {
-        let i = lb + k;
-        object_record(
-            &mut out[k * RECORD..],
-            one_hot::LAPTOP,
-            f,
-            s.l_x[i],
-            s.l_y[i],
-            s.l_theta[i],
-            radius,
-        );
-    }
-    n as u32
+    let r = s.strides.laptops;
+    let radius = circumradius(p.laptop_length, p.laptop_width);
+    let (x, y, theta) = (&s.l_x[e * r..], &s.l_y[e * r..], &s.l_theta[e * r..]);
+    rectangles(
+        out,
+        one_hot::LAPTOP,
+        f,
+        x,
+        y,
+        theta,
+        s.n_laptops[e] as usize,
+        radius,
+    )
 }
 
 fn tables(p: &StepParams, s: &StateChunk, e: usize, f: &Frame, out: &mut [f32]) -> u32 {
-    let tb = e * s.strides.tables;
-    let n = s.n_tables[e] as usize;
-    let radius =
-        (0.25 * p.table_length * p.table_length + 0.25 * p.table_width * p.table_width).sqrt();
+    let r = s.strides.tables;
+    let radius = circumradius(p.table_length, p.table_width);
+    let (x, y, theta) = (&s.t_x[e * r..], &s.t_y[e * r..], &s.t_theta[e * r..]);
+    rectangles(
+        out,
+        one_hot::TABLE,
+        f,
+        x,
+        y,
+        theta,
+        s.n_tables[e] as usize,
+        radius,
+    )
+}
+
+/// Half the diagonal of a `length` × `width` rectangle (m): the observed radius of tables and laptops.
+#[inline]
+fn circumradius(length: f32, width: f32) -> f32 {
+    (0.25 * length * length + 0.25 * width * width).sqrt()
+}
+
+/// Records of the first `n` rectangles of one kind (centres and headings in world coordinates).
+#[expect(
+    clippy::too_many_arguments,
+    reason = "one entity kind's columns and constants"
+)]
+fn rectangles(
+    out: &mut [f32],
+    kind: usize,
+    f: &Frame,
+    x: &[f32],
+    y: &[f32],
+    theta: &[f32],
+    n: usize,
+    radius: f32,
+) -> u32 {
     for k in 0..n {
-        let i = tb + k;
         object_record(
             &mut out[k * RECORD..],
-            one_hot::TABLE,
+            kind,
             f,
-            s.t_x[i],
-            s.t_y[i],
-            s.t_theta[i],
+            x[k],
+            y[k],
+            theta[k],
             radius,
         );
     }

@@ -76,6 +76,11 @@ fn init_metrics(s: &mut StateChunk, e: usize) {
     s.m_j_max[e] = 0.0;
     s.m_j_avg[e] = 0.0;
     s.m_compliant[e] = 0;
+    init_episode_sums(s, e);
+}
+
+/// The per-episode sums and minima behind the episode statistics (spec 8.3), at their start.
+pub fn init_episode_sums(s: &mut StateChunk, e: usize) {
     s.ep_return[e] = 0.0;
     s.ep_min_human_dist[e] = f32::INFINITY;
     s.ep_min_obstacle_dist[e] = f32::INFINITY;
