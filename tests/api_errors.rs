@@ -3,10 +3,12 @@
 //! changes nothing. And the state documents: `get_state` → `set_state` → `get_state` is exact,
 //! and a loaded environment steps exactly as the original does.
 
+mod common;
+
+use common::valid_outputs;
 use std::path::Path;
 
 use serde_json::{Value, json};
-use socnav::outputs::Outputs;
 use socnav::state::columns::FNV_OFFSET;
 use socnav::{Actions, BatchEnv, Config, EnvOptions, SimError};
 
@@ -65,50 +67,6 @@ fn fingerprints(env: &BatchEnv) -> (u64, u64) {
         env.state().fingerprint(),
         (0..o.n_envs).fold(FNV_OFFSET, |h, e| o.fingerprint_env(e, h)),
     )
-}
-
-/// The outputs a caller may read, as bits (NaN equals NaN): everything but the buffers whose
-/// flag says they hold nothing (`final_*` without `has_final`, `episode` without
-/// `episode_done`), which keep whatever an earlier step left there.
-fn valid_outputs(o: &Outputs) -> Vec<u32> {
-    let mut v: Vec<u32> = o
-        .obs
-        .iter()
-        .chain(&o.reward)
-        .chain(&o.info)
-        .map(|x| x.to_bits())
-        .collect();
-    v.extend(
-        o.obs_count
-            .iter()
-            .chain(&o.terminated)
-            .chain(&o.truncated)
-            .chain(&o.has_final)
-            .chain(&o.episode_done),
-    );
-    let (obs, info, episode) = (o.strides.obs(), o.strides.info(), o.strides.episode());
-    for e in 0..o.n_envs {
-        if o.has_final[e] != 0 {
-            v.extend(
-                o.final_obs[e * obs..(e + 1) * obs]
-                    .iter()
-                    .map(|x| x.to_bits()),
-            );
-            v.extend(
-                o.final_info[e * info..(e + 1) * info]
-                    .iter()
-                    .map(|x| x.to_bits()),
-            );
-        }
-        if o.episode_done[e] != 0 {
-            v.extend(
-                o.episode[e * episode..(e + 1) * episode]
-                    .iter()
-                    .map(|x| x.to_bits()),
-            );
-        }
-    }
-    v
 }
 
 /// Step with invalid actions, expect `SimError::Action` whose message holds every needle, and

@@ -4,6 +4,9 @@
 //! different seed gives a different trajectory; `reset(Some(seed))` restarts the same run.
 //! Plus a golden hash that pins the whole simulation.
 
+mod common;
+
+use common::valid_outputs;
 use std::path::Path;
 
 use socnav::outputs::Outputs;
@@ -159,50 +162,6 @@ fn a_different_seed_gives_a_different_trajectory() {
         c.state().fingerprint(),
         "the high half of the seed is ignored"
     );
-}
-
-/// The outputs a caller may read: everything, except the buffers whose flag says they hold
-/// nothing (`final_*` without `has_final`, `episode` statistics without `episode_done`), as
-/// bits so that NaN compares equal to NaN.
-fn valid_outputs(o: &Outputs) -> Vec<u32> {
-    let mut v: Vec<u32> = o
-        .obs
-        .iter()
-        .chain(&o.reward)
-        .chain(&o.info)
-        .map(|x| x.to_bits())
-        .collect();
-    v.extend(
-        o.obs_count
-            .iter()
-            .chain(&o.terminated)
-            .chain(&o.truncated)
-            .chain(&o.has_final)
-            .chain(&o.episode_done),
-    );
-    let (obs, info, episode) = (o.strides.obs(), o.strides.info(), o.strides.episode());
-    for e in 0..o.n_envs {
-        if o.has_final[e] != 0 {
-            v.extend(
-                o.final_obs[e * obs..(e + 1) * obs]
-                    .iter()
-                    .map(|x| x.to_bits()),
-            );
-            v.extend(
-                o.final_info[e * info..(e + 1) * info]
-                    .iter()
-                    .map(|x| x.to_bits()),
-            );
-        }
-        if o.episode_done[e] != 0 {
-            v.extend(
-                o.episode[e * episode..(e + 1) * episode]
-                    .iter()
-                    .map(|x| x.to_bits()),
-            );
-        }
-    }
-    v
 }
 
 /// Contract: `reset(Some(seed))` restarts the run: it gives the same outputs as the first

@@ -1,42 +1,19 @@
 //! The ORCA core must not allocate once its buffers are warm (STYLE.md rule 4: `step` does not
 //! allocate). A counting global allocator checks a full per-agent pass and an obstacle rebuild.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+mod common;
+
+use std::sync::atomic::Ordering;
+
+use common::ALLOCATIONS;
 
 use socnav::orca::{
     Neighbor, ObstacleScratch, ObstacleSet, OrcaAgent, OrcaNeighbor, OrcaScratch, agent_neighbors,
     compute_new_velocity, process_obstacles,
 };
 
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-#[expect(
-    unsafe_code,
-    reason = "a GlobalAlloc impl is unsafe by definition; it only counts"
-)]
-// SAFETY: forwards every call unchanged to the system allocator.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: common::Counting = common::Counting;
 
 /// One Jacobi pass over all agents with the core API, writing into `out`.
 #[expect(

@@ -1,0 +1,85 @@
+//! Helpers shared by several test files (each test file is its own crate and includes this
+//! module with `mod common;`).
+
+#![allow(
+    dead_code,
+    reason = "each test crate uses a different part of this module"
+)]
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use socnav::outputs::Outputs;
+
+/// The outputs a caller may read, as bits (NaN equals NaN): everything but the buffers whose
+/// flag says they hold nothing (`final_*` without `has_final`, `episode` without
+/// `episode_done`), which keep whatever an earlier step left there.
+pub fn valid_outputs(o: &Outputs) -> Vec<u32> {
+    let mut v: Vec<u32> = o
+        .obs
+        .iter()
+        .chain(&o.reward)
+        .chain(&o.info)
+        .map(|x| x.to_bits())
+        .collect();
+    v.extend(
+        o.obs_count
+            .iter()
+            .chain(&o.terminated)
+            .chain(&o.truncated)
+            .chain(&o.has_final)
+            .chain(&o.episode_done),
+    );
+    let (obs, info, episode) = (o.strides.obs(), o.strides.info(), o.strides.episode());
+    for e in 0..o.n_envs {
+        if o.has_final[e] != 0 {
+            v.extend(
+                o.final_obs[e * obs..(e + 1) * obs]
+                    .iter()
+                    .map(|x| x.to_bits()),
+            );
+            v.extend(
+                o.final_info[e * info..(e + 1) * info]
+                    .iter()
+                    .map(|x| x.to_bits()),
+            );
+        }
+        if o.episode_done[e] != 0 {
+            v.extend(
+                o.episode[e * episode..(e + 1) * episode]
+                    .iter()
+                    .map(|x| x.to_bits()),
+            );
+        }
+    }
+    v
+}
+
+/// Allocations made through [`Counting`] since the process started.
+pub static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+/// A global allocator that counts allocations and forwards everything to the system allocator.
+/// Install it in a test crate with `#[global_allocator] static GLOBAL: common::Counting = common::Counting;`.
+pub struct Counting;
+
+#[expect(
+    unsafe_code,
+    reason = "a GlobalAlloc impl is unsafe by definition; it only counts"
+)]
+// SAFETY: forwards every call unchanged to the system allocator.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
