@@ -341,3 +341,30 @@ fn golden_socnavgym_configs_equal_shipped_tomls() {
     }
     assert_eq!(checked, pairs.len());
 }
+
+/// Contract: every `configs/*.toml` is built into the library under its stem (so the names work
+/// in an installed binary, away from the source tree), and nothing else is.
+#[test]
+fn every_config_file_is_shipped_by_name() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter_map(|n| n.strip_suffix(".toml").map(str::to_string))
+        .collect();
+    files.sort();
+    let mut shipped: Vec<String> = socnav::Config::shipped_names()
+        .map(str::to_string)
+        .collect();
+    shipped.sort();
+    assert!(!files.is_empty());
+    assert_eq!(
+        files, shipped,
+        "configs/*.toml and Config::shipped_names() differ"
+    );
+    for name in &shipped {
+        let by_name = socnav::Config::from_name_or_path(name).unwrap();
+        let by_file = socnav::Config::from_file(dir.join(format!("{name}.toml"))).unwrap();
+        assert_eq!(by_name, by_file, "{name}");
+    }
+}

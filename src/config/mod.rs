@@ -19,6 +19,22 @@ use crate::error::SimError;
 
 pub use validate::validate;
 
+/// The shipped configs, built into the library so that their names work wherever it runs.
+const SHIPPED: [(&str, &str); 6] = [
+    ("exp1", include_str!("../../configs/exp1.toml")),
+    ("exp2", include_str!("../../configs/exp2.toml")),
+    ("exp3", include_str!("../../configs/exp3.toml")),
+    (
+        "lroom_mixed",
+        include_str!("../../configs/lroom_mixed.toml"),
+    ),
+    (
+        "corridor_mixed",
+        include_str!("../../configs/corridor_mixed.toml"),
+    ),
+    ("stress", include_str!("../../configs/stress.toml")),
+];
+
 /// The whole configuration of a batch of environments: what a SocNavGym 0.1.1 YAML file says.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(default)]
@@ -557,15 +573,22 @@ impl Config {
         if path.exists() {
             return Self::from_file(path);
         }
-        let builtin = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("configs")
-            .join(format!("{name}.toml"));
-        if builtin.exists() {
-            return Self::from_file(builtin);
+        match SHIPPED.iter().find(|(n, _)| *n == name) {
+            Some((n, text)) => Self::from_toml_str(text)
+                .map_err(|e| e.in_file(Path::new(&format!("configs/{n}.toml")))),
+            None => {
+                let names: Vec<&str> = SHIPPED.iter().map(|(n, _)| *n).collect();
+                Err(SimError::Io(format!(
+                    "no config named `{name}`: neither a file nor one of the shipped configs ({})",
+                    names.join(", ")
+                )))
+            }
         }
-        Err(SimError::Io(format!(
-            "no config named `{name}`: neither a file nor one of the shipped configs (configs/*.toml)"
-        )))
+    }
+
+    /// The names of the shipped configs (`configs/<name>.toml`), which are built into the library.
+    pub fn shipped_names() -> impl Iterator<Item = &'static str> {
+        SHIPPED.iter().map(|(n, _)| *n)
     }
 
     /// Serialise to TOML (every key, resolved defaults included).
