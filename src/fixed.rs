@@ -51,6 +51,27 @@ impl<T: Copy + Default, const N: usize> Fixed<T, N> {
         &self.items[..self.len]
     }
 
+    /// Remove item `i`, shifting the later ones down (order kept).
+    #[inline]
+    pub fn remove(&mut self, i: usize) -> T {
+        let item = self.as_slice()[i];
+        self.items.copy_within(i + 1..self.len, i);
+        self.len -= 1;
+        item
+    }
+
+    /// Exchange items `i` and `j`.
+    #[inline]
+    pub fn swap(&mut self, i: usize, j: usize) {
+        self.items[..self.len].swap(i, j);
+    }
+
+    /// Replace item `i`.
+    #[inline]
+    pub fn set(&mut self, i: usize, item: T) {
+        self.items[..self.len][i] = item;
+    }
+
     /// Shorten to `len` items.
     #[inline]
     pub fn truncate(&mut self, len: usize) {

@@ -2,7 +2,7 @@
 //! step (never reallocated): observation, per-type counts, reward, flags, info, the final
 //! observation and info of SAME_STEP autoresets, and the statistics of finished episodes.
 
-use crate::spec::{N_EPISODE, N_INFO, ObsLayout};
+use crate::spec::{N_EPISODE, N_EVENTS, N_INFO, ObsLayout};
 use crate::state::columns::soa;
 
 /// Strides of the output columns.
@@ -33,6 +33,10 @@ impl OutStrides {
     pub fn episode(&self) -> usize {
         N_EPISODE
     }
+    /// Social event counts per environment.
+    pub fn events(&self) -> usize {
+        N_EVENTS
+    }
 }
 
 soa! {
@@ -62,6 +66,8 @@ soa! {
         env.episode_done: u32,
         /// Statistics of the episode that ended (order of [`crate::spec::EPISODE_KEYS`]).
         episode.episode: f32,
+        /// Social events of this step (order of [`crate::spec::EVENT_KEYS`]).
+        events.events: u32,
     }
 }
 

@@ -70,9 +70,8 @@ pub struct Stage {
     pub run: fn(&StepParams, &mut Batch<'_>, usize),
 }
 
-/// The stages of a step, in order. Crowd and laptop-use formation progress (after `goals`) and
-/// the random social events (after `observation`) take their places here with social structure.
-pub const STAGES: [Stage; 13] = [
+/// The stages of a step, in order.
+pub const STAGES: [Stage; 15] = [
     Stage {
         name: "begin_step",
         run: systems::begin_step::begin_step,
@@ -102,6 +101,10 @@ pub const STAGES: [Stage; 13] = [
         run: systems::goals::goals,
     },
     Stage {
+        name: "formation",
+        run: systems::formation::formation,
+    },
+    Stage {
         name: "contacts",
         run: systems::contacts::contacts,
     },
@@ -120,6 +123,10 @@ pub const STAGES: [Stage; 13] = [
     Stage {
         name: "observation",
         run: systems::observation::observation,
+    },
+    Stage {
+        name: "social_events",
+        run: systems::social_events::social_events,
     },
     Stage {
         name: "autoreset",

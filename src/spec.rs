@@ -220,3 +220,39 @@ pub const DISCRETE_ACTIONS: [[f32; 3]; 7] = [
     [-1.0, 0.0, 0.0],
     [0.0, 0.0, 0.0],
 ];
+
+/// The social events counted per environment and step (outputs column `events`), in the order of
+/// [`event`]: crowd dispersals, laptop-use dispersals, crowd formations started, completed, completed
+/// approximately (the walkers stayed together for 25 steps) and given up (no free spot), laptop-use
+/// formations started, blocked (seat taken) and completed.
+pub const EVENT_KEYS: [&str; 9] = [
+    "crowd_dispersal",
+    "laptop_dispersal",
+    "crowd_formation_start",
+    "crowd_formation_complete",
+    "crowd_formation_approximate",
+    "crowd_formation_gave_up",
+    "laptop_formation_start",
+    "laptop_formation_blocked",
+    "laptop_formation_complete",
+];
+
+/// Number of event kinds.
+pub const N_EVENTS: usize = EVENT_KEYS.len();
+
+/// Index of each event kind in [`EVENT_KEYS`].
+pub mod event {
+    #![expect(
+        missing_docs,
+        reason = "each constant is the index of the event key of the same name"
+    )]
+    pub const CROWD_DISPERSAL: usize = 0;
+    pub const LAPTOP_DISPERSAL: usize = 1;
+    pub const CROWD_FORMATION_START: usize = 2;
+    pub const CROWD_FORMATION_COMPLETE: usize = 3;
+    pub const CROWD_FORMATION_APPROXIMATE: usize = 4;
+    pub const CROWD_FORMATION_GAVE_UP: usize = 5;
+    pub const LAPTOP_FORMATION_START: usize = 6;
+    pub const LAPTOP_FORMATION_BLOCKED: usize = 7;
+    pub const LAPTOP_FORMATION_COMPLETE: usize = 8;
+}

@@ -10,7 +10,7 @@ pub mod place;
 
 use crate::error::SimError;
 use crate::geometry::{Disc, Rect, Shape};
-use crate::math::{self, PI};
+use crate::math;
 use crate::params::{StepParams, count, shape_code};
 use crate::rng::{RngStream, stream_id};
 use crate::state::{NONE, StateChunk, blocker_kind, group_kind, policy, role, room_shape};
@@ -412,37 +412,19 @@ impl Gen<'_, '_> {
     ) -> Attempt {
         let p = self.p;
         let hb = self.e * s.strides.humans;
-        let jitter = PI / 14.0;
-        let mut members = [Disc::default(); 64];
-        let mut thetas = [0.0f32; 64];
         let n = size as usize;
-        assert!(
-            n <= members.len(),
-            "group of {n} members exceeds the 64 a group may have"
-        );
+        let mut poses = [(0.0, 0.0, 0.0); place::MAX_GROUP];
+        let standing = kind == group_kind::STANDING;
         let found = (0..place::MAX_TRIES).any(|_| {
             let (cx, cy) = self.area.point(self.rng);
-            let shared_theta = place::heading(self.rng);
-            for k in 0..n {
-                let phi = math::wrap_angle(2.0 * PI * k as f32 / size as f32);
-                let d1 = self.rng.uniform(-jitter, jitter);
-                let d2 = self.rng.uniform(-jitter, jitter);
-                let x = cx + p.group_radius * math::cos(phi + d1);
-                let y = cy + p.group_radius * math::sin(phi + d2);
-                members[k] = Disc {
+            place::group_layout(p, self.rng, cx, cy, n, standing, &mut poses);
+            poses[..n].iter().all(|&(x, y, _)| {
+                !self.spawn.blocked(&Shape::Disc(Disc {
                     x,
                     y,
                     r: p.human_radius,
-                };
-                thetas[k] = if kind == group_kind::STANDING {
-                    phi - PI + self.rng.uniform(-jitter, jitter)
-                } else {
-                    shared_theta
-                };
-            }
-            members[..n]
-                .iter()
-                .all(|d| !self.spawn.blocked(&Shape::Disc(*d)))
+                }))
+            })
         });
         if !found {
             return Err("a group");
@@ -458,22 +440,29 @@ impl Gen<'_, '_> {
             role::STANDING_GROUP
         };
         let (mut sx, mut sy) = (0.0f32, 0.0f32);
-        for k in 0..n {
+        for (k, &(x, y, theta)) in poses.iter().take(n).enumerate() {
             let i = hb + first as usize + k;
             s.h_id[i] = self.id();
-            s.h_x[i] = members[k].x;
-            s.h_y[i] = members[k].y;
-            s.h_theta[i] = thetas[k];
+            s.h_x[i] = x;
+            s.h_y[i] = y;
+            s.h_theta[i] = theta;
             s.h_speed[i] = speed;
             s.h_policy[i] = self.policy();
             // Standing members have no goal: their own position, as a loaded document gives
             // them (moving members get the group goal in `place_goals`).
-            s.h_goal_x[i] = members[k].x;
-            s.h_goal_y[i] = members[k].y;
+            s.h_goal_x[i] = x;
+            s.h_goal_y[i] = y;
             set_role(s, i, member_role, gi as u32, NONE);
-            sx += members[k].x;
-            sy += members[k].y;
-            self.spawn.add(Kind::Solid, Shape::Disc(members[k]));
+            sx += x;
+            sy += y;
+            self.spawn.add(
+                Kind::Solid,
+                Shape::Disc(Disc {
+                    x,
+                    y,
+                    r: p.human_radius,
+                }),
+            );
         }
         let g = self.e * s.strides.groups + gi;
         s.g_kind[g] = kind;
@@ -583,6 +572,15 @@ impl Gen<'_, '_> {
             for i in hb + s.g_first[gi] as usize..hb + (s.g_first[gi] + s.g_count[gi]) as usize {
                 s.h_goal_x[i] = g.x;
                 s.h_goal_y[i] = g.y;
+            }
+        }
+        // Standing groups and their members stay where they are.
+        for gi in gb + moving..gb + s.n_groups[self.e] as usize {
+            s.g_goal_x[gi] = s.g_x[gi];
+            s.g_goal_y[gi] = s.g_y[gi];
+            for i in hb + s.g_first[gi] as usize..hb + (s.g_first[gi] + s.g_count[gi]) as usize {
+                s.h_goal_x[i] = s.h_x[i];
+                s.h_goal_y[i] = s.h_y[i];
             }
         }
         Ok(())

@@ -122,6 +122,46 @@ impl SamplingBox {
     }
 }
 
+/// Most members a group may have: group layouts live in stack arrays (validation enforces it).
+pub const MAX_GROUP: usize = 64;
+
+/// A pose (m, m, rad).
+pub type Pose = (f32, f32, f32);
+
+/// The member poses of a group of `n` around (cx, cy) (spec 4.4): member k at angle
+/// φ_k = 2πk/n (wrapped) on the circle of radius `group_radius`, each coordinate's angle jittered
+/// by U(−π/14, π/14) independently; standing members face the centre (φ_k − π, jittered), moving
+/// members share one heading drawn first.
+pub fn group_layout(
+    p: &StepParams,
+    rng: &mut RngStream,
+    cx: f32,
+    cy: f32,
+    n: usize,
+    standing: bool,
+    out: &mut [Pose; MAX_GROUP],
+) {
+    assert!(
+        n <= MAX_GROUP,
+        "a group of {n} members exceeds the {MAX_GROUP} a group may have"
+    );
+    let jitter = PI / 14.0;
+    let shared_theta = heading(rng);
+    for (k, pose) in out.iter_mut().enumerate().take(n) {
+        let phi = math::wrap_angle(2.0 * PI * k as f32 / n as f32);
+        let d1 = rng.uniform(-jitter, jitter);
+        let d2 = rng.uniform(-jitter, jitter);
+        let x = cx + p.group_radius * math::cos(phi + d1);
+        let y = cy + p.group_radius * math::sin(phi + d2);
+        let theta = if standing {
+            phi - PI + rng.uniform(-jitter, jitter)
+        } else {
+            shared_theta
+        };
+        *pose = (x, y, theta);
+    }
+}
+
 /// A uniform heading in [-π, π).
 pub fn heading(rng: &mut RngStream) -> f32 {
     rng.uniform(-PI, PI)

@@ -104,6 +104,23 @@ macro_rules! soa {
                 ), )*]
             }
 
+            /// Names of the columns whose bits differ from `other`'s (same shape), for test
+            /// failures that say where two states part.
+            pub fn differing_columns(&self, other: &Self) -> Vec<&'static str> {
+                let mut out = Vec::new();
+                $(
+                    let same = self.$col.len() == other.$col.len()
+                        && self.$col.iter().zip(&other.$col).all(|(a, b)| {
+                            <$ty as $crate::state::columns::ColumnValue>::bits(*a)
+                                == <$ty as $crate::state::columns::ColumnValue>::bits(*b)
+                        });
+                    if !same {
+                        out.push(stringify!($col));
+                    }
+                )*
+                out
+            }
+
             /// Bytes of state per environment (all columns).
             pub fn bytes_per_env(&self) -> usize {
                 0 $( + self.strides.$kind() * std::mem::size_of::<$ty>() )*
@@ -141,6 +158,26 @@ macro_rules! soa {
         }
 
         impl<'a> $chunk<'a> {
+            /// Reorder the first `used` slots of kind `kind` of local environment `env`: slot `k`
+            /// receives the old slot `perm[k]`, in every column of that kind; slots from
+            /// `perm.len()` to `used` (entries the permutation drops) are zeroed. Used by the social
+            /// events, which regroup humans, groups and laptops (rare; at most [`MAX_PERMUTE`]
+            /// slots).
+            pub fn permute(&mut self, kind: &str, env: usize, perm: &[u32], used: usize) {
+                assert!(used <= $crate::state::columns::MAX_PERMUTE && perm.len() <= used, "permutation of {} of {used} slots", perm.len());
+                $(
+                    if stringify!($kind) == kind {
+                        let s = self.strides.$kind();
+                        let col = &mut self.$col[env * s..env * s + used];
+                        let mut tmp = [<$ty>::default(); $crate::state::columns::MAX_PERMUTE];
+                        for (k, &from) in perm.iter().enumerate() {
+                            tmp[k] = col[from as usize];
+                        }
+                        col.copy_from_slice(&tmp[..used]);
+                    }
+                )*
+            }
+
             /// Zero every per-slot column (all kinds but `env`) of local environment `env`.
             pub fn clear_slots(&mut self, env: usize) {
                 $(
@@ -185,6 +222,10 @@ pub fn fnv(mut h: u64, word: u32) -> u64 {
     }
     h
 }
+
+/// Most slots of one kind a permutation can reorder (humans, groups, laptops, laptop users of
+/// one environment); `BatchEnv::new` rejects configs whose capacities exceed it.
+pub const MAX_PERMUTE: usize = 256;
 
 /// FNV-1a offset basis.
 pub const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;

@@ -11,7 +11,7 @@
 
 use serde_json::{Map, Value, json};
 
-use super::{BatchState, NONE, blocker_kind, group_kind, policy, role, room_shape};
+use super::{BatchState, NONE, blocker_kind, forming, group_kind, policy, role, room_shape};
 use crate::error::SimError;
 use crate::math;
 use crate::params::StepParams;
@@ -104,18 +104,15 @@ fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
             let i = hb + k;
             let r = s.h_role[i];
             let group_goal = r == role::MOVING_GROUP;
-            let goal = match r {
-                role::STATIC | role::DYNAMIC | role::MOVING_GROUP => {
-                    json!([num(s.h_goal_x[i]), num(s.h_goal_y[i])])
-                }
-                _ => Value::Null,
-            };
+            // Every human has a goal: spawned laptop users and standing-group members their own
+            // position, formed ones the seat or slot they walked to (0.1.1 keeps it).
+            let goal = json!([num(s.h_goal_x[i]), num(s.h_goal_y[i])]);
             let goal_radius = if group_goal {
                 p.group_goal_radius
             } else {
                 p.human_goal_radius
             };
-            if !goal.is_null() {
+            if r != role::LAPTOP_USER && r != role::STANDING_GROUP {
                 goals.insert(
                     s.h_id[i].to_string(),
                     json!([goal[0], goal[1], num(goal_radius)]),
@@ -134,11 +131,10 @@ fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
             if s.h_laptop_user[i] != NONE {
                 h["hl"] = json!(s.h_laptop_user[i]);
             }
-            if s.h_forming[i] != 0 {
-                let crowd = s.cf_active[e] != 0
-                    && (0..s.cf_count[e] as usize)
-                        .any(|k| s.cf_human[e * c.group_size + k] as usize == i - hb);
-                h[if crowd { "forming_crowd" } else { "forming_hl" }] = json!(true);
+            match s.h_forming[i] {
+                forming::CROWD => h["forming_crowd"] = json!(true),
+                forming::LAPTOP => h["forming_hl"] = json!(true),
+                _ => {}
             }
             h
         })
@@ -152,7 +148,8 @@ fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
             json!({
                 "kind": if moving { "moving" } else { "standing" }, "dispersable": s.g_dispersable[g] != 0,
                 "members": members, "centre": [num(s.g_x[g]), num(s.g_y[g])],
-                "goal": if moving { json!([num(s.g_goal_x[g]), num(s.g_goal_y[g])]) } else { Value::Null },
+                // A standing group's goal: its centre when spawned, the old goal when it stopped.
+                "goal": [num(s.g_goal_x[g]), num(s.g_goal_y[g])],
                 "goal_radius": num(p.group_goal_radius), "radius": num(p.group_radius), "noise": num(p.group_noise_std),
             })
         })
@@ -274,6 +271,7 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
             crate::systems::reset::init_episode_sums(&mut s.env_chunk(e), 0);
         }
     }
+    crate::systems::regroup::number_lists(&mut s.env_chunk(e), 0);
     derive_goal_distances(s, e);
     (s.robot_wvx[e], s.robot_wvy[e]) = crate::systems::robot_motion::world_velocity(
         s.robot_theta[e],

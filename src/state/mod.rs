@@ -50,6 +50,18 @@ pub mod group_kind {
     pub const MOVING: u32 = 0;
     /// Stands still, members facing the centre.
     pub const STANDING: u32 = 1;
+    /// Dissolved by a social event, removed at the next regrouping.
+    pub const DISSOLVED: u32 = 2;
+}
+
+/// What a human is walking to (column `h_forming`).
+pub mod forming {
+    /// Nothing: an ordinary walker.
+    pub const NONE: u32 = 0;
+    /// Its slot in a forming crowd (speeds below the threshold are kept).
+    pub const CROWD: u32 = 1;
+    /// The seat at a laptop.
+    pub const LAPTOP: u32 = 2;
 }
 
 /// Kind of an invisible spawn blocker (column `b_kind`): which entity type 0.1.1 used for it.
@@ -88,6 +100,8 @@ soa! {
         env.stepping: u32,
         /// 1 when the ORCA obstacle set must be rebuilt (obstacles appeared or vanished).
         env.obstacles_dirty: u32,
+        /// The next list position (`*_seq`) to hand out: every append gets a larger one.
+        env.seq_next: u32,
         // ---- room ----
         /// Room size along x (m).
         env.map_x: f32,
@@ -297,11 +311,19 @@ soa! {
         human.h_group: u32,
         /// Laptop-user index or `NONE`.
         human.h_laptop_user: u32,
-        /// 1 while walking to a forming crowd or laptop seat.
+        /// `forming::NONE`, or what the human is walking to (`forming::CROWD`, `forming::LAPTOP`).
         human.h_forming: u32,
+        /// Position in its list (lone static, lone walking, its group's members, laptop users'
+        /// humans): entries appended later get larger numbers; slots are sorted by it.
+        human.h_seq: u32,
         /// Wrapped heading relative to the robot at the end of the previous step (rad), for the
         /// observed relative angular speed.
         human.h_prev_rel_theta: f32,
+        /// Replay only: the group velocity noise (m/s) this member gets at the next step, as the
+        /// golden episodes recorded it (`group_noise` in a state document); drawn otherwise.
+        human.h_noise_x: f32,
+        /// Replay only: the noise's y component (m/s).
+        human.h_noise_y: f32,
 
         // ---- groups ----
         /// `group_kind::*`.
@@ -324,6 +346,8 @@ soa! {
         group.g_vx: f32,
         /// This step's ORCA velocity y (m/s).
         group.g_vy: f32,
+        /// Position in its list (moving or standing groups).
+        group.g_seq: u32,
 
         // ---- forming crowd slots ----
         /// Slot x (m).
@@ -342,6 +366,8 @@ soa! {
         laptop_user.lu_laptop: u32,
         /// 1 if the user may leave.
         laptop_user.lu_dispersable: u32,
+        /// Position in the list of laptop users.
+        laptop_user.lu_seq: u32,
 
         // ---- laptops ----
         /// Entity id.
@@ -358,6 +384,8 @@ soa! {
         laptop.l_sin: f32,
         /// Laptop-user index or `NONE` when free.
         laptop.l_user: u32,
+        /// Position in the list of free laptops.
+        laptop.l_seq: u32,
 
         // ---- tables ----
         /// Entity id.

@@ -11,6 +11,8 @@ use crate::pipeline::Batch;
 pub fn begin_step(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     b.o.has_final[e] = 0;
     b.o.episode_done[e] = 0;
+    let n = b.o.strides.events();
+    b.o.events[e * n..(e + 1) * n].fill(0);
     if b.s.pending_reset[e] != 0 {
         b.s.stepping[e] = 0;
         super::reset::reset_and_observe(p, b, e);

@@ -82,7 +82,7 @@ pub fn sample_goal(
 }
 
 /// Does the disc touch a current goal: the robot's, a lone human's or a moving group's?
-fn touches_goal(p: &StepParams, s: &StateChunk, e: usize, d: &Disc) -> bool {
+pub fn touches_goal(p: &StepParams, s: &StateChunk, e: usize, d: &Disc) -> bool {
     if disc_disc(
         d,
         &Disc {

@@ -37,7 +37,9 @@ pub fn group_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
         for i in first..first + n as usize {
             // Without noise there is nothing to draw (0.1.1 draws zeros; the counter-based streams
             // of later draws do not depend on it).
-            let (nx, ny) = if p.group_noise_std > 0.0 {
+            let (nx, ny) = if p.replay != 0 {
+                (s.h_noise_x[i], s.h_noise_y[i])
+            } else if p.group_noise_std > 0.0 {
                 (
                     p.group_noise_std * rng.normal(),
                     p.group_noise_std * rng.normal(),

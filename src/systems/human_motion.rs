@@ -64,7 +64,7 @@ fn orca_velocity(
 /// Apply velocity (vx, vy) (m/s) to human `i`: threshold the speed, turn to the velocity, move.
 pub fn walk(p: &StepParams, s: &mut StateChunk, i: usize, vx: f32, vy: f32) {
     let mut speed = (vx * vx + vy * vy).sqrt();
-    if speed < p.speed_threshold && s.h_forming[i] == 0 {
+    if speed < p.speed_threshold && s.h_forming[i] != crate::state::forming::CROWD {
         speed = 0.0;
     }
     let theta = math::atan2(vy, vx);

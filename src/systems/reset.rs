@@ -41,10 +41,8 @@ pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize) {
     s.r_distance[e] = 0.0;
     s.r_alive[e] = 0.0;
     s.r_sngnn[e] = 0.0;
-    s.cf_active[e] = 0;
-    s.cf_count[e] = 0;
-    s.cf_close_steps[e] = 0;
-    s.lf_active[e] = 0;
+    super::formation::clear_crowd_formation(s, e);
+    super::formation::clear_laptop_formation(s, e);
     let hb = e * s.strides.humans;
     let n = s.n_humans[e] as usize;
     for i in hb..hb + n {
@@ -53,6 +51,7 @@ pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize) {
         s.h_vx[i] = s.h_speed[i] * c;
         s.h_vy[i] = s.h_speed[i] * sn;
     }
+    super::regroup::number_lists(s, e);
     s.obstacles_dirty[e] = 1;
     super::orca_obstacles::rebuild_if_dirty(p, s, e);
 }

@@ -84,3 +84,48 @@ pub fn wrapped_angular_speed(recorded: f64, dt: f64) -> f64 {
     let a = recorded * dt;
     a.sin().atan2(a.cos()) / dt
 }
+
+/// TIME_TO_COLLISION of a post-motion snapshot (spec 8.2): the fewest steps until the robot and a
+/// human touch at constant velocities, −1 if none. `bug` reproduces 0.1.1's leaked loop variable,
+/// which re-evaluates an already counted human in place of each laptop user, so laptop users
+/// never count; socnav evaluates them (standing still).
+pub fn time_to_collision(
+    state: &Value,
+    dt: f64,
+    robot_radius: f64,
+    human_radius: f64,
+    bug: bool,
+) -> f64 {
+    let robot = &state["robot"];
+    let (rx, ry, theta) = (num(&robot["x"]), num(&robot["y"]), num(&robot["theta"]));
+    let vel = &robot["vel"];
+    let (vx, vy) = (num(&vel[0]), num(&vel[1]));
+    let (s, c) = theta.sin_cos();
+    let (vrx, vry) = (vx * c - vy * s, vx * s + vy * c);
+    let reach = robot_radius + human_radius;
+    let mut best = f64::INFINITY;
+    for h in state["humans"].as_array().expect("humans") {
+        if bug && h["role"] == "hl" {
+            continue;
+        }
+        let (hx, hy) = (num(&h["x"]), num(&h["y"]));
+        let (speed, th) = (num(&h["speed"]), num(&h["theta"]));
+        let (vhx, vhy) = (speed * th.cos(), speed * th.sin());
+        let (px, py) = (rx - hx, ry - hy);
+        let dist = px.hypot(py);
+        if dist <= reach {
+            best = 0.0;
+            continue;
+        }
+        let approach = ((vhx - vrx) * px + (vhy - vry) * py) / dist;
+        if approach <= 0.0 {
+            continue;
+        }
+        let t = dist / approach;
+        let gap = ((hx + vhx * t) - (rx + vrx * t)).hypot((hy + vhy * t) - (ry + vry * t));
+        if gap <= reach {
+            best = best.min((t / dt).ceil());
+        }
+    }
+    if best.is_finite() { best } else { -1.0 }
+}

@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{Map, Value, json};
 use socnav::episodes::Aggregate;
+use socnav::spec::{EVENT_KEYS, N_EVENTS};
 use socnav::{Actions, BatchEnv, Config, EnvOptions};
 
 use crate::args::{BackendChoice, RunArgs};
@@ -74,6 +75,7 @@ pub fn run(a: &RunArgs) -> Result<(), Box<dyn std::error::Error>> {
     let mut policy = Policy::new(a.policy, a.seed, &env);
     let mut actions = vec![0.0f32; 3 * a.envs];
     let mut agg = Aggregate::default();
+    let mut events = [0u64; N_EVENTS];
     let bar = progress_bar(a.steps as u64);
     let mut stepping = Duration::ZERO;
     for _ in 0..a.steps {
@@ -82,12 +84,18 @@ pub fn run(a: &RunArgs) -> Result<(), Box<dyn std::error::Error>> {
         env.step(Actions::Continuous(&actions))?;
         stepping += t.elapsed();
         agg.add_finished(env.outputs());
+        for row in env.outputs().events.chunks_exact(N_EVENTS) {
+            for (total, &n) in events.iter_mut().zip(row) {
+                *total += u64::from(n);
+            }
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();
     let env_steps = (a.envs * a.steps) as f64;
     let rate = env_steps / stepping.as_secs_f64();
     let summary = Summary {
+        events: &events,
         a,
         env: &env,
         agg: &agg,
@@ -115,6 +123,7 @@ fn progress_bar(steps: u64) -> ProgressBar {
 }
 
 struct Summary<'a> {
+    events: &'a [u64; N_EVENTS],
     a: &'a RunArgs,
     env: &'a BatchEnv,
     agg: &'a Aggregate,
@@ -154,6 +163,7 @@ impl Summary<'_> {
             "out_of_map_rate": m("out_of_map"),
             "mean_episode_length": m("length"),
             "metrics": metrics,
+            "events": EVENT_KEYS.iter().zip(self.events).map(|(k, n)| (k.to_string(), json!(n))).collect::<Map<_, _>>(),
         })
     }
 
@@ -185,6 +195,15 @@ impl Summary<'_> {
             pct("timeout"),
             pct("out_of_map")
         );
+        if self.events.iter().any(|&n| n > 0) {
+            let cells: Vec<String> = EVENT_KEYS
+                .iter()
+                .zip(self.events)
+                .filter(|(_, n)| **n > 0)
+                .map(|(k, n)| format!("{k} {n}"))
+                .collect();
+            println!("social events: {}", cells.join(", "));
+        }
         println!("metrics (means over finished episodes, as the paper's table):");
         for chunk in METRICS.chunks(4) {
             let cells: Vec<String> = chunk

@@ -3,7 +3,7 @@
 
 use serde_json::Value;
 
-use super::super::{BatchState, NONE, blocker_kind, group_kind, policy, role};
+use super::super::{BatchState, NONE, blocker_kind, forming, group_kind, policy, role};
 use super::{ROLE_NAMES, shape_code};
 use crate::error::SimError;
 use crate::params::StepParams;
@@ -92,13 +92,21 @@ impl<'a> Reader<'a> {
     }
 
     fn u(&self, key: &str) -> Result<u32, SimError> {
-        let r = self.at(key)?;
-        match r.value {
+        self.at(key)?.as_u32()
+    }
+
+    fn as_u32(&self) -> Result<u32, SimError> {
+        match self.value {
             Value::Bool(b) => Ok(u32::from(*b)),
             v => v
                 .as_u64()
-                .map(|x| x as u32)
-                .ok_or_else(|| err(&r.path, format!("must be a non-negative integer, got {v}"))),
+                .and_then(|x| u32::try_from(x).ok())
+                .ok_or_else(|| {
+                    err(
+                        &self.path,
+                        format!("must be a non-negative integer, got {v}"),
+                    )
+                }),
         }
     }
 
@@ -251,6 +259,7 @@ pub(super) fn snapshot(
     groups(st, s, e, &ids)?;
     laptop_users(st, s, e, &ids, &laptop_ids)?;
     forming(st, s, e, &ids, &laptop_ids)?;
+    group_noise(st, s, e, &ids)?;
     metrics(&st.at("metrics")?, s, e)?;
     reward_state(&st.at("reward_state")?, s, e)
 }
@@ -360,7 +369,13 @@ fn humans(
         } else {
             NONE
         };
-        s.h_forming[i] = h.flag("forming_crowd")? | h.flag("forming_hl")?;
+        s.h_forming[i] = if h.flag("forming_crowd")? != 0 {
+            forming::CROWD
+        } else if h.flag("forming_hl")? != 0 {
+            forming::LAPTOP
+        } else {
+            forming::NONE
+        };
     }
     s.n_humans[e] = list.len() as u32;
     s.n_static[e] = n_static;
@@ -484,7 +499,7 @@ fn groups(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32]) -> Result<
         [s.g_goal_x[gb + k], s.g_goal_y[gb + k]] = if g.opt("goal").is_some() {
             g.vec::<2>("goal")?
         } else {
-            [0.0, 0.0]
+            [s.g_x[gb + k], s.g_y[gb + k]]
         };
         s.g_vx[gb + k] = 0.0;
         s.g_vy[gb + k] = 0.0;
@@ -524,9 +539,9 @@ fn forming(
     ids: &[u32],
     laptop_ids: &[u32],
 ) -> Result<(), SimError> {
-    s.cf_active[e] = 0;
-    s.cf_count[e] = 0;
-    s.cf_close_steps[e] = 0;
+    let mut env = s.env_chunk(e);
+    crate::systems::formation::clear_crowd_formation(&mut env, 0);
+    crate::systems::formation::clear_laptop_formation(&mut env, 0);
     if let Some(cf) = st.opt("crowd_forming") {
         let slots = cf.at("slots")?.items()?;
         capacity(
@@ -571,12 +586,31 @@ fn forming(
         s.cf_count[e] = slots.len() as u32;
         s.cf_active[e] = 1;
     }
-    s.lf_active[e] = 0;
     if let Some(lf) = st.opt("hl_forming") {
         s.lf_human[e] = slot_of(ids, lf.u("human")?, &lf.child_path("human"))? as u32;
         s.lf_laptop[e] = slot_of(laptop_ids, lf.u("laptop")?, &lf.child_path("laptop"))? as u32;
         [s.lf_seat_x[e], s.lf_seat_y[e], s.lf_seat_theta[e]] = lf.vec::<3>("seat")?;
         s.lf_active[e] = 1;
+    }
+    Ok(())
+}
+
+/// Replay: the group velocity noise (m/s) the next step adds to each listed member
+/// (`group_noise`: `[[member_id, noise_x, noise_y], ...]`, as the golden episodes recorded it);
+/// members not listed get none.
+fn group_noise(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32]) -> Result<(), SimError> {
+    let hb = e * s.strides.humans;
+    s.h_noise_x[hb..hb + s.strides.humans].fill(0.0);
+    s.h_noise_y[hb..hb + s.strides.humans].fill(0.0);
+    for entry in st.list("group_noise")? {
+        let items = entry.items()?;
+        if items.len() != 3 {
+            return Err(err(&entry.path, "must be [member_id, noise_x, noise_y]"));
+        }
+        let id = items[0].as_u32()?;
+        let i = hb + slot_of(ids, id, &entry.path)?;
+        s.h_noise_x[i] = items[1].as_f32()?;
+        s.h_noise_y[i] = items[2].as_f32()?;
     }
     Ok(())
 }
