@@ -145,6 +145,38 @@ fn every_problem_is_listed_at_once() {
     );
 }
 
+/// Contract: counts beyond what the step's fixed scratch holds are rejected up front, naming
+/// the limit and where the number comes from (the room check may add its own complaint).
+#[test]
+fn counts_beyond_the_per_environment_limits_are_rejected() {
+    let mut config = Config::default();
+    config.room.size_x = [200, 200];
+    config.counts.standing_groups = [0, 4];
+    config.counts.group_size = [2, 80];
+    config.counts.static_humans = [0, 10];
+    config.counts.laptops = [0, 300];
+    let problems = socnav::config::validate(&config);
+    let all = problems.join("\n");
+    for needles in [
+        &["counts.group_size", "at most 64", "80"][..],
+        &[
+            "at most 256 humans",
+            "331",
+            "static 10 + dynamic 1",
+            "groups 4 x group size 80",
+        ],
+        &["at most 256 laptops", "300"],
+        &["at most 256 ORCA obstacles", "`counts` allow"],
+    ] {
+        assert!(
+            problems
+                .iter()
+                .any(|p| needles.iter().all(|n| p.contains(n))),
+            "no message containing all of {needles:?}; got:\n{all}"
+        );
+    }
+}
+
 /// Contract: `BatchEnv::new` applies the same validation to a `Config` built in code.
 #[test]
 fn batch_rejects_an_invalid_config_built_in_code() {

@@ -394,6 +394,21 @@ impl Counts {
     pub fn max_laptop_users(&self) -> i32 {
         self.laptop_users[1] + self.laptop_users_non_dispersing[1]
     }
+
+    /// The largest number of humans of every role a reset can place (i64: no overflow on
+    /// absurd inputs, which validation reports).
+    pub fn max_humans(&self) -> i64 {
+        let m = |r: [i32; 2]| i64::from(r[1].max(0));
+        m(self.static_humans)
+            + m(self.dynamic_humans)
+            + i64::from(self.max_laptop_users().max(0))
+            + i64::from(self.max_groups().max(0)) * m(self.group_size)
+    }
+
+    /// The largest number of laptops, free and in use.
+    pub fn max_laptops(&self) -> i64 {
+        i64::from(self.laptops[1].max(0)) + i64::from(self.max_laptop_users().max(0))
+    }
 }
 
 /// Per-step probabilities of the social events, evaluated after the observation (spec 4.5).

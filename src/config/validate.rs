@@ -2,6 +2,9 @@
 //! and the offending value, so a user fixes a file in one go.
 
 use super::{Config, Shape};
+use crate::scenario::place::MAX_GROUP;
+use crate::state::columns::MAX_PERMUTE;
+use crate::systems::orca_obstacles::MAX_POLYGONS;
 
 /// Fraction of the sampling area that the footprints of the largest entity counts may cover.
 /// Random sequential placement of discs jams at about 55 % coverage (the random sequential
@@ -171,6 +174,42 @@ fn check_counts(c: &Config, v: &mut Problems) {
             c.counts.max_groups(),
             c.events.crowd_formation_probability,
             c.counts.group_size[0]
+        ));
+    }
+    if c.counts.group_size[1] > MAX_GROUP as i32 {
+        v.0.push(format!(
+            "`counts.group_size` maximum must be at most {MAX_GROUP}, got {}",
+            c.counts.group_size[1]
+        ));
+    }
+    // The social events regroup an environment's entities in fixed-size scratch (no allocation
+    // inside the step).
+    if c.counts.max_humans() > MAX_PERMUTE as i64 {
+        v.0.push(format!(
+            "at most {MAX_PERMUTE} humans per environment: `counts` allow {} (static {} + \
+             dynamic {} + laptop users {} + groups {} x group size {})",
+            c.counts.max_humans(),
+            c.counts.static_humans[1],
+            c.counts.dynamic_humans[1],
+            c.counts.max_laptop_users(),
+            c.counts.max_groups(),
+            c.counts.group_size[1]
+        ));
+    }
+    if c.counts.max_laptops() > MAX_PERMUTE as i64 {
+        v.0.push(format!(
+            "at most {MAX_PERMUTE} laptops per environment: `counts` allow {} (free {} + \
+             used {})",
+            c.counts.max_laptops(),
+            c.counts.laptops[1],
+            c.counts.max_laptop_users()
+        ));
+    }
+    let polygons = crate::state::caps::max_obstacle_polygons(c);
+    if polygons > MAX_POLYGONS {
+        v.0.push(format!(
+            "at most {MAX_POLYGONS} ORCA obstacles per environment (walls, tables, laptops, \
+             plants, laptop users, standing groups): `counts` allow {polygons}"
         ));
     }
     if c.counts.max_laptop_users() > 0 && c.counts.tables[0] < 1 {

@@ -86,51 +86,85 @@ fn max_wall_segments(c: &Config) -> usize {
     most as usize
 }
 
+/// Slots for humans, groups, laptops and laptop users, formations during an episode included.
+struct SocialCaps {
+    humans: usize,
+    groups: usize,
+    laptops: usize,
+    laptop_users: usize,
+}
+
+fn social_caps(c: &Config) -> SocialCaps {
+    let n = &c.counts;
+    let humans = n.max_humans().max(0) as usize;
+    let configured_groups = n.max_groups().max(0) as usize;
+    // Crowd formation turns lone walkers into new groups of at least 2 members.
+    let groups = if c.events.crowd_formation_probability > 0.0 {
+        configured_groups.max(humans / 2)
+    } else {
+        configured_groups
+    };
+    let laptops = n.max_laptops().max(0) as usize;
+    // Laptop-use formation seats walkers at free laptops: at most one user per laptop.
+    let laptop_users = if c.events.laptop_formation_probability > 0.0 {
+        laptops
+    } else {
+        n.max_laptop_users().max(0) as usize
+    };
+    SocialCaps {
+        humans,
+        groups,
+        laptops,
+        laptop_users,
+    }
+}
+
+/// The most ORCA obstacle polygons an environment of `c` can have: walls, tables, laptops,
+/// plants, laptop users and standing groups (validation bounds it by the step's scratch).
+pub fn max_obstacle_polygons(c: &Config) -> usize {
+    let max = |r: [i32; 2]| r[1].max(0) as usize;
+    let k = social_caps(c);
+    max_walls(c)
+        + max(c.counts.tables)
+        + k.laptops
+        + max(c.counts.plants)
+        + k.laptop_users
+        + k.groups
+}
+
+/// Wall rectangles: the room's outline (4, or 8 for an L) and 4 corridor walls.
+fn max_walls(c: &Config) -> usize {
+    let base = match c.room.shape {
+        Shape::NoWalls => 0,
+        Shape::Square | Shape::Rectangle => 4,
+        Shape::L | Shape::Random => 8,
+    };
+    let corridors = if c.room.corridors && base > 0 { 4 } else { 0 };
+    base + corridors
+}
+
 impl Caps {
     /// Capacities for `config`.
     pub fn from_config(c: &Config) -> Self {
         let n = &c.counts;
         let max = |r: [i32; 2]| r[1].max(0) as usize;
-        let group_size = max(n.group_size);
-        let configured_groups = n.max_groups().max(0) as usize;
-        let configured_users = n.max_laptop_users().max(0) as usize;
-        let humans = max(n.static_humans)
-            + max(n.dynamic_humans)
-            + configured_users
-            + configured_groups * group_size;
-        // Crowd formation turns lone walkers into new groups of at least 2 members.
-        let groups = if c.events.crowd_formation_probability > 0.0 {
-            configured_groups.max(humans / 2)
-        } else {
-            configured_groups
-        };
-        let laptops = max(n.laptops) + configured_users;
-        // Laptop-use formation seats walkers at free laptops: at most one user per laptop.
-        let laptop_users = if c.events.laptop_formation_probability > 0.0 {
-            laptops
-        } else {
-            configured_users
-        };
-        let base_walls = match c.room.shape {
-            Shape::NoWalls => 0,
-            Shape::Square | Shape::Rectangle => 4,
-            Shape::L | Shape::Random => 8,
-        };
-        let corridor_walls = if c.room.corridors && base_walls > 0 {
-            4
-        } else {
-            0
-        };
-        let walls = base_walls + corridor_walls;
+        let SocialCaps {
+            humans,
+            groups,
+            laptops,
+            laptop_users,
+        } = social_caps(c);
+        let walls = max_walls(c);
+        let corridors = c.room.corridors && c.room.shape != Shape::NoWalls;
         let wall_segments = max_wall_segments(c);
         let blockers = usize::from(matches!(c.room.shape, Shape::L | Shape::Random))
-            + if corridor_walls > 0 { 2 } else { 0 };
-        let polygons = walls + max(n.tables) + laptops + max(n.plants) + laptop_users + groups;
+            + if corridors { 2 } else { 0 };
+        let polygons = max_obstacle_polygons(c);
         let obstacle_vertices = 4 * polygons * (1 + SPLIT_VERTICES_PER_VERTEX);
         Self {
             humans,
             groups,
-            group_size,
+            group_size: max(n.group_size),
             laptop_users,
             laptops,
             tables: max(n.tables),

@@ -14,6 +14,7 @@ use crate::pipeline::Batch;
 use crate::rng::RngStream;
 use crate::scenario::place::{self, MAX_GROUP, MAX_TRIES, Pose, SamplingBox};
 use crate::spec::event;
+use crate::state::columns::MAX_PERMUTE;
 use crate::state::{NONE, StateChunk, forming, group_kind, policy, role};
 
 use super::regroup;
@@ -69,7 +70,7 @@ enum Start {
 }
 
 /// Local indices of the dispersable groups of `kind`, in group order.
-fn dispersable_groups(s: &StateChunk, e: usize, kind: u32) -> Fixed<u32, 256> {
+fn dispersable_groups(s: &StateChunk, e: usize, kind: u32) -> Fixed<u32, MAX_PERMUTE> {
     let gb = e * s.strides.groups;
     let mut out = Fixed::default();
     for g in 0..s.n_groups[e] as usize {
@@ -148,7 +149,7 @@ pub fn disperse_group(
 /// A random dispersable laptop user leaves; false when there is none.
 fn laptop_dispersal(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngStream) -> bool {
     let ub = e * s.strides.laptop_users;
-    let mut users: Fixed<u32, 256> = Fixed::default();
+    let mut users: Fixed<u32, MAX_PERMUTE> = Fixed::default();
     for u in 0..s.n_laptop_users[e] as usize {
         if s.lu_dispersable[ub + u] != 0 {
             users.push(u as u32);
@@ -176,7 +177,7 @@ pub fn end_laptop_use(p: &StepParams, s: &mut StateChunk, e: usize, u: usize, rn
 }
 
 /// Lone walkers that are not heading anywhere special, in slot order.
-fn free_walkers(s: &StateChunk, e: usize) -> Fixed<u32, 256> {
+fn free_walkers(s: &StateChunk, e: usize) -> Fixed<u32, MAX_PERMUTE> {
     let hb = e * s.strides.humans;
     let mut out = Fixed::default();
     for k in 0..s.n_humans[e] as usize {
@@ -257,7 +258,7 @@ pub fn start_crowd_formation(s: &mut StateChunk, e: usize, chosen: &[u32], slots
 /// formation is blocked (and the walker's policy still becomes ORCA, as in 0.1.1).
 fn laptop_formation(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngStream) -> Start {
     let lb = e * s.strides.laptops;
-    let mut laptops: Fixed<u32, 256> = Fixed::default();
+    let mut laptops: Fixed<u32, MAX_PERMUTE> = Fixed::default();
     for l in 0..s.n_laptops[e] as usize {
         if s.l_user[lb + l] == NONE {
             laptops.push(l as u32);
@@ -269,15 +270,25 @@ fn laptop_formation(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngS
     }
     let l = laptops[rng.below(laptops.len() as u32) as usize];
     let h = walkers[rng.below(walkers.len() as u32) as usize];
+    if send_to_laptop(p, s, e, h, l) {
+        Start::Started
+    } else {
+        Start::Blocked
+    }
+}
+
+/// Send walker `h` (local slot) to the seat of free laptop `l`: its policy becomes ORCA either
+/// way (as in 0.1.1); if the seat is free it heads there (true), else nothing starts (false).
+pub fn send_to_laptop(p: &StepParams, s: &mut StateChunk, e: usize, h: u32, l: u32) -> bool {
     let i = e * s.strides.humans + h as usize;
     s.h_policy[i] = policy::ORCA;
-    let ll = lb + l as usize;
+    let ll = e * s.strides.laptops + l as usize;
     let seat = place::seat(p, s.l_x[ll], s.l_y[ll], s.l_theta[ll]);
     if !spot_free(p, s, e, seat.0, seat.1) {
-        return Start::Blocked;
+        return false;
     }
     start_laptop_formation(s, e, h, l, seat);
-    Start::Started
+    true
 }
 
 /// Apply a laptop-use formation start: walker `h` (local slot) heads for the seat of laptop `l`.
