@@ -161,7 +161,7 @@ macro_rules! soa {
             /// Reorder the first `used` slots of kind `kind` of local environment `env`: slot `k`
             /// receives the old slot `perm[k]`, in every column of that kind; slots from
             /// `perm.len()` to `used` (entries the permutation drops) are zeroed. Used by the social
-            /// events, which regroup humans, groups and laptops (rare; at most [`MAX_PERMUTE`]
+            /// events, which regroup humans, groups and laptops (rare; at most [`MAX_PERMUTE`](crate::state::columns::MAX_PERMUTE)
             /// slots).
             pub fn permute(&mut self, kind: &str, env: usize, perm: &[u32], used: usize) {
                 assert!(used <= $crate::state::columns::MAX_PERMUTE && perm.len() <= used, "permutation of {} of {used} slots", perm.len());
