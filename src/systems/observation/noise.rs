@@ -19,9 +19,9 @@ use crate::rng::RngStream;
 use crate::spec::{ObsLayout, RECORD};
 use crate::state::StateChunk;
 
-/// RNG stream kind of the observation noise (`sub` = tick). Kinds 1-4 are the scenario, goals,
-/// avoid-robot and group-noise streams.
-pub const STREAM_OBS_NOISE: u32 = 5;
+/// RNG stream kind of the observation noise (`sub` = tick). Kinds 1-6 are the scenario, goals,
+/// avoid-robot, group-noise, formation and social-event streams.
+pub const STREAM_OBS_NOISE: u32 = 7;
 
 /// Add the configured noise to the observation `row` of environment `e` (batch index `env`)
 /// whose per-type record counts are `counts`.
