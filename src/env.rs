@@ -89,11 +89,7 @@ impl BatchEnv {
             ));
         }
         let caps = Caps::from_config(&config);
-        let layout = ObsLayout::new(
-            &caps,
-            config.observation.padded,
-            config.observation.robot_velocity,
-        );
+        let layout = ObsLayout::new(&caps, &config.observation);
         let params = StepParams::new(&config, options.seed, options.autoreset);
         let state = BatchState::new(options.n_envs, caps);
         let out = Outputs::new(options.n_envs, layout);

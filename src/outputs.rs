@@ -1,6 +1,7 @@
 //! What a step hands back, per environment, in caller-visible buffers that are overwritten every
-//! step (never reallocated): observation, per-type counts, reward, flags, info, the final
-//! observation and info of SAME_STEP autoresets, and the statistics of finished episodes.
+//! step (never reallocated): observation, per-type counts, interaction pairs, reward, flags, info,
+//! the final observation, interactions and info of SAME_STEP autoresets, and the statistics of
+//! finished episodes.
 
 use crate::spec::{N_EPISODE, N_EVENTS, N_INFO, ObsLayout};
 use crate::state::columns::soa;
@@ -25,6 +26,18 @@ impl OutStrides {
     pub fn counts(&self) -> usize {
         5
     }
+    /// Human-human pair indices per environment (two per pair).
+    pub fn hh(&self) -> usize {
+        2 * self.layout.pairs[crate::spec::interaction::HUMAN_HUMAN]
+    }
+    /// Human-laptop pair indices per environment (two per pair).
+    pub fn hl(&self) -> usize {
+        2 * self.layout.pairs[crate::spec::interaction::HUMAN_LAPTOP]
+    }
+    /// Pair counts per environment, one per interaction kind.
+    pub fn pairs(&self) -> usize {
+        2
+    }
     /// Info values per environment.
     pub fn info(&self) -> usize {
         N_INFO
@@ -46,6 +59,14 @@ soa! {
         obs.obs: f32,
         /// Real records per entity type in `obs` (order of [`crate::spec::ENTITY_KEYS`]).
         counts.obs_count: u32,
+        /// Human-human interactions: pairs (i, j) of `humans` record indices, flattened
+        /// `[i0, j0, i1, j1, ...]`, zero past `pair_count[0]` pairs.
+        hh.hh_pairs: u32,
+        /// Human-laptop interactions: pairs (`humans` index, `laptops` index), flattened, zero
+        /// past `pair_count[1]` pairs.
+        hl.hl_pairs: u32,
+        /// Pairs per interaction kind (order of [`crate::spec::INTERACTION_KEYS`]).
+        pairs.pair_count: u32,
         /// Reward of the step.
         env.reward: f32,
         /// 1 if the episode terminated at this step.
@@ -60,6 +81,12 @@ soa! {
         obs.final_obs: f32,
         /// SAME_STEP: per-type counts of `final_obs`.
         counts.final_obs_count: u32,
+        /// SAME_STEP: the human-human pairs of the finishing step.
+        hh.final_hh_pairs: u32,
+        /// SAME_STEP: the human-laptop pairs of the finishing step.
+        hl.final_hl_pairs: u32,
+        /// SAME_STEP: the pair counts of the finishing step.
+        pairs.final_pair_count: u32,
         /// SAME_STEP: the info of the finishing step.
         info.final_info: f32,
         /// 1 when an episode ended at this step and `episode` holds its statistics.

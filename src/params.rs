@@ -5,7 +5,8 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::config::{
-    Config, HumanPolicy, Kinematics, LaptopUserObstacle, OrcaNeighbourVelocity, RewardKind, Shape,
+    Config, HumanPolicy, Kinematics, LaptopUserObstacle, ObsFrame, OrcaNeighbourVelocity,
+    RewardKind, Shape,
 };
 
 /// How finished environments are reset (DESIGN.md section 3).
@@ -147,6 +148,20 @@ pub struct StepParams {
     pub obs_padded: u32,
     /// 1 when the robot record carries its commanded velocity.
     pub obs_robot_velocity: u32,
+    /// 1 when the records are written in the world frame (`WorldFrameObservations`).
+    pub obs_world_frame: u32,
+    /// 1 when the field of view or the range hides anything (`PartialObservations`); 0 skips
+    /// the visibility tests.
+    pub obs_partial: u32,
+    /// Robot field of view (rad), centred on its heading.
+    pub obs_fov: f32,
+    /// Sensor range (m); `f32::MAX` when unlimited (no infinity crosses to the GPU).
+    pub obs_range: f32,
+    /// 1 when any entry of `obs_noise` is on; 0 skips the noise pass.
+    pub obs_noise_on: u32,
+    /// Sensor noise (mean, standard deviation) per type: entity types at their
+    /// [`crate::spec::entity`] index, the robot's goal at [`NOISE_ROBOT`].
+    pub obs_noise: [[f32; 2]; 6],
     /// 1 when ORCA neighbours carry their velocities (0: at rest, as 0.1.1).
     pub orca_actual_velocity: u32,
     /// 1 when a moving group's ORCA velocity is divided by its member count (0.1.1).
@@ -165,7 +180,7 @@ pub struct StepParams {
     /// recorded ones by re-synchronising).
     pub replay: u32,
     /// Padding to a multiple of 16 bytes.
-    pub _pad: [u32; 4],
+    pub _pad: [u32; 3],
 }
 
 const _: () = assert!(std::mem::size_of::<StepParams>().is_multiple_of(16));
@@ -235,6 +250,14 @@ impl StepParams {
             reward_discomfort_factor: c.reward.discomfort_factor,
             obs_padded: u32::from(c.observation.padded),
             obs_robot_velocity: u32::from(c.observation.robot_velocity),
+            obs_world_frame: u32::from(c.observation.frame == ObsFrame::World),
+            obs_partial: u32::from(
+                c.observation.fov < std::f32::consts::TAU || c.observation.range.is_some(),
+            ),
+            obs_fov: c.observation.fov,
+            obs_range: c.observation.range.unwrap_or(f32::MAX),
+            obs_noise_on: u32::from(c.observation.noise.named().iter().any(|(_, g)| g.is_on())),
+            obs_noise: c.observation.noise.named().map(|(_, g)| [g.mean, g.std]),
             orca_actual_velocity: u32::from(
                 c.model.orca_neighbour_velocity == OrcaNeighbourVelocity::Actual,
             ),
@@ -248,7 +271,7 @@ impl StepParams {
             seed_lo: seed as u32,
             seed_hi: (seed >> 32) as u32,
             replay: 0,
-            _pad: [0; 4],
+            _pad: [0; 3],
         }
     }
 
@@ -262,6 +285,10 @@ impl StepParams {
         self.counts[i]
     }
 }
+
+/// Index of the robot's goal noise in [`StepParams::obs_noise`] (entity types use their
+/// [`crate::spec::entity`] index).
+pub const NOISE_ROBOT: usize = 5;
 
 /// Indices into [`StepParams::counts`].
 pub mod count {

@@ -7,7 +7,17 @@
 //! Each entity type is padded with all-zero records to its capacity; per-type counts say how many
 //! records are real. Without padding (`observation.padded = false`) the real records are exactly
 //! 0.1.1's observation vectors; with padding the walls are omitted as in 0.1.1.
+//!
+//! The options of 0.1.1's observation wrappers (spec 9.1) change the content, never the shape of
+//! the entity blocks: `observation.frame = "world"` writes world-frame records and a 16-float
+//! robot record ([`WORLD_ROBOT_RECORD`]); a limited field of view or range keeps the visible
+//! records only, compacted to the front of their block; sensor noise is added in place.
+//!
+//! Beside the observation, the interactions of 0.1.1's `info["interactions"]` (spec 5.2): index
+//! pairs into the `humans` and `laptops` records, padded to [`ObsLayout::pairs`] per kind
+//! ([`INTERACTION_KEYS`]) with per-kind counts.
 
+use crate::config::{ObsFrame, Observation};
 use crate::state::Caps;
 
 /// Floats per entity record: one-hot type (6), x, y, sin, cos, radius, relative speed,
@@ -16,6 +26,23 @@ pub const RECORD: usize = 14;
 
 /// Floats of the robot record without velocity: one-hot (6), goal x, goal y, radius.
 pub const ROBOT_RECORD: usize = 9;
+
+/// Floats of the world-frame robot record: one-hot (6), goal x, goal y, x, y (m, world frame),
+/// sin θ, cos θ, the commanded v_x, v_y (m/s, robot frame), ω (rad/s), radius (m).
+pub const WORLD_ROBOT_RECORD: usize = 16;
+
+/// Interaction kinds of 0.1.1's `info["interactions"]`, in output order: pairs (i, j) of
+/// `humans` record indices for every ordered pair of members of a group, and pairs (i, k) of a
+/// laptop user's `humans` record index and its laptop's `laptops` record index.
+pub const INTERACTION_KEYS: [&str; 2] = ["human-human", "human-laptop"];
+
+/// Index of each interaction kind in [`INTERACTION_KEYS`] and in the per-kind pair counts.
+pub mod interaction {
+    /// Human-human pairs (group members).
+    pub const HUMAN_HUMAN: usize = 0;
+    /// Human-laptop pairs (laptop users).
+    pub const HUMAN_LAPTOP: usize = 1;
+}
 
 /// Entity types in observation order, with their 0.1.1 dict keys.
 pub const ENTITY_KEYS: [&str; 5] = ["humans", "laptops", "tables", "plants", "walls"];
@@ -53,7 +80,8 @@ pub mod one_hot {
 /// Where each part of an environment's observation lives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ObsLayout {
-    /// Floats in the robot record (9, or 12 with the robot velocity).
+    /// Floats in the robot record: [`ROBOT_RECORD`] (9), 12 with the robot velocity, or
+    /// [`WORLD_ROBOT_RECORD`] (16) in the world frame.
     pub robot: usize,
     /// Record capacity per entity type, in [`ENTITY_KEYS`] order.
     pub capacity: [usize; 5],
@@ -61,13 +89,20 @@ pub struct ObsLayout {
     pub offset: [usize; 5],
     /// Floats per environment.
     pub dim: usize,
+    /// Pair capacity per interaction kind, in [`INTERACTION_KEYS`] order (each pair is two
+    /// `u32` indices).
+    pub pairs: [usize; 2],
 }
 
 impl ObsLayout {
     /// Layout for the given capacities and observation options.
-    pub fn new(caps: &Caps, padded: bool, robot_velocity: bool) -> Self {
-        let robot = ROBOT_RECORD + if robot_velocity { 3 } else { 0 };
-        let walls = if padded { 0 } else { caps.wall_segments };
+    pub fn new(caps: &Caps, obs: &Observation) -> Self {
+        let robot = match obs.frame {
+            ObsFrame::World => WORLD_ROBOT_RECORD,
+            ObsFrame::Robot if obs.robot_velocity => ROBOT_RECORD + 3,
+            ObsFrame::Robot => ROBOT_RECORD,
+        };
+        let walls = if obs.padded { 0 } else { caps.wall_segments };
         let capacity = [caps.humans, caps.laptops, caps.tables, caps.plants, walls];
         let mut offset = [0; 5];
         let mut at = robot;
@@ -75,11 +110,16 @@ impl ObsLayout {
             *o = at;
             at += n * RECORD;
         }
+        // A group of n members gives n(n - 1) ordered pairs, n - 1 per member. Every group (a
+        // crowd formed during an episode too) has at most `group_size` members and a human is in
+        // at most one group, so the members' pairs number at most humans × (group_size - 1).
+        let human_human = caps.humans * caps.group_size.saturating_sub(1);
         Self {
             robot,
             capacity,
             offset,
             dim: at,
+            pairs: [human_human, caps.laptop_users],
         }
     }
 }

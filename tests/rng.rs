@@ -329,3 +329,47 @@ fn mixer_avalanche() {
     }
     assert_eq!(mix32(0), 0);
 }
+
+/// Contract (docs/ARCHITECTURE.md, determinism): every purpose has its own stream kind. Two
+/// `pub const STREAM_*: u32 = N;` kinds with the same number would draw identical numbers for
+/// different purposes; this scans the sources, so that kinds added on different branches cannot
+/// collide unnoticed after a merge.
+#[test]
+fn stream_kinds_are_distinct() {
+    fn scan(dir: &std::path::Path, kinds: &mut Vec<(u32, String)>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                scan(&path, kinds);
+            } else if path.extension().is_some_and(|x| x == "rs") {
+                for line in std::fs::read_to_string(&path).unwrap().lines() {
+                    let line = line.trim();
+                    let Some(rest) = line.strip_prefix("pub const STREAM_") else {
+                        continue;
+                    };
+                    let (name, value) = rest.split_once(": u32 = ").unwrap_or_else(|| {
+                        panic!("{}: unexpected stream kind line `{line}`", path.display())
+                    });
+                    let value = value.trim_end_matches(';').parse().unwrap_or_else(|_| {
+                        panic!("{}: stream kind `{line}` is not a literal", path.display())
+                    });
+                    kinds.push((value, format!("STREAM_{name} ({})", path.display())));
+                }
+            }
+        }
+    }
+    let mut kinds = Vec::new();
+    scan(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src"),
+        &mut kinds,
+    );
+    kinds.sort();
+    assert!(kinds.len() >= 5, "stream kinds found: {kinds:?}");
+    for pair in kinds.windows(2) {
+        assert_ne!(
+            pair[0].0, pair[1].0,
+            "two streams share kind {}: {} and {}",
+            pair[0].0, pair[0].1, pair[1].1
+        );
+    }
+}

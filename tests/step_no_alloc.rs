@@ -19,8 +19,7 @@ static GLOBAL: common::Counting = common::Counting;
 
 /// Allocations during `steps` steps of a warm batch (250 warm-up steps cross the 201-step
 /// episode end, so every environment has reset inside a step at least once before counting).
-fn allocations_per_run(config: &str, n_envs: usize, threads: usize, steps: usize) -> usize {
-    let config = Config::from_name_or_path(config).unwrap();
+fn allocations_per_run(config: Config, n_envs: usize, threads: usize, steps: usize) -> usize {
     let mut env = BatchEnv::new(
         config,
         EnvOptions {
@@ -46,15 +45,28 @@ fn allocations_per_run(config: &str, n_envs: usize, threads: usize, steps: usize
 /// One test function: the counter is process-wide, so the cases must not run concurrently.
 #[test]
 fn a_warm_step_does_not_allocate() {
-    for config in ["exp1", "exp2", "lroom_mixed", "corridor_mixed"] {
+    let named = |name: &str| Config::from_name_or_path(name).unwrap();
+    // Every observation option on: world frame, limited view, noise on every type.
+    let mut options = named("exp2");
+    options.observation.frame = socnav::config::ObsFrame::World;
+    options.observation.fov = 3.0;
+    options.observation.range = Some(4.0);
+    options.observation.noise.robot.std = 0.1;
+    options.observation.noise.humans.std = 0.1;
+    options.observation.noise.walls.std = 0.1;
+    let configs = ["exp1", "exp2", "lroom_mixed", "corridor_mixed"]
+        .map(|name| (name, named(name)))
+        .into_iter()
+        .chain([("exp2 with every observation option", options)]);
+    for (name, config) in configs {
         let n = allocations_per_run(config, 64, 1, 250);
         assert_eq!(
             n, 0,
-            "{config}: {n} allocations in 250 warm steps on one thread"
+            "{name}: {n} allocations in 250 warm steps on one thread"
         );
     }
     let steps = 250;
-    let n = allocations_per_run("exp2", 256, 2, steps);
+    let n = allocations_per_run(named("exp2"), 256, 2, steps);
     // One worker beside the caller: one boxed job per step, plus its thread-local buffers
     // (ORCA world, obstacle build: a handful) on their first use.
     assert!(

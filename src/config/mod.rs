@@ -478,15 +478,104 @@ impl Default for Reward {
     }
 }
 
-/// What the observation contains (spec section 5).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+/// What the observation contains (spec section 5) and the options of 0.1.1's observation
+/// wrappers (spec 9.1), applied inside the step. The defaults are the bare 0.1.1 environment:
+/// robot frame, everything visible, no noise.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Observation {
     /// Pad every entity type to its capacity and omit the walls (`get_padded_observations`).
     /// Off, the wall segments are observed; the batch layout is fixed either way.
     pub padded: bool,
     /// Append the robot's commanded velocity (v_x, v_y, omega) to the robot record (not in 0.1.1).
+    /// Robot frame only: the world-frame robot record carries the command already.
     pub robot_velocity: bool,
+    /// Frame of the records: the robot's (0.1.1) or the world's (`WorldFrameObservations`).
+    pub frame: ObsFrame,
+    /// Width of the robot's field of view (rad), centred on its heading
+    /// (`PartialObservations.fov_angle`); 2π sees everything.
+    pub fov: f32,
+    /// Sensor range (m) from the robot centre (`PartialObservations.range`); `None` (the key
+    /// omitted) is unlimited.
+    pub range: Option<f32>,
+    /// Gaussian sensor noise per observed type (`NoisyObservations`).
+    pub noise: ObsNoise,
+}
+
+impl Default for Observation {
+    fn default() -> Self {
+        Self {
+            padded: false,
+            robot_velocity: false,
+            frame: ObsFrame::Robot,
+            // f32 2π: every bearing atan2(y, x) in [-π, π] lies within ±fov/2.
+            fov: std::f32::consts::TAU,
+            range: None,
+            noise: ObsNoise::default(),
+        }
+    }
+}
+
+/// The frame the observation records are written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ObsFrame {
+    /// Robot frame, x forward, y left (0.1.1's environment).
+    Robot,
+    /// World frame (0.1.1's `WorldFrameObservations` wrapper): a 16-float robot record with the
+    /// robot's pose and command; entity records with world positions, headings and velocities.
+    World,
+}
+
+/// Gaussian noise N(mean, std) added to observed values; `{ mean = 0, std = 0 }` is off.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default)]
+pub struct Gaussian {
+    /// Mean (the unit of the field it is added to: m, m/s, rad/s or none).
+    pub mean: f32,
+    /// Standard deviation (same unit as the mean).
+    pub std: f32,
+}
+
+impl Gaussian {
+    /// Whether adding this noise changes anything.
+    pub fn is_on(&self) -> bool {
+        self.mean != 0.0 || self.std != 0.0
+    }
+}
+
+/// Sensor noise per observed type (0.1.1's `NoisyObservations(mean, std_dev, apply_noise_to)`,
+/// with one distribution per type instead of one shared distribution and a list of types).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default)]
+pub struct ObsNoise {
+    /// Added to the robot record's goal x and y.
+    pub robot: Gaussian,
+    /// Added to fields 6-13 of every human record.
+    pub humans: Gaussian,
+    /// Added to fields 6-13 of every laptop record.
+    pub laptops: Gaussian,
+    /// Added to fields 6-13 of every table record.
+    pub tables: Gaussian,
+    /// Added to fields 6-13 of every plant record.
+    pub plants: Gaussian,
+    /// Added to fields 6-13 of every observed wall segment record.
+    pub walls: Gaussian,
+}
+
+impl ObsNoise {
+    /// Every distribution with its key name, entity types in observation order
+    /// ([`crate::spec::ENTITY_KEYS`]), then the robot.
+    pub fn named(&self) -> [(&'static str, Gaussian); 6] {
+        [
+            ("humans", self.humans),
+            ("laptops", self.laptops),
+            ("tables", self.tables),
+            ("plants", self.plants),
+            ("walls", self.walls),
+            ("robot", self.robot),
+        ]
+    }
 }
 
 /// Which velocity the neighbours of an ORCA agent have.

@@ -1,7 +1,7 @@
 //! Cross-field validation of a [`Config`]: returns every problem at once, each naming the key
 //! and the offending value, so a user fixes a file in one go.
 
-use super::{Config, Shape};
+use super::{Config, ObsFrame, Shape};
 use crate::scenario::place::MAX_GROUP;
 use crate::state::columns::MAX_PERMUTE;
 use crate::systems::orca_obstacles::MAX_POLYGONS;
@@ -16,6 +16,7 @@ const MAX_FILL_FRACTION: f32 = 0.55;
 pub fn validate(config: &Config) -> Vec<String> {
     let mut v = Problems::default();
     check_scalars(config, &mut v);
+    check_observation(config, &mut v);
     check_counts(config, &mut v);
     // The room checks run alongside the others, so that a room too small for what it must hold
     // is reported together with every other problem; they only need usable room sizes.
@@ -145,6 +146,35 @@ fn check_scalars(c: &Config, v: &mut Problems) {
             "`render.resolution` must be >= 16 pixels, got {}",
             c.render.resolution
         ));
+    }
+}
+
+fn check_observation(c: &Config, v: &mut Problems) {
+    let o = &c.observation;
+    v.angle("observation.fov", o.fov);
+    if let Some(range) = o.range {
+        if !(range.is_finite() && range > 0.0) {
+            v.0.push(format!(
+                "`observation.range` must be a finite number > 0 m (omit the key for an unlimited \
+                 range), got {range}"
+            ));
+        }
+    }
+    if o.robot_velocity && o.frame == ObsFrame::World {
+        v.0.push(
+            "`observation.robot_velocity` applies to the robot frame only: with \
+             `observation.frame = \"world\"` the robot record carries the command already"
+                .into(),
+        );
+    }
+    for (key, g) in o.noise.named() {
+        if !g.mean.is_finite() {
+            v.0.push(format!(
+                "`observation.noise.{key}.mean` must be finite, got {}",
+                g.mean
+            ));
+        }
+        v.non_negative(&format!("observation.noise.{key}.std"), g.std);
     }
 }
 

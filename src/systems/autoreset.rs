@@ -1,5 +1,5 @@
 //! Stage `autoreset`: what happens to an environment whose episode ended at this step.
-//! SAME_STEP keeps the final observation and info aside and resets at once; NEXT_STEP marks the
+//! SAME_STEP keeps the final observation, interactions and info aside and resets at once; NEXT_STEP marks the
 //! environment so that `begin_step` resets it at the next step; DISABLED leaves it to the caller.
 
 use crate::params::{AutoresetMode, StepParams};
@@ -17,6 +17,13 @@ pub fn autoreset(p: &StepParams, b: &mut Batch<'_>, e: usize) {
             .copy_from_slice(&b.o.info[e * info..(e + 1) * info]);
         b.o.final_obs_count[e * counts..(e + 1) * counts]
             .copy_from_slice(&b.o.obs_count[e * counts..(e + 1) * counts]);
+        let (hh, hl, pairs) = (b.o.strides.hh(), b.o.strides.hl(), b.o.strides.pairs());
+        b.o.final_hh_pairs[e * hh..(e + 1) * hh]
+            .copy_from_slice(&b.o.hh_pairs[e * hh..(e + 1) * hh]);
+        b.o.final_hl_pairs[e * hl..(e + 1) * hl]
+            .copy_from_slice(&b.o.hl_pairs[e * hl..(e + 1) * hl]);
+        b.o.final_pair_count[e * pairs..(e + 1) * pairs]
+            .copy_from_slice(&b.o.pair_count[e * pairs..(e + 1) * pairs]);
         b.o.has_final[e] = 1;
         super::reset::reset_and_observe_keep_step_outputs(p, b, e);
     } else if p.autoreset == AutoresetMode::NextStep.code() {

@@ -6,13 +6,15 @@
     reason = "each test crate uses a different part of this module"
 )]
 
+pub mod scene;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use socnav::outputs::Outputs;
 
-/// The outputs a caller may read, as bits (NaN equals NaN): everything but the buffers whose
-/// flag says they hold nothing (`final_*` without `has_final`, `episode` without
+/// The outputs a caller may read, as bits (NaN equals NaN), interaction pairs included:
+/// everything but the buffers whose flag says they hold nothing (`final_*` without `has_final`, `episode` without
 /// `episode_done`), which keep whatever an earlier step left there.
 pub fn valid_outputs(o: &Outputs) -> Vec<u32> {
     let mut v: Vec<u32> = o
@@ -25,6 +27,9 @@ pub fn valid_outputs(o: &Outputs) -> Vec<u32> {
     v.extend(
         o.obs_count
             .iter()
+            .chain(&o.hh_pairs)
+            .chain(&o.hl_pairs)
+            .chain(&o.pair_count)
             .chain(&o.terminated)
             .chain(&o.truncated)
             .chain(&o.has_final)
@@ -43,6 +48,10 @@ pub fn valid_outputs(o: &Outputs) -> Vec<u32> {
                     .iter()
                     .map(|x| x.to_bits()),
             );
+            let (hh, hl, pairs) = (o.strides.hh(), o.strides.hl(), o.strides.pairs());
+            v.extend(&o.final_hh_pairs[e * hh..(e + 1) * hh]);
+            v.extend(&o.final_hl_pairs[e * hl..(e + 1) * hl]);
+            v.extend(&o.final_pair_count[e * pairs..(e + 1) * pairs]);
         }
         if o.episode_done[e] != 0 {
             v.extend(

@@ -2,7 +2,7 @@
 //! batch layout it implies.
 
 use socnav::Config;
-use socnav::spec::{ENTITY_KEYS, ObsLayout};
+use socnav::spec::{ENTITY_KEYS, INTERACTION_KEYS, ObsLayout};
 use socnav::state::Caps;
 
 use crate::args::CheckArgs;
@@ -10,11 +10,7 @@ use crate::args::CheckArgs;
 pub fn check(a: &CheckArgs) -> Result<(), Box<dyn std::error::Error>> {
     let config = Config::from_name_or_path(&a.config)?;
     let caps = Caps::from_config(&config);
-    let layout = ObsLayout::new(
-        &caps,
-        config.observation.padded,
-        config.observation.robot_velocity,
-    );
+    let layout = ObsLayout::new(&caps, &config.observation);
     println!("# {}: valid. Resolved configuration:\n", a.config);
     println!("{}", config.to_toml_string());
     println!("# Capacities per environment: {caps:?}");
@@ -29,5 +25,11 @@ pub fn check(a: &CheckArgs) -> Result<(), Box<dyn std::error::Error>> {
         layout.robot,
         per_type.join(", ")
     );
+    let pairs: Vec<String> = INTERACTION_KEYS
+        .iter()
+        .zip(layout.pairs)
+        .map(|(k, n)| format!("{k} {n}"))
+        .collect();
+    println!("# Interaction pairs at most: {}", pairs.join(", "));
     Ok(())
 }
