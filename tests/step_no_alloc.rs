@@ -1,6 +1,7 @@
 //! `BatchEnv::step` does not allocate once warm (STYLE.md rule 4), resets inside the step included:
-//! scenario generation uses stack lists, the ORCA and obstacle buffers are thread-local and keep
-//! their capacity, outputs are overwritten in place. A counting global allocator checks it.
+//! scenario generation uses stack lists, the ORCA and obstacle buffers (a narrow field of view's
+//! obstacle subsets included) are thread-local and keep their capacity, outputs are overwritten
+//! in place. A counting global allocator checks it.
 //!
 //! On more than one thread the pool's workers are handed one small job each per step (rayon's
 //! `spawn` boxes it), and a worker reserves its thread-local buffers the first time it meets a
@@ -21,6 +22,10 @@ static GLOBAL: common::Counting = common::Counting;
 /// episode end, so every environment has reset inside a step at least once before counting).
 fn allocations_per_run(config: &str, n_envs: usize, threads: usize, steps: usize) -> usize {
     let config = Config::from_name_or_path(config).unwrap();
+    allocations_with(config, n_envs, threads, steps)
+}
+
+fn allocations_with(config: Config, n_envs: usize, threads: usize, steps: usize) -> usize {
     let mut env = BatchEnv::new(
         config,
         EnvOptions {
@@ -52,6 +57,14 @@ fn a_warm_step_does_not_allocate() {
             n, 0,
             "{config}: {n} allocations in 250 warm steps on one thread"
         );
+    }
+    // A 2 rad field of view: each walker's visible obstacles are processed into thread-local
+    // buffers reserved from the capacities.
+    for name in ["exp2", "lroom_mixed"] {
+        let mut config = Config::from_name_or_path(name).unwrap();
+        config.human.fov_angle = 2.0;
+        let n = allocations_with(config, 64, 1, 250);
+        assert_eq!(n, 0, "{name}, fov 2 rad: {n} allocations in 250 warm steps");
     }
     let steps = 250;
     let n = allocations_per_run("exp2", 256, 2, steps);
