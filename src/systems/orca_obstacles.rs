@@ -85,8 +85,8 @@ pub fn with_visible<R>(
 /// Squared distance (m²) from `pos` to the bounding box of `polygon` (0 inside).
 fn box_distance_sq(pos: [f32; 2], polygon: &Polygon) -> f32 {
     let gap = |k: usize| {
-        let lo = polygon.iter().fold(f32::INFINITY, |m, v| m.min(v[k]));
-        let hi = polygon.iter().fold(f32::NEG_INFINITY, |m, v| m.max(v[k]));
+        let lo = polygon[1..].iter().fold(polygon[0][k], |m, v| m.min(v[k]));
+        let hi = polygon[1..].iter().fold(polygon[0][k], |m, v| m.max(v[k]));
         (lo - pos[k]).max(pos[k] - hi).max(0.0)
     };
     let (dx, dy) = (gap(0), gap(1));
