@@ -191,6 +191,7 @@ pub fn laptop_use_disc(p: &StepParams, s: &StateChunk, e: usize, u: usize) -> Di
 
 /// Whether `view` sees human slot `j` of environment `e` as 0.1.1 decides it: a lone human by its
 /// own disc, a group member by its group's disc, a laptop user by its laptop use's disc.
+#[inline]
 pub fn sees_human(view: Option<&View>, p: &StepParams, s: &StateChunk, e: usize, j: usize) -> bool {
     let Some(v) = view else {
         return true;
