@@ -1,6 +1,7 @@
 //! `BatchEnv::step` does not allocate once warm (STYLE.md rule 4), resets inside the step included:
-//! scenario generation uses stack lists, the ORCA and obstacle buffers are thread-local and keep
-//! their capacity, outputs are overwritten in place. A counting global allocator checks it.
+//! scenario generation uses stack lists, the ORCA and obstacle buffers (a narrow field of view's
+//! obstacle subsets included) are thread-local and keep their capacity, outputs are overwritten
+//! in place. A counting global allocator checks it.
 //!
 //! On more than one thread the pool's workers are handed one small job each per step (rayon's
 //! `spawn` boxes it), and a worker reserves its thread-local buffers the first time it meets a
@@ -54,10 +55,21 @@ fn a_warm_step_does_not_allocate() {
     options.observation.noise.robot.std = 0.1;
     options.observation.noise.humans.std = 0.1;
     options.observation.noise.walls.std = 0.1;
+    // A 2 rad field of view for the walkers: each walker's visible obstacles are processed into
+    // thread-local buffers reserved from the capacities.
+    let narrow_view = |name: &str| {
+        let mut config = named(name);
+        config.human.fov_angle = 2.0;
+        config
+    };
     let configs = ["exp1", "exp2", "lroom_mixed", "corridor_mixed"]
-        .map(|name| (name, named(name)))
+        .map(|name| (name.to_string(), named(name)))
         .into_iter()
-        .chain([("exp2 with every observation option", options)]);
+        .chain([("exp2 with every observation option".to_string(), options)])
+        .chain(
+            ["exp2", "lroom_mixed"]
+                .map(|name| (format!("{name}, walkers' fov 2 rad"), narrow_view(name))),
+        );
     for (name, config) in configs {
         let n = allocations_per_run(config, 64, 1, 250);
         assert_eq!(

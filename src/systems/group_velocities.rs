@@ -34,6 +34,8 @@ pub fn group_velocities(p: &StepParams, b: &mut Batch<'_>, e: usize) {
             skip_human: None,
             skip_group: Some(g),
             robot: false,
+            // Groups see everything (0.1.1 runs their simulator without a field of view).
+            view: None,
         };
         let v = orca_world::with_world(|w| w.velocity(p, s, e, &agent, others));
         s.g_vx[g] = v[0];

@@ -2,7 +2,8 @@
 //! velocity with its policy (ORCA or SFM) and moves at once, so later walkers see it where it now
 //! is (0.1.1 updates them one after another). Speeds below the threshold become 0 (except for
 //! walkers heading to a forming crowd); the heading always follows the velocity. Whether a walker
-//! takes the robot into account is drawn every step with `prob_to_avoid_robot`.
+//! takes the robot into account is drawn every step with `prob_to_avoid_robot`. Both policies see
+//! only what lies in the walker's field of view (`perception.rs`; everything at 0.1.1's 2π).
 
 use crate::math;
 use crate::params::StepParams;
@@ -10,6 +11,7 @@ use crate::pipeline::Batch;
 use crate::state::{StateChunk, policy};
 
 use super::orca_world::{self, Others};
+use super::perception::View;
 
 /// RNG stream kind of the per-step "does this human avoid the robot" draws (`sub` = tick).
 pub const STREAM_AVOID_ROBOT: u32 = 3;
@@ -25,10 +27,11 @@ pub fn human_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     let first = e * s.strides.humans + s.n_static[e] as usize;
     for i in first..first + s.n_dynamic[e] as usize {
         let avoid_robot = rng.chance(p.prob_avoid_robot);
+        let view = View::of_human(p, s, i);
         let (vx, vy) = if s.h_policy[i] == policy::ORCA {
-            orca_velocity(p, s, e, i, avoid_robot)
+            orca_velocity(p, s, e, i, avoid_robot, view)
         } else {
-            super::sfm::velocity(p, s, e, i, avoid_robot)
+            super::sfm::velocity(p, s, e, i, avoid_robot, view.as_ref())
         };
         walk(p, s, i, vx, vy);
     }
@@ -36,13 +39,15 @@ pub fn human_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
 
 /// The ORCA velocity (m/s) of lone walker `i`: itself at rest (or at its velocity) wanting to go
 /// to its goal at the human speed, in a fresh simulator with the other lone humans, the moving
-/// groups and, if it avoids it, the robot.
+/// groups and, if it avoids it, the robot; of the humans, groups and obstacles only those in
+/// `view` (`None`: all).
 fn orca_velocity(
     p: &StepParams,
     s: &StateChunk,
     e: usize,
     i: usize,
     avoid_robot: bool,
+    view: Option<View>,
 ) -> (f32, f32) {
     let (x, y) = (s.h_x[i], s.h_y[i]);
     let pref = orca_world::preferred(x, y, s.h_goal_x[i], s.h_goal_y[i], p.human_max_speed);
@@ -56,6 +61,7 @@ fn orca_velocity(
         skip_human: Some(i),
         skip_group: None,
         robot: avoid_robot,
+        view,
     };
     let v = orca_world::with_world(|w| w.velocity(p, s, e, &agent, others));
     (v[0], v[1])

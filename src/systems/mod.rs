@@ -24,6 +24,7 @@ pub mod metrics;
 pub mod observation;
 pub mod orca_obstacles;
 pub mod orca_world;
+pub mod perception;
 pub mod regroup;
 pub mod reset;
 pub mod reward;

@@ -6,13 +6,22 @@
 //! The polygons, in 0.1.1's order: tables, free laptops, plants (bounding squares), walls, laptop
 //! users (axis-aligned squares of half-side `laptop_user_half_side`, 2 x human diameter in 0.1.1)
 //! and standing groups (squares of half-side the group radius around the stored centre).
+//!
+//! A walker whose field of view is narrower than 0.1.1's "sees everything" tolerance takes part
+//! only with the obstacles it sees (spec 4.2-4.3): [`with_visible`] processes that subset, in the
+//! same order, for its one solve. Both paths walk the one list of [`for_each_polygon`].
 
 use std::cell::RefCell;
 
 use crate::fixed::Fixed;
-use crate::orca::{ObstacleScratch, ObstacleSet, process_obstacles};
+use crate::geometry::{Disc, Rect, Shape};
+use crate::orca::{
+    ObstacleScratch, ObstacleSet, ObstacleVerts, OrcaAgent, obstacle_range_sq, process_obstacles,
+};
 use crate::params::StepParams;
 use crate::state::{NONE, StateChunk, group_kind};
+
+use super::perception::{self, View};
 
 type Polygon = [[f32; 2]; 4];
 
@@ -29,62 +38,133 @@ pub fn rebuild_if_dirty(p: &StepParams, s: &mut StateChunk, e: usize) {
         return;
     }
     let mut polygons: Fixed<Polygon, MAX_POLYGONS> = Fixed::default();
-    collect(p, s, e, &mut polygons);
-    BUILD.with(|b| {
-        let (scratch, set) = &mut *b.borrow_mut();
-        // Reserved from the capacities on a thread's first build, so no later build allocates.
-        set.reserve(s.strides.obstacle_vertices);
-        scratch.reserve(s.strides.obstacle_vertices);
-        process_obstacles(polygons.as_slice(), scratch, set)
-            .unwrap_or_else(|err| panic!("scenario produced a degenerate obstacle: {err}"));
-        store(s, e, set);
-    });
+    for_each_polygon(p, s, e, |_, polygon| polygons.push(polygon));
+    let cap = s.strides.obstacle_vertices;
+    with_processed(cap, polygons.as_slice(), |set| store(s, e, set));
     s.obstacles_dirty[e] = 0;
 }
 
-fn collect(p: &StepParams, s: &StateChunk, e: usize, out: &mut Fixed<Polygon, MAX_POLYGONS>) {
-    let rect = |r: crate::geometry::Rect| -> Polygon {
-        [0, 1, 2, 3].map(|k| {
-            let (x, y) = r.corner(k);
-            [x, y]
-        })
+/// Run `f` on the processed obstacles of environment `e` that `view` sees, for `agent`'s solve:
+/// the cached set when it sees them all (bit for bit what a walker seeing everything gets); no
+/// obstacles when none it sees comes within its obstacle range (split edges are pieces of the
+/// input edges, so none of them would be a neighbour either: the same velocity); else the visible
+/// polygons, in the same order, processed afresh into this thread's buffers (reserved from the
+/// capacities, so a warm step does not allocate).
+pub fn with_visible<R>(
+    p: &StepParams,
+    s: &StateChunk,
+    e: usize,
+    view: &View,
+    agent: &OrcaAgent,
+    f: impl FnOnce(&ObstacleVerts<'_>) -> R,
+) -> R {
+    // As RVO2's neighbour search, with a margin so that f32 rounding of the bounding-box distance
+    // never calls far a polygon whose edges the search would accept.
+    let range_sq = obstacle_range_sq(agent.time_horizon_obst, agent.max_speed, agent.radius);
+    let reject_sq = range_sq * (1.0 + 1e-3);
+    let mut polygons: Fixed<Polygon, MAX_POLYGONS> = Fixed::default();
+    let (mut all, mut near) = (0, false);
+    for_each_polygon(p, s, e, |seen_as, polygon| {
+        all += 1;
+        if view.sees(&seen_as) {
+            near |= box_distance_sq(agent.pos, &polygon) <= reject_sq;
+            polygons.push(polygon);
+        }
+    });
+    if polygons.len() == all {
+        return f(&super::orca_world::obstacles(s, e));
+    }
+    if !near {
+        return f(&ObstacleVerts::EMPTY);
+    }
+    with_processed(s.strides.obstacle_vertices, polygons.as_slice(), |set| {
+        f(&set.as_view())
+    })
+}
+
+/// Squared distance (m²) from `pos` to the bounding box of `polygon` (0 inside).
+fn box_distance_sq(pos: [f32; 2], polygon: &Polygon) -> f32 {
+    let gap = |k: usize| {
+        let lo = polygon[1..].iter().fold(polygon[0][k], |m, v| m.min(v[k]));
+        let hi = polygon[1..].iter().fold(polygon[0][k], |m, v| m.max(v[k]));
+        (lo - pos[k]).max(pos[k] - hi).max(0.0)
     };
-    let square = |x: f32, y: f32, h: f32| -> Polygon {
-        [
-            [x + h, y + h],
-            [x - h, y + h],
-            [x - h, y - h],
-            [x + h, y - h],
-        ]
-    };
+    let (dx, dy) = (gap(0), gap(1));
+    dx * dx + dy * dy
+}
+
+/// Process `polygons` with RVO2's `processObstacles` into this thread's set and run `f` on it;
+/// `cap` is the environment's obstacle-vertex capacity.
+fn with_processed<R>(cap: usize, polygons: &[Polygon], f: impl FnOnce(&ObstacleSet) -> R) -> R {
+    BUILD.with(|b| {
+        let (scratch, set) = &mut *b.borrow_mut();
+        // Reserved from the capacities on a thread's first build, so no later build allocates.
+        set.reserve(cap);
+        scratch.reserve(cap);
+        process_obstacles(polygons, scratch, set)
+            .unwrap_or_else(|err| panic!("scenario produced a degenerate obstacle: {err}"));
+        f(set)
+    })
+}
+
+/// Every ORCA obstacle polygon of environment `e`, in 0.1.1's order, with the shape a walker's
+/// field of view is tested against (`perception.rs`): rectangles as themselves, plants, laptop
+/// users and standing groups as the discs 0.1.1 tests (their polygons are squares).
+pub fn for_each_polygon(
+    p: &StepParams,
+    s: &StateChunk,
+    e: usize,
+    mut f: impl FnMut(Shape, Polygon),
+) {
     for t in 0..s.n_tables[e] as usize {
-        out.push(rect(super::world::table_rect(p, s, e, t)));
+        let r = super::world::table_rect(p, s, e, t);
+        f(Shape::Rect(r), corners(&r));
     }
     let lb = e * s.strides.laptops;
     for l in 0..s.n_laptops[e] as usize {
         if s.l_user[lb + l] == NONE {
-            out.push(rect(super::world::laptop_rect(p, s, e, l)));
+            let r = super::world::laptop_rect(p, s, e, l);
+            f(Shape::Rect(r), corners(&r));
         }
     }
     let pb = e * s.strides.plants;
     for i in pb..pb + s.n_plants[e] as usize {
-        out.push(square(s.p_x[i], s.p_y[i], p.plant_radius));
+        let (x, y, r) = (s.p_x[i], s.p_y[i], p.plant_radius);
+        f(Shape::Disc(Disc { x, y, r }), square(x, y, r));
     }
     for w in 0..s.n_walls[e] as usize {
-        out.push(rect(super::world::wall_rect(p, s, e, w)));
+        let r = super::world::wall_rect(p, s, e, w);
+        f(Shape::Rect(r), corners(&r));
     }
     let hb = e * s.strides.humans;
     let ub = e * s.strides.laptop_users;
     for u in ub..ub + s.n_laptop_users[e] as usize {
         let h = hb + s.lu_human[u] as usize;
-        out.push(square(s.h_x[h], s.h_y[h], p.laptop_user_half_side));
+        let seen_as = Shape::Disc(perception::laptop_use_disc(p, s, e, u));
+        f(seen_as, square(s.h_x[h], s.h_y[h], p.laptop_user_half_side));
     }
     let gb = e * s.strides.groups;
     for g in gb..gb + s.n_groups[e] as usize {
         if s.g_kind[g] == group_kind::STANDING {
-            out.push(square(s.g_x[g], s.g_y[g], p.group_radius));
+            let seen_as = Shape::Disc(perception::group_disc(p, s, g));
+            f(seen_as, square(s.g_x[g], s.g_y[g], p.group_radius));
         }
     }
+}
+
+/// The rectangle's corners in 0.1.1's counter-clockwise order.
+fn corners(r: &Rect) -> Polygon {
+    [0, 1, 2, 3].map(|k| r.corner(k).into())
+}
+
+/// The axis-aligned square of half-side `h` around (x, y), counter-clockwise from (+h, +h).
+fn square(x: f32, y: f32, h: f32) -> Polygon {
+    [
+        [x + h, y + h],
+        [x - h, y + h],
+        [x - h, y - h],
+        [x + h, y - h],
+    ]
 }
 
 fn store(s: &mut StateChunk, e: usize, set: &ObstacleSet) {

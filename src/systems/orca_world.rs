@@ -4,17 +4,24 @@
 //! new velocity is read, so this module builds that agent, picks its neighbours as RVO2 would
 //! and runs the solver once.
 //!
+//! A walker with a field of view narrower than 0.1.1's "sees everything" tolerance meets only the
+//! lone humans, moving groups and obstacles it sees (`perception.rs`); the robot, when it avoids
+//! it, whether seen or not, as 0.1.1 adds it. Moving groups and the shadow robot see everything.
+//!
 //! In a fresh simulator every agent has zero velocity (the 0.1.1 choice, kept by default);
 //! `model.orca_neighbour_velocity = "actual"` gives the agents their current velocities instead.
 
 use std::cell::RefCell;
 
+use crate::geometry::Shape;
 use crate::orca::{
     Neighbor, ObstacleVerts, OrcaAgent, OrcaNeighbor, OrcaScratch, compute_new_velocity,
     insert_agent_neighbor,
 };
 use crate::params::StepParams;
 use crate::state::{StateChunk, group_kind};
+
+use super::perception::{self, View};
 
 /// Reusable per-thread buffers (they keep their capacity, so a warm step does not allocate).
 #[derive(Debug, Default)]
@@ -43,6 +50,9 @@ pub struct Others {
     pub skip_group: Option<usize>,
     /// Whether the robot is one of the agents.
     pub robot: bool,
+    /// The first agent's view: only the lone humans, moving groups and obstacles it sees take
+    /// part. `None`: it sees everything (the environment's cached obstacles are used as they are).
+    pub view: Option<View>,
 }
 
 /// Radius (m) of a moving group's ORCA super-agent: member circle plus a human diameter.
@@ -113,13 +123,13 @@ impl OrcaWorld {
         self.reserve(&s.strides);
         self.gather(p, s, e, others);
         self.select(first);
-        compute_new_velocity(
-            first,
-            &self.neighbors,
-            &obstacles(s, e),
-            p.dt,
-            &mut self.scratch,
-        )
+        let (neighbors, scratch) = (&self.neighbors, &mut self.scratch);
+        match &others.view {
+            None => compute_new_velocity(first, neighbors, &obstacles(s, e), p.dt, scratch),
+            Some(view) => super::orca_obstacles::with_visible(p, s, e, view, first, |seen| {
+                compute_new_velocity(first, neighbors, seen, p.dt, scratch)
+            }),
+        }
     }
 
     /// Room for the largest simulator the capacities allow, reserved on a thread's first call so
@@ -136,13 +146,14 @@ impl OrcaWorld {
             .reserve(caps.obstacle_vertices + agents, caps.obstacle_vertices);
     }
 
-    /// The other agents in 0.1.1's order: lone humans, the robot, moving groups.
+    /// The other agents in 0.1.1's order: lone humans, the robot, moving groups (those seen).
     fn gather(&mut self, p: &StepParams, s: &StateChunk, e: usize, others: Others) {
         let actual = p.orca_actual_velocity != 0;
+        let view = others.view.as_ref();
         self.candidates.clear();
         let hb = e * s.strides.humans;
         for i in hb..hb + (s.n_static[e] + s.n_dynamic[e]) as usize {
-            if others.skip_human == Some(i) {
+            if others.skip_human == Some(i) || !perception::sees_human(view, p, s, e, i) {
                 continue;
             }
             let vel = if actual {
@@ -171,7 +182,10 @@ impl OrcaWorld {
         }
         let gb = e * s.strides.groups;
         for g in gb..gb + s.n_groups[e] as usize {
-            if s.g_kind[g] != group_kind::MOVING || others.skip_group == Some(g) {
+            if s.g_kind[g] != group_kind::MOVING
+                || others.skip_group == Some(g)
+                || !perception::sees(view, &Shape::Disc(perception::group_disc(p, s, g)))
+            {
                 continue;
             }
             let vel = if actual {

@@ -1,11 +1,15 @@
 //! SocNavGym 0.1.1's one-shot social force model (spec 4.3, orca-sfm.md 3.5): the velocity of a
 //! lone walker is recomputed from scratch every step as (f/mass)·dt, capped at the human speed,
 //! with f = w·(desired + Σ obstacle + Σ pedestrian forces), w = 1/√3. There is no velocity state.
+//! Only the obstacles and humans in the walker's field of view push it (`perception.rs`); the
+//! robot, when the walker avoids it this step, pushes it seen or not (as in 0.1.1).
 
-use crate::geometry::Rect;
+use crate::geometry::{Disc, Shape};
 use crate::math;
 use crate::params::StepParams;
 use crate::state::{StateChunk, group_kind, role};
+
+use super::perception::{self, View};
 
 /// Weight of each force group (0.1.1: 1/√3 each).
 const W: f32 = 0.577_350_26;
@@ -21,8 +25,15 @@ struct Params {
 }
 
 /// The SFM velocity (m/s, world frame) of human slot `i` of environment `e`; `robot` says whether
-/// this human takes the robot into account this step.
-pub fn velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, robot: bool) -> (f32, f32) {
+/// this human takes the robot into account this step, `view` what it sees (`None`: everything).
+pub fn velocity(
+    p: &StepParams,
+    s: &StateChunk,
+    e: usize,
+    i: usize,
+    robot: bool,
+    view: Option<&View>,
+) -> (f32, f32) {
     let sp = Params {
         r0: s.sfm_r0[e],
         gamma: s.sfm_gamma[e],
@@ -42,45 +53,50 @@ pub fn velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, robot: bool)
     };
     let r = p.human_radius;
     let disc_gap = |ox: f32, oy: f32, ro: f32| length(x - ox, y - oy) - ro - r;
+    // Discs push from their centre, rectangles from their nearest point; unseen ones not at all.
+    let mut push = |shape: Shape| {
+        if !perception::sees(view, &shape) {
+            return;
+        }
+        match shape {
+            Shape::Disc(d) => obstacle(d.x, d.y, disc_gap(d.x, d.y, d.r)),
+            Shape::Rect(rc) => {
+                let (qx, qy) = rc.nearest_point(x, y);
+                obstacle(qx, qy, length(x - qx, y - qy) - r);
+            }
+        }
+    };
     let pb = e * s.strides.plants;
     for k in pb..pb + s.n_plants[e] as usize {
-        obstacle(
-            s.p_x[k],
-            s.p_y[k],
-            disc_gap(s.p_x[k], s.p_y[k], p.plant_radius),
-        );
+        push(Shape::Disc(Disc {
+            x: s.p_x[k],
+            y: s.p_y[k],
+            r: p.plant_radius,
+        }));
     }
-    let mut rect = |rc: Rect| {
-        let (qx, qy) = rc.nearest_point(x, y);
-        obstacle(qx, qy, length(x - qx, y - qy) - r);
-    };
     for w in 0..s.n_walls[e] as usize {
-        rect(super::world::wall_rect(p, s, e, w));
+        push(Shape::Rect(super::world::wall_rect(p, s, e, w)));
     }
     for t in 0..s.n_tables[e] as usize {
-        rect(super::world::table_rect(p, s, e, t));
+        push(Shape::Rect(super::world::table_rect(p, s, e, t)));
     }
     let lb = e * s.strides.laptops;
     for l in 0..s.n_laptops[e] as usize {
         if s.l_user[lb + l] == crate::state::NONE {
-            rect(super::world::laptop_rect(p, s, e, l));
+            push(Shape::Rect(super::world::laptop_rect(p, s, e, l)));
         }
     }
     let gb = e * s.strides.groups;
     for g in gb..gb + s.n_groups[e] as usize {
         if s.g_kind[g] == group_kind::STANDING {
-            obstacle(
-                s.g_x[g],
-                s.g_y[g],
-                disc_gap(s.g_x[g], s.g_y[g], p.group_radius),
-            );
+            push(Shape::Disc(perception::group_disc(p, s, g)));
         }
     }
     if robot {
         let (rx, ry) = (s.robot_x[e], s.robot_y[e]);
         obstacle(rx, ry, disc_gap(rx, ry, p.robot_radius));
     }
-    let (fpx, fpy) = pedestrian_forces(s, e, i, &sp);
+    let (fpx, fpy) = pedestrian_forces(p, s, e, i, &sp, view);
     fdx = W * fdx + W * fox + W * fpx;
     fdy = W * fdy + W * foy + W * fpy;
     // mass 1: v = f·dt, capped at the human speed.
@@ -94,15 +110,25 @@ pub fn velocity(p: &StepParams, s: &StateChunk, e: usize, i: usize, robot: bool)
     }
 }
 
-/// Σ f_ij over lone humans, moving-group members and laptop users (standing-group members are
-/// obstacles through their group's disc).
-fn pedestrian_forces(s: &StateChunk, e: usize, i: usize, sp: &Params) -> (f32, f32) {
+/// Σ f_ij over the lone humans, moving-group members and laptop users `view` sees (standing-group
+/// members are obstacles through their group's disc).
+fn pedestrian_forces(
+    p: &StepParams,
+    s: &StateChunk,
+    e: usize,
+    i: usize,
+    sp: &Params,
+    view: Option<&View>,
+) -> (f32, f32) {
     let hb = e * s.strides.humans;
     let (xi, yi) = (s.h_x[i], s.h_y[i]);
     let (vix, viy) = (s.h_vx[i], s.h_vy[i]);
     let (mut fx, mut fy) = (0.0f32, 0.0f32);
     for j in hb..hb + s.n_humans[e] as usize {
-        if j == i || s.h_role[j] == role::STANDING_GROUP {
+        if j == i
+            || s.h_role[j] == role::STANDING_GROUP
+            || !perception::sees_human(view, p, s, e, j)
+        {
             continue;
         }
         let (vjx, vjy) = (s.h_vx[j], s.h_vy[j]);

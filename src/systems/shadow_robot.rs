@@ -26,6 +26,8 @@ pub fn shadow_robot(p: &StepParams, b: &mut Batch<'_>, e: usize) {
         skip_human: None,
         skip_group: None,
         robot: false,
+        // The shadow robot sees everything (0.1.1 adds every entity to its simulator).
+        view: None,
     };
     let v = orca_world::with_world(|w| w.velocity(p, s, e, &agent, others));
     let (vx, vy, w) = command_from_velocity(p, theta, v[0], v[1]);
