@@ -328,3 +328,183 @@ fn gif_of_a_few_steps_decodes_frame_by_frame() {
     }
     assert_eq!(frames, steps + 1);
 }
+
+/// The scene of [`scene_doc`] under `config`.
+fn scene_env_with(config: Config, doc: &Value) -> BatchEnv {
+    let mut env = BatchEnv::new(
+        config,
+        EnvOptions {
+            n_envs: 1,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    env.set_state(0, doc).unwrap();
+    env
+}
+
+/// `over` painted with opacity `alpha` on `under`, within 2 levels per channel (tiny-skia blends
+/// in 8-bit premultiplied arithmetic).
+fn assert_blend(got: Rgb, over: Rgb, under: Rgb, alpha: f32, what: &str) {
+    let a = (alpha * 255.0).round() / 255.0;
+    let mix = |o: u8, u: u8| f32::from(u) + (f32::from(o) - f32::from(u)) * a;
+    let want = [
+        mix(over.0, under.0),
+        mix(over.1, under.1),
+        mix(over.2, under.2),
+    ];
+    let got3 = [got.0, got.1, got.2].map(f32::from);
+    assert!(
+        got3.iter().zip(want).all(|(g, w)| (g - w).abs() <= 2.0),
+        "{what}: got {got:?}, want about {want:?}"
+    );
+}
+
+#[test]
+fn the_robots_sensor_is_drawn_as_its_field_of_view_and_range() {
+    let mut c = config();
+    c.observation.fov = std::f32::consts::FRAC_PI_2;
+    c.observation.range = Some(3.0);
+    let env = scene_env_with(c, &scene_doc());
+    let (img, view) = frame(&env);
+    // The robot at (2, -1) faces +x: 2 m ahead lies inside the 90° wedge of 3 m.
+    let ahead = (ROBOT.0 + 2.0, ROBOT.1);
+    let tint = rgb_at(&img, &view, ahead);
+    assert_blend(
+        tint,
+        palette::ROBOT,
+        palette::FLOOR,
+        0.07,
+        "inside the sensor",
+    );
+    // Behind the robot, beyond its range, and outside the opening: plain floor.
+    for outside in [
+        (ROBOT.0 - 1.5, ROBOT.1),
+        (ROBOT.0 + 3.5, ROBOT.1),
+        (ROBOT.0 + 1.0, ROBOT.1 + 1.8),
+    ] {
+        assert_eq!(
+            rgb_at(&img, &view, outside),
+            palette::FLOOR,
+            "at {outside:?}"
+        );
+    }
+
+    // Full view, unlimited range: nothing drawn, the frame equals the default one.
+    let plain = frame(&scene_env()).0;
+    let mut full = config();
+    full.observation.fov = std::f32::consts::TAU;
+    full.observation.range = None;
+    assert!(frame(&scene_env_with(full, &scene_doc())).0.data() == plain.data());
+
+    // Unlimited range: the wedge reaches the walls but never tints the margin outside the room.
+    let mut unlimited = config();
+    unlimited.observation.fov = std::f32::consts::FRAC_PI_2;
+    let env = scene_env_with(unlimited, &scene_doc());
+    let (img, view) = frame(&env);
+    assert_blend(
+        rgb_at(&img, &view, (ROBOT.0 + 3.5, ROBOT.1)),
+        palette::ROBOT,
+        palette::FLOOR,
+        0.07,
+        "unlimited range, 3.5 m ahead",
+    );
+    let (_, py) = view.px(ROBOT.0, ROBOT.1);
+    let edge = img.pixel(img.width() - 2, py as u32).unwrap();
+    assert_eq!(
+        Rgb(edge.red(), edge.green(), edge.blue()),
+        palette::OUTSIDE,
+        "the margin in front of the robot"
+    );
+}
+
+#[test]
+fn walkers_fields_of_view_are_drawn_when_limited() {
+    let mut c = config();
+    c.human.fov_angle = 1.0;
+    let env = scene_env_with(c, &scene_doc());
+    let (img, view) = frame(&env);
+    // The walker at (-2, -1.5) faces +x; its wedge is 1.5 m long.
+    assert_blend(
+        rgb_at(&img, &view, (WALKER.0 + 1.0, WALKER.1)),
+        palette::HUMAN_WALKING,
+        palette::FLOOR,
+        0.08,
+        "in the walker's view",
+    );
+    for outside in [
+        (WALKER.0 - 1.0, WALKER.1),
+        (WALKER.0 + 1.0, WALKER.1 + 0.9),
+        (WALKER.0 + 2.0, WALKER.1),
+    ] {
+        assert_eq!(
+            rgb_at(&img, &view, outside),
+            palette::FLOOR,
+            "at {outside:?}"
+        );
+    }
+    // Static humans and laptop users do not walk, so no view is drawn for them.
+    assert_eq!(
+        rgb_at(&img, &view, (STATIC_HUMAN.0 + 1.0, STATIC_HUMAN.1)),
+        palette::FLOOR
+    );
+}
+
+#[test]
+fn a_walker_heading_to_a_laptop_seat_is_linked_to_it() {
+    let seat = (1.0, -2.0);
+    let mut doc = scene_doc();
+    doc["state"]["hl_forming"] = json!({"human": 2, "laptop": 4, "seat": [seat.0, seat.1, 0.0]});
+    let (img, view) = frame(&scene_env_with(config(), &doc));
+    let (plain, _) = frame(&scene_env());
+    // The seat's cross is drawn in the laptop user's colour...
+    let at_seat = rgb_at(&img, &view, seat);
+    assert_ne!(at_seat, palette::FLOOR);
+    assert!(
+        at_seat.1 < palette::FLOOR.1 && at_seat.2 < palette::FLOOR.2 && at_seat.0 > 200,
+        "an orange mark at the seat: {at_seat:?}"
+    );
+    // ... and the midpoint of the walker's line to it changes; the rest of the room does not.
+    let mid = (0.5 * (WALKER.0 + seat.0), 0.5 * (WALKER.1 + seat.1));
+    assert_ne!(rgb_at(&img, &view, mid), rgb_at(&plain, &view, mid));
+    assert_eq!(
+        rgb_at(&img, &view, (mid.0, mid.1 + 1.0)),
+        rgb_at(&plain, &view, (mid.0, mid.1 + 1.0))
+    );
+}
+
+#[test]
+fn a_forming_crowd_shows_its_slots_and_the_walkers_way_to_them() {
+    let (slot, centre) = ((0.0, -2.0), (0.0, -1.5));
+    let mut doc = scene_doc();
+    doc["state"]["humans"][1]["forming_crowd"] = json!(true);
+    doc["state"]["crowd_forming"] = json!({
+        "slots": [[slot.0, slot.1, 1.57], [centre.0, -1.0, -1.57]],
+        "slot_of": {"2": 0, "1": 1},
+        "centre": [centre.0, centre.1],
+        "almost_formed_count": 0,
+    });
+    // Capacity for a crowd of 2 (the scene itself has no group).
+    let mut c = config();
+    c.counts.standing_groups = [0, 1];
+    c.counts.group_size = [2, 2];
+    let (img, view) = frame(&scene_env_with(c, &doc));
+    let (plain, _) = frame(&scene_env());
+    let at_slot = rgb_at(&img, &view, slot);
+    let pink = palette::HUMAN_STANDING_GROUP;
+    assert!(
+        at_slot != palette::FLOOR && at_slot.1 < palette::FLOOR.1 && at_slot.0 > 200,
+        "a pink cross at the slot: {at_slot:?} (crowd colour {pink:?})"
+    );
+    // The walker's line to its slot; the static human (not walking to it) gets none.
+    let mid = (0.5 * (WALKER.0 + slot.0), 0.5 * (WALKER.1 + slot.1));
+    assert_ne!(rgb_at(&img, &view, mid), rgb_at(&plain, &view, mid));
+    let mid_static = (
+        0.5 * (STATIC_HUMAN.0 + centre.0),
+        0.5 * (STATIC_HUMAN.1 - 1.0),
+    );
+    assert_eq!(
+        rgb_at(&img, &view, mid_static),
+        rgb_at(&plain, &view, mid_static)
+    );
+}

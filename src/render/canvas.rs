@@ -2,11 +2,12 @@
 //! metres into pixels once, and draws anti-aliased discs, rotated rectangles, lines and crosses.
 //! Line widths are in units of [`View::line`], so frames of every size look alike.
 
-use tiny_skia::{FillRule, LineCap, Paint, Path, PathBuilder, Pixmap, Stroke, Transform};
+use tiny_skia::{FillRule, LineCap, Mask, Paint, Path, PathBuilder, Pixmap, Stroke, Transform};
 
 use super::palette::Rgb;
 use super::view::View;
 use crate::geometry::Rect;
+use crate::math;
 
 /// A fill and/or an outline.
 #[derive(Debug, Clone, Copy)]
@@ -42,6 +43,8 @@ pub struct Canvas {
     pub pixmap: Pixmap,
     /// The world → pixel mapping.
     pub view: View,
+    /// While set, drawing only touches pixels inside this mask ([`Canvas::clip_to`]).
+    clip: Option<Mask>,
 }
 
 fn paint(c: Rgb, alpha: f32) -> Paint<'static> {
@@ -56,7 +59,22 @@ impl Canvas {
     pub fn new(view: View, background: Rgb) -> Option<Self> {
         let mut pixmap = Pixmap::new(view.width, view.height)?;
         pixmap.fill(background.with_alpha(1.0));
-        Some(Self { pixmap, view })
+        Some(Self {
+            pixmap,
+            view,
+            clip: None,
+        })
+    }
+
+    /// Clip what is drawn next to the rectangle `r` (m), or stop clipping (`None`). Views that
+    /// reach across the whole room are clipped to it so that they never tint the margin.
+    pub fn clip_to(&mut self, r: Option<&Rect>) {
+        self.clip = r.and_then(|r| {
+            let path = self.rect_path(r)?;
+            let mut mask = Mask::new(self.view.width, self.view.height)?;
+            mask.fill_path(&path, FillRule::Winding, true, Transform::identity());
+            Some(mask)
+        });
     }
 
     fn draw(&mut self, path: &Path, style: Style) {
@@ -66,7 +84,7 @@ impl Canvas {
                 &paint(c, a),
                 FillRule::Winding,
                 Transform::identity(),
-                None,
+                self.clip.as_ref(),
             );
         }
         if let Some((c, a, w)) = style.stroke {
@@ -75,8 +93,13 @@ impl Canvas {
                 line_cap: LineCap::Round,
                 ..Stroke::default()
             };
-            self.pixmap
-                .stroke_path(path, &paint(c, a), &stroke, Transform::identity(), None);
+            self.pixmap.stroke_path(
+                path,
+                &paint(c, a),
+                &stroke,
+                Transform::identity(),
+                self.clip.as_ref(),
+            );
         }
     }
 
@@ -90,6 +113,12 @@ impl Canvas {
 
     /// A rotated rectangle (m).
     pub fn rect(&mut self, r: &Rect, style: Style) {
+        if let Some(path) = self.rect_path(r) {
+            self.draw(&path, style);
+        }
+    }
+
+    fn rect_path(&self, r: &Rect) -> Option<Path> {
         let mut pb = PathBuilder::new();
         for k in 0..4 {
             let (x, y) = r.corner(k);
@@ -99,6 +128,29 @@ impl Canvas {
             } else {
                 pb.line_to(px, py)
             }
+        }
+        pb.close();
+        pb.finish()
+    }
+
+    /// A circular sector with apex (x, y) (m) and radius `r` (m), centred on `heading` (rad) and
+    /// opening `fov` (rad); a full disc when `fov` ≥ 2π. The arc is a polyline of at most π/64
+    /// rad per segment, which stays within a pixel of the circle for any radius inside the frame.
+    pub fn wedge(&mut self, (x, y): (f32, f32), heading: f32, fov: f32, r: f32, style: Style) {
+        if fov >= math::TAU {
+            self.disc(x, y, r, style);
+            return;
+        }
+        let fov = fov.max(0.0);
+        let segments = ((fov / (math::PI / 64.0)).ceil() as usize).max(1);
+        let mut pb = PathBuilder::new();
+        let (px, py) = self.view.px(x, y);
+        pb.move_to(px, py);
+        for k in 0..=segments {
+            let a = heading - 0.5 * fov + fov * k as f32 / segments as f32;
+            let (sn, cs) = math::sin_cos(a);
+            let (qx, qy) = self.view.px(x + r * cs, y + r * sn);
+            pb.line_to(qx, qy);
         }
         pb.close();
         if let Some(path) = pb.finish() {

@@ -5,9 +5,15 @@
 //! What a frame shows, bottom to top (colours in [`palette`]):
 //! - the room floor (light) inside the outside colour; an L room's removed block is outside;
 //!   1 m tick marks (every 5th longer) in the margin along the bottom and left room edges;
+//! - fields of view, clipped to the room: the robot's sensor (a faint red wedge of the
+//!   observation's `fov` and `range`) when the observation is partial; each lone walker's view
+//!   (a faint blue wedge of `human.fov_angle`, 1.5 m long: humans see without a range limit,
+//!   so the wedge shows direction and opening) when that angle leaves anything out;
 //! - the robot's goal: a red disc outline of `goal_radius`; lone walkers' goals and moving groups'
 //!   goals as faint crosses in their colour; each group's stored centre (`g_x`, `g_y`) as a faint
 //!   circle of `group_radius`;
+//! - formations in progress: a forming crowd's spot (faint pink circle), its slots (crosses) and
+//!   a line from each walker to its slot; a walker's laptop seat (orange cross) and its line;
 //! - tables (brown), laptops (grey; in use: amber with an orange rim), plants (green discs);
 //! - walls (dark rectangles, corridor walls included; spawn blockers are invisible and not drawn);
 //! - the robot's trail (red polyline);

@@ -1,13 +1,15 @@
-//! The layers of a frame, drawn bottom to top by [`draw_scene`]: floor, tick marks, goals and
-//! group circles, furniture, walls, the robot's trail, group and laptop links, humans, the shadow
-//! robot, the robot, and the progress bar. Each layer reads only the columns it draws.
+//! The layers of a frame, drawn bottom to top by [`draw_scene`]: floor, tick marks, fields of
+//! view, goals and group circles, formations in progress, furniture, walls, the robot's trail,
+//! humans, group and laptop links, the shadow robot, the robot, and the progress bar. Each layer
+//! reads only the columns it draws.
 
 use super::canvas::{Canvas, Style};
 use super::palette::{self, Rgb};
 use crate::geometry::Rect;
 use crate::math;
 use crate::params::StepParams;
-use crate::state::{BatchState, NONE, blocker_kind, group_kind, role};
+use crate::state::{BatchState, NONE, blocker_kind, forming, group_kind, role};
+use crate::systems::perception;
 
 /// Everything a frame shows (see [`super::Frame`]).
 pub struct Scene<'a> {
@@ -25,7 +27,9 @@ pub struct Scene<'a> {
 pub fn draw_scene(c: &mut Canvas, scene: &Scene<'_>) {
     floor(c, scene);
     ticks(c);
+    views(c, scene);
     goals(c, scene);
+    formations(c, scene);
     furniture(c, scene);
     walls(c, scene);
     if scene.trail.len() > 1 {
@@ -92,6 +96,48 @@ fn ticks(c: &mut Canvas) {
     }
 }
 
+/// Length (m) of the wedges that show a walker's field of view. 0.1.1's humans see without a
+/// range limit; the wedge shows the direction and the opening, not how far they see.
+const HUMAN_VIEW_LENGTH_M: f32 = 1.5;
+
+/// The robot's sensor (its observation's field of view and range) when the observation is
+/// partial, clipped to the room; and each lone walker's field of view when `human.fov_angle`
+/// leaves anything out (the walkers that ORCA and SFM filter by it).
+fn views(c: &mut Canvas, sc: &Scene<'_>) {
+    let (p, s, e) = (sc.p, sc.s, sc.e);
+    let (map_x, map_y) = (s.map_x[e], s.map_y[e]);
+    c.clip_to(Some(&Rect::new(0.0, 0.0, 0.0, map_x, map_y)));
+    if p.obs_partial != 0 {
+        // An unlimited range reaches every point of the room.
+        let reach = (map_x * map_x + map_y * map_y).sqrt();
+        let sensor = Style {
+            fill: Some((palette::ROBOT, 0.07)),
+            stroke: Some((palette::ROBOT, 0.35, 1.0)),
+        };
+        c.wedge(
+            (s.robot_x[e], s.robot_y[e]),
+            s.robot_theta[e],
+            p.obs_fov,
+            p.obs_range.min(reach),
+            sensor,
+        );
+    }
+    if !perception::sees_everything(p.fov_angle) {
+        let view = Style {
+            fill: Some((palette::HUMAN_WALKING, 0.08)),
+            stroke: Some((palette::HUMAN_WALKING, 0.3, 0.8)),
+        };
+        let hb = e * s.strides.humans;
+        for i in hb..hb + s.n_humans[e] as usize {
+            if s.h_role[i] == role::DYNAMIC {
+                let apex = (s.h_x[i], s.h_y[i]);
+                c.wedge(apex, s.h_theta[i], p.fov_angle, HUMAN_VIEW_LENGTH_M, view);
+            }
+        }
+    }
+    c.clip_to(None);
+}
+
 /// The robot's goal (disc of `goal_radius`), lone walkers' goals (crosses), moving groups' goals
 /// (crosses) and every group's stored centre (a faint circle of `group_radius`).
 fn goals(c: &mut Canvas, sc: &Scene<'_>) {
@@ -133,6 +179,40 @@ fn goals(c: &mut Canvas, sc: &Scene<'_>) {
             stroke: Some((colour, 0.6, 1.0)),
         };
         c.disc(s.g_x[g], s.g_y[g], p.group_radius, ring);
+    }
+}
+
+/// Formations in progress: a forming crowd's spot (a faint circle of
+/// `group_radius`), its slots (crosses) and a line from each walker to its slot; a walker's
+/// laptop seat (a cross) and the line to it.
+fn formations(c: &mut Canvas, sc: &Scene<'_>) {
+    let (p, s, e) = (sc.p, sc.s, sc.e);
+    let hb = e * s.strides.humans;
+    let cross = 0.5 * p.human_radius;
+    if s.cf_active[e] != 0 {
+        let colour = palette::HUMAN_STANDING_GROUP;
+        c.disc(
+            s.cf_x[e],
+            s.cf_y[e],
+            p.group_radius,
+            Style::outline(colour, 0.45, 1.0),
+        );
+        let sb = e * s.strides.group_size;
+        for k in sb..sb + s.cf_count[e] as usize {
+            let slot = (s.cf_slot_x[k], s.cf_slot_y[k]);
+            c.cross(slot.0, slot.1, cross, colour, 0.7);
+            let i = hb + s.cf_human[k] as usize;
+            if s.h_forming[i] == forming::CROWD {
+                c.line((s.h_x[i], s.h_y[i]), slot, colour, 0.45, 1.0);
+            }
+        }
+    }
+    if s.lf_active[e] != 0 {
+        let colour = palette::HUMAN_LAPTOP_USER;
+        let seat = (s.lf_seat_x[e], s.lf_seat_y[e]);
+        c.cross(seat.0, seat.1, cross, colour, 0.7);
+        let i = hb + s.lf_human[e] as usize;
+        c.line((s.h_x[i], s.h_y[i]), seat, colour, 0.45, 1.0);
     }
 }
 
