@@ -21,14 +21,14 @@ pub fn goals(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     }
     let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = super::step_stream(p, s, e, env, STREAM_GOALS);
+    let mut rng = super::LazyStream::new(p, s, e, env, STREAM_GOALS);
     let hb = e * s.strides.humans;
     let first = hb + s.n_static[e] as usize;
     for i in first..first + s.n_dynamic[e] as usize {
         let reach = p.human_radius + p.human_goal_radius;
         if s.h_forming[i] == 0 && distance(s.h_x[i], s.h_y[i], s.h_goal_x[i], s.h_goal_y[i]) < reach
         {
-            if let Some(g) = sample_goal(p, s, e, &mut rng, p.human_goal_radius) {
+            if let Some(g) = sample_goal(p, s, e, rng.get(), p.human_goal_radius) {
                 s.h_goal_x[i] = g.x;
                 s.h_goal_y[i] = g.y;
             }
@@ -45,7 +45,7 @@ pub fn goals(p: &StepParams, b: &mut Batch<'_>, e: usize) {
             .clone()
             .all(|i| distance(s.h_x[i], s.h_y[i], s.g_goal_x[g], s.g_goal_y[g]) < reach);
         if arrived {
-            if let Some(goal) = sample_goal(p, s, e, &mut rng, p.group_goal_radius) {
+            if let Some(goal) = sample_goal(p, s, e, rng.get(), p.group_goal_radius) {
                 s.g_goal_x[g] = goal.x;
                 s.g_goal_y[g] = goal.y;
                 for i in members {

@@ -18,7 +18,7 @@ pub fn group_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     }
     let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = super::step_stream(p, s, e, env, STREAM_GROUP_NOISE);
+    let mut rng = super::LazyStream::new(p, s, e, env, STREAM_GROUP_NOISE);
     let hb = e * s.strides.humans;
     let gb = e * s.strides.groups;
     for g in gb..gb + s.n_groups[e] as usize {
@@ -41,8 +41,8 @@ pub fn group_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
                 (s.h_noise_x[i], s.h_noise_y[i])
             } else if p.group_noise_std > 0.0 {
                 (
-                    p.group_noise_std * rng.normal(),
-                    p.group_noise_std * rng.normal(),
+                    p.group_noise_std * rng.get().normal(),
+                    p.group_noise_std * rng.get().normal(),
                 )
             } else {
                 (0.0, 0.0)

@@ -23,10 +23,11 @@ pub fn human_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     }
     let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = super::step_stream(p, s, e, env, STREAM_AVOID_ROBOT);
+    let mut rng = super::LazyStream::new(p, s, e, env, STREAM_AVOID_ROBOT);
     let first = e * s.strides.humans + s.n_static[e] as usize;
     for i in first..first + s.n_dynamic[e] as usize {
-        let avoid_robot = rng.chance(p.prob_avoid_robot);
+        // Nothing to draw when no walker avoids the robot (every paper config).
+        let avoid_robot = p.prob_avoid_robot > 0.0 && rng.get().chance(p.prob_avoid_robot);
         let view = View::of_human(p, s, i);
         let (vx, vy) = if s.h_policy[i] == policy::ORCA {
             orca_velocity(p, s, e, i, avoid_robot, view)

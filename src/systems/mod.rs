@@ -12,6 +12,31 @@ pub fn step_stream(p: &StepParams, s: &StateChunk, e: usize, env: u32, kind: u32
     RngStream::new(p.seed(), env, s.episode[e], stream_id(kind, s.tick[e]))
 }
 
+/// [`step_stream`], keyed only when first drawn from: stages that draw only on rare occasions
+/// (a goal reached, an event) skip hashing the key on every other step. The draws are the same.
+pub struct LazyStream {
+    key: (u64, u32, u32, u32),
+    rng: Option<RngStream>,
+}
+
+impl LazyStream {
+    /// The stream of kind `kind` for this step of environment `e` (batch index `env`).
+    pub fn new(p: &StepParams, s: &StateChunk, e: usize, env: u32, kind: u32) -> Self {
+        Self {
+            key: (p.seed(), env, s.episode[e], stream_id(kind, s.tick[e])),
+            rng: None,
+        }
+    }
+
+    /// The stream, keyed on the first call.
+    #[inline]
+    pub fn get(&mut self) -> &mut RngStream {
+        let (seed, env, episode, stream) = self.key;
+        self.rng
+            .get_or_insert_with(|| RngStream::new(seed, env, episode, stream))
+    }
+}
+
 pub mod autoreset;
 pub mod begin_step;
 pub mod contacts;

@@ -31,30 +31,30 @@ pub fn social_events(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     let events = b.o.strides.events();
     let counts = &mut b.o.events[e * events..(e + 1) * events];
     let s = &mut b.s;
-    let mut rng = super::step_stream(p, s, e, env, STREAM_SOCIAL);
+    let mut rng = super::LazyStream::new(p, s, e, env, STREAM_SOCIAL);
     if p.p_crowd_dispersal > 0.0
-        && rng.chance(p.p_crowd_dispersal)
-        && crowd_dispersal(p, s, e, &mut rng)
+        && rng.get().chance(p.p_crowd_dispersal)
+        && crowd_dispersal(p, s, e, rng.get())
     {
         counts[event::CROWD_DISPERSAL] += 1;
     }
     if p.p_laptop_dispersal > 0.0
-        && rng.chance(p.p_laptop_dispersal)
-        && laptop_dispersal(p, s, e, &mut rng)
+        && rng.get().chance(p.p_laptop_dispersal)
+        && laptop_dispersal(p, s, e, rng.get())
     {
         counts[event::LAPTOP_DISPERSAL] += 1;
     }
     let idle = s.cf_active[e] == 0 && s.lf_active[e] == 0;
-    if idle && p.p_crowd_formation > 0.0 && rng.chance(p.p_crowd_formation) {
-        match crowd_formation(p, s, e, &mut rng) {
+    if idle && p.p_crowd_formation > 0.0 && rng.get().chance(p.p_crowd_formation) {
+        match crowd_formation(p, s, e, rng.get()) {
             Start::Started => counts[event::CROWD_FORMATION_START] += 1,
             Start::Blocked => counts[event::CROWD_FORMATION_GAVE_UP] += 1,
             Start::Impossible => {}
         }
     }
     let idle = s.cf_active[e] == 0 && s.lf_active[e] == 0;
-    if idle && p.p_laptop_formation > 0.0 && rng.chance(p.p_laptop_formation) {
-        match laptop_formation(p, s, e, &mut rng) {
+    if idle && p.p_laptop_formation > 0.0 && rng.get().chance(p.p_laptop_formation) {
+        match laptop_formation(p, s, e, rng.get()) {
             Start::Started => counts[event::LAPTOP_FORMATION_START] += 1,
             Start::Blocked => counts[event::LAPTOP_FORMATION_BLOCKED] += 1,
             Start::Impossible => {}

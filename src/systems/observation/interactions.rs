@@ -23,10 +23,18 @@ pub(super) fn write_interactions<const W: bool, const P: bool>(
     hl: &mut [u32],
 ) -> [u32; 2] {
     let n_hh = human_human(s, e, f, hh);
-    hh[2 * n_hh..].fill(0);
+    zero(&mut hh[2 * n_hh..]);
     let n_hl = human_laptop(s, e, f, hl);
-    hl[2 * n_hl..].fill(0);
+    zero(&mut hl[2 * n_hl..]);
     [n_hh as u32, n_hl as u32]
+}
+
+/// Zero the unused pair slots (most environments use all or none: skip the empty call).
+#[inline]
+fn zero(rest: &mut [u32]) {
+    if !rest.is_empty() {
+        rest.fill(0);
+    }
 }
 
 /// Whether the sensor sees human slot `slot` of environment `e`.

@@ -180,7 +180,10 @@ fn write<const WORLD: bool, const PARTIAL: bool>(
     for (t, &n) in counts.iter().enumerate() {
         let from = layout.offset[t] + n as usize * RECORD;
         let to = layout.offset[t] + layout.capacity[t] * RECORD;
-        row[from..to].fill(0.0);
+        // Most blocks are full or empty: skip the call rather than zero nothing.
+        if from < to {
+            row[from..to].fill(0.0);
+        }
     }
     if p.obs_noise_on != 0 {
         let env = (s.first_env + e) as u32;
