@@ -9,7 +9,7 @@
 mod common;
 mod golden;
 
-use common::scene::{load, push, scene, static_human, walker};
+use common::scene::{load, push, records_scene, scene, static_human};
 use serde_json::{Value, json};
 use socnav::config::ObsFrame;
 use socnav::outputs::Outputs;
@@ -83,35 +83,8 @@ fn assert_padding_zero(env: &BatchEnv, e: usize) {
 /// robot frame; the layout carries the robot record's length.
 #[test]
 fn world_frame_records() {
-    let half_pi = std::f64::consts::FRAC_PI_2;
-    let mut doc = scene(false, [1.0, 2.0, half_pi], [1.0, 5.0]);
-    doc["state"]["robot"]["vel"] = json!([0.1, 0.0, 0.2]);
-    // Static human on the robot's right facing +x (robot behind it: gaze 0); a walker on its
-    // left facing +x, towards the robot (gaze 1), at 0.05 m/s.
-    push(&mut doc, "humans", static_human(2, 2.0, 2.0, 0.0));
-    push(
-        &mut doc,
-        "humans",
-        walker(1, 0.0, 2.0, 0.0, 0.05, [-3.0, 2.0]),
-    );
-    push(
-        &mut doc,
-        "laptops",
-        json!({"id": 3, "x": 1.0, "y": 3.0, "theta": 0.0}),
-    );
-    push(
-        &mut doc,
-        "tables",
-        json!({"id": 4, "x": -2.0, "y": 2.0, "theta": 0.3}),
-    );
-    push(&mut doc, "plants", json!({"id": 5, "x": 1.0, "y": 0.0}));
-    // A 2.5 m wall along x centred at (1, 6): segments centred at x = 0.25, 1.25 (1 m) and 2.0
-    // (the 0.5 m remainder); a 2 m wall along y centred at (-3, -3): left end (-3, -4), two 1 m
-    // segments centred at y = -3.5 and -2.5.
-    doc["walls"] = json!([
-        {"id": 6, "x": 1.0, "y": 6.0, "theta": 0.0, "length": 2.5},
-        {"id": 7, "x": -3.0, "y": -3.0, "theta": half_pi, "length": 2.0},
-    ]);
+    // The scene of the robot-frame test (`records_scene`), written in the world frame.
+    let doc = records_scene();
     let mut config = scene_config();
     config.observation.frame = ObsFrame::World;
     let mut env = load(config.clone(), &[doc]);

@@ -81,3 +81,38 @@ pub fn load(config: Config, scenes: &[Value]) -> BatchEnv {
     }
     env
 }
+
+/// The observation-records scene (no room walls): the robot at (1, 2) facing +y with goal
+/// (1, 5), last command 0.1 m/s and 0.2 rad/s; a static human at (2, 2) facing +x (the robot
+/// behind it: gaze 0) and a walker at (0, 2) facing +x towards the robot (gaze 1) at 0.05 m/s;
+/// a laptop at (1, 3), a table at (-2, 2) turned 0.3 rad, a plant at (1, 0); a 2.5 m wall along x
+/// centred at (1, 6) (segments centred at x = 0.25, 1.25 and, the 0.5 m remainder, 2.0) and a 2 m
+/// wall along y centred at (-3, -3) (left end (-3, -4): segments centred at y = -3.5 and -2.5).
+/// Static humans take the first slots.
+pub fn records_scene() -> Value {
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    let mut doc = scene(false, [1.0, 2.0, half_pi], [1.0, 5.0]);
+    doc["state"]["robot"]["vel"] = json!([0.1, 0.0, 0.2]);
+    push(&mut doc, "humans", static_human(2, 2.0, 2.0, 0.0));
+    push(
+        &mut doc,
+        "humans",
+        walker(1, 0.0, 2.0, 0.0, 0.05, [-3.0, 2.0]),
+    );
+    push(
+        &mut doc,
+        "laptops",
+        json!({"id": 3, "x": 1.0, "y": 3.0, "theta": 0.0}),
+    );
+    push(
+        &mut doc,
+        "tables",
+        json!({"id": 4, "x": -2.0, "y": 2.0, "theta": 0.3}),
+    );
+    push(&mut doc, "plants", json!({"id": 5, "x": 1.0, "y": 0.0}));
+    doc["walls"] = json!([
+        {"id": 6, "x": 1.0, "y": 6.0, "theta": 0.0, "length": 2.5},
+        {"id": 7, "x": -3.0, "y": -3.0, "theta": half_pi, "length": 2.0},
+    ]);
+    doc
+}
