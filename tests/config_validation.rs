@@ -400,3 +400,43 @@ fn every_config_file_is_shipped_by_name() {
         assert_eq!(by_name, by_file, "{name}");
     }
 }
+
+#[test]
+fn overrides_merge_key_by_key_and_are_validated() {
+    let base = Config::from_name_or_path("exp2").unwrap();
+    let c = base
+        .with_overrides(&json!({"episode": {"length": 100}, "counts": {"plants": [1, 3]}}))
+        .unwrap();
+    assert_eq!(c.episode.length, 100);
+    assert_eq!(c.counts.plants, [1, 3]);
+    // Everything else is the base config's.
+    let mut expected = base.clone();
+    expected.episode.length = 100;
+    expected.counts.plants = [1, 3];
+    assert_eq!(c, expected);
+
+    // `null` restores the default of an optional key.
+    let limited = base
+        .with_overrides(&json!({"observation": {"range": 3.0}}))
+        .unwrap();
+    assert_eq!(limited.observation.range, Some(3.0));
+    let unlimited = limited
+        .with_overrides(&json!({"observation": {"range": null}}))
+        .unwrap();
+    assert_eq!(unlimited.observation.range, None);
+
+    // Unknown keys, bad values and bad shapes are named, all at once.
+    let problems = config_problems(base.with_overrides(&json!({
+        "episode": {"lenght": 100},
+        "counts": {"plants": [3, 1]},
+    })));
+    assert!(
+        problems.iter().any(|p| p.contains("lenght")),
+        "{problems:?}"
+    );
+    assert!(problems.iter().any(|p| p.contains("plants")), "{problems:?}");
+    let problems = config_problems(base.with_overrides(&json!({"episode": 3})));
+    assert!(problems.iter().any(|p| p.contains("`episode`")), "{problems:?}");
+    let problems = config_problems(base.with_overrides(&json!([1, 2])));
+    assert!(problems.iter().any(|p| p.contains("table")), "{problems:?}");
+}

@@ -695,6 +695,26 @@ impl Config {
         SHIPPED.iter().map(|(n, _)| *n)
     }
 
+    /// This config with `overrides` applied: a JSON object of sections and keys in the TOML
+    /// layout (`{"counts": {"plants": [0, 2]}, "episode": {"length": 100}}`), merged key by
+    /// key; `null` restores a key's default. The result is validated like a file, so unknown keys
+    /// and bad values are all reported at once.
+    pub fn with_overrides(&self, overrides: &serde_json::Value) -> Result<Self, SimError> {
+        let mut table: toml::Table = toml::from_str(&self.to_toml_string())
+            .expect("a serialised Config parses back as TOML");
+        let serde_json::Value::Object(sections) = overrides else {
+            return Err(SimError::Config(vec![format!(
+                "overrides must be a table of sections, got {overrides}"
+            )]));
+        };
+        let mut problems = Vec::new();
+        merge_json(&mut table, sections, "", &mut problems);
+        if !problems.is_empty() {
+            return Err(SimError::Config(problems));
+        }
+        Self::from_toml_str(&toml::to_string(&table).expect("a TOML table serialises"))
+    }
+
     /// Serialise to TOML (every key, resolved defaults included).
     pub fn to_toml_string(&self) -> String {
         toml::to_string_pretty(self).expect("a Config always serialises to TOML")
@@ -709,6 +729,43 @@ impl Config {
             Ok(config)
         } else {
             Err(SimError::Config(problems))
+        }
+    }
+}
+
+/// Merge the JSON object `from` into the TOML table `into`, key by key (tables recursively);
+/// `null` removes a key so that its default applies. Values TOML cannot hold are reported in
+/// `problems` with their dotted path.
+fn merge_json(
+    into: &mut toml::Table,
+    from: &serde_json::Map<String, serde_json::Value>,
+    prefix: &str,
+    problems: &mut Vec<String>,
+) {
+    for (key, value) in from {
+        let path = format!("{prefix}{key}");
+        match value {
+            serde_json::Value::Null => {
+                into.remove(key);
+            }
+            serde_json::Value::Object(inner) => {
+                let entry = into
+                    .entry(key.clone())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+                match entry {
+                    toml::Value::Table(t) => merge_json(t, inner, &format!("{path}."), problems),
+                    _ => problems.push(format!("`{path}` is a value, not a section")),
+                }
+            }
+            other if matches!(into.get(key), Some(toml::Value::Table(_))) => {
+                problems.push(format!("`{path}` is a section, not a value (got {other})"));
+            }
+            other => match toml::Value::try_from(other) {
+                Ok(v) => {
+                    into.insert(key.clone(), v);
+                }
+                Err(e) => problems.push(format!("`{path}` = {other}: {e}")),
+            },
         }
     }
 }
