@@ -434,9 +434,15 @@ fn overrides_merge_key_by_key_and_are_validated() {
         problems.iter().any(|p| p.contains("lenght")),
         "{problems:?}"
     );
-    assert!(problems.iter().any(|p| p.contains("plants")), "{problems:?}");
+    assert!(
+        problems.iter().any(|p| p.contains("plants")),
+        "{problems:?}"
+    );
     let problems = config_problems(base.with_overrides(&json!({"episode": 3})));
-    assert!(problems.iter().any(|p| p.contains("`episode`")), "{problems:?}");
+    assert!(
+        problems.iter().any(|p| p.contains("`episode`")),
+        "{problems:?}"
+    );
     let problems = config_problems(base.with_overrides(&json!([1, 2])));
     assert!(problems.iter().any(|p| p.contains("table")), "{problems:?}");
 }

@@ -1,0 +1,30 @@
+"""socnav: a batched social-navigation simulator with SocNavGym 0.1.1's semantics.
+
+``make_vec`` gives a ``gymnasium.vector.VectorEnv`` over a whole batch stepped in Rust;
+``make`` a single ``gymnasium.Env``. Configs are the shipped names (``"exp1"``, ``"exp2"``, ...),
+TOML paths, or either with a dict of overrides.
+"""
+
+from socnav._socnav import (
+    BackendUnavailableError,
+    ConfigError,
+    ScenarioError,
+    SocNavError,
+    shipped_configs,
+)
+from socnav.env import SocNavEnv, make
+from socnav.vector import SocNavVectorEnv, make_vec
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BackendUnavailableError",
+    "ConfigError",
+    "ScenarioError",
+    "SocNavEnv",
+    "SocNavError",
+    "SocNavVectorEnv",
+    "make",
+    "make_vec",
+    "shipped_configs",
+]

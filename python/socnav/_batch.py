@@ -1,0 +1,100 @@
+"""The pieces both environments share: building the Rust batch from a config argument, the
+spaces from its layout, and the validation of actions."""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Mapping
+
+import numpy as np
+from gymnasium import spaces
+
+from socnav._socnav import Batch
+
+ACTION_TYPES = ("continuous", "discrete")
+OBS_MODES = ("dict", "flat")
+N_DISCRETE = 7
+
+
+def build_batch(
+    config: str | Mapping[str, Any],
+    num_envs: int,
+    seed: int | None,
+    autoreset_mode: str,
+    threads: int | None,
+) -> Batch:
+    """``config``: a shipped name or a TOML path, or a dict of overrides with an optional
+    ``"base"`` key naming the config they apply to (default ``"exp1"``)."""
+    if isinstance(config, Mapping):
+        overrides = dict(config)
+        base = overrides.pop("base", "exp1")
+        text = json.dumps(overrides)
+    elif isinstance(config, str):
+        base, text = config, None
+    else:
+        raise TypeError(f"config must be a name, a path or a dict, got {type(config).__name__}")
+    if not isinstance(num_envs, (int, np.integer)) or isinstance(num_envs, bool) or num_envs < 1:
+        raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+    return Batch(base, int(num_envs), 0 if seed is None else int(seed), autoreset_mode, threads, text)
+
+
+def observation_space(batch: Batch, obs_mode: str) -> spaces.Space:
+    """The space of one environment's observation: a flat float32 row, or the SocNavGym dict
+    (``robot`` and one ``(capacity, 14)`` block per entity type, padded with zeros)."""
+    layout = batch.layout()
+    if obs_mode == "flat":
+        return spaces.Box(-np.inf, np.inf, (layout["dim"],), np.float32)
+    blocks = {"robot": spaces.Box(-np.inf, np.inf, (layout["robot"],), np.float32)}
+    for key, (_, capacity) in layout["entities"].items():
+        blocks[key] = spaces.Box(-np.inf, np.inf, (capacity, layout["record"]), np.float32)
+    return spaces.Dict(blocks)
+
+
+def action_space(batch: Batch, action_type: str) -> spaces.Space:
+    """Forward, lateral and rotation in [-1, 1]; a differential-drive robot's lateral bound is
+    [0, 0], as in SocNavGym. Or the 7 discrete actions."""
+    if action_type == "discrete":
+        return spaces.Discrete(N_DISCRETE)
+    lateral = 1.0 if batch.holonomic else 0.0
+    low = np.array([-1.0, -lateral, -1.0], dtype=np.float32)
+    return spaces.Box(low, -low, (3,), np.float32)
+
+
+def split_obs(flat: np.ndarray, layout: dict) -> dict[str, np.ndarray]:
+    """Views of a ``(n, dim)`` observation as the dict blocks (no copy)."""
+    n = flat.shape[0]
+    out = {"robot": flat[:, : layout["robot"]]}
+    record = layout["record"]
+    for key, (offset, capacity) in layout["entities"].items():
+        out[key] = flat[:, offset : offset + capacity * record].reshape(n, capacity, record)
+    return out
+
+
+def check_choice(name: str, value: str, choices: tuple[str, ...]) -> str:
+    if value not in choices:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
+    return value
+
+
+def step_batch(batch: Batch, action_type: str, actions: Any, num_envs: int) -> None:
+    """Validate ``actions`` (shape, dtype, finiteness, range for discrete) and step."""
+    a = np.asarray(actions)
+    if action_type == "continuous":
+        if a.shape != (num_envs, 3):
+            raise ValueError(f"actions must have shape ({num_envs}, 3), got {a.shape}")
+        if not np.issubdtype(a.dtype, np.number) or np.issubdtype(a.dtype, np.complexfloating):
+            raise ValueError(f"actions must be real numbers, got dtype {a.dtype}")
+        a = np.ascontiguousarray(a, dtype=np.float32)
+        if not np.isfinite(a).all():
+            bad = np.argwhere(~np.isfinite(a))[0]
+            raise ValueError(f"actions[{bad[0]}, {bad[1]}] is {a[tuple(bad)]}: actions must be finite")
+        batch.step_continuous(a)
+    else:
+        if a.shape != (num_envs,):
+            raise ValueError(f"actions must have shape ({num_envs},), got {a.shape}")
+        if not np.issubdtype(a.dtype, np.integer):
+            raise ValueError(f"discrete actions must be integers, got dtype {a.dtype}")
+        if a.size and (a.min() < 0 or a.max() >= N_DISCRETE):
+            k = int(np.argmax((a < 0) | (a >= N_DISCRETE)))
+            raise ValueError(f"actions[{k}] is {a[k]}: discrete actions are 0..{N_DISCRETE - 1}")
+        batch.step_discrete(np.ascontiguousarray(a, dtype=np.uint32))

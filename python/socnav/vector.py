@@ -1,0 +1,179 @@
+"""``SocNavVectorEnv``: a gymnasium vector environment over a Rust batch.
+
+Observations, rewards and the info arrays are views of buffers the batch owns and overwrites
+at every ``step`` and ``reset`` (``np.shares_memory`` holds between two steps' results); pass
+``copy=True`` to get fresh arrays instead, e.g. to keep observations in a replay buffer.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+import numpy as np
+import gymnasium as gym
+from gymnasium.vector import AutoresetMode
+from gymnasium.vector.utils import batch_space
+
+from socnav import _batch
+from socnav._socnav import Batch
+
+_AUTORESET = {
+    "next_step": AutoresetMode.NEXT_STEP,
+    "same_step": AutoresetMode.SAME_STEP,
+    "disabled": AutoresetMode.DISABLED,
+}
+
+
+class SocNavVectorEnv(gym.vector.VectorEnv):
+    """``num_envs`` environments of one config stepping together (see ``make_vec``)."""
+
+    def __init__(
+        self,
+        config: str | Mapping[str, Any] = "exp1",
+        num_envs: int = 1,
+        *,
+        seed: int | None = None,
+        obs_mode: str = "dict",
+        action_type: str = "continuous",
+        autoreset_mode: str | AutoresetMode = "next_step",
+        threads: int | None = None,
+        copy: bool = False,
+    ) -> None:
+        mode = autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else autoreset_mode
+        _batch.check_choice("autoreset_mode", mode, tuple(_AUTORESET))
+        self.obs_mode = _batch.check_choice("obs_mode", obs_mode, _batch.OBS_MODES)
+        self.action_type = _batch.check_choice("action_type", action_type, _batch.ACTION_TYPES)
+        self.copy = copy
+        self._batch: Batch = _batch.build_batch(config, num_envs, seed, mode, threads)
+        self.num_envs = self._batch.num_envs
+        self.metadata = {"autoreset_mode": _AUTORESET[mode], "render_modes": []}
+        self._layout = self._batch.layout()
+        self._keys = Batch.keys()
+        self.single_observation_space = _batch.observation_space(self._batch, obs_mode)
+        self.single_action_space = _batch.action_space(self._batch, action_type)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._buf = self._batch.buffers()
+        self._all = np.ones(self.num_envs, dtype=bool)
+        self._seeded = seed is not None
+
+    @property
+    def backend(self) -> str:
+        """The backend stepping the batch (``"cpu"``)."""
+        return self._batch.backend
+
+    def reset(
+        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        """Reset every environment, or with ``options={"reset_mask": mask}`` only those where
+        the boolean ``mask`` is true (the DISABLED autoreset mode's way to restart them)."""
+        if isinstance(seed, (list, tuple)):
+            seed = seed[0] if seed else None
+        mask = (options or {}).get("reset_mask")
+        if mask is not None:
+            mask = np.asarray(mask)
+            if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
+                raise ValueError(
+                    f"reset_mask must be a bool array of shape ({self.num_envs},), "
+                    f"got {mask.dtype} {mask.shape}"
+                )
+            self._batch.reset_envs(np.ascontiguousarray(mask))
+        else:
+            self._batch.reset(None if seed is None else int(seed))
+        return self._obs(self._buf["obs"]), self._info(final=False)
+
+    def step(self, actions: Any):
+        _batch.step_batch(self._batch, self.action_type, actions, self.num_envs)
+        b = self._buf
+        reward = b["reward"].copy() if self.copy else b["reward"]
+        return (
+            self._obs(b["obs"]),
+            reward,
+            b["terminated"].astype(bool),
+            b["truncated"].astype(bool),
+            self._info(final=True),
+        )
+
+    def _obs(self, flat: np.ndarray) -> Any:
+        if self.copy:
+            flat = flat.copy()
+        if self.obs_mode == "flat":
+            return flat
+        return _batch.split_obs(flat, self._layout)
+
+    def _info(self, *, final: bool) -> dict[str, Any]:
+        """Every metric as an array with its ``_key`` mask (all true: every environment reports
+        every metric); the statistics of episodes that just ended under ``"episode"``; under
+        SAME_STEP the finishing steps' observation and info as ``final_obs`` / ``final_info``."""
+        b = self._buf
+        info: dict[str, Any] = {}
+        values = b["info"].copy() if self.copy else b["info"]
+        for k, key in enumerate(self._keys["info"]):
+            info[key] = values[:, k]
+            info["_" + key] = self._all
+        if final:
+            done = b["episode_done"].astype(bool)
+            if done.any():
+                stats = b["episode"].copy()
+                info["episode"] = {key: stats[:, k] for k, key in enumerate(self._keys["episode"])}
+                info["_episode"] = done
+            if self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP:
+                has_final = b["has_final"].astype(bool)
+                if has_final.any():
+                    info["final_obs"] = self._final_obs(has_final)
+                    info["_final_obs"] = has_final
+                    final_info = b["final_info"].copy()
+                    info["final_info"] = {
+                        key: final_info[:, k] for k, key in enumerate(self._keys["info"])
+                    }
+                    info["_final_info"] = has_final
+        return info
+
+    def _final_obs(self, mask: np.ndarray) -> Any:
+        flat = self._buf["final_obs"].copy()
+        if self.obs_mode == "flat":
+            return flat
+        return _batch.split_obs(flat, self._layout)
+
+
+def make_vec(
+    config: str | Mapping[str, Any] = "exp1",
+    num_envs: int = 1,
+    *,
+    seed: int | None = None,
+    obs_mode: str = "dict",
+    action_type: str = "continuous",
+    autoreset_mode: str | AutoresetMode = "next_step",
+    backend: str = "auto",
+    threads: int | None = None,
+    copy: bool = False,
+) -> SocNavVectorEnv:
+    """A vector environment of ``num_envs`` environments.
+
+    Args:
+        config: a shipped config name (``socnav.shipped_configs()``), a TOML path, or a dict of
+            overrides in the TOML layout with an optional ``"base"`` name.
+        seed: seed of the batch (0 when ``None``); ``reset(seed=...)`` re-seeds it.
+        obs_mode: ``"dict"`` (SocNavGym's blocks, zero-padded) or ``"flat"`` (one row).
+        action_type: ``"continuous"`` (``Box(-1, 1, (3,))``) or ``"discrete"`` (``Discrete(7)``).
+        autoreset_mode: ``"next_step"`` (default), ``"same_step"`` or ``"disabled"``.
+        backend: ``"auto"`` or ``"cpu"`` (the GPU backend is not built yet).
+        threads: CPU threads (all cores when ``None``).
+        copy: return fresh arrays instead of views of the batch's buffers.
+    """
+    if backend not in ("auto", "cpu"):
+        from socnav._socnav import BackendUnavailableError
+
+        raise BackendUnavailableError(
+            f"backend {backend!r} is not available: this build has the 'cpu' backend only"
+        )
+    return SocNavVectorEnv(
+        config,
+        num_envs,
+        seed=seed,
+        obs_mode=obs_mode,
+        action_type=action_type,
+        autoreset_mode=autoreset_mode,
+        threads=threads,
+        copy=copy,
+    )

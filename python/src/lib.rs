@@ -1,0 +1,307 @@
+//! `socnav._socnav`: the batch of environments as the Python class `Batch`, whose output
+//! buffers numpy sees without copies (each array keeps the `Batch` alive and is overwritten by
+//! the next `step` or `reset`), and the exception tree every core error maps to.
+//!
+//! The gymnasium environments (`socnav.make_vec`, `socnav.make`) are written in Python on top
+//! of this class; everything about shapes comes from here, which takes it from the core's
+//! `spec` module, so no shape is written twice.
+
+use ndarray::{ArrayView, IxDyn};
+use numpy::{Element, PyArray, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyFileNotFoundError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use socnav::config::Kinematics;
+use socnav::spec::{ENTITY_KEYS, EPISODE_KEYS, EVENT_KEYS, INFO_KEYS, INTERACTION_KEYS, RECORD};
+use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
+
+create_exception!(
+    _socnav,
+    SocNavError,
+    PyException,
+    "Base class of every socnav error."
+);
+create_exception!(
+    _socnav,
+    ConfigError,
+    SocNavError,
+    "An invalid configuration; the message lists every problem."
+);
+create_exception!(
+    _socnav,
+    ScenarioError,
+    SocNavError,
+    "A scenario could not be generated (the room is too crowded)."
+);
+create_exception!(
+    _socnav,
+    BackendUnavailableError,
+    SocNavError,
+    "The requested backend cannot run on this machine."
+);
+
+/// The Python exception for a core error.
+fn py_err(e: SimError) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        SimError::Config(_) => ConfigError::new_err(msg),
+        SimError::Scenario(_) => ScenarioError::new_err(msg),
+        SimError::BackendUnavailable(_) => BackendUnavailableError::new_err(msg),
+        SimError::Shape(_) | SimError::Action(_) => PyValueError::new_err(msg),
+        SimError::Io(_) => PyFileNotFoundError::new_err(msg),
+    }
+}
+
+fn autoreset_mode(name: &str) -> PyResult<AutoresetMode> {
+    match name {
+        "next_step" => Ok(AutoresetMode::NextStep),
+        "same_step" => Ok(AutoresetMode::SameStep),
+        "disabled" => Ok(AutoresetMode::Disabled),
+        other => Err(PyValueError::new_err(format!(
+            "autoreset_mode must be 'next_step', 'same_step' or 'disabled', got {other:?}"
+        ))),
+    }
+}
+
+/// A batch of environments stepping together.
+#[pyclass(module = "socnav._socnav")]
+struct Batch {
+    env: BatchEnv,
+}
+
+/// An array over `data` with `shape`, owned by the `Batch` object `owner`.
+fn borrowed<'py, T: Element>(
+    owner: &Bound<'py, Batch>,
+    data: &[T],
+    shape: &[usize],
+) -> Bound<'py, PyArrayDyn<T>> {
+    let view =
+        ArrayView::from_shape(IxDyn(shape), data).expect("output buffer of the stated shape");
+    // SAFETY: `data` is an output buffer of the batch that `owner` holds: it is allocated once
+    // with the batch and never reallocated, and the array keeps `owner` alive.
+    #[allow(
+        unsafe_code,
+        reason = "zero-copy arrays over the batch's output buffers"
+    )]
+    unsafe {
+        PyArray::borrow_from_array(&view, owner.clone().into_any())
+    }
+}
+
+#[pymethods]
+impl Batch {
+    /// `config`: a shipped config name or a TOML path; `overrides`: a JSON object of keys applied
+    /// on top (`Config::with_overrides`).
+    #[new]
+    #[pyo3(signature = (config, num_envs, seed=0, autoreset_mode="next_step", threads=None, overrides=None))]
+    fn new(
+        config: &str,
+        num_envs: usize,
+        seed: u64,
+        autoreset_mode: &str,
+        threads: Option<usize>,
+        overrides: Option<&str>,
+    ) -> PyResult<Self> {
+        let mut c = Config::from_name_or_path(config).map_err(py_err)?;
+        if let Some(text) = overrides {
+            let json: serde_json::Value = serde_json::from_str(text)
+                .map_err(|e| ConfigError::new_err(format!("overrides are not JSON: {e}")))?;
+            c = c.with_overrides(&json).map_err(py_err)?;
+        }
+        let options = EnvOptions {
+            n_envs: num_envs,
+            seed,
+            autoreset: self::autoreset_mode(autoreset_mode)?,
+            threads,
+        };
+        let env = BatchEnv::new(c, options).map_err(py_err)?;
+        Ok(Self { env })
+    }
+
+    /// Number of environments.
+    #[getter]
+    fn num_envs(&self) -> usize {
+        self.env.n_envs()
+    }
+
+    /// The backend stepping the batch (`"cpu"`).
+    #[getter]
+    fn backend(&self) -> &'static str {
+        self.env.backend_name()
+    }
+
+    /// Whether the robot is holonomic (else differential drive: the lateral action must be 0).
+    #[getter]
+    fn holonomic(&self) -> bool {
+        self.env.config().robot.kinematics == Kinematics::Holonomic
+    }
+
+    /// The resolved config as TOML (every key).
+    fn config_toml(&self) -> String {
+        self.env.config().to_toml_string()
+    }
+
+    /// The observation layout: `dim`, `robot` (robot record length), `record` (14), and per
+    /// entity key its `offset` and `capacity` (records), plus the interaction pair capacities.
+    fn layout<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let l = self.env.layout();
+        let d = PyDict::new(py);
+        d.set_item("dim", l.dim)?;
+        d.set_item("robot", l.robot)?;
+        d.set_item("record", RECORD)?;
+        let entities = PyDict::new(py);
+        for (t, key) in ENTITY_KEYS.iter().enumerate() {
+            entities.set_item(*key, (l.offset[t], l.capacity[t]))?;
+        }
+        d.set_item("entities", entities)?;
+        let pairs = PyDict::new(py);
+        for (k, key) in INTERACTION_KEYS.iter().enumerate() {
+            pairs.set_item(*key, l.pairs[k])?;
+        }
+        d.set_item("pairs", pairs)?;
+        Ok(d)
+    }
+
+    /// Key names: `info`, `episode`, `events`, `entities`, `interactions` (the orders of the
+    /// output columns).
+    #[staticmethod]
+    fn keys<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("info", INFO_KEYS.to_vec())?;
+        d.set_item("episode", EPISODE_KEYS.to_vec())?;
+        d.set_item("events", EVENT_KEYS.to_vec())?;
+        d.set_item("entities", ENTITY_KEYS.to_vec())?;
+        d.set_item("interactions", INTERACTION_KEYS.to_vec())?;
+        Ok(d)
+    }
+
+    /// Reset every environment (re-seeding the batch when `seed` is given).
+    #[pyo3(signature = (seed=None))]
+    fn reset(&mut self, py: Python<'_>, seed: Option<u64>) -> PyResult<()> {
+        let env = &mut self.env;
+        py.detach(|| env.reset(seed)).map_err(py_err)
+    }
+
+    /// Reset the environments where `mask` is true.
+    fn reset_envs(&mut self, py: Python<'_>, mask: PyReadonlyArray1<'_, bool>) -> PyResult<()> {
+        let mask = mask
+            .as_slice()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .to_vec();
+        let env = &mut self.env;
+        py.detach(|| env.reset_envs(&mask)).map_err(py_err)
+    }
+
+    /// One step with continuous actions: float32 `(num_envs, 3)` in [-1, 1] (forward, lateral,
+    /// rotation). The GIL is released while the batch steps.
+    fn step_continuous(
+        &mut self,
+        py: Python<'_>,
+        actions: PyReadonlyArray2<'_, f32>,
+    ) -> PyResult<()> {
+        let actions = actions
+            .as_slice()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let env = &mut self.env;
+        py.detach(|| env.step(Actions::Continuous(actions)))
+            .map_err(py_err)
+    }
+
+    /// One step with discrete actions: uint32 `(num_envs,)` in 0..7.
+    fn step_discrete(
+        &mut self,
+        py: Python<'_>,
+        actions: PyReadonlyArray1<'_, u32>,
+    ) -> PyResult<()> {
+        let actions = actions
+            .as_slice()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let env = &mut self.env;
+        py.detach(|| env.step(Actions::Discrete(actions)))
+            .map_err(py_err)
+    }
+
+    /// The output buffers as arrays without copies, by name: `obs` `(n, dim)`, `obs_count`
+    /// `(n, 5)`, `reward` `(n,)`, `terminated`, `truncated` (uint32 `(n,)`), `info` `(n, 32)`,
+    /// `has_final`, `final_obs`, `final_obs_count`, `final_info` (SAME_STEP), `episode_done`,
+    /// `episode` `(n, 32)`, `events` `(n, 9)`, `hh_pairs`, `hl_pairs`, `pair_count` and their
+    /// `final_*` copies. Overwritten in place by every step and reset.
+    fn buffers<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
+        let py = slf.py();
+        let this = slf.borrow();
+        let o = this.env.outputs();
+        let n = this.env.n_envs();
+        let st = &o.strides;
+        let d = PyDict::new(py);
+        let f32s: [(&str, &[f32], usize); 5] = [
+            ("obs", &o.obs, st.layout.dim),
+            ("final_obs", &o.final_obs, st.layout.dim),
+            ("info", &o.info, st.info()),
+            ("final_info", &o.final_info, st.info()),
+            ("episode", &o.episode, st.episode()),
+        ];
+        for (name, data, width) in f32s {
+            d.set_item(name, borrowed(slf, data, &[n, width]))?;
+        }
+        d.set_item("reward", borrowed(slf, &o.reward, &[n]))?;
+        let u32s: [(&str, &[u32], usize); 10] = [
+            ("obs_count", &o.obs_count, 5),
+            ("final_obs_count", &o.final_obs_count, 5),
+            ("hh_pairs", &o.hh_pairs, st.hh()),
+            ("final_hh_pairs", &o.final_hh_pairs, st.hh()),
+            ("hl_pairs", &o.hl_pairs, st.hl()),
+            ("final_hl_pairs", &o.final_hl_pairs, st.hl()),
+            ("pair_count", &o.pair_count, st.pairs()),
+            ("final_pair_count", &o.final_pair_count, st.pairs()),
+            ("events", &o.events, st.events()),
+            ("terminated", &o.terminated, 1),
+        ];
+        for (name, data, width) in u32s {
+            let shape: &[usize] = if width == 1 { &[n] } else { &[n, width] };
+            d.set_item(name, borrowed(slf, data, shape))?;
+        }
+        for (name, data) in [
+            ("truncated", &o.truncated),
+            ("has_final", &o.has_final),
+            ("episode_done", &o.episode_done),
+        ] {
+            d.set_item(name, borrowed(slf, data, &[n]))?;
+        }
+        Ok(d)
+    }
+
+    /// One environment's state as a JSON document (`BatchEnv::get_state`).
+    fn get_state(&self, env: usize) -> PyResult<String> {
+        let doc = self.env.get_state(env).map_err(py_err)?;
+        Ok(doc.to_string())
+    }
+
+    /// Load one environment's state from a JSON document (`BatchEnv::set_state`).
+    fn set_state(&mut self, env: usize, doc: &str) -> PyResult<()> {
+        let doc: serde_json::Value = serde_json::from_str(doc)
+            .map_err(|e| PyValueError::new_err(format!("state document is not JSON: {e}")))?;
+        self.env.set_state(env, &doc).map_err(py_err)
+    }
+}
+
+/// The shipped config names.
+#[pyfunction]
+fn shipped_configs() -> Vec<&'static str> {
+    Config::shipped_names().collect()
+}
+
+#[pymodule]
+fn _socnav(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add_class::<Batch>()?;
+    m.add_function(wrap_pyfunction!(shipped_configs, m)?)?;
+    m.add("SocNavError", py.get_type::<SocNavError>())?;
+    m.add("ConfigError", py.get_type::<ConfigError>())?;
+    m.add("ScenarioError", py.get_type::<ScenarioError>())?;
+    m.add(
+        "BackendUnavailableError",
+        py.get_type::<BackendUnavailableError>(),
+    )?;
+    Ok(())
+}

@@ -1,0 +1,137 @@
+"""The Python package against its contract: gymnasium's API, zero-copy outputs, errors that
+name the bad value, and agreement between the dict and flat observations."""
+
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from gymnasium.vector import AutoresetMode
+
+import socnav
+
+FORWARD = np.array([0.8, 0.0, 0.3], dtype=np.float32)
+
+
+def test_make_vec_steps_a_batch():
+    env = socnav.make_vec("exp1", num_envs=64, seed=0)
+    obs, info = env.reset(seed=0)
+    assert obs["robot"].shape == (64, 9)
+    obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+    assert reward.shape == (64,) and reward.dtype == np.float32
+    assert terminated.dtype == np.bool_ and truncated.shape == (64,)
+    assert info["PATH_LENGTH"].shape == (64,) and info["_PATH_LENGTH"].all()
+    assert env.observation_space["humans"].shape == (64,) + env.single_observation_space["humans"].shape
+
+
+def test_outputs_are_views_overwritten_in_place_unless_copied():
+    env = socnav.make_vec("exp2", num_envs=8, obs_mode="flat")
+    first, _ = env.reset(seed=1)
+    kept = first.copy()
+    second = env.step(np.tile(FORWARD, (8, 1)))[0]
+    assert np.shares_memory(first, second)
+    assert not np.array_equal(kept, second), "the robot moved: the buffer holds the new step"
+    copied = socnav.make_vec("exp2", num_envs=8, obs_mode="flat", copy=True)
+    a, _ = copied.reset(seed=1)
+    b = copied.step(np.tile(FORWARD, (8, 1)))[0]
+    assert not np.shares_memory(a, b)
+    np.testing.assert_array_equal(a, kept)
+
+
+def test_dict_blocks_are_the_flat_row():
+    flat_env = socnav.make_vec("exp2", num_envs=4, obs_mode="flat", seed=5)
+    dict_env = socnav.make_vec("exp2", num_envs=4, obs_mode="dict", seed=5)
+    flat, _ = flat_env.reset(seed=5)
+    blocks, _ = dict_env.reset(seed=5)
+    joined = np.concatenate([blocks[k].reshape(4, -1) for k in ["robot", "humans", "laptops", "tables", "plants", "walls"]], axis=1)
+    np.testing.assert_array_equal(joined, flat)
+    assert dict_env.single_observation_space.contains({k: v[0] for k, v in blocks.items()})
+
+
+def test_same_seed_same_rollout():
+    runs = []
+    for _ in range(2):
+        env = socnav.make_vec("exp3", num_envs=16, obs_mode="flat", copy=True)
+        env.reset(seed=7)
+        rng = np.random.default_rng(0)
+        rewards = [env.step(rng.uniform(-1, 1, (16, 3)).astype(np.float32) * [1, 0, 1])[1] for _ in range(50)]
+        runs.append(np.stack(rewards))
+    np.testing.assert_array_equal(runs[0], runs[1])
+
+
+def test_autoreset_modes():
+    env = socnav.make_vec({"base": "exp1", "episode": {"length": 5}}, num_envs=4, autoreset_mode="same_step")
+    assert env.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+    env.reset(seed=0)
+    for _ in range(6):
+        _, _, terminated, truncated, info = env.step(np.zeros((4, 3), dtype=np.float32))
+        if (terminated | truncated).any():
+            break
+    done = terminated | truncated
+    assert done.any()
+    np.testing.assert_array_equal(info["_final_obs"], done)
+    assert info["final_obs"]["robot"].shape == (4, 9)
+    assert "episode" in info and info["_episode"].any()
+
+    disabled = socnav.make_vec({"base": "exp1", "episode": {"length": 3}}, num_envs=2, autoreset_mode="disabled", obs_mode="flat")
+    disabled.reset(seed=0)
+    for _ in range(5):
+        _, _, terminated, truncated, _ = disabled.step(np.zeros((2, 3), dtype=np.float32))
+    assert (terminated | truncated).all()
+    obs, _ = disabled.reset(options={"reset_mask": np.array([True, False])})
+    with pytest.raises(ValueError, match="reset_mask"):
+        disabled.reset(options={"reset_mask": np.array([1, 0])})
+
+
+@pytest.mark.parametrize(
+    "actions, message",
+    [
+        (np.zeros((4, 2), dtype=np.float32), r"shape \(4, 3\)"),
+        (np.full((4, 3), np.nan, dtype=np.float32), "finite"),
+        (np.array([["a", "b", "c"]] * 4), "real numbers"),
+        (np.tile([0.5, 0.5, 0.0], (4, 1)), "lateral"),
+    ],
+)
+def test_bad_continuous_actions_are_value_errors(actions, message):
+    env = socnav.make_vec("exp1", num_envs=4)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        env.step(actions)
+    env.step(np.zeros((4, 3), dtype=np.float32))  # the batch is still usable
+
+
+def test_bad_discrete_actions_are_value_errors():
+    env = socnav.make_vec("exp1", num_envs=3, action_type="discrete")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"actions\[1\] is 7"):
+        env.step(np.array([0, 7, 2]))
+    with pytest.raises(ValueError, match="integers"):
+        env.step(np.array([0.0, 1.0, 2.0]))
+    env.step(np.array([0, 6, 2]))
+
+
+def test_config_errors_name_every_problem():
+    with pytest.raises(socnav.ConfigError) as err:
+        socnav.make_vec({"base": "exp2", "counts": {"plants": [3, 1]}, "episode": {"lenght": 9}}, num_envs=2)
+    assert "plants" in str(err.value) and "lenght" in str(err.value)
+    assert issubclass(socnav.ConfigError, socnav.SocNavError)
+    with pytest.raises(FileNotFoundError, match="no_such_config"):
+        socnav.make_vec("no_such_config", num_envs=2)
+    with pytest.raises(ValueError, match="num_envs"):
+        socnav.make_vec("exp1", num_envs=0)
+    with pytest.raises(ValueError, match="obs_mode"):
+        socnav.make_vec("exp1", num_envs=1, obs_mode="image")
+    with pytest.raises(socnav.BackendUnavailableError):
+        socnav.make_vec("exp1", num_envs=1, backend="gpu")
+
+
+@pytest.mark.parametrize("config, obs_mode, action_type", [("exp1", "dict", "continuous"), ("exp3", "flat", "discrete")])
+def test_single_env_passes_check_env(config, obs_mode, action_type):
+    env = socnav.make(config, obs_mode=obs_mode, action_type=action_type)
+    check_env(env, skip_render_check=True)
+    _, info = env.reset(seed=0)
+    assert info == {}
+    info = env.step(env.action_space.sample())[4]
+    assert info["TIME_TO_REACH_GOAL"] is None, "None before success, as in SocNavGym"
+
+
+def test_shipped_configs_are_listed():
+    assert {"exp1", "exp2", "exp3"} <= set(socnav.shipped_configs())
