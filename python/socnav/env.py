@@ -36,7 +36,6 @@ class SocNavEnv(gym.Env):
         self.observation_space = _batch.observation_space(self._batch, obs_mode)
         self.action_space = _batch.action_space(self._batch, action_type)
         self._buf = self._batch.buffers()
-        self._episode_seed = 0
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)

@@ -15,7 +15,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from socnav import _batch
-from socnav._socnav import Batch
+from socnav._socnav import BackendUnavailableError, Batch
 
 _AUTORESET = {
     "next_step": AutoresetMode.NEXT_STEP,
@@ -55,7 +55,6 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._buf = self._batch.buffers()
         self._all = np.ones(self.num_envs, dtype=bool)
-        self._seeded = seed is not None
 
     @property
     def backend(self) -> str:
@@ -66,7 +65,8 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
         """Reset every environment, or with ``options={"reset_mask": mask}`` only those where
-        the boolean ``mask`` is true (the DISABLED autoreset mode's way to restart them)."""
+        the boolean ``mask`` is true (the DISABLED autoreset mode's way to restart them). The
+        batch has one seed: of a list of seeds, the first one seeds it."""
         if isinstance(seed, (list, tuple)):
             seed = seed[0] if seed else None
         mask = (options or {}).get("reset_mask")
@@ -80,22 +80,23 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             self._batch.reset_envs(np.ascontiguousarray(mask))
         else:
             self._batch.reset(None if seed is None else int(seed))
-        return self._obs(self._buf["obs"]), self._info(final=False)
+        return self._obs(self._buf["obs"], self.copy), self._info(final=False)
 
     def step(self, actions: Any):
         _batch.step_batch(self._batch, self.action_type, actions, self.num_envs)
         b = self._buf
         reward = b["reward"].copy() if self.copy else b["reward"]
         return (
-            self._obs(b["obs"]),
+            self._obs(b["obs"], self.copy),
             reward,
             b["terminated"].astype(bool),
             b["truncated"].astype(bool),
             self._info(final=True),
         )
 
-    def _obs(self, flat: np.ndarray) -> Any:
-        if self.copy:
+    def _obs(self, flat: np.ndarray, copy: bool) -> Any:
+        """``flat`` (``(n, dim)``) as this env's observations: the row or the dict blocks."""
+        if copy:
             flat = flat.copy()
         if self.obs_mode == "flat":
             return flat
@@ -120,7 +121,8 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             if self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP:
                 has_final = b["has_final"].astype(bool)
                 if has_final.any():
-                    info["final_obs"] = self._final_obs(has_final)
+                    # Copied: the finishing observation is kept past the next step.
+                    info["final_obs"] = self._obs(b["final_obs"], copy=True)
                     info["_final_obs"] = has_final
                     final_info = b["final_info"].copy()
                     info["final_info"] = {
@@ -128,12 +130,6 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
                     }
                     info["_final_info"] = has_final
         return info
-
-    def _final_obs(self, mask: np.ndarray) -> Any:
-        flat = self._buf["final_obs"].copy()
-        if self.obs_mode == "flat":
-            return flat
-        return _batch.split_obs(flat, self._layout)
 
 
 def make_vec(
@@ -162,8 +158,6 @@ def make_vec(
         copy: return fresh arrays instead of views of the batch's buffers.
     """
     if backend not in ("auto", "cpu"):
-        from socnav._socnav import BackendUnavailableError
-
         raise BackendUnavailableError(
             f"backend {backend!r} is not available: this build has the 'cpu' backend only"
         )

@@ -53,7 +53,7 @@ fn py_err(e: SimError) -> PyErr {
     }
 }
 
-fn autoreset_mode(name: &str) -> PyResult<AutoresetMode> {
+fn parse_autoreset(name: &str) -> PyResult<AutoresetMode> {
     match name {
         "next_step" => Ok(AutoresetMode::NextStep),
         "same_step" => Ok(AutoresetMode::SameStep),
@@ -112,7 +112,7 @@ impl Batch {
         let options = EnvOptions {
             n_envs: num_envs,
             seed,
-            autoreset: self::autoreset_mode(autoreset_mode)?,
+            autoreset: parse_autoreset(autoreset_mode)?,
             threads,
         };
         let env = BatchEnv::new(c, options).map_err(py_err)?;
@@ -245,7 +245,7 @@ impl Batch {
             d.set_item(name, borrowed(slf, data, &[n, width]))?;
         }
         d.set_item("reward", borrowed(slf, &o.reward, &[n]))?;
-        let u32s: [(&str, &[u32], usize); 10] = [
+        let u32s: [(&str, &[u32], usize); 9] = [
             ("obs_count", &o.obs_count, 5),
             ("final_obs_count", &o.final_obs_count, 5),
             ("hh_pairs", &o.hh_pairs, st.hh()),
@@ -255,13 +255,12 @@ impl Batch {
             ("pair_count", &o.pair_count, st.pairs()),
             ("final_pair_count", &o.final_pair_count, st.pairs()),
             ("events", &o.events, st.events()),
-            ("terminated", &o.terminated, 1),
         ];
         for (name, data, width) in u32s {
-            let shape: &[usize] = if width == 1 { &[n] } else { &[n, width] };
-            d.set_item(name, borrowed(slf, data, shape))?;
+            d.set_item(name, borrowed(slf, data, &[n, width]))?;
         }
         for (name, data) in [
+            ("terminated", &o.terminated),
             ("truncated", &o.truncated),
             ("has_final", &o.has_final),
             ("episode_done", &o.episode_done),
