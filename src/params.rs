@@ -144,6 +144,18 @@ pub struct StepParams {
     pub reward_discomfort_distance: f32,
     /// Discomfort scale.
     pub reward_discomfort_factor: f32,
+    /// Weight (1/m) of the personal-space intrusion; 0 skips the term.
+    pub reward_personal_space_weight: f32,
+    /// Personal space (m) beyond the robot's surface.
+    pub reward_personal_space_distance: f32,
+    /// Weight (1/m) of the obstacle intrusion; 0 skips the term.
+    pub reward_obstacle_weight: f32,
+    /// Obstacle clearance (m) from the robot's surface.
+    pub reward_obstacle_distance: f32,
+    /// Weight of a stalled step; 0 skips the term.
+    pub reward_stalled_weight: f32,
+    /// Weight (s²/m) of the command's acceleration; 0 skips the term.
+    pub reward_acceleration_weight: f32,
     /// 1 when the observation omits walls and pads every type (0.1.1 padded mode).
     pub obs_padded: u32,
     /// 1 when the robot record carries its commanded velocity.
@@ -180,7 +192,7 @@ pub struct StepParams {
     /// recorded ones by re-synchronising).
     pub replay: u32,
     /// Padding to a multiple of 16 bytes.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 1],
 }
 
 const _: () = assert!(std::mem::size_of::<StepParams>().is_multiple_of(16));
@@ -248,6 +260,12 @@ impl StepParams {
             reward_distance_scale: c.reward.distance_scale,
             reward_discomfort_distance: c.reward.discomfort_distance,
             reward_discomfort_factor: c.reward.discomfort_factor,
+            reward_personal_space_weight: c.reward.personal_space_weight,
+            reward_personal_space_distance: c.reward.personal_space_distance,
+            reward_obstacle_weight: c.reward.obstacle_weight,
+            reward_obstacle_distance: c.reward.obstacle_distance,
+            reward_stalled_weight: c.reward.stalled_weight,
+            reward_acceleration_weight: c.reward.acceleration_weight,
             obs_padded: u32::from(c.observation.padded),
             obs_robot_velocity: u32::from(c.observation.robot_velocity),
             obs_world_frame: u32::from(c.observation.frame == ObsFrame::World),
@@ -271,7 +289,7 @@ impl StepParams {
             seed_lo: seed as u32,
             seed_hi: (seed >> 32) as u32,
             replay: 0,
-            _pad: [0; 3],
+            _pad: [0; 1],
         }
     }
 

@@ -366,6 +366,63 @@ fn dsrnn_reward_terms() {
     );
 }
 
+/// Contract: the weighted terms beyond 0.1.1 (`reward.*_weight`) on hand-computed scenes
+/// (dt = 1 s, robot radius 0.25 m, human radius 0.36 m, plant radius 0.4 m), each measured as
+/// the difference to the reward of the same scene with every weight 0.
+#[test]
+fn extra_reward_terms() {
+    let mut c = scene_config();
+    c.reward.personal_space_weight = -2.0;
+    c.reward.personal_space_distance = 0.8;
+    c.reward.obstacle_weight = -3.0;
+    c.reward.obstacle_distance = 0.3;
+    c.reward.stalled_weight = -0.25;
+    c.reward.acceleration_weight = -0.5;
+    // 0: a human 1.2 m ahead of a robot that stands still: its centre is 0.95 m from the
+    //    robot's surface, outside 0.8 m: no intrusion; stalled: -0.25; no acceleration.
+    let mut stalled = scene(false, [0.0, 0.0, 0.0], [3.0, 3.0]);
+    push(&mut stalled, "humans", static_human(1, 1.2, 0.0, 0.0));
+    // 1: a human 1 m ahead and the robot drives off at 0.1 m/s to (0.1, 0): 0.9 m apart, 0.65 m
+    //    from the surface: intrusion 0.15 m -> -0.3; acceleration 0.1 m/s² -> -0.05.
+    let mut close_by = scene(false, [0.0, 0.0, 0.0], [3.0, 3.0]);
+    push(&mut close_by, "humans", static_human(1, 1.0, 0.0, 0.0));
+    // 2: a plant centred 0.8 m behind a still robot: its surface is 0.4 m from the robot's
+    //    centre, 0.15 m from the robot's surface: intrusion 0.15 m -> -0.45; stalled -0.25.
+    let mut plant = scene(false, [0.0, 0.0, 0.0], [3.0, 3.0]);
+    push(&mut plant, "plants", json!({"id": 1, "x": -0.8, "y": 0.0}));
+    // 3: no humans, no obstacles (infinite distances): only the acceleration term.
+    let empty = scene(false, [0.0, 0.0, 0.0], [3.0, 3.0]);
+    let scenes = [stalled, close_by, plant, empty];
+    let stop = [0.0f32; 3];
+    let forward = [1.0f32, 0.0, 0.0];
+    let actions = [stop, forward, stop, forward];
+    let mut plain = load(scene_config(), &scenes);
+    let mut weighted = load(c, &scenes);
+    let extra = |plain: &BatchEnv, weighted: &BatchEnv, e: usize| {
+        weighted.outputs().reward[e] - plain.outputs().reward[e]
+    };
+    step(&mut plain, &actions);
+    step(&mut weighted, &actions);
+    // 1e-6: f32 distances of about 1 m.
+    let got = |e| extra(&plain, &weighted, e);
+    close("stalled", got(0), -0.25, 1e-6);
+    close("personal space + acceleration", got(1), -0.3 - 0.05, 1e-6);
+    close("obstacle + stalled", got(2), -0.45 - 0.25, 1e-6);
+    close(
+        "acceleration without humans or obstacles",
+        got(3),
+        -0.05,
+        1e-6,
+    );
+    // A second step at the same speed: no acceleration; scene 1's robot is at (0.2, 0), 0.8 m
+    // from the human's centre, 0.55 m from its surface: intrusion 0.25 m -> -0.5.
+    step(&mut plain, &actions);
+    step(&mut weighted, &actions);
+    let got = |e| extra(&plain, &weighted, e);
+    close("personal space, steady speed", got(1), -0.5, 1e-6);
+    assert_eq!(got(3), 0.0, "steady speed without neighbours");
+}
+
 // ---------------------------------------------------------------------------------------------
 // Metrics (spec 8.2)
 // ---------------------------------------------------------------------------------------------

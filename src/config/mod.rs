@@ -459,6 +459,22 @@ pub struct Reward {
     pub discomfort_distance: f32,
     /// Scale of the discomfort term (1/(m s)).
     pub discomfort_factor: f32,
+    /// Weight (1/m) of the personal-space term: how far (m) the nearest human's centre is inside
+    /// `personal_space_distance` of the robot's surface. Not in 0.1.1; 0 leaves it out.
+    pub personal_space_weight: f32,
+    /// Personal space (m) beyond the robot's surface; 0.45 is the threshold of
+    /// PERSONAL_SPACE_COMPLIANCE.
+    pub personal_space_distance: f32,
+    /// Weight (1/m) of the obstacle term: how far (m) the nearest plant, table or wall is inside
+    /// `obstacle_distance` of the robot's surface. Not in 0.1.1; 0 leaves it out.
+    pub obstacle_weight: f32,
+    /// Clearance (m) from the robot's surface under which the obstacle term applies.
+    pub obstacle_distance: f32,
+    /// Weight of the stalled term: 1 on a step whose linear command is 0. Not in 0.1.1.
+    pub stalled_weight: f32,
+    /// Weight (s²/m) of the acceleration term: the magnitude (m/s²) of the change of the linear
+    /// command over the step, as A_AVG measures it. Not in 0.1.1.
+    pub acceleration_weight: f32,
 }
 
 impl Default for Reward {
@@ -474,6 +490,12 @@ impl Default for Reward {
             distance_scale: 5.0,
             discomfort_distance: 0.6,
             discomfort_factor: 0.5,
+            personal_space_weight: 0.0,
+            personal_space_distance: 0.45,
+            obstacle_weight: 0.0,
+            obstacle_distance: 0.3,
+            stalled_weight: 0.0,
+            acceleration_weight: 0.0,
         }
     }
 }

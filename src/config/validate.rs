@@ -135,12 +135,18 @@ fn check_scalars(c: &Config, v: &mut Problems) {
         ("reward.alive", r.alive),
         ("reward.distance_scale", r.distance_scale),
         ("reward.discomfort_factor", r.discomfort_factor),
+        ("reward.personal_space_weight", r.personal_space_weight),
+        ("reward.obstacle_weight", r.obstacle_weight),
+        ("reward.stalled_weight", r.stalled_weight),
+        ("reward.acceleration_weight", r.acceleration_weight),
     ] {
         if !x.is_finite() {
             v.0.push(format!("`{key}` must be finite, got {x}"));
         }
     }
     v.non_negative("reward.discomfort_distance", r.discomfort_distance);
+    v.non_negative("reward.personal_space_distance", r.personal_space_distance);
+    v.non_negative("reward.obstacle_distance", r.obstacle_distance);
     if c.render.resolution < 16 {
         v.0.push(format!(
             "`render.resolution` must be >= 16 pixels, got {}",

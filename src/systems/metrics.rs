@@ -68,8 +68,9 @@ fn progress(p: &StepParams, s: &mut StateChunk, e: usize, row: &mut [f32]) {
     row[info::PATH_LENGTH] = s.m_path_length[e];
 }
 
+/// The magnitude of the vector (x, y).
 #[inline]
-fn speed(x: f32, y: f32) -> f32 {
+pub fn speed(x: f32, y: f32) -> f32 {
     (x * x + y * y).sqrt()
 }
 
@@ -81,11 +82,20 @@ fn running(min: &mut f32, avg: &mut f32, max: &mut f32, value: f32, tick: f32) {
     *avg = (*avg * (tick - 1.0) + value) / tick;
 }
 
+/// This step's acceleration (m/s²) of the robot-frame linear command (v_x, v_y): valid until
+/// `metrics` stores the command as the previous one.
+#[inline]
+pub fn command_acceleration(p: &StepParams, s: &StateChunk, e: usize) -> (f32, f32) {
+    (
+        (s.robot_vx[e] - s.m_prev_vx[e]) / p.dt,
+        (s.robot_vy[e] - s.m_prev_vy[e]) / p.dt,
+    )
+}
+
 /// V, A and JERK statistics of the robot-frame linear command.
 fn motion_statistics(p: &StepParams, s: &mut StateChunk, e: usize, tick: f32, row: &mut [f32]) {
     let (vx, vy) = (s.robot_vx[e], s.robot_vy[e]);
-    let ax = (vx - s.m_prev_vx[e]) / p.dt;
-    let ay = (vy - s.m_prev_vy[e]) / p.dt;
+    let (ax, ay) = command_acceleration(p, s, e);
     let jx = (ax - s.m_prev_ax[e]) / p.dt;
     let jy = (ay - s.m_prev_ay[e]) / p.dt;
     running(
@@ -125,7 +135,7 @@ fn motion_statistics(p: &StepParams, s: &mut StateChunk, e: usize, tick: f32, ro
 }
 
 /// Smallest robot-human centre distance (m); +inf without humans.
-fn min_human_distance(s: &StateChunk, e: usize) -> f32 {
+pub fn min_human_distance(s: &StateChunk, e: usize) -> f32 {
     let hb = e * s.strides.humans;
     (hb..hb + s.n_humans[e] as usize)
         .map(|i| speed(s.h_x[i] - s.robot_x[e], s.h_y[i] - s.robot_y[e]))
@@ -167,7 +177,7 @@ pub fn time_to_collision(p: &StepParams, s: &StateChunk, e: usize) -> f32 {
 
 /// Minimum and mean distance (m) from the robot centre to plants (surface), tables and walls
 /// (nearest point); laptops excluded, robot radius not subtracted. (+inf, NaN) without obstacles.
-fn obstacle_distances(p: &StepParams, s: &StateChunk, e: usize) -> (f32, f32) {
+pub fn obstacle_distances(p: &StepParams, s: &StateChunk, e: usize) -> (f32, f32) {
     let (rx, ry) = (s.robot_x[e], s.robot_y[e]);
     let (mut min, mut sum, mut n) = (f32::INFINITY, 0.0f32, 0u32);
     let mut add = |d: f32| {

@@ -6,6 +6,7 @@
 //! advances it by ω·dt twice); a pseudo-human's heading is its own group's (0.1.1 takes it from a
 //! leaked loop variable).
 
+use super::metrics;
 use crate::geometry::origin_segment_distance;
 use crate::math;
 use crate::params::StepParams;
@@ -64,7 +65,31 @@ fn step_reward(p: &StepParams, s: &mut StateChunk, e: usize) -> f32 {
     s.r_discomfort_dsrnn[e] = r_disc;
     s.r_discomfort_sngnn[e] = 0.0;
     s.r_alive[e] = p.reward_alive;
-    r_disc + r_dist + p.reward_alive
+    with_extra_terms(p, s, e, r_disc + r_dist + p.reward_alive)
+}
+
+/// `r` plus the weighted terms beyond 0.1.1 (`reward.*_weight`). A term whose weight is 0 is not
+/// evaluated at all, so 0.1.1's reward stays bit-exact (not even `+ 0.0`, which turns -0 into +0)
+/// and an infinite distance (no humans, no obstacles) never meets a zero weight.
+fn with_extra_terms(p: &StepParams, s: &StateChunk, e: usize, mut r: f32) -> f32 {
+    if p.reward_personal_space_weight != 0.0 {
+        let clearance = metrics::min_human_distance(s, e) - p.robot_radius;
+        let intrusion = (p.reward_personal_space_distance - clearance).max(0.0);
+        r += p.reward_personal_space_weight * intrusion;
+    }
+    if p.reward_obstacle_weight != 0.0 {
+        let clearance = metrics::obstacle_distances(p, s, e).0 - p.robot_radius;
+        let intrusion = (p.reward_obstacle_distance - clearance).max(0.0);
+        r += p.reward_obstacle_weight * intrusion;
+    }
+    if p.reward_stalled_weight != 0.0 && metrics::speed(s.robot_vx[e], s.robot_vy[e]) == 0.0 {
+        r += p.reward_stalled_weight;
+    }
+    if p.reward_acceleration_weight != 0.0 {
+        let (ax, ay) = metrics::command_acceleration(p, s, e);
+        r += p.reward_acceleration_weight * metrics::speed(ax, ay);
+    }
+    r
 }
 
 /// The robot's world-frame velocity (m/s): its command turned by its heading, computed with the
