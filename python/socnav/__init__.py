@@ -12,14 +12,17 @@ from socnav._socnav import (
     SocNavError,
     shipped_configs,
 )
+from socnav._batch import RewardInputs
 from socnav.env import SocNavEnv, make
 from socnav.vector import SocNavVectorEnv, make_vec
+from socnav import orca, socnavgym
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BackendUnavailableError",
     "ConfigError",
+    "RewardInputs",
     "ScenarioError",
     "SocNavEnv",
     "SocNavError",

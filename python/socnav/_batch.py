@@ -4,16 +4,17 @@ spaces from its layout, and the validation of actions."""
 from __future__ import annotations
 
 import json
-from typing import Any, Mapping
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping
 
 import numpy as np
 from gymnasium import spaces
 
-from socnav._socnav import Batch
+from socnav._socnav import DISCRETE_ACTIONS, Batch, ConfigError
 
 ACTION_TYPES = ("continuous", "discrete")
 OBS_MODES = ("dict", "flat")
-N_DISCRETE = 7
+N_DISCRETE = len(DISCRETE_ACTIONS)
 
 
 def build_batch(
@@ -28,6 +29,9 @@ def build_batch(
     if isinstance(config, Mapping):
         overrides = dict(config)
         base = overrides.pop("base", "exp1")
+        bad = list(_non_finite(overrides, ""))
+        if bad:
+            raise ConfigError("; ".join(f"`{key}` must be finite, got {value}" for key, value in bad))
         text = json.dumps(overrides)
     elif isinstance(config, str):
         base, text = config, None
@@ -36,6 +40,20 @@ def build_batch(
     if not isinstance(num_envs, (int, np.integer)) or isinstance(num_envs, bool) or num_envs < 1:
         raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
     return Batch(base, int(num_envs), 0 if seed is None else int(seed), autoreset_mode, threads, text)
+
+
+def _non_finite(table: Mapping[str, Any], prefix: str):
+    """(dotted key, value) of every NaN or infinite float in a nested table (JSON has none)."""
+    for key, value in table.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            yield from _non_finite(value, name + ".")
+        elif isinstance(value, (list, tuple)):
+            for i, item in enumerate(value):
+                if isinstance(item, float) and not np.isfinite(item):
+                    yield f"{name}[{i}]", item
+        elif isinstance(value, float) and not np.isfinite(value):
+            yield name, value
 
 
 def observation_space(batch: Batch, obs_mode: str) -> spaces.Space:
@@ -98,3 +116,56 @@ def step_batch(batch: Batch, action_type: str, actions: Any, num_envs: int) -> N
             k = int(np.argmax((a < 0) | (a >= N_DISCRETE)))
             raise ValueError(f"actions[{k}] is {a[k]}: discrete actions are 0..{N_DISCRETE - 1}")
         batch.step_discrete(np.ascontiguousarray(a, dtype=np.uint32))
+
+
+@dataclass(frozen=True)
+class RewardInputs:
+    """What a custom reward function sees of one step of the batch; the first axis of every
+    array is the environment. The arrays may be views of buffers the next step overwrites:
+    copy what you keep.
+
+    Attributes:
+        actions: the actions given to ``step`` (continuous ``(n, 3)`` float32 in [-1, 1], or
+            discrete ``(n,)`` integers).
+        obs: the observation each environment reached at this step, before an autoreset
+            replaced it (``"dict"`` blocks or the ``"flat"`` row, as the environment returns).
+        reward: the built-in reward of the step (float32 ``(n,)``), as the config defines it.
+        terminated: bool ``(n,)``.
+        truncated: bool ``(n,)``.
+        info: every metric of the step by name, float32 ``(n,)`` (NaN where SocNavGym has
+            ``None``).
+        stepped: bool ``(n,)``; false where the call was not a step of that environment but the
+            reset of the NEXT_STEP autoreset (or a finished environment waiting under DISABLED).
+            Those environments get reward 0 whatever the function returns.
+    """
+
+    actions: np.ndarray
+    obs: Any
+    reward: np.ndarray
+    terminated: np.ndarray
+    truncated: np.ndarray
+    info: dict[str, np.ndarray]
+    stepped: np.ndarray
+
+
+RewardFn = Callable[[RewardInputs], Any]
+
+
+def custom_reward(fn: RewardFn, inputs: RewardInputs, out: np.ndarray) -> np.ndarray:
+    """Call ``fn`` and write its rewards into ``out`` (float32 ``(n,)``), 0 where the
+    environment did not step. Anything but ``n`` finite real numbers is a ``ValueError``
+    naming the problem."""
+    n = out.shape[0]
+    got = np.asarray(fn(inputs))
+    if got.shape not in ((n,), ()):
+        raise ValueError(f"reward_fn must return {n} rewards (shape ({n},)), got shape {got.shape}")
+    if not np.issubdtype(got.dtype, np.number) or np.issubdtype(got.dtype, np.complexfloating):
+        raise ValueError(f"reward_fn must return real numbers, got dtype {got.dtype}")
+    out[:] = got
+    if not np.isfinite(out).all():
+        k = int(np.argmax(~np.isfinite(out)))
+        raise ValueError(
+            f"reward_fn's reward for environment {k} is {out[k]} as float32: rewards must be finite"
+        )
+    out[~inputs.stepped] = 0.0
+    return out

@@ -38,6 +38,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         autoreset_mode: str | AutoresetMode = "next_step",
         threads: int | None = None,
         copy: bool = False,
+        reward_fn: _batch.RewardFn | None = None,
     ) -> None:
         mode = autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else autoreset_mode
         _batch.check_choice("autoreset_mode", mode, tuple(_AUTORESET))
@@ -55,6 +56,13 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._buf = self._batch.buffers()
         self._all = np.ones(self.num_envs, dtype=bool)
+        self._reward_fn = reward_fn
+        # With a reward function: its rewards, their running episode returns, and which
+        # environments finished at the last step (their next step is a reset under NEXT_STEP,
+        # or nothing under DISABLED until `reset_mask` restarts them).
+        self._reward = np.zeros(self.num_envs, dtype=np.float32)
+        self._returns = np.zeros(self.num_envs, dtype=np.float64)
+        self._finished = np.zeros(self.num_envs, dtype=bool)
 
     @property
     def backend(self) -> str:
@@ -78,21 +86,55 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
                     f"got {mask.dtype} {mask.shape}"
                 )
             self._batch.reset_envs(np.ascontiguousarray(mask))
+            self._finished[mask] = False
+            self._returns[mask] = 0.0
         else:
             self._batch.reset(None if seed is None else int(seed))
+            self._finished[:] = False
+            self._returns[:] = 0.0
         return self._obs(self._buf["obs"], self.copy), self._info(final=False)
 
     def step(self, actions: Any):
         _batch.step_batch(self._batch, self.action_type, actions, self.num_envs)
         b = self._buf
-        reward = b["reward"].copy() if self.copy else b["reward"]
-        return (
-            self._obs(b["obs"], self.copy),
-            reward,
-            b["terminated"].astype(bool),
-            b["truncated"].astype(bool),
-            self._info(final=True),
+        terminated = b["terminated"].astype(bool)
+        truncated = b["truncated"].astype(bool)
+        info = self._info(final=True)
+        if self._reward_fn is None:
+            reward = b["reward"].copy() if self.copy else b["reward"]
+        else:
+            reward = self._custom_reward(actions, terminated, truncated, info)
+        return self._obs(b["obs"], self.copy), reward, terminated, truncated, info
+
+    def _custom_reward(
+        self, actions: Any, terminated: np.ndarray, truncated: np.ndarray, info: dict[str, Any]
+    ) -> np.ndarray:
+        """The reward function's rewards for this step; the episode returns in ``info`` become
+        theirs."""
+        b = self._buf
+        stepped = self._all if self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP else ~self._finished
+        flat = b["obs"]
+        has_final = b["has_final"].astype(bool)
+        if has_final.any():
+            # SAME_STEP already reset these: score the observation the step reached.
+            flat = np.where(has_final[:, None], b["final_obs"], flat)
+        inputs = _batch.RewardInputs(
+            actions=np.asarray(actions),
+            obs=self._obs(flat, copy=False),
+            reward=b["reward"],
+            terminated=terminated,
+            truncated=truncated,
+            info={key: info[key] for key in self._keys["info"]},
+            stepped=stepped,
         )
+        reward = _batch.custom_reward(self._reward_fn, inputs, self._reward)
+        self._returns += reward
+        if "episode" in info:
+            done = info["_episode"]
+            info["episode"]["return"] = np.where(done, self._returns, info["episode"]["return"]).astype(np.float32)
+            self._returns[done] = 0.0
+        self._finished = terminated | truncated
+        return reward.copy() if self.copy else reward
 
     def _obs(self, flat: np.ndarray, copy: bool) -> Any:
         """``flat`` (``(n, dim)``) as this env's observations: the row or the dict blocks."""
@@ -143,6 +185,7 @@ def make_vec(
     backend: str = "auto",
     threads: int | None = None,
     copy: bool = False,
+    reward_fn: _batch.RewardFn | None = None,
 ) -> SocNavVectorEnv:
     """A vector environment of ``num_envs`` environments.
 
@@ -156,6 +199,10 @@ def make_vec(
         backend: ``"auto"`` or ``"cpu"`` (the GPU backend is not built yet).
         threads: CPU threads (all cores when ``None``).
         copy: return fresh arrays instead of views of the batch's buffers.
+        reward_fn: a vectorised reward: called after every step with the step's arrays
+            (``socnav.RewardInputs``), it returns one reward per environment, which replaces
+            the built-in one (also in the episode returns of ``info["episode"]``). Plain numpy
+            over the batch costs microseconds; a Python loop over environments does not.
     """
     if backend not in ("auto", "cpu"):
         raise BackendUnavailableError(
@@ -170,4 +217,5 @@ def make_vec(
         autoreset_mode=autoreset_mode,
         threads=threads,
         copy=copy,
+        reward_fn=reward_fn,
     )

@@ -6,6 +6,8 @@
 //! of this class; everything about shapes comes from here, which takes it from the core's
 //! `spec` module, so no shape is written twice.
 
+mod orca;
+
 use ndarray::{ArrayView, IxDyn};
 use numpy::{Element, PyArray, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::create_exception;
@@ -13,7 +15,9 @@ use pyo3::exceptions::{PyException, PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use socnav::config::Kinematics;
-use socnav::spec::{ENTITY_KEYS, EPISODE_KEYS, EVENT_KEYS, INFO_KEYS, INTERACTION_KEYS, RECORD};
+use socnav::spec::{
+    DISCRETE_ACTIONS, ENTITY_KEYS, EPISODE_KEYS, EVENT_KEYS, INFO_KEYS, INTERACTION_KEYS, RECORD,
+};
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
 
 create_exception!(
@@ -91,10 +95,15 @@ fn borrowed<'py, T: Element>(
 
 #[pymethods]
 impl Batch {
-    /// `config`: a shipped config name or a TOML path; `overrides`: a JSON object of keys applied
-    /// on top (`Config::with_overrides`).
+    /// `config`: a shipped config name or a TOML path, or with `toml_text` only a label (the
+    /// config is then that TOML text); `overrides`: a JSON object of keys applied on top
+    /// (`Config::with_overrides`).
     #[new]
-    #[pyo3(signature = (config, num_envs, seed=0, autoreset_mode="next_step", threads=None, overrides=None))]
+    #[pyo3(signature = (config, num_envs, seed=0, autoreset_mode="next_step", threads=None, overrides=None, toml_text=None))]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the Python constructor's keyword arguments"
+    )]
     fn new(
         config: &str,
         num_envs: usize,
@@ -102,8 +111,13 @@ impl Batch {
         autoreset_mode: &str,
         threads: Option<usize>,
         overrides: Option<&str>,
+        toml_text: Option<&str>,
     ) -> PyResult<Self> {
-        let mut c = Config::from_name_or_path(config).map_err(py_err)?;
+        let mut c = match toml_text {
+            Some(text) => Config::from_toml_str(text),
+            None => Config::from_name_or_path(config),
+        }
+        .map_err(py_err)?;
         if let Some(text) = overrides {
             let json: serde_json::Value = serde_json::from_str(text)
                 .map_err(|e| ConfigError::new_err(format!("overrides are not JSON: {e}")))?;
@@ -142,7 +156,8 @@ impl Batch {
         self.env.config().to_toml_string()
     }
 
-    /// The observation layout: `dim`, `robot` (robot record length), `record` (14), and per
+    /// The observation layout: `dim`, `robot` (robot record length), `record` (14), `padded`
+    /// (every type padded to its capacity, walls omitted), and per
     /// entity key its `offset` and `capacity` (records), plus the interaction pair capacities.
     fn layout<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let l = self.env.layout();
@@ -150,6 +165,7 @@ impl Batch {
         d.set_item("dim", l.dim)?;
         d.set_item("robot", l.robot)?;
         d.set_item("record", RECORD)?;
+        d.set_item("padded", self.env.config().observation.padded)?;
         let entities = PyDict::new(py);
         for (t, key) in ENTITY_KEYS.iter().enumerate() {
             entities.set_item(*key, (l.offset[t], l.capacity[t]))?;
@@ -284,6 +300,15 @@ impl Batch {
     }
 }
 
+/// A SocNavGym 0.1.1 config (its YAML parsed and given as JSON text) as socnav TOML.
+#[pyfunction]
+fn socnavgym_config_toml(yaml_json: &str) -> PyResult<String> {
+    let yaml: serde_json::Value = serde_json::from_str(yaml_json)
+        .map_err(|e| ConfigError::new_err(format!("the SocNavGym config is not JSON: {e}")))?;
+    let c = Config::from_socnavgym(&yaml).map_err(py_err)?;
+    Ok(c.to_toml_string())
+}
+
 /// The shipped config names.
 #[pyfunction]
 fn shipped_configs() -> Vec<&'static str> {
@@ -295,6 +320,12 @@ fn _socnav(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_class::<Batch>()?;
     m.add_function(wrap_pyfunction!(shipped_configs, m)?)?;
+    m.add_function(wrap_pyfunction!(socnavgym_config_toml, m)?)?;
+    m.add(
+        "DISCRETE_ACTIONS",
+        DISCRETE_ACTIONS.map(|a| a.to_vec()).to_vec(),
+    )?;
+    orca::register(m)?;
     m.add("SocNavError", py.get_type::<SocNavError>())?;
     m.add("ConfigError", py.get_type::<ConfigError>())?;
     m.add("ScenarioError", py.get_type::<ScenarioError>())?;

@@ -1,0 +1,165 @@
+"""SocNavGym 0.1.1's interface over socnav, for code written against SocNavGym.
+
+``SocNavGymEnv`` returns what 0.1.1's ``SocNavEnv`` returns: the observation as a plain dict of
+1-D float32 vectors in the order robot, humans, laptops, tables, plants, walls, each holding only
+the entities that exist (a key is absent when its type has none; with ``padded = true`` in the
+config every type is padded to its capacity and the walls are omitted, as 0.1.1's
+``get_padded_observations``), and its info dict: the collision and outcome flags as ``bool``,
+``FAILURE_TO_PROGRESS`` and ``TIME_TO_COLLISION`` as ``int``, ``None`` where 0.1.1 has ``None``,
+and ``interactions`` as lists of index pairs. ``observation_space`` is recomputed from the current
+episode's counts, and its ``Dict`` sorts the keys alphabetically as gym's does (which is the order
+SB3's flattening uses).
+
+The config may be a SocNavGym YAML file (``.yaml``/``.yml``, converted key by key; needs PyYAML),
+or anything ``socnav.make`` takes. ``DiscreteActions`` is 0.1.1's wrapper of the same name.
+
+    env = DiscreteActions(SocNavGymEnv("exp1_no_sngnn.yaml"))
+    obs, info = env.reset(seed=0)
+    obs, reward, terminated, truncated, info = env.step(4)   # forward
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Mapping
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from socnav import _batch
+from socnav._socnav import DISCRETE_ACTIONS, Batch, ConfigError, socnavgym_config_toml
+
+#: 0.1.1's boolean info keys.
+BOOL_INFO = frozenset(
+    ["OUT_OF_MAP", "SUCCESS", "COLLISION", "COLLISION_HUMAN", "COLLISION_OBJECT", "COLLISION_WALL", "TIMEOUT"]
+)
+#: 0.1.1's integer info keys.
+INT_INFO = frozenset(["FAILURE_TO_PROGRESS", "TIME_TO_COLLISION"])
+
+
+def load_socnavgym_yaml(path: str | os.PathLike[str]) -> str:
+    """A SocNavGym 0.1.1 YAML config as socnav TOML text (every key converted, the missing
+    ones and values socnav cannot take listed in one ``ConfigError``)."""
+    try:
+        import yaml
+    except ImportError as e:
+        raise ImportError(
+            "reading a SocNavGym YAML config needs PyYAML: pip install pyyaml"
+        ) from e
+    with open(path, encoding="utf-8") as f:
+        parsed = yaml.safe_load(f)
+    if not isinstance(parsed, dict):
+        raise ConfigError(f"{os.fspath(path)}: a SocNavGym config is a YAML mapping, got {type(parsed).__name__}")
+    try:
+        return socnavgym_config_toml(json.dumps(parsed))
+    except ConfigError as e:
+        raise ConfigError(f"{os.fspath(path)}: {e}") from None
+
+
+def _is_yaml(config: Any) -> bool:
+    return isinstance(config, (str, os.PathLike)) and os.fspath(config).endswith((".yaml", ".yml"))
+
+
+class SocNavGymEnv(gym.Env):
+    """One environment with SocNavGym 0.1.1's observation and info (see the module)."""
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, config: str | os.PathLike[str] | Mapping[str, Any] = "exp1", *, threads: int | None = 1) -> None:
+        if _is_yaml(config):
+            self._batch: Batch = Batch(os.fspath(config), 1, 0, "disabled", threads, None, load_socnavgym_yaml(config))
+        else:
+            self._batch = _batch.build_batch(config, 1, None, "disabled", threads)
+        layout = self._batch.layout()
+        self._robot = layout["robot"]
+        self._record = layout["record"]
+        self._blocks = [(key, offset, capacity) for key, (offset, capacity) in layout["entities"].items()]
+        self._padded = bool(layout["padded"])
+        self._info_keys = Batch.keys()["info"]
+        self._buf = self._batch.buffers()
+        self.action_space = _batch.action_space(self._batch, "continuous")
+
+    @property
+    def observation_space(self) -> spaces.Dict:  # type: ignore[override]
+        """Recomputed from the current episode's counts on every access, as in 0.1.1."""
+        obs = self._obs()
+        return spaces.Dict(
+            {key: spaces.Box(-np.inf, np.inf, value.shape, np.float32) for key, value in obs.items()}
+        )
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        if seed is not None:
+            self._batch.reset(int(seed))
+        else:
+            self._batch.reset_envs(np.ones(1, dtype=bool))
+        return self._obs(), {}
+
+    def step(self, action: Any):
+        a = np.asarray(action)
+        if a.shape != (3,):
+            raise ValueError(f"action must have shape (3,), got {a.shape}")
+        _batch.step_batch(self._batch, "continuous", a.reshape(1, 3), 1)
+        b = self._buf
+        return self._obs(), float(b["reward"][0]), bool(b["terminated"][0]), bool(b["truncated"][0]), self._info()
+
+    def _obs(self) -> dict[str, np.ndarray]:
+        """0.1.1's dict: the robot vector, then each type's real records (all of its capacity
+        when padded), flattened; absent keys for types with no records."""
+        row = self._buf["obs"][0]
+        counts = self._buf["obs_count"][0]
+        out = {"robot": row[: self._robot].copy()}
+        for t, (key, offset, capacity) in enumerate(self._blocks):
+            n = capacity if self._padded else int(counts[t])
+            if n > 0:
+                out[key] = row[offset : offset + n * self._record].copy()
+        return out
+
+    def _info(self) -> dict[str, Any]:
+        values = self._buf["info"][0]
+        info: dict[str, Any] = {}
+        for k, key in enumerate(self._info_keys):
+            v = float(values[k])
+            if key in BOOL_INFO:
+                info[key] = v != 0.0
+            elif np.isnan(v):
+                info[key] = None
+            elif key in INT_INFO:
+                info[key] = int(v)
+            else:
+                info[key] = v
+        hh, hl = self._buf["pair_count"][0]
+        info["interactions"] = {
+            "human-human": _pairs(self._buf["hh_pairs"][0], int(hh)),
+            "human-laptop": _pairs(self._buf["hl_pairs"][0], int(hl)),
+        }
+        return info
+
+
+def _pairs(flat: np.ndarray, n: int) -> list[tuple[int, int]]:
+    return [(int(flat[2 * i]), int(flat[2 * i + 1])) for i in range(n)]
+
+
+class DiscreteActions(gym.ActionWrapper):
+    """0.1.1's ``DiscreteActions``: ``Discrete(7)`` onto the continuous actions: 0 turn left,
+    1 turn right, 2 forward + left, 3 forward + right, 4 forward, 5 backward, 6 stop."""
+
+    ACTIONS = np.array(DISCRETE_ACTIONS, dtype=np.float32)
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.action_space = spaces.Discrete(len(self.ACTIONS))
+
+    def action(self, action: Any) -> np.ndarray:
+        a = np.asarray(action)
+        if a.shape != () or not np.issubdtype(a.dtype, np.integer) or not 0 <= int(a) < len(self.ACTIONS):
+            raise ValueError(f"a discrete action is an integer in 0..{len(self.ACTIONS) - 1}, got {action!r}")
+        return self.ACTIONS[int(a)].copy()
+
+
+def make(config: str | os.PathLike[str] | Mapping[str, Any] = "exp1", *, discrete: bool = False) -> gym.Env:
+    """A ``SocNavGymEnv``, wrapped in ``DiscreteActions`` when ``discrete``."""
+    env: gym.Env = SocNavGymEnv(config)
+    return DiscreteActions(env) if discrete else env
