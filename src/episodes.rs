@@ -3,6 +3,35 @@
 
 use crate::spec::{EPISODE_KEYS, N_EPISODE};
 
+/// The statistics of the paper's table (spec 8.3) in the order `socnav run` reports them: the
+/// info metrics of spec 8.2 as episode statistics, then the table's own columns.
+pub const TABLE_KEYS: [&str; 24] = [
+    "STL",
+    "SPL",
+    "PATH_LENGTH",
+    "PERSONAL_SPACE_COMPLIANCE",
+    "FAILURE_TO_PROGRESS",
+    "STALLED_TIME",
+    "TIME_TO_REACH_GOAL",
+    "V_MIN",
+    "V_AVG",
+    "V_MAX",
+    "A_MIN",
+    "A_AVG",
+    "A_MAX",
+    "JERK_MIN",
+    "JERK_AVG",
+    "JERK_MAX",
+    "MINIMUM_DISTANCE_TO_HUMAN",
+    "MINIMUM_OBSTACLE_DISTANCE",
+    "AVERAGE_OBSTACLE_DISTANCE",
+    "TIME_TO_COLLISION",
+    "DISCOMFORT_DSRNN",
+    "DISCOMFORT_SNGNN",
+    "time_taken",
+    "return",
+];
+
 /// Running sums over finished episodes.
 #[derive(Debug, Clone)]
 pub struct Aggregate {

@@ -62,7 +62,7 @@ def observation_space(batch: Batch, obs_mode: str) -> spaces.Space:
     layout = batch.layout()
     if obs_mode == "flat":
         return spaces.Box(-np.inf, np.inf, (layout["dim"],), np.float32)
-    blocks = {"robot": spaces.Box(-np.inf, np.inf, (layout["robot"],), np.float32)}
+    blocks: dict[str, spaces.Space[Any]] = {"robot": spaces.Box(-np.inf, np.inf, (layout["robot"],), np.float32)}
     for key, (_, capacity) in layout["entities"].items():
         blocks[key] = spaces.Box(-np.inf, np.inf, (capacity, layout["record"]), np.float32)
     return spaces.Dict(blocks)

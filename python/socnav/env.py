@@ -48,6 +48,7 @@ class SocNavEnv(gym.Env):
 
     def step(self, action: Any):
         a = np.asarray(action)
+        batch_action: np.ndarray
         if self.action_type == "continuous":
             if a.shape != (3,):
                 raise ValueError(f"action must have shape (3,), got {a.shape}")

@@ -58,18 +58,16 @@ def load_socnavgym_yaml(path: str | os.PathLike[str]) -> str:
         raise ConfigError(f"{os.fspath(path)}: {e}") from None
 
 
-def _is_yaml(config: Any) -> bool:
-    return isinstance(config, (str, os.PathLike)) and os.fspath(config).endswith((".yaml", ".yml"))
-
-
 class SocNavGymEnv(gym.Env):
     """One environment with SocNavGym 0.1.1's observation and info (see the module)."""
 
     metadata = {"render_modes": []}
 
     def __init__(self, config: str | os.PathLike[str] | Mapping[str, Any] = "exp1", *, threads: int | None = 1) -> None:
-        if _is_yaml(config):
-            self._batch: Batch = Batch(os.fspath(config), 1, 0, "disabled", threads, None, load_socnavgym_yaml(config))
+        if isinstance(config, os.PathLike):
+            config = os.fspath(config)
+        if isinstance(config, str) and config.endswith((".yaml", ".yml")):
+            self._batch: Batch = Batch(config, 1, 0, "disabled", threads, None, load_socnavgym_yaml(config))
         else:
             self._batch = _batch.build_batch(config, 1, None, "disabled", threads)
         layout = self._batch.layout()

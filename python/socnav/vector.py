@@ -103,13 +103,18 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         if self._reward_fn is None:
             reward = b["reward"].copy() if self.copy else b["reward"]
         else:
-            reward = self._custom_reward(actions, terminated, truncated, info)
+            reward = self._custom_reward(self._reward_fn, actions, terminated, truncated, info)
         return self._obs(b["obs"], self.copy), reward, terminated, truncated, info
 
     def _custom_reward(
-        self, actions: Any, terminated: np.ndarray, truncated: np.ndarray, info: dict[str, Any]
+        self,
+        reward_fn: _batch.RewardFn,
+        actions: Any,
+        terminated: np.ndarray,
+        truncated: np.ndarray,
+        info: dict[str, Any],
     ) -> np.ndarray:
-        """The reward function's rewards for this step; the episode returns in ``info`` become
+        """``reward_fn``'s rewards for this step; the episode returns in ``info`` become
         theirs."""
         b = self._buf
         stepped = self._all if self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP else ~self._finished
@@ -127,7 +132,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             info={key: info[key] for key in self._keys["info"]},
             stepped=stepped,
         )
-        reward = _batch.custom_reward(self._reward_fn, inputs, self._reward)
+        reward = _batch.custom_reward(reward_fn, inputs, self._reward)
         self._returns += reward
         if "episode" in info:
             done = info["_episode"]

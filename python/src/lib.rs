@@ -15,6 +15,7 @@ use pyo3::exceptions::{PyException, PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use socnav::config::Kinematics;
+use socnav::episodes::TABLE_KEYS;
 use socnav::spec::{
     DISCRETE_ACTIONS, ENTITY_KEYS, EPISODE_KEYS, EVENT_KEYS, INFO_KEYS, INTERACTION_KEYS, RECORD,
 };
@@ -180,7 +181,7 @@ impl Batch {
     }
 
     /// Key names: `info`, `episode`, `events`, `entities`, `interactions` (the orders of the
-    /// output columns).
+    /// output columns), and `table` (the paper's metrics in the order `socnav run` reports them).
     #[staticmethod]
     fn keys<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -189,6 +190,7 @@ impl Batch {
         d.set_item("events", EVENT_KEYS.to_vec())?;
         d.set_item("entities", ENTITY_KEYS.to_vec())?;
         d.set_item("interactions", INTERACTION_KEYS.to_vec())?;
+        d.set_item("table", TABLE_KEYS.to_vec())?;
         Ok(d)
     }
 

@@ -7,39 +7,12 @@ use std::time::{Duration, Instant};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{Map, Value, json};
 use socnav::episodes::Aggregate;
+use socnav::episodes::TABLE_KEYS;
 use socnav::spec::{EVENT_KEYS, N_EVENTS};
 use socnav::{Actions, BatchEnv, Config, EnvOptions};
 
 use crate::args::{BackendChoice, RunArgs};
 use crate::policy::Policy;
-
-/// Metric keys reported, as the info keys of spec 8.2 (plus the table's episode columns).
-const METRICS: [&str; 24] = [
-    "STL",
-    "SPL",
-    "PATH_LENGTH",
-    "PERSONAL_SPACE_COMPLIANCE",
-    "FAILURE_TO_PROGRESS",
-    "STALLED_TIME",
-    "TIME_TO_REACH_GOAL",
-    "V_MIN",
-    "V_AVG",
-    "V_MAX",
-    "A_MIN",
-    "A_AVG",
-    "A_MAX",
-    "JERK_MIN",
-    "JERK_AVG",
-    "JERK_MAX",
-    "MINIMUM_DISTANCE_TO_HUMAN",
-    "MINIMUM_OBSTACLE_DISTANCE",
-    "AVERAGE_OBSTACLE_DISTANCE",
-    "TIME_TO_COLLISION",
-    "DISCOMFORT_DSRNN",
-    "DISCOMFORT_SNGNN",
-    "time_taken",
-    "return",
-];
 
 /// Make a batch on the chosen backend, saying which one runs.
 pub fn make_env(
@@ -138,7 +111,7 @@ fn finite_or_null(x: f64) -> Value {
 impl Summary<'_> {
     fn json(&self) -> Value {
         let mut metrics = Map::new();
-        for key in METRICS {
+        for key in TABLE_KEYS {
             metrics.insert(key.to_string(), finite_or_null(self.agg.mean(key)));
         }
         let m = |k: &str| finite_or_null(self.agg.mean(k));
@@ -205,7 +178,7 @@ impl Summary<'_> {
             println!("social events: {}", cells.join(", "));
         }
         println!("metrics (means over finished episodes, as the paper's table):");
-        for chunk in METRICS.chunks(4) {
+        for chunk in TABLE_KEYS.chunks(4) {
             let cells: Vec<String> = chunk
                 .iter()
                 .map(|k| format!("{k:>26} {:>9.4}", self.agg.mean(k)))

@@ -1,0 +1,87 @@
+"""Type stubs of the compiled extension ``socnav._socnav`` (python/src/lib.rs, python/src/orca.rs).
+
+``mypy.stubtest`` checks them against the built module in CI (scripts/test-all)."""
+
+from typing import Any, final
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = [
+    "DISCRETE_ACTIONS",
+    "BackendUnavailableError",
+    "Batch",
+    "ConfigError",
+    "ScenarioError",
+    "SocNavError",
+    "orca_compute_velocities",
+    "orca_compute_velocities_batch",
+    "shipped_configs",
+    "socnavgym_config_toml",
+]
+
+DISCRETE_ACTIONS: list[list[float]]
+
+class SocNavError(Exception): ...
+class ConfigError(SocNavError): ...
+class ScenarioError(SocNavError): ...
+class BackendUnavailableError(SocNavError): ...
+
+@final
+class Batch:
+    def __new__(
+        cls,
+        config: str,
+        num_envs: int,
+        seed: int = 0,
+        autoreset_mode: str = "next_step",
+        threads: int | None = None,
+        overrides: str | None = None,
+        toml_text: str | None = None,
+    ) -> Batch: ...
+    @property
+    def num_envs(self) -> int: ...
+    @property
+    def backend(self) -> str: ...
+    @property
+    def holonomic(self) -> bool: ...
+    def config_toml(self) -> str: ...
+    def layout(self) -> dict[str, Any]: ...
+    @staticmethod
+    def keys() -> dict[str, list[str]]: ...
+    def reset(self, seed: int | None = None) -> None: ...
+    def reset_envs(self, mask: npt.NDArray[np.bool_]) -> None: ...
+    def step_continuous(self, actions: npt.NDArray[np.float32]) -> None: ...
+    def step_discrete(self, actions: npt.NDArray[np.uint32]) -> None: ...
+    def buffers(self) -> dict[str, npt.NDArray[Any]]: ...
+    def get_state(self, env: int) -> str: ...
+    def set_state(self, env: int, doc: str) -> None: ...
+
+def shipped_configs() -> list[str]: ...
+def socnavgym_config_toml(yaml_json: str) -> str: ...
+def orca_compute_velocities(
+    positions: npt.NDArray[np.float32],
+    velocities: npt.NDArray[np.float32],
+    pref_velocities: npt.NDArray[np.float32],
+    radius: npt.NDArray[np.float32],
+    max_speed: npt.NDArray[np.float32],
+    neighbor_dist: npt.NDArray[np.float32],
+    max_neighbors: npt.NDArray[np.int64],
+    time_horizon: npt.NDArray[np.float32],
+    time_horizon_obst: npt.NDArray[np.float32],
+    time_step: float,
+    obstacles: list[npt.NDArray[np.float32]] | None = None,
+) -> npt.NDArray[np.float32]: ...
+def orca_compute_velocities_batch(
+    positions: list[npt.NDArray[np.float32]],
+    velocities: list[npt.NDArray[np.float32]],
+    pref_velocities: list[npt.NDArray[np.float32]],
+    radius: list[npt.NDArray[np.float32]],
+    max_speed: list[npt.NDArray[np.float32]],
+    neighbor_dist: list[npt.NDArray[np.float32]],
+    max_neighbors: list[npt.NDArray[np.int64]],
+    time_horizon: list[npt.NDArray[np.float32]],
+    time_horizon_obst: list[npt.NDArray[np.float32]],
+    time_step: list[float],
+    obstacles: list[list[npt.NDArray[np.float32]]],
+) -> list[npt.NDArray[np.float32]]: ...
