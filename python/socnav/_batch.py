@@ -88,6 +88,12 @@ def split_obs(flat: np.ndarray, layout: dict) -> dict[str, np.ndarray]:
     return out
 
 
+def check_running(ended: bool) -> None:
+    """A single environment cannot step past the end of its episode (SocNavGym raises too)."""
+    if ended:
+        raise RuntimeError("step() after the episode ended: call reset() first")
+
+
 def check_choice(name: str, value: str, choices: tuple[str, ...]) -> str:
     if value not in choices:
         raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")

@@ -36,6 +36,7 @@ class SocNavEnv(gym.Env):
         self.observation_space = _batch.observation_space(self._batch, obs_mode)
         self.action_space = _batch.action_space(self._batch, action_type)
         self._buf = self._batch.buffers()
+        self._ended = True  # until the first reset
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
@@ -43,6 +44,7 @@ class SocNavEnv(gym.Env):
             self._batch.reset(int(seed))
         else:
             self._batch.reset_envs(np.ones(1, dtype=bool))
+        self._ended = False
         # SocNavGym's reset reports no metrics.
         return self._obs(), {}
 
@@ -57,15 +59,12 @@ class SocNavEnv(gym.Env):
             if a.shape != ():
                 raise ValueError(f"a discrete action is one integer, got shape {a.shape}")
             batch_action = a.reshape(1)
+        _batch.check_running(self._ended)
         _batch.step_batch(self._batch, self.action_type, batch_action, 1)
         b = self._buf
-        return (
-            self._obs(),
-            float(b["reward"][0]),
-            bool(b["terminated"][0]),
-            bool(b["truncated"][0]),
-            self._info(),
-        )
+        terminated, truncated = bool(b["terminated"][0]), bool(b["truncated"][0])
+        self._ended = terminated or truncated
+        return self._obs(), float(b["reward"][0]), terminated, truncated, self._info()
 
     def _obs(self) -> Any:
         flat = self._buf["obs"].copy()

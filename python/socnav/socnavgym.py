@@ -77,6 +77,7 @@ class SocNavGymEnv(gym.Env):
         self._padded = bool(layout["padded"])
         self._info_keys = Batch.keys()["info"]
         self._buf = self._batch.buffers()
+        self._ended = True  # until the first reset
         self.action_space = _batch.action_space(self._batch, "continuous")
 
     @property
@@ -93,15 +94,31 @@ class SocNavGymEnv(gym.Env):
             self._batch.reset(int(seed))
         else:
             self._batch.reset_envs(np.ones(1, dtype=bool))
+        self._ended = False
         return self._obs(), {}
 
     def step(self, action: Any):
         a = np.asarray(action)
         if a.shape != (3,):
             raise ValueError(f"action must have shape (3,), got {a.shape}")
+        _batch.check_running(self._ended)
         _batch.step_batch(self._batch, "continuous", a.reshape(1, 3), 1)
         b = self._buf
-        return self._obs(), float(b["reward"][0]), bool(b["terminated"][0]), bool(b["truncated"][0]), self._info()
+        terminated, truncated = bool(b["terminated"][0]), bool(b["truncated"][0])
+        self._ended = terminated or truncated
+        return self._obs(), float(b["reward"][0]), terminated, truncated, self._info()
+
+    def get_state(self) -> dict[str, Any]:
+        """The environment's complete state as a document (the format of the golden episodes'
+        snapshots plus the room), e.g. to restore it later with :meth:`set_state`."""
+        doc: dict[str, Any] = json.loads(self._batch.get_state(0))
+        return doc
+
+    def set_state(self, document: str | Mapping[str, Any]) -> None:
+        """Load a state document (:meth:`get_state`'s, or a golden episode's header and snapshot);
+        the episode continues from it."""
+        self._batch.set_state(0, document if isinstance(document, str) else json.dumps(document))
+        self._ended = False
 
     def _obs(self) -> dict[str, np.ndarray]:
         """0.1.1's dict: the robot vector, then each type's real records (all of its capacity

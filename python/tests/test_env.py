@@ -135,3 +135,19 @@ def test_single_env_passes_check_env(config, obs_mode, action_type):
 
 def test_shipped_configs_are_listed():
     assert {"exp1", "exp2", "exp3"} <= set(socnav.shipped_configs())
+
+
+def test_single_env_cannot_step_past_the_end():
+    env = socnav.make("exp1", action_type="discrete")
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(6)
+    env.reset(seed=0)
+    for _ in range(1000):
+        _, _, terminated, truncated, _ = env.step(5)  # backward, until the episode ends
+        if terminated or truncated:
+            break
+    assert terminated or truncated
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(6)
+    env.reset()
+    env.step(6)

@@ -62,7 +62,7 @@ def test_golden_steps_return_socnavgym_outputs(config):
         rec = _episode(config, seed)
         header, state = rec["header"], rec["initial"]["state"]
         for step in rec["steps"]:
-            env._batch.set_state(0, _document(header, state, step))
+            env.set_state(_document(header, state, step))
             obs, reward, terminated, truncated, info = env.step(np.array(step["action"], dtype=np.float32))
             state = step["state"]
             if not step.get("outputs_replayable", True):
@@ -144,6 +144,26 @@ def test_padded_config_keeps_every_type_and_omits_walls():
     assert set(obs) == {"robot", "humans", "laptops", "tables", "plants"} - {
         k for k, (_, cap) in env._batch.layout()["entities"].items() if cap == 0
     }
+
+
+def test_stepping_past_the_end_raises_and_state_round_trips():
+    env = SocNavGymEnv("exp1")
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(np.zeros(3, dtype=np.float32))
+    env.reset(seed=4)
+    saved = env.get_state()
+    backward = np.array([-1.0, 0.0, 0.0], dtype=np.float32)
+    first = [env.step(backward)[1] for _ in range(3)]
+    ended = False
+    for _ in range(500):
+        ended = any(env.step(backward)[2:4])
+        if ended:
+            break
+    assert ended
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(backward)
+    env.set_state(saved)
+    assert [env.step(backward)[1] for _ in range(3)] == first
 
 
 def test_discrete_actions_follow_socnavgym():
