@@ -1,5 +1,7 @@
-//! Every `.wgsl` file under `shaders/` parses and validates with naga (no GPU needed), and the
-//! common libraries stay in step with their Rust twins.
+//! Every `.wgsl` file under `shaders/` parses and validates with naga (no GPU needed): stage
+//! shaders as the GPU backend assembles them (generated prelude included), libraries with their
+//! requirements. The embedded copies are the files; the common libraries stay in step with their
+//! Rust twins; `StepParams` has the same layout in WGSL as in Rust.
 //!
 //! Library files declare what they build on with header lines `// requires: <path>` (relative to
 //! `shaders/`), before the first non-comment line. A file is validated with its requirements
@@ -8,6 +10,8 @@
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
+
+use socnav::backend::wgsl;
 
 fn shaders_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders")
@@ -66,6 +70,19 @@ fn resolve(path: &Path, order: &mut Vec<PathBuf>, visiting: &mut Vec<PathBuf>) {
     order.push(path.to_owned());
 }
 
+/// Parses and validates `src` (named `label` in messages).
+fn validate_source(src: &str, label: &str) -> Result<naga::Module, String> {
+    let module =
+        naga::front::wgsl::parse_str(src).map_err(|e| e.emit_to_string_with_path(src, label))?;
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .map_err(|e| e.emit_to_string_with_path(src, label))?;
+    Ok(module)
+}
+
 /// Parses and validates `path` with its requirements prepended.
 fn validate(path: &Path) -> Result<(), String> {
     let mut order = Vec::new();
@@ -81,15 +98,20 @@ fn validate(path: &Path) -> Result<(), String> {
         })
         .collect::<Vec<_>>()
         .join(" + ");
-    let module =
-        naga::front::wgsl::parse_str(&src).map_err(|e| e.emit_to_string_with_path(&src, &label))?;
-    naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::default(),
+    validate_source(&src, &label).map(|_| ())
+}
+
+/// A stage shader (`shaders/<stage>.wgsl`) as the GPU backend assembles it for a batch of
+/// experiment 2 (every column kind in use), validated.
+fn validate_stage(stage: &str) -> Result<naga::Module, String> {
+    let env = socnav::BatchEnv::new(
+        socnav::Config::from_name_or_path("exp2").expect("exp2"),
+        socnav::EnvOptions::default(),
     )
-    .validate(&module)
-    .map_err(|e| e.emit_to_string_with_path(&src, &label))?;
-    Ok(())
+    .expect("batch");
+    let prelude = wgsl::prelude(4, &env.state().columns());
+    let src = wgsl::assemble(stage, &prelude)?;
+    validate_source(&src, &format!("{stage} (assembled)"))
 }
 
 #[test]
@@ -97,9 +119,211 @@ fn all_wgsl_shaders_validate() {
     let mut files = Vec::new();
     wgsl_files(&shaders_dir(), &mut files);
     assert!(!files.is_empty(), "no .wgsl files under shaders/");
-    let errors: Vec<String> = files.iter().filter_map(|p| validate(p).err()).collect();
+    let mut errors = Vec::new();
+    for p in &files {
+        let rel = p.strip_prefix(shaders_dir()).expect("under shaders/");
+        let rel = rel.to_str().expect("UTF-8 path");
+        // The library embeds what the backend compiles: it must be this very file.
+        match wgsl::source(rel) {
+            Some(embedded) if embedded == read(p) => {}
+            Some(_) => errors.push(format!("{rel}: the embedded copy differs (rebuild)")),
+            None => errors.push(format!("{rel} is not listed in backend::wgsl::FILES")),
+        }
+        // Stage shaders need the generated prelude; libraries stand alone.
+        let result = match rel.strip_suffix(".wgsl").filter(|r| !r.contains('/')) {
+            Some(stage) => validate_stage(stage).map(|_| ()),
+            None => validate(p),
+        };
+        errors.extend(result.err());
+    }
     println!("validated {} shaders", files.len());
     assert!(errors.is_empty(), "{}", errors.join("\n"));
+}
+
+/// Every stage shader is named after a stage of the step and has the entry point `main`.
+#[test]
+fn stage_shaders_are_stages_with_a_main() {
+    let names: Vec<&str> = socnav::pipeline::STAGES.iter().map(|s| s.name).collect();
+    for (path, _) in wgsl::FILES.iter().filter(|(p, _)| !p.contains('/')) {
+        let stage = path.strip_suffix(".wgsl").expect(".wgsl");
+        assert!(
+            names.contains(&stage),
+            "shaders/{path} is not a stage of pipeline::STAGES"
+        );
+        let module = validate_stage(stage).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            module.entry_points.iter().any(|ep| ep.name == "main"),
+            "shaders/{path} has no entry point `main`"
+        );
+    }
+}
+
+/// `StepParams` in WGSL (`shaders/common/params.wgsl`) has the Rust struct's layout: every field
+/// at the same byte offset with the same size, in the same order, and the same total size. The
+/// offsets on the Rust side come from `offset_of!` over the field list of src/params.rs.
+#[test]
+fn step_params_layout_matches_rust() {
+    let src = read(&shaders_dir().join("common/params.wgsl"));
+    let module = validate_source(&src, "common/params.wgsl").unwrap_or_else(|e| panic!("{e}"));
+    let layouter = {
+        let mut l = naga::proc::Layouter::default();
+        l.update(module.to_ctx()).expect("layout");
+        l
+    };
+    let (handle, ty) = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some("StepParams"))
+        .expect("struct StepParams in params.wgsl");
+    let naga::TypeInner::Struct { members, span } = &ty.inner else {
+        panic!("StepParams is not a struct")
+    };
+    let wgsl: Vec<(String, u32, u32)> = members
+        .iter()
+        .map(|m| {
+            (
+                m.name.clone().unwrap_or_default(),
+                m.offset,
+                layouter[m.ty].size,
+            )
+        })
+        .collect();
+    let rust = rust_step_params_fields();
+    assert_eq!(
+        *span as usize,
+        std::mem::size_of::<socnav::StepParams>(),
+        "size of StepParams (WGSL vs Rust)"
+    );
+    assert_eq!(
+        layouter[handle].size as usize,
+        std::mem::size_of::<socnav::StepParams>()
+    );
+    assert_eq!(
+        wgsl.len(),
+        rust.len(),
+        "field count: WGSL {:?} vs Rust {:?}",
+        wgsl.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        rust.iter().map(|f| f.0).collect::<Vec<_>>()
+    );
+    for ((wname, woff, wsize), (rname, roff, rsize)) in wgsl.iter().zip(&rust) {
+        // Rust's private padding field is `_pad`; WGSL names cannot start with `_`.
+        let rname = rname.trim_start_matches('_');
+        assert_eq!(
+            (wname.as_str(), *woff as usize, *wsize as usize),
+            (rname, *roff, *rsize),
+            "StepParams member (name, offset, size): WGSL vs Rust"
+        );
+    }
+}
+
+/// (name, offset, size) of every field of `StepParams`, read from src/params.rs: the names and
+/// order from the source, the offsets and sizes from the compiled struct.
+fn rust_step_params_fields() -> Vec<(&'static str, usize, usize)> {
+    let src = repo_file("src/params.rs");
+    let body = &src[src.find("pub struct StepParams {").expect("struct")..];
+    let body = &body[..body.find("\n}\n").expect("end of struct")];
+    let names: Vec<String> = body
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("pub "))
+        .filter_map(|l| l.split(':').next())
+        .filter(|n| !n.starts_with("struct"))
+        .map(str::to_owned)
+        .collect();
+    let offsets = step_params_offsets();
+    assert_eq!(
+        names.iter().map(String::as_str).collect::<Vec<_>>(),
+        offsets.iter().map(|f| f.0).collect::<Vec<_>>(),
+        "the offset table below must list src/params.rs's fields in order"
+    );
+    let mut sized = Vec::new();
+    for (k, &(name, off)) in offsets.iter().enumerate() {
+        let end = offsets
+            .get(k + 1)
+            .map_or(std::mem::size_of::<socnav::StepParams>(), |n| n.1);
+        sized.push((name, off, end - off));
+    }
+    sized
+}
+
+macro_rules! offsets {
+    ($($f:ident),* $(,)?) => {
+        vec![$((stringify!($f), std::mem::offset_of!(socnav::StepParams, $f))),*]
+    };
+}
+
+fn step_params_offsets() -> Vec<(&'static str, usize)> {
+    offsets!(
+        dt,
+        episode_length,
+        robot_radius,
+        goal_radius,
+        robot_max_speed,
+        robot_max_rotation,
+        holonomic,
+        human_radius,
+        human_goal_radius,
+        human_max_speed,
+        speed_threshold,
+        gaze_angle,
+        fov_angle,
+        prob_avoid_robot,
+        human_policy,
+        group_radius,
+        group_goal_radius,
+        group_noise_std,
+        human_laptop_distance,
+        laptop_width,
+        laptop_length,
+        plant_radius,
+        table_width,
+        table_length,
+        wall_thickness,
+        wall_segment_size,
+        margin,
+        shape,
+        corridors,
+        size_x_min,
+        size_x_max,
+        size_y_min,
+        size_y_max,
+        counts,
+        p_crowd_dispersal,
+        p_laptop_dispersal,
+        p_crowd_formation,
+        p_laptop_formation,
+        reward_kind,
+        reward_reach,
+        reward_out_of_map,
+        reward_timeout,
+        reward_collision,
+        reward_alive,
+        reward_distance_scale,
+        reward_discomfort_distance,
+        reward_discomfort_factor,
+        reward_personal_space_weight,
+        reward_personal_space_distance,
+        reward_obstacle_weight,
+        reward_obstacle_distance,
+        reward_stalled_weight,
+        reward_acceleration_weight,
+        obs_padded,
+        obs_robot_velocity,
+        obs_world_frame,
+        obs_partial,
+        obs_fov,
+        obs_range,
+        obs_noise_on,
+        obs_noise,
+        orca_actual_velocity,
+        group_velocity_divided,
+        laptop_user_half_side,
+        dsrnn_pseudo_humans,
+        autoreset,
+        seed_lo,
+        seed_hi,
+        replay,
+        _pad,
+    )
 }
 
 /// The 32-bit pattern of every hexadecimal literal in `src`: integers as written (without `_`

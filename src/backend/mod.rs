@@ -2,6 +2,9 @@
 //! reference; every backend must produce the same state, bit for bit, on a conforming device.
 
 pub mod cpu;
+#[cfg(feature = "gpu")]
+pub mod gpu;
+pub mod wgsl;
 
 use crate::error::SimError;
 use crate::outputs::Outputs;

@@ -22,6 +22,11 @@ pub trait ColumnValue: Copy + Default + Send + Sync + 'static {
     const ELEM: Elem;
     /// Its bits, for fingerprints (`-0.0` is normalised to `+0.0`).
     fn bits(self) -> u32;
+    /// Append `column` to the packed array of its element kind (the GPU buffers hold every
+    /// column of one kind back to back, in declaration order).
+    fn pack(column: &[Self], f32s: &mut Vec<f32>, u32s: &mut Vec<u32>);
+    /// Fill `column` from the packed array of its kind, starting at that array's cursor.
+    fn unpack(column: &mut [Self], f32s: &[f32], u32s: &[u32], cursor: &mut [usize; 2]);
 }
 
 impl ColumnValue for f32 {
@@ -29,12 +34,26 @@ impl ColumnValue for f32 {
     fn bits(self) -> u32 {
         if self == 0.0 { 0 } else { self.to_bits() }
     }
+    fn pack(column: &[Self], f32s: &mut Vec<f32>, _: &mut Vec<u32>) {
+        f32s.extend_from_slice(column);
+    }
+    fn unpack(column: &mut [Self], f32s: &[f32], _: &[u32], cursor: &mut [usize; 2]) {
+        column.copy_from_slice(&f32s[cursor[0]..cursor[0] + column.len()]);
+        cursor[0] += column.len();
+    }
 }
 
 impl ColumnValue for u32 {
     const ELEM: Elem = Elem::U32;
     fn bits(self) -> u32 {
         self
+    }
+    fn pack(column: &[Self], _: &mut Vec<f32>, u32s: &mut Vec<u32>) {
+        u32s.extend_from_slice(column);
+    }
+    fn unpack(column: &mut [Self], _: &[f32], u32s: &[u32], cursor: &mut [usize; 2]) {
+        column.copy_from_slice(&u32s[cursor[1]..cursor[1] + column.len()]);
+        cursor[1] += column.len();
     }
 }
 
@@ -102,6 +121,18 @@ macro_rules! soa {
                     <$ty as $crate::state::columns::ColumnValue>::ELEM,
                     self.strides.$kind(),
                 ), )*]
+            }
+
+            /// Every column appended to the packed array of its element kind, in declaration
+            /// order (the layout of the GPU buffers; offsets from [`Self::columns`]).
+            pub fn pack(&self, f32s: &mut Vec<f32>, u32s: &mut Vec<u32>) {
+                $( <$ty as $crate::state::columns::ColumnValue>::pack(&self.$col, f32s, u32s); )*
+            }
+
+            /// The inverse of [`Self::pack`]: every column read back from the packed arrays.
+            pub fn unpack(&mut self, f32s: &[f32], u32s: &[u32]) {
+                let mut cursor = [0usize; 2];
+                $( <$ty as $crate::state::columns::ColumnValue>::unpack(&mut self.$col, f32s, u32s, &mut cursor); )*
             }
 
             /// Names of the columns whose bits differ from `other`'s (same shape), for test

@@ -22,6 +22,8 @@ pub enum Command {
     CheckConfig(CheckArgs),
     /// Draw an episode to an animated GIF (or its first frame to a PNG).
     Render(RenderArgs),
+    /// List the GPU adapters wgpu finds and which one each backend choice would take.
+    Devices,
 }
 
 /// Which backend runs the batch.
@@ -31,6 +33,8 @@ pub enum BackendChoice {
     Auto,
     /// The CPU backend.
     Cpu,
+    /// The GPU backend, on any adapter (software ones included).
+    Gpu,
 }
 
 /// How actions are chosen.

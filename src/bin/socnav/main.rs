@@ -1,10 +1,12 @@
 //! `socnav`: the command-line tool. `run` rolls out a batch and prints outcome rates, the paper's
 //! metrics and throughput; `bench` measures env-steps/s per stage over batch sizes;
-//! `check-config` validates a config and prints it resolved; `render` draws an episode.
+//! `check-config` validates a config and prints it resolved; `render` draws an episode; `devices`
+//! lists the GPU adapters.
 
 mod args;
 mod bench;
 mod check;
+mod devices;
 mod policy;
 mod render;
 mod run;
@@ -20,6 +22,7 @@ fn main() -> ExitCode {
         args::Command::Bench(a) => bench::bench(&a),
         args::Command::CheckConfig(a) => check::check(&a),
         args::Command::Render(a) => render::render(&a),
+        args::Command::Devices => devices::devices(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

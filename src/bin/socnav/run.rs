@@ -14,6 +14,19 @@ use socnav::{Actions, BatchEnv, Config, EnvOptions};
 use crate::args::{BackendChoice, RunArgs};
 use crate::policy::Policy;
 
+/// Why the GPU backend cannot step a batch in this build.
+fn gpu_unfinished() -> String {
+    #[cfg(feature = "gpu")]
+    let shaders = socnav::backend::gpu::STAGES_WITH_SHADERS.len();
+    #[cfg(not(feature = "gpu"))]
+    let shaders = 0;
+    format!(
+        "the GPU backend cannot step a batch yet ({shaders} of {} stages have their shader; \
+         `socnav devices` lists the adapters it would use)",
+        socnav::pipeline::STAGES.len()
+    )
+}
+
 /// Make a batch on the chosen backend, saying which one runs.
 pub fn make_env(
     config: Config,
@@ -32,11 +45,14 @@ pub fn make_env(
             ..Default::default()
         },
     )?;
-    if backend == BackendChoice::Auto && !quiet {
-        eprintln!(
-            "backend auto: using the CPU backend ({} threads); this build has no GPU backend",
-            env.threads()
-        );
+    match backend {
+        BackendChoice::Gpu => return Err(socnav::SimError::BackendUnavailable(gpu_unfinished())),
+        BackendChoice::Auto if !quiet => eprintln!(
+            "backend auto: using the CPU backend ({} threads); {}",
+            env.threads(),
+            gpu_unfinished()
+        ),
+        _ => {}
     }
     Ok(env)
 }

@@ -1,0 +1,239 @@
+//! Finding and opening a GPU for the GPU backend (DESIGN.md section 8).
+//!
+//! Policy:
+//! - [`AdapterPolicy::Hardware`] (`--backend auto`) takes a discrete or integrated GPU only: a
+//!   software adapter (lavapipe, llvmpipe) is slower than the CPU backend, so it is used only when
+//!   asked for.
+//! - [`AdapterPolicy::Any`] (`--backend gpu`) takes the best adapter there is, software included.
+//! - `WGPU_ADAPTER_NAME` (a case-insensitive part of the adapter's name) picks an adapter by name
+//!   under either policy, software ones included; no match is an error that lists the adapters.
+//! - `WGPU_BACKEND` (`vulkan`, `metal`, `dx12`, `gl`, comma separated) restricts the APIs searched.
+//!   wgpu's GL backend is skipped unless `WGPU_BACKEND` names it: its `dot`/`length` round
+//!   differently from Vulkan's, so the CPU/GPU parity contract does not hold there.
+//!
+//! wgpu reports validation errors through a handler that panics by default; the device installed
+//! here records them instead ([`GpuDevice::take_errors`]), so a shader or buffer mistake becomes an
+//! error the caller sees, never a crash of the host (or of a Python interpreter).
+
+use std::sync::{Arc, Mutex};
+
+use crate::error::SimError;
+
+/// Which adapters may be used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AdapterPolicy {
+    /// Discrete or integrated GPUs only (`--backend auto`).
+    Hardware,
+    /// Any adapter, software ones included (`--backend gpu`).
+    Any,
+}
+
+/// What the user reads when no adapter can be used.
+const INSTALL_HINT: &str = "install a Vulkan driver: your GPU vendor's driver, or Mesa's software \
+driver for testing (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers`); `socnav devices` lists \
+the adapters wgpu finds";
+
+/// An adapter as the user sees it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AdapterSummary {
+    /// Adapter name, e.g. "NVIDIA H100 80GB HBM3" or "llvmpipe (LLVM 15.0.6, 256 bits)".
+    pub name: String,
+    /// Graphics API: "Vulkan", "Metal", "Dx12", "Gl".
+    pub backend: String,
+    /// "DiscreteGpu", "IntegratedGpu", "VirtualGpu", "Cpu" or "Other".
+    pub device_type: String,
+    /// Driver name and version.
+    pub driver: String,
+    /// Whether the adapter is a hardware GPU.
+    pub hardware: bool,
+}
+
+impl AdapterSummary {
+    fn of(info: &wgpu::AdapterInfo) -> Self {
+        Self {
+            name: info.name.clone(),
+            backend: format!("{:?}", info.backend),
+            device_type: format!("{:?}", info.device_type),
+            driver: format!("{} {}", info.driver, info.driver_info)
+                .trim()
+                .to_owned(),
+            hardware: is_hardware(info.device_type),
+        }
+    }
+}
+
+impl std::fmt::Display for AdapterSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} ({}, {}, {})",
+            self.name, self.backend, self.device_type, self.driver
+        )
+    }
+}
+
+fn is_hardware(t: wgpu::DeviceType) -> bool {
+    matches!(
+        t,
+        wgpu::DeviceType::DiscreteGpu | wgpu::DeviceType::IntegratedGpu
+    )
+}
+
+/// Preference among usable adapters: discrete, integrated, virtual, other, software.
+fn rank(t: wgpu::DeviceType) -> u8 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+fn instance() -> (wgpu::Instance, bool) {
+    let gl_requested = wgpu::Backends::from_env().is_some_and(|b| b.contains(wgpu::Backends::GL));
+    let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    (wgpu::Instance::new(desc), gl_requested)
+}
+
+/// Every adapter wgpu finds (honouring `WGPU_BACKEND`), for `socnav devices`.
+pub fn list_adapters() -> Vec<AdapterSummary> {
+    let (instance, _) = instance();
+    pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
+        .iter()
+        .map(|a| AdapterSummary::of(&a.get_info()))
+        .collect()
+}
+
+/// An open device and its queue, with the adapter it came from. Clones share the device.
+#[derive(Clone)]
+pub struct GpuDevice {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The adapter, as the user sees it.
+    pub adapter: AdapterSummary,
+    /// The limits the device was opened with (the adapter's own).
+    pub limits: wgpu::Limits,
+    errors: Arc<Mutex<Vec<String>>>,
+}
+
+impl std::fmt::Debug for GpuDevice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuDevice")
+            .field("adapter", &self.adapter)
+            .finish_non_exhaustive()
+    }
+}
+
+impl GpuDevice {
+    /// Open the best adapter the policy allows (see the module docs).
+    pub fn open(policy: AdapterPolicy) -> Result<Self, SimError> {
+        let (instance, gl_requested) = instance();
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        let name_filter = std::env::var("WGPU_ADAPTER_NAME")
+            .ok()
+            .filter(|s| !s.is_empty());
+        let chosen = choose(&adapters, policy, name_filter.as_deref(), gl_requested)?;
+        let adapter = &adapters[chosen];
+        let info = adapter.get_info();
+        // The adapter's own limits: large batches need storage bindings beyond WebGPU's defaults.
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("socnav"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| {
+            SimError::BackendUnavailable(format!("cannot open GPU device {}: {e}", info.name))
+        })?;
+        let errors = Arc::new(Mutex::new(Vec::new()));
+        let sink = Arc::clone(&errors);
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            sink.lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .push(e.to_string());
+        }));
+        Ok(Self {
+            device,
+            queue,
+            adapter: AdapterSummary::of(&info),
+            limits,
+            errors,
+        })
+    }
+
+    /// The validation errors wgpu reported since the last call, as one error.
+    pub fn take_errors(&self) -> Result<(), SimError> {
+        let mut errors = self
+            .errors
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if errors.is_empty() {
+            return Ok(());
+        }
+        let msg = errors.join("; ");
+        errors.clear();
+        Err(SimError::BackendUnavailable(format!(
+            "the GPU device reported: {msg}"
+        )))
+    }
+}
+
+/// Index of the adapter to open, or why there is none.
+fn choose(
+    adapters: &[wgpu::Adapter],
+    policy: AdapterPolicy,
+    name_filter: Option<&str>,
+    gl_requested: bool,
+) -> Result<usize, SimError> {
+    let infos: Vec<wgpu::AdapterInfo> = adapters.iter().map(wgpu::Adapter::get_info).collect();
+    let listing = || {
+        if infos.is_empty() {
+            "none".to_owned()
+        } else {
+            infos
+                .iter()
+                .map(|i| AdapterSummary::of(i).to_string())
+                .collect::<Vec<_>>()
+                .join("; ")
+        }
+    };
+    let usable = |i: &wgpu::AdapterInfo| gl_requested || i.backend != wgpu::Backend::Gl;
+    let candidates: Vec<usize> = match name_filter {
+        Some(name) => {
+            let needle = name.to_lowercase();
+            let found: Vec<usize> = (0..infos.len())
+                .filter(|&k| usable(&infos[k]) && infos[k].name.to_lowercase().contains(&needle))
+                .collect();
+            if found.is_empty() {
+                return Err(SimError::BackendUnavailable(format!(
+                    "WGPU_ADAPTER_NAME={name:?} matches no usable adapter (adapters: {})",
+                    listing()
+                )));
+            }
+            found
+        }
+        None => (0..infos.len())
+            .filter(|&k| {
+                usable(&infos[k])
+                    && (policy == AdapterPolicy::Any || is_hardware(infos[k].device_type))
+            })
+            .collect(),
+    };
+    candidates
+        .into_iter()
+        .min_by_key(|&k| rank(infos[k].device_type))
+        .ok_or_else(|| {
+            let wanted = match policy {
+                AdapterPolicy::Hardware => "no hardware GPU adapter",
+                AdapterPolicy::Any => "no GPU adapter",
+            };
+            SimError::BackendUnavailable(format!(
+                "{wanted} found (adapters: {}); {INSTALL_HINT}",
+                listing()
+            ))
+        })
+}

@@ -1,0 +1,161 @@
+//! CPU/GPU parity of each stage that has a shader (DESIGN.md section 4): from the same state,
+//! parameters and actions, the stage's WGSL shader must leave the state bit-identical to its Rust
+//! twin on lavapipe (and on any adapter that rounds like it).
+//!
+//! States come from real rollouts (random actions, resets and social events included), then the
+//! stage runs many times in a row on both sides, with fresh random actions each time (some out of
+//! [-1, 1], to exercise the clipping), and the states are compared after every run.
+//!
+//! Needs a GPU adapter (lavapipe will do: `apt-get install mesa-vulkan-drivers`). Without one the
+//! tests print why and pass, unless `REQUIRE_GPU=1`, which CI sets.
+#![cfg(feature = "gpu")]
+
+use std::sync::OnceLock;
+
+use socnav::backend::gpu::{AdapterPolicy, GpuDevice, GpuStages};
+use socnav::config::Kinematics;
+use socnav::pipeline::{Batch, STAGES};
+use socnav::rng::RngStream;
+use socnav::state::BatchState;
+use socnav::{Actions, BatchEnv, Config, EnvOptions, StepParams};
+
+/// The shared device, or `None` (after saying why) when there is none and none is required.
+fn device() -> Option<GpuDevice> {
+    static DEVICE: OnceLock<Result<GpuDevice, String>> = OnceLock::new();
+    let dev = DEVICE.get_or_init(|| GpuDevice::open(AdapterPolicy::Any).map_err(|e| e.to_string()));
+    match dev {
+        Ok(d) => Some(d.clone()),
+        Err(e) if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("REQUIRE_GPU=1 but no GPU adapter: {e}")
+        }
+        Err(e) => {
+            eprintln!("SKIPPED: no GPU adapter ({e})");
+            None
+        }
+    }
+}
+
+/// Uniform actions in [-1.5, 1.5] (the stages clip), from a seeded stream; the lateral one 0
+/// unless the robot is holonomic (as `BatchEnv` requires).
+fn random_actions(rng: &mut RngStream, n: usize, holonomic: bool) -> Vec<f32> {
+    (0..3 * n)
+        .map(|k| {
+            let a = 3.0 * rng.next_f32() - 1.5;
+            if k % 3 == 1 && !holonomic { 0.0 } else { a }
+        })
+        .collect()
+}
+
+/// A batch of `config` after `steps` random steps on the CPU.
+fn rolled_out(config: Config, n_envs: usize, steps: usize) -> BatchEnv {
+    let mut env = BatchEnv::new(
+        config,
+        EnvOptions {
+            n_envs,
+            seed: 11,
+            ..Default::default()
+        },
+    )
+    .expect("batch");
+    env.reset(None).expect("reset");
+    let holonomic = env.params().holonomic != 0;
+    let mut rng = RngStream::new(5, 0, 0, 0);
+    for _ in 0..steps {
+        env.step(Actions::Continuous(&random_actions(
+            &mut rng, n_envs, holonomic,
+        )))
+        .expect("step");
+    }
+    env
+}
+
+/// Run stage `stage` over every environment of `state` on the CPU.
+fn cpu_stage(stage: &str, p: &StepParams, env: &BatchEnv, state: &mut BatchState, actions: &[f32]) {
+    let run = STAGES
+        .iter()
+        .find(|s| s.name == stage)
+        .unwrap_or_else(|| panic!("no stage {stage}"))
+        .run;
+    let mut outputs = env.outputs().clone();
+    let n_envs = state.n_envs;
+    let mut b = Batch {
+        s: state.chunk(),
+        o: outputs.chunk(),
+        actions,
+        error: None,
+    };
+    for e in 0..n_envs {
+        run(p, &mut b, e);
+    }
+    assert!(b.error.is_none(), "{stage}: {:?}", b.error);
+}
+
+/// Run `stage` `runs` times from the rolled-out state on both backends, comparing every time.
+fn check_parity(stage: &'static str, config: Config, n_envs: usize, runs: usize) {
+    let Some(dev) = device() else { return };
+    let env = rolled_out(config, n_envs, 40);
+    let p = *env.params();
+    let mut cpu = env.state().clone();
+    let mut gpu = GpuStages::new(dev, &p, &cpu, &[stage]).expect("GPU stages");
+    let mut from_gpu = cpu.clone();
+    let mut rng = RngStream::new(9, 0, 0, 1);
+    let stepping = cpu.stepping.iter().filter(|&&s| s != 0).count();
+    assert!(
+        stepping > n_envs / 2,
+        "most environments step ({stepping} of {n_envs})"
+    );
+    for run in 0..runs {
+        let actions = random_actions(&mut rng, n_envs, p.holonomic != 0);
+        cpu_stage(stage, &p, &env, &mut cpu, &actions);
+        gpu.upload_actions(&actions);
+        gpu.run(stage).expect("GPU stage");
+        gpu.download_state(&mut from_gpu).expect("readback");
+        let differ = cpu.differing_columns(&from_gpu);
+        assert!(
+            differ.is_empty(),
+            "{stage} on {}, run {run}: columns {differ:?} differ between CPU and GPU",
+            gpu.adapter()
+        );
+    }
+    println!(
+        "{stage}: {runs} runs over {n_envs} environments bit-identical on {}",
+        gpu.adapter()
+    );
+}
+
+fn config(name: &str) -> Config {
+    Config::from_name_or_path(name).expect("shipped config")
+}
+
+/// Contract: `robot_motion` (diff-drive): command clipping, rotation first, then translation.
+#[test]
+fn robot_motion_diff_drive() {
+    check_parity("robot_motion", config("exp1"), 256, 50);
+}
+
+/// Contract: `robot_motion` (holonomic): the lateral command and its θ + π/2 terms, with a time
+/// step other than 1 s (at dt = 1 a misplaced factor of dt would go unseen).
+#[test]
+fn robot_motion_holonomic() {
+    let mut c = config("exp2");
+    c.robot.kinematics = Kinematics::Holonomic;
+    c.episode.time_step = 0.3;
+    check_parity("robot_motion", c, 256, 50);
+}
+
+/// The state survives the trip to the device and back bit for bit, every column.
+#[test]
+fn state_round_trip() {
+    let Some(dev) = device() else { return };
+    let env = rolled_out(config("exp3"), 64, 60);
+    let state = env.state().clone();
+    let mut gpu = GpuStages::new(dev, env.params(), &state, &[]).expect("GPU stages");
+    let mut back = BatchState::zeroed(state.n_envs, state.strides);
+    assert!(!state.differing_columns(&back).is_empty());
+    gpu.download_state(&mut back).expect("readback");
+    assert!(
+        state.differing_columns(&back).is_empty(),
+        "columns changed on the way: {:?}",
+        state.differing_columns(&back)
+    );
+}
