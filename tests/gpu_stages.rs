@@ -14,8 +14,10 @@ use std::sync::OnceLock;
 
 use socnav::backend::gpu::{AdapterPolicy, GpuDevice, GpuStages};
 use socnav::config::Kinematics;
+use socnav::outputs::Outputs;
 use socnav::pipeline::{Batch, STAGES};
 use socnav::rng::RngStream;
+use socnav::spec::{INFO_KEYS, N_INFO};
 use socnav::state::BatchState;
 use socnav::{Actions, BatchEnv, Config, EnvOptions, StepParams};
 
@@ -69,14 +71,19 @@ fn rolled_out(config: Config, n_envs: usize, steps: usize) -> BatchEnv {
     env
 }
 
-/// Run stage `stage` over every environment of `state` on the CPU.
-fn cpu_stage(stage: &str, p: &StepParams, env: &BatchEnv, state: &mut BatchState, actions: &[f32]) {
+/// Run stage `stage` over every environment of `state` and `outputs` on the CPU.
+fn cpu_stage(
+    stage: &str,
+    p: &StepParams,
+    state: &mut BatchState,
+    outputs: &mut Outputs,
+    actions: &[f32],
+) {
     let run = STAGES
         .iter()
         .find(|s| s.name == stage)
         .unwrap_or_else(|| panic!("no stage {stage}"))
         .run;
-    let mut outputs = env.outputs().clone();
     let n_envs = state.n_envs;
     let mut b = Batch {
         s: state.chunk(),
@@ -90,14 +97,30 @@ fn cpu_stage(stage: &str, p: &StepParams, env: &BatchEnv, state: &mut BatchState
     assert!(b.error.is_none(), "{stage}: {:?}", b.error);
 }
 
-/// Run `stage` `runs` times from the rolled-out state on both backends, comparing every time.
-fn check_parity(stage: &'static str, config: Config, n_envs: usize, runs: usize) {
-    let Some(dev) = device() else { return };
+/// A change of the state before a run, to reach the cases a stage decides between.
+type Perturb = fn(&mut BatchState, &StepParams, &mut RngStream);
+
+/// Run `stage` `runs` times from the rolled-out state on both backends, comparing the state and
+/// the outputs every time. Without `perturb` the runs chain on each side (each from its own last
+/// state); with it, the CPU state is perturbed before each run and uploaded as the GPU's.
+/// Returns how often each of the 7 outcome flags of the info row was raised over the runs (on
+/// the CPU), for tests that must see every case; `None` when skipped for want of a device.
+fn check_parity(
+    stage: &'static str,
+    config: Config,
+    n_envs: usize,
+    runs: usize,
+    perturb: Option<Perturb>,
+) -> Option<[usize; 7]> {
+    let dev = device()?;
+    let mut raised = [0usize; 7];
     let env = rolled_out(config, n_envs, 40);
     let p = *env.params();
     let mut cpu = env.state().clone();
-    let mut gpu = GpuStages::new(dev, &p, &cpu, &[stage]).expect("GPU stages");
+    let mut cpu_out = env.outputs().clone();
+    let mut gpu = GpuStages::new(dev, &p, &cpu, &cpu_out, &[stage]).expect("GPU stages");
     let mut from_gpu = cpu.clone();
+    let mut from_gpu_out = cpu_out.clone();
     let mut rng = RngStream::new(9, 0, 0, 1);
     let stepping = cpu.stepping.iter().filter(|&&s| s != 0).count();
     assert!(
@@ -105,15 +128,27 @@ fn check_parity(stage: &'static str, config: Config, n_envs: usize, runs: usize)
         "most environments step ({stepping} of {n_envs})"
     );
     for run in 0..runs {
+        if let Some(perturb) = perturb {
+            perturb(&mut cpu, &p, &mut rng);
+            gpu.upload_state(&cpu);
+        }
         let actions = random_actions(&mut rng, n_envs, p.holonomic != 0);
-        cpu_stage(stage, &p, &env, &mut cpu, &actions);
+        cpu_stage(stage, &p, &mut cpu, &mut cpu_out, &actions);
         gpu.upload_actions(&actions);
         gpu.run(stage).expect("GPU stage");
         gpu.download_state(&mut from_gpu).expect("readback");
+        gpu.download_outputs(&mut from_gpu_out).expect("readback");
+        for e in 0..n_envs {
+            for (k, count) in raised.iter_mut().enumerate() {
+                *count += usize::from(cpu_out.info[e * N_INFO + k] != 0.0);
+            }
+        }
         let differ = cpu.differing_columns(&from_gpu);
+        let differ_out = cpu_out.differing_columns(&from_gpu_out);
         assert!(
-            differ.is_empty(),
-            "{stage} on {}, run {run}: columns {differ:?} differ between CPU and GPU",
+            differ.is_empty() && differ_out.is_empty(),
+            "{stage} on {}, run {run}: state columns {differ:?} and output columns {differ_out:?} \
+             differ between CPU and GPU",
             gpu.adapter()
         );
     }
@@ -121,8 +156,33 @@ fn check_parity(stage: &'static str, config: Config, n_envs: usize, runs: usize)
         "{stage}: {runs} runs over {n_envs} environments bit-identical on {}",
         gpu.adapter()
     );
+    Some(raised)
 }
 
+/// Uniform in [lo, hi).
+fn uniform(rng: &mut RngStream, lo: f32, hi: f32) -> f32 {
+    lo + (hi - lo) * rng.next_f32()
+}
+
+/// Robots (and shadow robots) anywhere in and just outside the room, some at their goal, ticks
+/// around the episode length, shadow outcomes cleared: every branch of `termination`.
+fn scatter_robots(s: &mut BatchState, p: &StepParams, rng: &mut RngStream) {
+    for e in 0..s.n_envs {
+        let (hx, hy) = (0.6 * s.map_x[e], 0.6 * s.map_y[e]);
+        s.robot_x[e] = uniform(rng, -hx, hx);
+        s.robot_y[e] = uniform(rng, -hy, hy);
+        s.shadow_x[e] = uniform(rng, -hx, hx);
+        s.shadow_y[e] = uniform(rng, -hy, hy);
+        if rng.next_f32() < 0.2 {
+            s.goal_x[e] = s.robot_x[e] + uniform(rng, -0.6, 0.6);
+            s.goal_y[e] = s.robot_y[e];
+        }
+        s.tick[e] = p.episode_length - 1 + (rng.next_u32() % 3);
+        s.done[e] = 0;
+        s.shadow_collided[e] = u32::from(rng.next_f32() < 0.1);
+        s.shadow_reached[e] = 0;
+    }
+}
 fn config(name: &str) -> Config {
     Config::from_name_or_path(name).expect("shipped config")
 }
@@ -130,7 +190,7 @@ fn config(name: &str) -> Config {
 /// Contract: `robot_motion` (diff-drive): command clipping, rotation first, then translation.
 #[test]
 fn robot_motion_diff_drive() {
-    check_parity("robot_motion", config("exp1"), 256, 50);
+    check_parity("robot_motion", config("exp1"), 256, 50, None);
 }
 
 /// Contract: `robot_motion` (holonomic): the lateral command and its θ + π/2 terms, with a time
@@ -140,22 +200,47 @@ fn robot_motion_holonomic() {
     let mut c = config("exp2");
     c.robot.kinematics = Kinematics::Holonomic;
     c.episode.time_step = 0.3;
-    check_parity("robot_motion", c, 256, 50);
+    check_parity("robot_motion", c, 256, 50, None);
 }
 
-/// The state survives the trip to the device and back bit for bit, every column.
+/// Contract: `termination` in every config kind (walls, plants, tables, laptops, groups): the
+/// outcome flags, terminated/truncated, `done` and the shadow robot's outcome.
+#[test]
+fn termination() {
+    for name in ["exp1", "exp2", "exp3", "lroom_mixed"] {
+        let Some(raised) = check_parity("termination", config(name), 256, 20, Some(scatter_robots))
+        else {
+            return;
+        };
+        // Every outcome, collisions of each kind included, was decided on both sides.
+        for (k, n) in raised.iter().enumerate() {
+            assert!(*n > 0, "{name}: info flag {} never raised", INFO_KEYS[k]);
+        }
+    }
+}
+
+/// The state and the outputs survive the trip to the device and back bit for bit, every column.
 #[test]
 fn state_round_trip() {
     let Some(dev) = device() else { return };
     let env = rolled_out(config("exp3"), 64, 60);
     let state = env.state().clone();
-    let mut gpu = GpuStages::new(dev, env.params(), &state, &[]).expect("GPU stages");
+    let outputs = env.outputs().clone();
+    let mut gpu = GpuStages::new(dev, env.params(), &state, &outputs, &[]).expect("GPU stages");
     let mut back = BatchState::zeroed(state.n_envs, state.strides);
     assert!(!state.differing_columns(&back).is_empty());
     gpu.download_state(&mut back).expect("readback");
     assert!(
         state.differing_columns(&back).is_empty(),
-        "columns changed on the way: {:?}",
+        "state columns changed on the way: {:?}",
         state.differing_columns(&back)
+    );
+    let mut back = Outputs::zeroed(outputs.n_envs, outputs.strides);
+    assert!(!outputs.differing_columns(&back).is_empty());
+    gpu.download_outputs(&mut back).expect("readback");
+    assert!(
+        outputs.differing_columns(&back).is_empty(),
+        "output columns changed on the way: {:?}",
+        outputs.differing_columns(&back)
     );
 }

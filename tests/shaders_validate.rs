@@ -101,17 +101,17 @@ fn validate(path: &Path) -> Result<(), String> {
     validate_source(&src, &label).map(|_| ())
 }
 
-/// A stage shader (`shaders/<stage>.wgsl`) as the GPU backend assembles it for a batch of
-/// experiment 2 (every column kind in use), validated.
-fn validate_stage(stage: &str) -> Result<naga::Module, String> {
+/// `shaders/<path>` as the GPU backend assembles it for a batch of experiment 2 (every column
+/// kind in use): the generated prelude, `common/params.wgsl`, the file's requirements, the file.
+fn validate_assembled(path: &str) -> Result<naga::Module, String> {
     let env = socnav::BatchEnv::new(
         socnav::Config::from_name_or_path("exp2").expect("exp2"),
         socnav::EnvOptions::default(),
     )
     .expect("batch");
-    let prelude = wgsl::prelude(4, &env.state().columns());
-    let src = wgsl::assemble(stage, &prelude)?;
-    validate_source(&src, &format!("{stage} (assembled)"))
+    let prelude = wgsl::prelude(4, &env.state().columns(), &env.outputs().columns());
+    let src = wgsl::assemble(path, &prelude)?;
+    validate_source(&src, &format!("{path} (assembled)"))
 }
 
 #[test]
@@ -129,12 +129,14 @@ fn all_wgsl_shaders_validate() {
             Some(_) => errors.push(format!("{rel}: the embedded copy differs (rebuild)")),
             None => errors.push(format!("{rel} is not listed in backend::wgsl::FILES")),
         }
-        // Stage shaders need the generated prelude; libraries stand alone.
-        let result = match rel.strip_suffix(".wgsl").filter(|r| !r.contains('/')) {
-            Some(stage) => validate_stage(stage).map(|_| ()),
-            None => validate(p),
-        };
-        errors.extend(result.err());
+        errors.extend(validate_assembled(rel).err());
+        // The pure libraries also stand alone, with their requirements only.
+        if matches!(
+            rel,
+            "common/math.wgsl" | "common/rng.wgsl" | "common/params.wgsl"
+        ) {
+            errors.extend(validate(p).err());
+        }
     }
     println!("validated {} shaders", files.len());
     assert!(errors.is_empty(), "{}", errors.join("\n"));
@@ -150,7 +152,7 @@ fn stage_shaders_are_stages_with_a_main() {
             names.contains(&stage),
             "shaders/{path} is not a stage of pipeline::STAGES"
         );
-        let module = validate_stage(stage).unwrap_or_else(|e| panic!("{e}"));
+        let module = validate_assembled(path).unwrap_or_else(|e| panic!("{e}"));
         assert!(
             module.entry_points.iter().any(|ep| ep.name == "main"),
             "shaders/{path} has no entry point `main`"

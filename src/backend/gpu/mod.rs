@@ -18,24 +18,33 @@ pub use device::{AdapterPolicy, AdapterSummary, GpuDevice, list_adapters};
 
 use crate::backend::wgsl;
 use crate::error::SimError;
+use crate::outputs::Outputs;
 use crate::params::StepParams;
 use crate::state::BatchState;
 
 /// The stages that have a shader so far, in [`crate::pipeline::STAGES`] order.
-pub const STAGES_WITH_SHADERS: &[&str] = &["robot_motion"];
+pub const STAGES_WITH_SHADERS: &[&str] = &["robot_motion", "termination"];
 
-/// A batch's state, parameters and actions on the device, and a pipeline per stage shader.
+/// A packed table on the device: every f32 column in one storage buffer, every u32 column in
+/// another, and the host copies they are packed from and read back into.
+struct DeviceTable {
+    f32s: wgpu::Buffer,
+    u32s: wgpu::Buffer,
+    packed_f32: Vec<f32>,
+    packed_u32: Vec<u32>,
+}
+
+/// A batch's state, outputs, parameters and actions on the device, and a pipeline per stage
+/// shader.
 pub struct GpuStages {
     dev: GpuDevice,
     n_envs: usize,
-    sf: wgpu::Buffer,
-    su: wgpu::Buffer,
+    state: DeviceTable,
+    outputs: DeviceTable,
     actions: wgpu::Buffer,
     readback: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
-    packed_f32: Vec<f32>,
-    packed_u32: Vec<u32>,
 }
 
 impl std::fmt::Debug for GpuStages {
@@ -52,84 +61,119 @@ fn bytes_of<T>(n: usize) -> u64 {
     (n.max(1) * std::mem::size_of::<T>()) as u64
 }
 
+/// A storage buffer the host writes and reads back.
+fn storage_buffer(dev: &GpuDevice, label: &str, size: u64) -> wgpu::Buffer {
+    dev.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
+impl DeviceTable {
+    /// Buffers for a table packed into `packed_f32`/`packed_u32`, or why they do not fit.
+    fn new(
+        dev: &GpuDevice,
+        what: &str,
+        n_envs: usize,
+        packed_f32: Vec<f32>,
+        packed_u32: Vec<u32>,
+    ) -> Result<Self, SimError> {
+        let max = dev.limits.max_storage_buffer_binding_size;
+        for (kind, bytes) in [
+            ("f32", bytes_of::<f32>(packed_f32.len())),
+            ("u32", bytes_of::<u32>(packed_u32.len())),
+        ] {
+            if bytes > max {
+                return Err(SimError::BackendUnavailable(format!(
+                    "{n_envs} environments need {bytes} bytes of {kind} {what} columns, more \
+                     than {} allows in one binding ({max} bytes): use fewer environments",
+                    dev.adapter.name
+                )));
+            }
+        }
+        Ok(Self {
+            f32s: storage_buffer(dev, what, bytes_of::<f32>(packed_f32.len())),
+            u32s: storage_buffer(dev, what, bytes_of::<u32>(packed_u32.len())),
+            packed_f32,
+            packed_u32,
+        })
+    }
+
+    fn largest(&self) -> usize {
+        self.packed_f32.len().max(self.packed_u32.len())
+    }
+}
+
 impl GpuStages {
-    /// Upload `state` and `params` and build the pipelines of `stages` (names from
+    /// Upload `state`, `outputs` and `params` and build the pipelines of `stages` (names from
     /// [`STAGES_WITH_SHADERS`]).
     pub fn new(
         dev: GpuDevice,
         params: &StepParams,
         state: &BatchState,
+        outputs: &Outputs,
         stages: &[&'static str],
     ) -> Result<Self, SimError> {
         let n_envs = state.n_envs;
-        let (mut packed_f32, mut packed_u32) = (Vec::new(), Vec::new());
-        state.pack(&mut packed_f32, &mut packed_u32);
-        let max = dev.limits.max_storage_buffer_binding_size;
-        for (what, bytes) in [
-            ("f32 state columns", bytes_of::<f32>(packed_f32.len())),
-            ("u32 state columns", bytes_of::<u32>(packed_u32.len())),
-        ] {
-            if bytes > max {
-                return Err(SimError::BackendUnavailable(format!(
-                    "{n_envs} environments need {bytes} bytes of {what}, more than {} allows in \
-                     one binding ({max} bytes): use fewer environments",
-                    dev.adapter.name
-                )));
-            }
-        }
-        let storage = wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_DST
-            | wgpu::BufferUsages::COPY_SRC;
-        let buffer = |label: &str, size: u64| {
-            dev.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: storage,
-                mapped_at_creation: false,
-            })
-        };
-        let params_buf = buffer("step params", std::mem::size_of::<StepParams>() as u64);
+        let (mut f, mut u) = (Vec::new(), Vec::new());
+        state.pack(&mut f, &mut u);
+        let state_table = DeviceTable::new(&dev, "state", n_envs, f, u)?;
+        let (mut f, mut u) = (Vec::new(), Vec::new());
+        outputs.pack(&mut f, &mut u);
+        let outputs_table = DeviceTable::new(&dev, "output", n_envs, f, u)?;
+        let params_buf = storage_buffer(&dev, "step params", size_of::<StepParams>() as u64);
         dev.queue
             .write_buffer(&params_buf, 0, bytemuck::bytes_of(params));
-        let sf = buffer("state f32", bytes_of::<f32>(packed_f32.len()));
-        let su = buffer("state u32", bytes_of::<u32>(packed_u32.len()));
-        let actions = buffer("actions", bytes_of::<f32>(3 * n_envs));
+        let actions = storage_buffer(&dev, "actions", bytes_of::<f32>(3 * n_envs));
         let readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: bytes_of::<u32>(packed_f32.len().max(packed_u32.len())),
+            size: bytes_of::<u32>(state_table.largest().max(outputs_table.largest())),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
+        // Bindings of the prelude (`backend::wgsl::prelude`): params, sf, su, actions, outf, outu.
+        let bound = [
+            (&params_buf, true),
+            (&state_table.f32s, false),
+            (&state_table.u32s, false),
+            (&actions, true),
+            (&outputs_table.f32s, false),
+            (&outputs_table.u32s, false),
+        ];
+        let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..)
+            .zip(&bound)
+            .map(|(binding, &(_, read_only))| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            })
+            .collect();
         let layout = dev
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("stage bindings"),
-                entries: &[
-                    entry(0, true),
-                    entry(1, false),
-                    entry(2, false),
-                    entry(3, true),
-                ],
+                entries: &layout_entries,
             });
+        let group_entries: Vec<wgpu::BindGroupEntry<'_>> = (0u32..)
+            .zip(&bound)
+            .map(|(binding, &(buf, _))| wgpu::BindGroupEntry {
+                binding,
+                resource: buf.as_entire_binding(),
+            })
+            .collect();
         let bind_group = dev.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("stage bindings"),
             layout: &layout,
-            entries: &[(0, &params_buf), (1, &sf), (2, &su), (3, &actions)].map(
-                |(binding, buf)| wgpu::BindGroupEntry {
-                    binding,
-                    resource: buf.as_entire_binding(),
-                },
-            ),
+            entries: &group_entries,
         });
         let pipeline_layout = dev
             .device
@@ -138,7 +182,7 @@ impl GpuStages {
                 bind_group_layouts: &[Some(&layout)],
                 immediate_size: 0,
             });
-        let prelude = wgsl::prelude(n_envs, &state.columns());
+        let prelude = wgsl::prelude(n_envs, &state.columns(), &outputs.columns());
         let mut pipelines = Vec::new();
         for &stage in stages {
             if !STAGES_WITH_SHADERS.contains(&stage) {
@@ -146,7 +190,8 @@ impl GpuStages {
                     "stage {stage:?} has no shader yet (stages with shaders: {STAGES_WITH_SHADERS:?})"
                 )));
             }
-            let src = wgsl::assemble(stage, &prelude).map_err(SimError::BackendUnavailable)?;
+            let src = wgsl::assemble(&format!("{stage}.wgsl"), &prelude)
+                .map_err(SimError::BackendUnavailable)?;
             let module = dev
                 .device
                 .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -166,19 +211,18 @@ impl GpuStages {
             dev.take_errors()?;
             pipelines.push((stage, pipeline));
         }
-        let mut this = Self {
+        let this = Self {
             dev,
             n_envs,
-            sf,
-            su,
+            state: state_table,
+            outputs: outputs_table,
             actions,
             readback,
             bind_group,
             pipelines,
-            packed_f32,
-            packed_u32,
         };
-        this.write_packed();
+        this.write(&this.state);
+        this.write(&this.outputs);
         Ok(this)
     }
 
@@ -187,18 +231,28 @@ impl GpuStages {
         &self.dev.adapter
     }
 
-    fn write_packed(&mut self) {
+    fn write(&self, t: &DeviceTable) {
         let q = &self.dev.queue;
-        q.write_buffer(&self.sf, 0, bytemuck::cast_slice(&self.packed_f32));
-        q.write_buffer(&self.su, 0, bytemuck::cast_slice(&self.packed_u32));
+        q.write_buffer(&t.f32s, 0, bytemuck::cast_slice(&t.packed_f32));
+        q.write_buffer(&t.u32s, 0, bytemuck::cast_slice(&t.packed_u32));
     }
 
     /// Replace the device's state with `state` (same batch size and capacities).
     pub fn upload_state(&mut self, state: &BatchState) {
-        self.packed_f32.clear();
-        self.packed_u32.clear();
-        state.pack(&mut self.packed_f32, &mut self.packed_u32);
-        self.write_packed();
+        let t = &mut self.state;
+        t.packed_f32.clear();
+        t.packed_u32.clear();
+        state.pack(&mut t.packed_f32, &mut t.packed_u32);
+        self.write(&self.state);
+    }
+
+    /// Replace the device's outputs with `outputs` (same batch size and layout).
+    pub fn upload_outputs(&mut self, outputs: &Outputs) {
+        let t = &mut self.outputs;
+        t.packed_f32.clear();
+        t.packed_u32.clear();
+        outputs.pack(&mut t.packed_f32, &mut t.packed_u32);
+        self.write(&self.outputs);
     }
 
     /// Set the actions of the next stages: 3 floats per environment.
@@ -235,17 +289,32 @@ impl GpuStages {
 
     /// Read the device's state back into `state` (same batch size and capacities).
     pub fn download_state(&mut self, state: &mut BatchState) -> Result<(), SimError> {
-        let (nf, nu) = (self.packed_f32.len(), self.packed_u32.len());
-        let f = self.read_words(&self.sf, nf)?;
-        self.packed_f32.copy_from_slice(bytemuck::cast_slice(&f));
-        let u = self.read_words(&self.su, nu)?;
-        self.packed_u32.copy_from_slice(&u);
-        state.unpack(&self.packed_f32, &self.packed_u32);
+        let (f, u) = self.read_table(&self.state)?;
+        state.unpack(&f, &u);
         Ok(())
+    }
+
+    /// Read the device's outputs back into `outputs` (same batch size and layout).
+    pub fn download_outputs(&mut self, outputs: &mut Outputs) -> Result<(), SimError> {
+        let (f, u) = self.read_table(&self.outputs)?;
+        outputs.unpack(&f, &u);
+        Ok(())
+    }
+
+    fn read_table(&self, t: &DeviceTable) -> Result<(Vec<f32>, Vec<u32>), SimError> {
+        let f = self.read_words(&t.f32s, t.packed_f32.len())?;
+        let u = self.read_words(&t.u32s, t.packed_u32.len())?;
+        Ok((f.into_iter().map(f32::from_bits).collect(), u))
     }
 
     /// The first `n` 32-bit words of `src`.
     fn read_words(&self, src: &wgpu::Buffer, n: usize) -> Result<Vec<u32>, SimError> {
+        let failed = |e: &dyn std::fmt::Display| {
+            SimError::BackendUnavailable(format!("GPU readback failed: {e}"))
+        };
+        if n == 0 {
+            return Ok(Vec::new());
+        }
         let bytes = (n * 4) as u64;
         let mut enc = self
             .dev
@@ -264,14 +333,10 @@ impl GpuStages {
         self.dev
             .device
             .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| SimError::BackendUnavailable(format!("GPU readback failed: {e}")))?;
-        rx.recv()
-            .map_err(|e| SimError::BackendUnavailable(format!("GPU readback failed: {e}")))?
-            .map_err(|e| SimError::BackendUnavailable(format!("GPU readback failed: {e}")))?;
+            .map_err(|e| failed(&e))?;
+        rx.recv().map_err(|e| failed(&e))?.map_err(|e| failed(&e))?;
         let words = {
-            let view = slice
-                .get_mapped_range()
-                .map_err(|e| SimError::BackendUnavailable(format!("GPU readback failed: {e}")))?;
+            let view = slice.get_mapped_range().map_err(|e| failed(&e))?;
             bytemuck::cast_slice::<u8, u32>(&view).to_vec()
         };
         self.readback.unmap();

@@ -1,0 +1,57 @@
+// requires: common/math.wgsl
+//
+// Twin of src/geometry.rs: exact 2-D geometry of discs and rotated rectangles (touching counts).
+// Every function mirrors its Rust twin operation for operation (`Rect::distance_sq` is
+// `geo_rect_distance_sq`, `disc_rect` is `geo_disc_rect`, ...); change both files in the same
+// commit. Lengths in metres.
+
+struct Disc {
+    x: f32,
+    y: f32,
+    r: f32,
+}
+
+// A rotated rectangle: centre, cos and sin of its heading, half extents along local x and y.
+struct Rect {
+    x: f32,
+    y: f32,
+    c: f32,
+    s: f32,
+    hl: f32,
+    hw: f32,
+}
+
+fn geo_rect_new(x: f32, y: f32, theta: f32, length: f32, width: f32) -> Rect {
+    let sc = math_sin_cos(theta);
+    return Rect(x, y, sc.y, sc.x, 0.5 * length, 0.5 * width);
+}
+
+fn geo_rect_with_trig(x: f32, y: f32, c: f32, s: f32, length: f32, width: f32) -> Rect {
+    return Rect(x, y, c, s, 0.5 * length, 0.5 * width);
+}
+
+// World point -> rectangle frame.
+fn geo_rect_to_local(r: Rect, px: f32, py: f32) -> vec2<f32> {
+    let dx = px - r.x;
+    let dy = py - r.y;
+    return vec2<f32>(dx * r.c + dy * r.s, dy * r.c - dx * r.s);
+}
+
+// Squared distance from (px, py) to the rectangle (0 inside).
+fn geo_rect_distance_sq(r: Rect, px: f32, py: f32) -> f32 {
+    let l = geo_rect_to_local(r, px, py);
+    let dx = max(abs(l.x) - r.hl, 0.0);
+    let dy = max(abs(l.y) - r.hw, 0.0);
+    return dx * dx + dy * dy;
+}
+
+fn geo_disc_disc(a: Disc, b: Disc) -> bool {
+    let dx = a.x - b.x;
+    let dy = a.y - b.y;
+    let r = a.r + b.r;
+    return dx * dx + dy * dy <= r * r;
+}
+
+fn geo_disc_rect(d: Disc, r: Rect) -> bool {
+    return geo_rect_distance_sq(r, d.x, d.y) <= d.r * d.r;
+}
