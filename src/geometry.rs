@@ -162,11 +162,11 @@ impl Shape {
     }
 }
 
-/// Distance from the origin to the segment from `a` to `b` (m).
+/// Distance from the origin to the segment from `a` to `a + e` (m). The segment is given by its
+/// displacement `e`, not its end: `(a + e) - a` would round, and Mesa's shader optimiser folds it
+/// to `e` on lavapipe, which would break CPU/GPU parity.
 #[inline]
-pub fn origin_segment_distance(ax: f32, ay: f32, bx: f32, by: f32) -> f32 {
-    let ex = bx - ax;
-    let ey = by - ay;
+pub fn origin_segment_distance(ax: f32, ay: f32, ex: f32, ey: f32) -> f32 {
     let len_sq = ex * ex + ey * ey;
     let t = if len_sq > 0.0 {
         (-(ax * ex + ay * ey) / len_sq).clamp(0.0, 1.0)
@@ -283,8 +283,10 @@ mod tests {
 
     #[test]
     fn segment_distance() {
-        assert_eq!(origin_segment_distance(1.0, -1.0, 1.0, 1.0), 1.0);
-        assert_eq!(origin_segment_distance(3.0, 4.0, 6.0, 8.0), 5.0);
+        assert_eq!(origin_segment_distance(1.0, -1.0, 0.0, 2.0), 1.0);
         assert_eq!(origin_segment_distance(3.0, 4.0, 3.0, 4.0), 5.0);
+        assert_eq!(origin_segment_distance(3.0, 4.0, 0.0, 0.0), 5.0);
+        // The nearest point inside the segment: from (-1, 1) to (1, 1), distance 1.
+        assert_eq!(origin_segment_distance(-1.0, 1.0, 2.0, 0.0), 1.0);
     }
 }

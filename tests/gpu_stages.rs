@@ -19,6 +19,7 @@ use socnav::pipeline::{Batch, STAGES};
 use socnav::rng::RngStream;
 use socnav::spec::{INFO_KEYS, N_INFO};
 use socnav::state::BatchState;
+use socnav::state::columns::Elem;
 use socnav::{Actions, BatchEnv, Config, EnvOptions, StepParams};
 
 /// The shared device, or `None` (after saying why) when there is none and none is required.
@@ -98,11 +99,12 @@ fn cpu_stage(
 }
 
 /// A change of the state before a run, to reach the cases a stage decides between.
-type Perturb = fn(&mut BatchState, &StepParams, &mut RngStream);
+type Perturb = fn(&mut BatchState, &mut Outputs, &StepParams, &mut RngStream);
 
 /// Run `stage` `runs` times from the rolled-out state on both backends, comparing the state and
 /// the outputs every time. Without `perturb` the runs chain on each side (each from its own last
-/// state); with it, the CPU state is perturbed before each run and uploaded as the GPU's.
+/// state); with it, the CPU state and outputs are perturbed before each run and uploaded as the
+/// GPU's.
 /// Returns how often each of the 7 outcome flags of the info row was raised over the runs (on
 /// the CPU), for tests that must see every case; `None` when skipped for want of a device.
 fn check_parity(
@@ -129,8 +131,9 @@ fn check_parity(
     );
     for run in 0..runs {
         if let Some(perturb) = perturb {
-            perturb(&mut cpu, &p, &mut rng);
+            perturb(&mut cpu, &mut cpu_out, &p, &mut rng);
             gpu.upload_state(&cpu);
+            gpu.upload_outputs(&cpu_out);
         }
         let actions = random_actions(&mut rng, n_envs, p.holonomic != 0);
         cpu_stage(stage, &p, &mut cpu, &mut cpu_out, &actions);
@@ -148,8 +151,18 @@ fn check_parity(
         assert!(
             differ.is_empty() && differ_out.is_empty(),
             "{stage} on {}, run {run}: state columns {differ:?} and output columns {differ_out:?} \
-             differ between CPU and GPU",
-            gpu.adapter()
+             differ between CPU and GPU; first differences: {}{}",
+            gpu.adapter(),
+            first_differences(
+                &cpu.columns(),
+                |f, u| cpu.pack(f, u),
+                |f, u| from_gpu.pack(f, u)
+            ) + "; ",
+            first_differences(
+                &cpu_out.columns(),
+                |f, u| cpu_out.pack(f, u),
+                |f, u| { from_gpu_out.pack(f, u) }
+            ),
         );
     }
     println!(
@@ -159,6 +172,47 @@ fn check_parity(
     Some(raised)
 }
 
+/// The first differing element of each differing column of two packed tables with `columns`:
+/// "name[env][slot]: cpu vs gpu".
+fn first_differences(
+    columns: &[(&'static str, Elem, usize)],
+    pack_cpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
+    pack_gpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
+) -> String {
+    let (mut cf, mut cu, mut gf, mut gu) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    pack_cpu(&mut cf, &mut cu);
+    pack_gpu(&mut gf, &mut gu);
+    let total_per_env: usize = columns.iter().map(|c| c.2).sum();
+    let n_envs = (cf.len() + cu.len()) / total_per_env.max(1);
+    let mut out = Vec::new();
+    let mut offset = [0usize; 2];
+    for &(name, elem, stride) in columns {
+        let k = usize::from(elem == Elem::U32);
+        let len = n_envs * stride;
+        let range = offset[k]..offset[k] + len;
+        offset[k] += len;
+        let first = match elem {
+            Elem::F32 => range
+                .clone()
+                .find(|&i| cf[i].to_bits() != gf[i].to_bits() && !(cf[i] == 0.0 && gf[i] == 0.0))
+                .map(|i| (i, format!("{:e} vs {:e}", cf[i], gf[i]))),
+            Elem::U32 => range
+                .clone()
+                .find(|&i| cu[i] != gu[i])
+                .map(|i| (i, format!("{} vs {}", cu[i], gu[i]))),
+        };
+        if let Some((i, values)) = first {
+            let j = i - range.start;
+            out.push(format!(
+                "{name}[env {}][{}]: {values}",
+                j / stride.max(1),
+                j % stride.max(1)
+            ));
+        }
+    }
+    out.join("; ")
+}
+
 /// Uniform in [lo, hi).
 fn uniform(rng: &mut RngStream, lo: f32, hi: f32) -> f32 {
     lo + (hi - lo) * rng.next_f32()
@@ -166,7 +220,7 @@ fn uniform(rng: &mut RngStream, lo: f32, hi: f32) -> f32 {
 
 /// Robots (and shadow robots) anywhere in and just outside the room, some at their goal, ticks
 /// around the episode length, shadow outcomes cleared: every branch of `termination`.
-fn scatter_robots(s: &mut BatchState, p: &StepParams, rng: &mut RngStream) {
+fn scatter_robots(s: &mut BatchState, _: &mut Outputs, p: &StepParams, rng: &mut RngStream) {
     for e in 0..s.n_envs {
         let (hx, hy) = (0.6 * s.map_x[e], 0.6 * s.map_y[e]);
         s.robot_x[e] = uniform(rng, -hx, hx);
@@ -217,6 +271,49 @@ fn termination() {
             assert!(*n > 0, "{name}: info flag {} never raised", INFO_KEYS[k]);
         }
     }
+}
+
+/// Robots scattered as for `termination`, moving at random world velocities and commands, with
+/// random previous goal distances (or none) and an outcome drawn for a quarter of them: every
+/// branch and term of `reward`.
+fn scatter_for_reward(s: &mut BatchState, o: &mut Outputs, p: &StepParams, rng: &mut RngStream) {
+    scatter_robots(s, o, p, rng);
+    for e in 0..s.n_envs {
+        s.robot_wvx[e] = uniform(rng, -0.2, 0.2);
+        s.robot_wvy[e] = uniform(rng, -0.2, 0.2);
+        let stalled = rng.next_f32() < 0.2;
+        s.robot_vx[e] = if stalled {
+            0.0
+        } else {
+            uniform(rng, -0.1, 0.1)
+        };
+        s.m_prev_vx[e] = uniform(rng, -0.1, 0.1);
+        s.r_has_prev[e] = u32::from(rng.next_f32() < 0.8);
+        s.r_prev_dist[e] = uniform(rng, 0.0, 10.0);
+        let row = &mut o.info[e * N_INFO..e * N_INFO + 7];
+        row.fill(0.0);
+        if rng.next_f32() < 0.25 {
+            row[(rng.next_u32() % 7) as usize] = 1.0;
+        }
+    }
+}
+
+/// Contract: `reward`: terminal constants, distance and discomfort terms (pseudo-humans of
+/// groups and laptop users included), the persisting info values, and the weighted terms.
+#[test]
+fn reward() {
+    for name in ["exp1", "exp2", "exp3"] {
+        check_parity("reward", config(name), 256, 20, Some(scatter_for_reward));
+    }
+    let mut c = config("exp2");
+    c.reward.personal_space_weight = -1.0;
+    c.reward.personal_space_distance = 2.0;
+    c.reward.obstacle_weight = -0.5;
+    c.reward.obstacle_distance = 1.0;
+    c.reward.stalled_weight = -0.1;
+    c.reward.acceleration_weight = -0.3;
+    c.episode.time_step = 0.3;
+    check_parity("reward", c, 256, 20, Some(scatter_for_reward));
 }
 
 /// The state and the outputs survive the trip to the device and back bit for bit, every column.

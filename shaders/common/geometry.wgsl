@@ -55,3 +55,16 @@ fn geo_disc_disc(a: Disc, b: Disc) -> bool {
 fn geo_disc_rect(d: Disc, r: Rect) -> bool {
     return geo_rect_distance_sq(r, d.x, d.y) <= d.r * d.r;
 }
+
+// Distance from the origin to the segment from a to a + e (m), the segment given by its
+// displacement (see the Rust twin).
+fn geo_origin_segment_distance(ax: f32, ay: f32, ex: f32, ey: f32) -> f32 {
+    let len_sq = ex * ex + ey * ey;
+    var t = 0.0;
+    if (len_sq > 0.0) {
+        t = clamp(-(ax * ex + ay * ey) / len_sq, 0.0, 1.0);
+    }
+    let px = ax + t * ex;
+    let py = ay + t * ey;
+    return sqrt(px * px + py * py);
+}

@@ -43,9 +43,14 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/robot_motion.wgsl"),
     ),
     (
+        "common/measures.wgsl",
+        include_str!("../../shaders/common/measures.wgsl"),
+    ),
+    (
         "termination.wgsl",
         include_str!("../../shaders/termination.wgsl"),
     ),
+    ("reward.wgsl", include_str!("../../shaders/reward.wgsl")),
 ];
 
 /// Invocations per workgroup of the stage shaders (one environment each).

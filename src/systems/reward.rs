@@ -111,9 +111,7 @@ pub fn min_predicted_clearance(p: &StepParams, s: &StateChunk, e: usize) -> f32 
         let py = y - ry;
         let vx = hvx - vrx;
         let vy = hvy - vry;
-        origin_segment_distance(px, py, px + vx * p.dt, py + vy * p.dt)
-            - p.human_radius
-            - p.robot_radius
+        origin_segment_distance(px, py, vx * p.dt, vy * p.dt) - p.human_radius - p.robot_radius
     };
     let hb = e * s.strides.humans;
     let mut d_min = f32::INFINITY;

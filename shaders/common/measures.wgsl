@@ -1,0 +1,62 @@
+// requires: common/world.wgsl
+//
+// Twins of the public helpers of src/systems/metrics.rs that other stages use as well (`speed`,
+// `command_acceleration`, `min_human_distance`, `obstacle_distances`): a stage shader cannot
+// require another stage's file, so they live here. Change both in the same commit.
+
+// The magnitude of the vector (x, y).
+fn speed(x: f32, y: f32) -> f32 {
+    return sqrt(x * x + y * y);
+}
+
+// This step's acceleration (m/s²) of the robot-frame linear command, valid until `metrics` stores
+// the command as the previous one.
+fn command_acceleration(e: u32) -> vec2<f32> {
+    return vec2<f32>(
+        (sf[C_ROBOT_VX + e] - sf[C_M_PREV_VX + e]) / params.dt,
+        (sf[C_ROBOT_VY + e] - sf[C_M_PREV_VY + e]) / params.dt,
+    );
+}
+
+// Smallest robot-human centre distance (m); +inf without humans.
+fn min_human_distance(e: u32) -> f32 {
+    let hb = e * S_H_X;
+    var best = math_inf();
+    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
+        best = min(best, speed(sf[C_H_X + i] - sf[C_ROBOT_X + e], sf[C_H_Y + i] - sf[C_ROBOT_Y + e]));
+    }
+    return best;
+}
+
+// Minimum and mean distance (m) from the robot centre to plants (surface), tables and walls
+// (nearest point); laptops excluded, robot radius not subtracted. (+inf, NaN) without obstacles.
+fn obstacle_distances(e: u32) -> vec2<f32> {
+    let rx = sf[C_ROBOT_X + e];
+    let ry = sf[C_ROBOT_Y + e];
+    var lo = math_inf();
+    var sum = 0.0;
+    var n = 0u;
+    let pb = e * S_P_X;
+    for (var i = pb; i < pb + su[C_N_PLANTS + e]; i++) {
+        let d = speed(sf[C_P_X + i] - rx, sf[C_P_Y + i] - ry) - params.plant_radius;
+        lo = min(lo, d);
+        sum += d;
+        n += 1u;
+    }
+    for (var t = 0u; t < su[C_N_TABLES + e]; t++) {
+        let d = sqrt(geo_rect_distance_sq(world_table_rect(e, t), rx, ry));
+        lo = min(lo, d);
+        sum += d;
+        n += 1u;
+    }
+    for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
+        let d = sqrt(geo_rect_distance_sq(world_wall_rect(e, w), rx, ry));
+        lo = min(lo, d);
+        sum += d;
+        n += 1u;
+    }
+    if (n == 0u) {
+        return vec2<f32>(math_inf(), math_nan());
+    }
+    return vec2<f32>(lo, sum / f32(n));
+}

@@ -1,0 +1,129 @@
+// requires: common/measures.wgsl
+//
+// Twin of src/systems/reward.rs (stage `reward`, spec 6.2): the DSRNN-style reward. Terminal
+// steps get the outcome's constant; other steps the distance, discomfort and alive terms plus the
+// weighted terms beyond 0.1.1 (skipped at weight 0). The reward's info values persist: a terminal
+// step reports those of the previous step. Change both files in the same commit.
+
+// The robot's world-frame velocity (m/s), computed with the motion.
+fn robot_world_velocity(e: u32) -> vec2<f32> {
+    return vec2<f32>(sf[C_ROBOT_WVX + e], sf[C_ROBOT_WVY + e]);
+}
+
+// Clearance (m) over the next dt between the robot and a human at (x, y) moving at (hvx, hvy).
+fn clearance(e: u32, x: f32, y: f32, hvx: f32, hvy: f32) -> f32 {
+    let vr = robot_world_velocity(e);
+    let px = x - sf[C_ROBOT_X + e];
+    let py = y - sf[C_ROBOT_Y + e];
+    let vx = hvx - vr.x;
+    let vy = hvy - vr.y;
+    return geo_origin_segment_distance(px, py, vx * params.dt, vy * params.dt)
+        - params.human_radius
+        - params.robot_radius;
+}
+
+// The smallest predicted clearance (m) between the robot and any human; +inf without humans.
+fn min_predicted_clearance(e: u32) -> f32 {
+    let hb = e * S_H_X;
+    var d_min = math_inf();
+    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
+        d_min = min(d_min, clearance(e, sf[C_H_X + i], sf[C_H_Y + i], sf[C_H_VX + i], sf[C_H_VY + i]));
+    }
+    if (params.dsrnn_pseudo_humans != 0u) {
+        let gb = e * S_G_X;
+        for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
+            let first = hb + su[C_G_FIRST + g];
+            let n = su[C_G_COUNT + g];
+            var total = 0.0;
+            for (var k = first; k < first + n; k++) {
+                total += sf[C_H_SPEED + k];
+            }
+            let mean_speed = total / f32(n);
+            let sc = math_sin_cos(sf[C_H_THETA + first]);
+            d_min = min(d_min, clearance(e, sf[C_G_X + g], sf[C_G_Y + g], mean_speed * sc.y, mean_speed * sc.x));
+        }
+        let ub = e * S_LU_HUMAN;
+        let lb = e * S_L_X;
+        for (var u = ub; u < ub + su[C_N_LAPTOP_USERS + e]; u++) {
+            let h = hb + su[C_LU_HUMAN + u];
+            let l = lb + su[C_LU_LAPTOP + u];
+            let cx = 0.5 * (sf[C_H_X + h] + sf[C_L_X + l]);
+            let cy = 0.5 * (sf[C_H_Y + h] + sf[C_L_Y + l]);
+            d_min = min(d_min, clearance(e, cx, cy, 0.0, 0.0));
+        }
+    }
+    return d_min;
+}
+
+// r plus the weighted terms beyond 0.1.1; a term with weight 0 is not evaluated at all.
+fn with_extra_terms(e: u32, r0: f32) -> f32 {
+    var r = r0;
+    if (params.reward_personal_space_weight != 0.0) {
+        let c = min_human_distance(e) - params.robot_radius;
+        let intrusion = max(params.reward_personal_space_distance - c, 0.0);
+        r += params.reward_personal_space_weight * intrusion;
+    }
+    if (params.reward_obstacle_weight != 0.0) {
+        let c = obstacle_distances(e).x - params.robot_radius;
+        let intrusion = max(params.reward_obstacle_distance - c, 0.0);
+        r += params.reward_obstacle_weight * intrusion;
+    }
+    if (params.reward_stalled_weight != 0.0 && speed(sf[C_ROBOT_VX + e], sf[C_ROBOT_VY + e]) == 0.0) {
+        r += params.reward_stalled_weight;
+    }
+    if (params.reward_acceleration_weight != 0.0) {
+        let a = command_acceleration(e);
+        r += params.reward_acceleration_weight * speed(a.x, a.y);
+    }
+    return r;
+}
+
+// The reward of a non-terminal step; updates the reward memory.
+fn step_reward(e: u32) -> f32 {
+    let dx = sf[C_GOAL_X + e] - sf[C_ROBOT_X + e];
+    let dy = sf[C_GOAL_Y + e] - sf[C_ROBOT_Y + e];
+    let d = sqrt(dx * dx + dy * dy);
+    var r_dist = 0.0;
+    if (su[C_R_HAS_PREV + e] != 0u) {
+        r_dist = -(params.reward_distance_scale * (d - sf[C_R_PREV_DIST + e]));
+    }
+    let d_min = min_predicted_clearance(e);
+    var r_disc = 0.0;
+    if (d_min < params.reward_discomfort_distance) {
+        r_disc = (d_min - params.reward_discomfort_distance) * params.reward_discomfort_factor * params.dt;
+    }
+    sf[C_R_PREV_DIST + e] = d;
+    su[C_R_HAS_PREV + e] = 1u;
+    sf[C_R_DISTANCE + e] = r_dist;
+    sf[C_R_DISCOMFORT_DSRNN + e] = r_disc;
+    sf[C_R_DISCOMFORT_SNGNN + e] = 0.0;
+    sf[C_R_ALIVE + e] = params.reward_alive;
+    return with_extra_terms(e, r_disc + r_dist + params.reward_alive);
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = gid.x;
+    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+        return;
+    }
+    let row = CO_INFO + e * SO_INFO;
+    var r: f32;
+    if (outf[row + INFO_OUT_OF_MAP] != 0.0) {
+        r = params.reward_out_of_map;
+    } else if (outf[row + INFO_SUCCESS] != 0.0) {
+        r = params.reward_reach;
+    } else if (outf[row + INFO_COLLISION] != 0.0) {
+        r = params.reward_collision;
+    } else if (outf[row + INFO_TIMEOUT] != 0.0) {
+        r = params.reward_timeout;
+    } else {
+        r = step_reward(e);
+    }
+    outf[CO_REWARD + e] = r;
+    outf[row + INFO_DISCOMFORT_SNGNN] = sf[C_R_DISCOMFORT_SNGNN + e];
+    outf[row + INFO_DISCOMFORT_DSRNN] = sf[C_R_DISCOMFORT_DSRNN + e];
+    outf[row + INFO_DISTANCE_REWARD] = sf[C_R_DISTANCE + e];
+    outf[row + INFO_ALIVE_REWARD] = sf[C_R_ALIVE + e];
+    outf[row + INFO_SNGNN_REWARD] = sf[C_R_SNGNN + e];
+}
