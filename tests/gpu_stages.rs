@@ -316,6 +316,38 @@ fn reward() {
     check_parity("reward", c, 256, 20, Some(scatter_for_reward));
 }
 
+/// As for `reward`, plus a random reward, episodes ending for a third of the robots, and shadow
+/// robots arrived at random ticks: every metric and the episode statistics of `metrics`.
+fn scatter_for_metrics(s: &mut BatchState, o: &mut Outputs, p: &StepParams, rng: &mut RngStream) {
+    scatter_for_reward(s, o, p, rng);
+    for e in 0..s.n_envs {
+        o.reward[e] = uniform(rng, -1.0, 1.0);
+        s.done[e] = u32::from(rng.next_f32() < 0.3);
+        s.shadow_reached[e] = u32::from(rng.next_f32() < 0.5);
+        s.shadow_reach_tick[e] = 1 + rng.next_u32() % s.tick[e];
+        s.shadow_path_length[e] = uniform(rng, 0.0, 20.0);
+        s.m_path_length[e] = uniform(rng, 0.0, 20.0);
+        s.robot_vy[e] = if p.holonomic != 0 {
+            uniform(rng, -0.1, 0.1)
+        } else {
+            0.0
+        };
+    }
+}
+
+/// Contract: `metrics`: the info metrics, their running accumulators, and the statistics of the
+/// episodes that end (time to collision, obstacle distances, STL/SPL included).
+#[test]
+fn metrics() {
+    for name in ["exp1", "exp2", "exp3", "lroom_mixed"] {
+        check_parity("metrics", config(name), 256, 20, Some(scatter_for_metrics));
+    }
+    let mut c = config("exp2");
+    c.robot.kinematics = Kinematics::Holonomic;
+    c.episode.time_step = 0.3;
+    check_parity("metrics", c, 256, 20, Some(scatter_for_metrics));
+}
+
 /// The state and the outputs survive the trip to the device and back bit for bit, every column.
 #[test]
 fn state_round_trip() {

@@ -35,10 +35,6 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/common/world.wgsl"),
     ),
     (
-        "common/orca.wgsl",
-        include_str!("../../shaders/common/orca.wgsl"),
-    ),
-    (
         "robot_motion.wgsl",
         include_str!("../../shaders/robot_motion.wgsl"),
     ),
@@ -51,6 +47,7 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/termination.wgsl"),
     ),
     ("reward.wgsl", include_str!("../../shaders/reward.wgsl")),
+    ("metrics.wgsl", include_str!("../../shaders/metrics.wgsl")),
 ];
 
 /// Invocations per workgroup of the stage shaders (one environment each).
