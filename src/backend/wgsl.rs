@@ -48,6 +48,10 @@ pub const FILES: &[(&str, &str)] = &[
     ),
     ("reward.wgsl", include_str!("../../shaders/reward.wgsl")),
     ("metrics.wgsl", include_str!("../../shaders/metrics.wgsl")),
+    (
+        "group_motion.wgsl",
+        include_str!("../../shaders/group_motion.wgsl"),
+    ),
 ];
 
 /// Invocations per workgroup of the stage shaders (one environment each).

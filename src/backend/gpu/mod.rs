@@ -23,7 +23,13 @@ use crate::params::StepParams;
 use crate::state::BatchState;
 
 /// The stages that have a shader so far, in [`crate::pipeline::STAGES`] order.
-pub const STAGES_WITH_SHADERS: &[&str] = &["robot_motion", "termination", "reward", "metrics"];
+pub const STAGES_WITH_SHADERS: &[&str] = &[
+    "robot_motion",
+    "group_motion",
+    "termination",
+    "reward",
+    "metrics",
+];
 
 /// A packed table on the device: every f32 column in one storage buffer, every u32 column in
 /// another, and the host copies they are packed from and read back into.
