@@ -361,6 +361,31 @@ fn group_motion() {
     check_parity("group_motion", c, 256, 30, None);
 }
 
+/// Humans scattered over the room (and into its objects), half of them walking: every kind of
+/// contact `contacts` resolves.
+fn scatter_humans(s: &mut BatchState, _: &mut Outputs, _: &StepParams, rng: &mut RngStream) {
+    for e in 0..s.n_envs {
+        let (hx, hy) = (0.5 * s.map_x[e], 0.5 * s.map_y[e]);
+        let hb = e * s.strides.humans;
+        for i in hb..hb + s.n_humans[e] as usize {
+            s.h_x[i] = uniform(rng, -hx, hx);
+            s.h_y[i] = uniform(rng, -hy, hy);
+        }
+    }
+}
+
+/// Contract: `contacts`: humans pushed out of plants, walls (mirror images), tables and free
+/// laptops; static humans never moved.
+#[test]
+fn contacts() {
+    for name in ["exp1", "exp2", "exp3", "lroom_mixed", "corridor_mixed"] {
+        check_parity("contacts", config(name), 256, 10, Some(scatter_humans));
+    }
+    let mut c = config("exp2");
+    c.episode.time_step = 0.3;
+    check_parity("contacts", c, 256, 10, Some(scatter_humans));
+}
+
 /// The state and the outputs survive the trip to the device and back bit for bit, every column.
 #[test]
 fn state_round_trip() {

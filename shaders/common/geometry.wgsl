@@ -68,3 +68,8 @@ fn geo_origin_segment_distance(ax: f32, ay: f32, ex: f32, ey: f32) -> f32 {
     let py = ay + t * ey;
     return sqrt(px * px + py * py);
 }
+
+// Circumradius: half the diagonal.
+fn geo_rect_circumradius(r: Rect) -> f32 {
+    return sqrt(r.hl * r.hl + r.hw * r.hw);
+}

@@ -52,6 +52,7 @@ pub const FILES: &[(&str, &str)] = &[
         "group_motion.wgsl",
         include_str!("../../shaders/group_motion.wgsl"),
     ),
+    ("contacts.wgsl", include_str!("../../shaders/contacts.wgsl")),
 ];
 
 /// Invocations per workgroup of the stage shaders (one environment each).

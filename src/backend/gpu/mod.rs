@@ -26,6 +26,7 @@ use crate::state::BatchState;
 pub const STAGES_WITH_SHADERS: &[&str] = &[
     "robot_motion",
     "group_motion",
+    "contacts",
     "termination",
     "reward",
     "metrics",

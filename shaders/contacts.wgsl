@@ -1,0 +1,99 @@
+// requires: common/world.wgsl
+//
+// Twin of src/systems/contacts.rs (stage `contacts`, spec 4.6): after all motion, a human that
+// touches a plant, wall, table or free laptop is pushed out by an MPE-style soft contact force: it
+// turns to the force direction, takes speed min(|F|·dt, max speed) and moves once more. Change
+// both files in the same commit.
+
+// Softness of the contact (m), MPE's `contact_margin`: the f32 of 1e-3.
+const CONTACT_MARGIN: f32 = 0x1.0624dep-10f;
+// Stiffness of the contact, MPE's `contact_force`.
+const CONTACT_STIFFNESS: f32 = 100.0;
+// `role::STATIC`.
+const ROLE_STATIC: u32 = 0u;
+// `state::NONE`.
+const NONE: u32 = 0xffffffffu;
+
+fn human_disc(i: u32) -> Disc {
+    return Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius);
+}
+
+// Apply the contact force for separation vector (dx, dy) and contact distance `reach` (m).
+fn push(i: u32, dx: f32, dy: f32, reach: f32) {
+    let dist = sqrt(dx * dx + dy * dy);
+    if (dist <= 0.0) {
+        return;
+    }
+    let penetration = CONTACT_MARGIN * math_softplus(-(dist - reach) / CONTACT_MARGIN);
+    let fx = CONTACT_STIFFNESS * dx / dist * penetration;
+    let fy = CONTACT_STIFFNESS * dy / dist * penetration;
+    let theta = math_atan2(fy, fx);
+    let speed = min(sqrt(fx * fx + fy * fy) * params.dt, params.human_max_speed);
+    let sc = math_sin_cos(theta);
+    sf[C_H_THETA + i] = theta;
+    sf[C_H_SPEED + i] = speed;
+    sf[C_H_VX + i] = speed * sc.y;
+    sf[C_H_VY + i] = speed * sc.x;
+    sf[C_H_X + i] += speed * params.dt * sc.y;
+    sf[C_H_Y + i] += speed * params.dt * sc.x;
+}
+
+fn push_from_rect(i: u32, rect: Rect) {
+    if (geo_disc_rect(human_disc(i), rect)) {
+        let dx = sf[C_H_X + i] - rect.x;
+        let dy = sf[C_H_Y + i] - rect.y;
+        push(i, dx, dy, params.human_radius + geo_rect_circumradius(rect));
+    }
+}
+
+// Human centre minus its mirror image across the wall face on the human's side.
+fn mirror_delta(wall: Rect, x: f32, y: f32) -> vec2<f32> {
+    let ly = geo_rect_to_local(wall, x, y).y;
+    var face = -wall.hw;
+    if (ly >= 0.0) {
+        face = wall.hw;
+    }
+    let across = 2.0 * (ly - face);
+    return vec2<f32>(-wall.s * across, wall.c * across);
+}
+
+fn push_out(e: u32, i: u32) {
+    let r = params.human_radius;
+    let pb = e * S_P_X;
+    for (var k = pb; k < pb + su[C_N_PLANTS + e]; k++) {
+        let plant = Disc(sf[C_P_X + k], sf[C_P_Y + k], params.plant_radius);
+        if (geo_disc_disc(human_disc(i), plant)) {
+            push(i, sf[C_H_X + i] - plant.x, sf[C_H_Y + i] - plant.y, r + plant.r);
+        }
+    }
+    for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
+        let wall = world_wall_rect(e, w);
+        if (geo_disc_rect(human_disc(i), wall)) {
+            let d = mirror_delta(wall, sf[C_H_X + i], sf[C_H_Y + i]);
+            push(i, d.x, d.y, 2.0 * r);
+        }
+    }
+    for (var t = 0u; t < su[C_N_TABLES + e]; t++) {
+        push_from_rect(i, world_table_rect(e, t));
+    }
+    let lb = e * S_L_X;
+    for (var l = 0u; l < su[C_N_LAPTOPS + e]; l++) {
+        if (su[C_L_USER + lb + l] == NONE) {
+            push_from_rect(i, world_laptop_rect(e, l));
+        }
+    }
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = gid.x;
+    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+        return;
+    }
+    let hb = e * S_H_X;
+    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
+        if (su[C_H_ROLE + i] != ROLE_STATIC) {
+            push_out(e, i);
+        }
+    }
+}
