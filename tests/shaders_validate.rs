@@ -109,7 +109,12 @@ fn validate_assembled(path: &str) -> Result<naga::Module, String> {
         socnav::EnvOptions::default(),
     )
     .expect("batch");
-    let prelude = wgsl::prelude(4, &env.state().columns(), &env.outputs().columns());
+    let prelude = wgsl::prelude(
+        4,
+        &env.state().columns(),
+        &env.outputs().columns(),
+        &env.layout(),
+    );
     let src = wgsl::assemble(path, &prelude)?;
     validate_source(&src, &format!("{path} (assembled)"))
 }

@@ -6,6 +6,8 @@
     reason = "each test crate uses a different part of this module"
 )]
 
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod scene;
 
 use std::alloc::{GlobalAlloc, Layout, System};

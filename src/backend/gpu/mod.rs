@@ -189,7 +189,12 @@ impl GpuStages {
                 bind_group_layouts: &[Some(&layout)],
                 immediate_size: 0,
             });
-        let prelude = wgsl::prelude(n_envs, &state.columns(), &outputs.columns());
+        let prelude = wgsl::prelude(
+            n_envs,
+            &state.columns(),
+            &outputs.columns(),
+            &outputs.strides.layout,
+        );
         let mut pipelines = Vec::new();
         for &stage in stages {
             if !STAGES_WITH_SHADERS.contains(&stage) {
