@@ -113,7 +113,7 @@ fn validate_assembled(path: &str) -> Result<naga::Module, String> {
         4,
         &env.state().columns(),
         &env.outputs().columns(),
-        &env.layout(),
+        env.layout(),
     );
     let src = wgsl::assemble(path, &prelude)?;
     validate_source(&src, &format!("{path} (assembled)"))
