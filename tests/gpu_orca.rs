@@ -21,31 +21,17 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io::Read;
 use std::path::PathBuf;
-use std::sync::OnceLock;
 
-use socnav::backend::gpu::{AdapterPolicy, GpuDevice};
+mod common;
+
+use common::gpu::device;
+use socnav::backend::gpu::GpuDevice;
 use socnav::backend::wgsl;
 use socnav::orca::{
     ObstacleScratch, ObstacleSet, OrcaAgent, OrcaNeighbor, OrcaScratch, agent_neighbors,
     compute_new_velocity, process_obstacles,
 };
 use socnav::rng::RngStream;
-
-/// The shared device, or `None` (after saying why) when there is none and none is required.
-fn device() -> Option<GpuDevice> {
-    static DEVICE: OnceLock<Result<GpuDevice, String>> = OnceLock::new();
-    let dev = DEVICE.get_or_init(|| GpuDevice::open(AdapterPolicy::Any).map_err(|e| e.to_string()));
-    match dev {
-        Ok(d) => Some(d.clone()),
-        Err(e) if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") => {
-            panic!("REQUIRE_GPU=1 but no GPU adapter: {e}")
-        }
-        Err(e) => {
-            eprintln!("SKIPPED: no GPU adapter ({e})");
-            None
-        }
-    }
-}
 
 // ---------------------------------------------------------------------------------------------
 // The test kernel
