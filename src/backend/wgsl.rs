@@ -53,6 +53,10 @@ pub const FILES: &[(&str, &str)] = &[
     ("reward.wgsl", include_str!("../../shaders/reward.wgsl")),
     ("metrics.wgsl", include_str!("../../shaders/metrics.wgsl")),
     (
+        "observation.wgsl",
+        include_str!("../../shaders/observation.wgsl"),
+    ),
+    (
         "group_motion.wgsl",
         include_str!("../../shaders/group_motion.wgsl"),
     ),

@@ -30,6 +30,7 @@ pub const STAGES_WITH_SHADERS: &[&str] = &[
     "termination",
     "reward",
     "metrics",
+    "observation",
 ];
 
 /// A packed table on the device: every f32 column in one storage buffer, every u32 column in

@@ -1,0 +1,512 @@
+// requires: common/rng.wgsl
+//
+// Twin of src/systems/observation/ (stage `observation`, spec 5 and 9.1): the robot record, one
+// 14-float record per entity (walls split into segments), the per-type counts, the interaction
+// pairs, and the humans' relative-heading cache; with every option of the observation wrappers:
+// the world frame, the robot's command in its record, a limited field of view and range (visible
+// records compacted to the front of each block, pairs indexing them), and Gaussian noise from the
+// counter-based stream of kind 7. One environment per invocation. Change both in the same commit.
+
+// RNG stream kind of the observation noise (Rust `observation::STREAM_OBS_NOISE`).
+const STREAM_OBS_NOISE: u32 = 7u;
+// `params::NOISE_ROBOT`.
+const NOISE_ROBOT: u32 = 5u;
+// `spec::one_hot`.
+const ONE_HOT_ROBOT: u32 = 0u;
+const ONE_HOT_HUMAN: u32 = 1u;
+const ONE_HOT_TABLE: u32 = 2u;
+const ONE_HOT_LAPTOP: u32 = 3u;
+const ONE_HOT_PLANT: u32 = 4u;
+const ONE_HOT_WALL: u32 = 5u;
+
+// Rust `Frame`: the robot pose and velocities an observation is relative to.
+struct ObsFrame {
+    x: f32,
+    y: f32,
+    theta: f32,
+    sin: f32,
+    cos: f32,
+    vx: f32,
+    vy: f32,
+    // Heading subtracted from entity headings: the robot's, or 0 in the world frame.
+    ref_theta: f32,
+    // Indices 11 and 12 of non-human records.
+    object_v: f32,
+    object_w: f32,
+    world: bool,
+    partial: bool,
+}
+
+var<private> fr: ObsFrame;
+
+fn obs_frame(e: u32) -> ObsFrame {
+    let theta = sf[C_ROBOT_THETA + e];
+    let sc = math_sin_cos(theta);
+    let cx = sf[C_ROBOT_VX + e];
+    let cy = sf[C_ROBOT_VY + e];
+    let world = params.obs_world_frame != 0u;
+    var ref_theta = theta;
+    var object_v = -sqrt(cx * cx + cy * cy);
+    var object_w = -sf[C_ROBOT_W + e];
+    if (world) {
+        ref_theta = 0.0;
+        object_v = 0.0;
+        object_w = 0.0;
+    }
+    return ObsFrame(
+        sf[C_ROBOT_X + e], sf[C_ROBOT_Y + e], theta, sc.x, sc.y,
+        sf[C_ROBOT_WVX + e], sf[C_ROBOT_WVY + e],
+        ref_theta, object_v, object_w, world, params.obs_partial != 0u,
+    );
+}
+
+// World point -> robot frame.
+fn obs_local(x: f32, y: f32) -> vec2<f32> {
+    let dx = x - fr.x;
+    let dy = y - fr.y;
+    return vec2<f32>(fr.cos * dx + fr.sin * dy, fr.cos * dy - fr.sin * dx);
+}
+
+// `Sensor::within`: bearing in [-fov/2, fov/2] and distance within the range, bounds inclusive.
+fn obs_within(l: vec2<f32>) -> bool {
+    let half_fov = 0.5 * params.obs_fov;
+    let bearing = math_atan2(l.y, l.x);
+    return bearing >= -half_fov && bearing <= half_fov
+        && sqrt(l.x * l.x + l.y * l.y) <= params.obs_range;
+}
+
+fn obs_sees(l: vec2<f32>) -> bool {
+    return !fr.partial || obs_within(l);
+}
+
+fn obs_sees_point(x: f32, y: f32) -> bool {
+    if (!fr.partial) {
+        return true;
+    }
+    return obs_within(obs_local(x, y));
+}
+
+// sin_cos(theta - ref_theta). In the world frame the Rust subtracts 0.0 (exact: theta); written
+// with the frame's heading only in the robot frame.
+fn obs_rel_sin_cos(theta: f32) -> vec2<f32> {
+    if (fr.world) {
+        return math_sin_cos(theta);
+    }
+    return math_sin_cos(theta - fr.ref_theta);
+}
+
+// Plants: sin_cos(0.0 - ref_theta), spelled as the exact value of the Rust difference (+0 for
+// r = ±0, else -r) so that no rewrite of `0.0 - r` to `-r` (which gives -0 at r = +0) can
+// change it. (Mesa 22.3.6 was seen not to make that rewrite; the guard costs nothing.)
+fn obs_plant_sin_cos() -> vec2<f32> {
+    if (fr.world || fr.ref_theta == 0.0) {
+        return math_sin_cos(0.0);
+    }
+    return math_sin_cos(-fr.ref_theta);
+}
+
+fn obs_robot_record(e: u32, row: u32) {
+    for (var k = 0u; k < 6u; k++) {
+        outf[row + k] = 0.0;
+    }
+    outf[row + ONE_HOT_ROBOT] = 1.0;
+    if (fr.world) {
+        outf[row + 6u] = sf[C_GOAL_X + e];
+        outf[row + 7u] = sf[C_GOAL_Y + e];
+        outf[row + 8u] = fr.x;
+        outf[row + 9u] = fr.y;
+        outf[row + 10u] = fr.sin;
+        outf[row + 11u] = fr.cos;
+        outf[row + 12u] = sf[C_ROBOT_VX + e];
+        outf[row + 13u] = sf[C_ROBOT_VY + e];
+        outf[row + 14u] = sf[C_ROBOT_W + e];
+        outf[row + 15u] = params.robot_radius;
+        return;
+    }
+    let g = obs_local(sf[C_GOAL_X + e], sf[C_GOAL_Y + e]);
+    outf[row + 6u] = g.x;
+    outf[row + 7u] = g.y;
+    outf[row + 8u] = params.robot_radius;
+    if (params.obs_robot_velocity != 0u) {
+        outf[row + 9u] = sf[C_ROBOT_VX + e];
+        outf[row + 10u] = sf[C_ROBOT_VY + e];
+        outf[row + 11u] = sf[C_ROBOT_W + e];
+    }
+}
+
+// A non-human record at `at`.
+fn obs_object_record(at: u32, kind: u32, px: f32, py: f32, sc: vec2<f32>, radius: f32) {
+    for (var k = 0u; k < OBS_RECORD; k++) {
+        outf[at + k] = 0.0;
+    }
+    outf[at + kind] = 1.0;
+    outf[at + 6u] = px;
+    outf[at + 7u] = py;
+    outf[at + 8u] = sc.x;
+    outf[at + 9u] = sc.y;
+    outf[at + 10u] = radius;
+    outf[at + 11u] = fr.object_v;
+    outf[at + 12u] = fr.object_w;
+}
+
+// 1 if the robot centre lies within the gaze cone of the human at (hx, hy), heading cos hc, sin hs.
+fn obs_gaze(hx: f32, hy: f32, hc: f32, hs: f32) -> f32 {
+    let dx = fr.x - hx;
+    let dy = fr.y - hy;
+    let bearing = math_atan2(hc * dy - hs * dx, hc * dx + hs * dy);
+    let half = 0.5 * params.gaze_angle;
+    if (bearing >= -half && bearing <= half) {
+        return 1.0;
+    }
+    return 0.0;
+}
+
+fn obs_humans(e: u32, block: u32) -> u32 {
+    let hb = e * S_H_X;
+    var k = 0u;
+    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
+        let theta = sf[C_H_THETA + i];
+        let rel = theta - fr.theta;
+        let wrapped = math_wrap_angle(rel);
+        let prev = sf[C_H_PREV_REL_THETA + i];
+        sf[C_H_PREV_REL_THETA + i] = wrapped;
+        let x = sf[C_H_X + i];
+        let y = sf[C_H_Y + i];
+        let l = obs_local(x, y);
+        if (!obs_sees(l)) {
+            continue;
+        }
+        let at = block + k * OBS_RECORD;
+        k += 1u;
+        for (var j = 0u; j < OBS_RECORD; j++) {
+            outf[at + j] = 0.0;
+        }
+        outf[at + ONE_HOT_HUMAN] = 1.0;
+        let hsc = math_sin_cos(theta);
+        outf[at + 10u] = params.human_radius;
+        outf[at + 13u] = obs_gaze(x, y, hsc.y, hsc.x);
+        if (fr.world) {
+            outf[at + 6u] = x;
+            outf[at + 7u] = y;
+            outf[at + 8u] = hsc.x;
+            outf[at + 9u] = hsc.y;
+            outf[at + 11u] = sf[C_H_VX + i];
+            outf[at + 12u] = sf[C_H_VY + i];
+        } else {
+            let sc = math_sin_cos(rel);
+            let dvx = sf[C_H_VX + i] - fr.vx;
+            let dvy = sf[C_H_VY + i] - fr.vy;
+            outf[at + 6u] = l.x;
+            outf[at + 7u] = l.y;
+            outf[at + 8u] = sc.x;
+            outf[at + 9u] = sc.y;
+            outf[at + 11u] = sqrt(dvx * dvx + dvy * dvy);
+            outf[at + 12u] = math_wrap_angle(wrapped - prev) / params.dt;
+        }
+    }
+    return k;
+}
+
+// Half the diagonal of a `length` x `width` rectangle (m).
+fn obs_circumradius(length: f32, width: f32) -> f32 {
+    return sqrt(0.25 * length * length + 0.25 * width * width);
+}
+
+fn obs_laptops(e: u32, block: u32) -> u32 {
+    let radius = obs_circumradius(params.laptop_length, params.laptop_width);
+    let lb = e * S_L_X;
+    var k = 0u;
+    for (var i = lb; i < lb + su[C_N_LAPTOPS + e]; i++) {
+        let x = sf[C_L_X + i];
+        let y = sf[C_L_Y + i];
+        let l = obs_local(x, y);
+        if (!obs_sees(l)) {
+            continue;
+        }
+        var p = l;
+        if (fr.world) {
+            p = vec2<f32>(x, y);
+        }
+        let sc = obs_rel_sin_cos(sf[C_L_THETA + i]);
+        obs_object_record(block + k * OBS_RECORD, ONE_HOT_LAPTOP, p.x, p.y, sc, radius);
+        k += 1u;
+    }
+    return k;
+}
+
+fn obs_tables(e: u32, block: u32) -> u32 {
+    let radius = obs_circumradius(params.table_length, params.table_width);
+    let tb = e * S_T_X;
+    var k = 0u;
+    for (var i = tb; i < tb + su[C_N_TABLES + e]; i++) {
+        let x = sf[C_T_X + i];
+        let y = sf[C_T_Y + i];
+        let l = obs_local(x, y);
+        if (!obs_sees(l)) {
+            continue;
+        }
+        var p = l;
+        if (fr.world) {
+            p = vec2<f32>(x, y);
+        }
+        let sc = obs_rel_sin_cos(sf[C_T_THETA + i]);
+        obs_object_record(block + k * OBS_RECORD, ONE_HOT_TABLE, p.x, p.y, sc, radius);
+        k += 1u;
+    }
+    return k;
+}
+
+fn obs_plants(e: u32, block: u32) -> u32 {
+    let pb = e * S_P_X;
+    var k = 0u;
+    for (var i = pb; i < pb + su[C_N_PLANTS + e]; i++) {
+        let x = sf[C_P_X + i];
+        let y = sf[C_P_Y + i];
+        let l = obs_local(x, y);
+        if (!obs_sees(l)) {
+            continue;
+        }
+        var p = l;
+        if (fr.world) {
+            p = vec2<f32>(x, y);
+        }
+        let sc = obs_plant_sin_cos();
+        obs_object_record(block + k * OBS_RECORD, ONE_HOT_PLANT, p.x, p.y, sc, params.plant_radius);
+        k += 1u;
+    }
+    return k;
+}
+
+// Rust `segment`: the segment centred `along` metres from the wall's left end, as record k.
+// `local` and `written` are the left end and unit direction (x, y, dx, dy).
+fn obs_segment(
+    block: u32, k: u32, local: vec4<f32>, written: vec4<f32>, along: f32, sc: vec2<f32>,
+    radius: f32,
+) -> u32 {
+    if (fr.partial) {
+        if (!obs_within(vec2<f32>(local.x + along * local.z, local.y + along * local.w))) {
+            return 0u;
+        }
+    }
+    obs_object_record(
+        block + k * OBS_RECORD, ONE_HOT_WALL, written.x + along * written.z,
+        written.y + along * written.w, sc, radius,
+    );
+    return 1u;
+}
+
+fn obs_walls(e: u32, block: u32) -> u32 {
+    let wb = e * S_W_X;
+    let step = params.wall_segment_size;
+    var k = 0u;
+    for (var w = wb; w < wb + su[C_N_WALLS + e]; w++) {
+        let length = sf[C_W_LENGTH + w];
+        let wc = sf[C_W_COS + w];
+        let ws = sf[C_W_SIN + w];
+        let x0 = sf[C_W_X + w] - 0.5 * length * wc;
+        let y0 = sf[C_W_Y + w] - 0.5 * length * ws;
+        let l = obs_local(x0, y0);
+        let dx = fr.cos * wc + fr.sin * ws;
+        let dy = fr.cos * ws - fr.sin * wc;
+        let local = vec4<f32>(l.x, l.y, dx, dy);
+        var written = local;
+        if (fr.world) {
+            written = vec4<f32>(x0, y0, wc, ws);
+        }
+        let sc = obs_rel_sin_cos(sf[C_W_THETA + w]);
+        // `scenario::layout::segments`.
+        let full_f = floor(length / step);
+        let full = u32(full_f);
+        let rest = length - full_f * step;
+        for (var j = 0u; j < full; j++) {
+            k += obs_segment(block, k, local, written, (f32(j) + 0.5) * step, sc, 0.5 * step);
+        }
+        if (rest > 0.0) {
+            k += obs_segment(block, k, local, written, f32(full) * step + 0.5 * rest, sc, 0.5 * rest);
+        }
+    }
+    return k;
+}
+
+// Rust `noise::perturb` of `n` values from row index `first`.
+fn obs_perturb(row: u32, first: u32, n: u32, base: u32, mean: f32, std_dev: f32) {
+    for (var i = first; i < first + n; i++) {
+        var rng = RngStream(base, 2u * i);
+        outf[row + i] = outf[row + i] + rng_gauss(&rng, mean, std_dev);
+    }
+}
+
+fn obs_offset(t: u32) -> u32 {
+    var v = OBS_OFFSET_WALLS;
+    switch (t) {
+        case 0u: { v = OBS_OFFSET_HUMANS; }
+        case 1u: { v = OBS_OFFSET_LAPTOPS; }
+        case 2u: { v = OBS_OFFSET_TABLES; }
+        case 3u: { v = OBS_OFFSET_PLANTS; }
+        default: {}
+    }
+    return v;
+}
+
+fn obs_capacity(t: u32) -> u32 {
+    var v = OBS_CAPACITY_WALLS;
+    switch (t) {
+        case 0u: { v = OBS_CAPACITY_HUMANS; }
+        case 1u: { v = OBS_CAPACITY_LAPTOPS; }
+        case 2u: { v = OBS_CAPACITY_TABLES; }
+        case 3u: { v = OBS_CAPACITY_PLANTS; }
+        default: {}
+    }
+    return v;
+}
+
+// Rust `noise::add_noise`.
+fn obs_noise(e: u32, row: u32, counts_in: array<u32, 5>) {
+    var counts = counts_in;
+    let stream = rng_new(
+        params.seed_lo,
+        params.seed_hi,
+        e,
+        su[C_EPISODE + e],
+        rng_stream_id(STREAM_OBS_NOISE, su[C_TICK + e]),
+    );
+    let base = stream.base;
+    let rmean = params.obs_noise[2u * NOISE_ROBOT];
+    let rstd = params.obs_noise[2u * NOISE_ROBOT + 1u];
+    if (rmean != 0.0 || rstd != 0.0) {
+        obs_perturb(row, 6u, 2u, base, rmean, rstd);
+    }
+    for (var t = 0u; t < 5u; t++) {
+        let mean = params.obs_noise[2u * t];
+        let std_dev = params.obs_noise[2u * t + 1u];
+        if (mean == 0.0 && std_dev == 0.0) {
+            continue;
+        }
+        var records = counts[t];
+        if (params.obs_padded != 0u) {
+            records = obs_capacity(t);
+        }
+        let first = obs_offset(t);
+        for (var k = 0u; k < records; k++) {
+            obs_perturb(row, first + k * OBS_RECORD + 6u, OBS_RECORD - 6u, base, mean, std_dev);
+        }
+    }
+}
+
+// How many of the human slots [lo, hi) of environment e the sensor sees.
+fn obs_humans_seen(e: u32, lo: u32, hi: u32) -> u32 {
+    var n = 0u;
+    for (var k = lo; k < hi; k++) {
+        let i = e * S_H_X + k;
+        if (obs_sees_point(sf[C_H_X + i], sf[C_H_Y + i])) {
+            n += 1u;
+        }
+    }
+    return n;
+}
+
+fn obs_laptops_seen(e: u32, to: u32) -> u32 {
+    var n = 0u;
+    for (var k = 0u; k < to; k++) {
+        let i = e * S_L_X + k;
+        if (obs_sees_point(sf[C_L_X + i], sf[C_L_Y + i])) {
+            n += 1u;
+        }
+    }
+    return n;
+}
+
+fn obs_human_human(e: u32) -> u32 {
+    let out = CO_HH_PAIRS + e * SO_HH_PAIRS;
+    let gb = e * S_G_FIRST;
+    var n = 0u;
+    var slot = 0u;
+    var seen = 0u;
+    for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
+        let first = su[C_G_FIRST + g];
+        let end = first + su[C_G_COUNT + g];
+        var start = first;
+        var stop = end;
+        if (fr.partial) {
+            start = seen + obs_humans_seen(e, slot, first);
+            seen = start + obs_humans_seen(e, first, end);
+            stop = seen;
+        }
+        slot = end;
+        for (var a = start; a < stop; a++) {
+            for (var b = a + 1u; b < stop; b++) {
+                outu[out + 2u * n] = a;
+                outu[out + 2u * n + 1u] = b;
+                outu[out + 2u * n + 2u] = b;
+                outu[out + 2u * n + 3u] = a;
+                n += 2u;
+            }
+        }
+    }
+    for (var k = 2u * n; k < SO_HH_PAIRS; k++) {
+        outu[out + k] = 0u;
+    }
+    return n;
+}
+
+fn obs_human_laptop(e: u32) -> u32 {
+    let out = CO_HL_PAIRS + e * SO_HL_PAIRS;
+    let ub = e * S_LU_HUMAN;
+    var n = 0u;
+    for (var u = ub; u < ub + su[C_N_LAPTOP_USERS + e]; u++) {
+        var h = su[C_LU_HUMAN + u];
+        var l = su[C_LU_LAPTOP + u];
+        if (fr.partial) {
+            let hi = e * S_H_X + h;
+            let li = e * S_L_X + l;
+            if (!obs_sees_point(sf[C_H_X + hi], sf[C_H_Y + hi])
+                || !obs_sees_point(sf[C_L_X + li], sf[C_L_Y + li])) {
+                continue;
+            }
+            h = obs_humans_seen(e, 0u, h);
+            l = obs_laptops_seen(e, l);
+        }
+        outu[out + 2u * n] = h;
+        outu[out + 2u * n + 1u] = l;
+        n += 1u;
+    }
+    for (var k = 2u * n; k < SO_HL_PAIRS; k++) {
+        outu[out + k] = 0u;
+    }
+    return n;
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = gid.x;
+    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+        return;
+    }
+    fr = obs_frame(e);
+    let row = CO_OBS + e * SO_OBS;
+    obs_robot_record(e, row);
+    var counts = array<u32, 5>(0u, 0u, 0u, 0u, 0u);
+    counts[0] = obs_humans(e, row + OBS_OFFSET_HUMANS);
+    counts[1] = obs_laptops(e, row + OBS_OFFSET_LAPTOPS);
+    counts[2] = obs_tables(e, row + OBS_OFFSET_TABLES);
+    counts[3] = obs_plants(e, row + OBS_OFFSET_PLANTS);
+    if (OBS_CAPACITY_WALLS > 0u) {
+        counts[4] = obs_walls(e, row + OBS_OFFSET_WALLS);
+    }
+    for (var t = 0u; t < 5u; t++) {
+        let first = obs_offset(t) + counts[t] * OBS_RECORD;
+        let last = obs_offset(t) + obs_capacity(t) * OBS_RECORD;
+        for (var i = first; i < last; i++) {
+            outf[row + i] = 0.0;
+        }
+    }
+    if (params.obs_noise_on != 0u) {
+        obs_noise(e, row, counts);
+    }
+    for (var t = 0u; t < 5u; t++) {
+        outu[CO_OBS_COUNT + e * SO_OBS_COUNT + t] = counts[t];
+    }
+    let pc = CO_PAIR_COUNT + e * SO_PAIR_COUNT;
+    outu[pc] = obs_human_human(e);
+    outu[pc + 1u] = obs_human_laptop(e);
+}
