@@ -43,6 +43,18 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/robot_motion.wgsl"),
     ),
     (
+        "common/orca_world.wgsl",
+        include_str!("../../shaders/common/orca_world.wgsl"),
+    ),
+    (
+        "shadow_robot.wgsl",
+        include_str!("../../shaders/shadow_robot.wgsl"),
+    ),
+    (
+        "group_velocities.wgsl",
+        include_str!("../../shaders/group_velocities.wgsl"),
+    ),
+    (
         "common/measures.wgsl",
         include_str!("../../shaders/common/measures.wgsl"),
     ),

@@ -3,14 +3,16 @@
 //!
 //! What exists so far:
 //! - [`device`]: finding and opening an adapter under the policy of DESIGN.md section 8.
-//! - [`GpuStages`]: the state packed into two storage buffers (every f32 column back to back,
-//!   every u32 column likewise, in declaration order; offsets and strides reach the shaders as
-//!   generated constants, [`crate::backend::wgsl::prelude`]), the step parameters and the actions,
-//!   and one compute pipeline per stage shader, built once. It runs single stages, which is what
-//!   the CPU/GPU parity tests of each stage need (`tests/gpu_stages.rs`).
+//! - [`GpuStages`]: the state and the outputs each packed into two storage buffers (every f32
+//!   column back to back, every u32 column likewise, in declaration order; offsets and strides
+//!   reach the shaders as generated constants, [`crate::backend::wgsl::prelude`]), the step
+//!   parameters and the actions, and one compute pipeline per stage shader, built once. It runs
+//!   single stages, which is what the CPU/GPU parity tests of each stage need
+//!   (`tests/gpu_stages.rs`, `tests/gpu_observation.rs`).
 //!
 //! Still to build before `--backend gpu` can step a batch: the shaders of the other stages, the
-//! output buffers and their per-step readback, and resets off the host's critical path.
+//! whole step in one submit with one readback of the outputs, and resets off the host's critical
+//! path (the plan is in docs/ARCHITECTURE.md).
 
 pub mod device;
 
@@ -25,6 +27,8 @@ use crate::state::BatchState;
 /// The stages that have a shader so far, in [`crate::pipeline::STAGES`] order.
 pub const STAGES_WITH_SHADERS: &[&str] = &[
     "robot_motion",
+    "shadow_robot",
+    "group_velocities",
     "group_motion",
     "contacts",
     "termination",

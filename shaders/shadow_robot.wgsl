@@ -1,0 +1,101 @@
+// requires: common/orca_world.wgsl
+//
+// Twin of `shadow_robot` and `command_from_velocity` in src/systems/shadow_robot.rs (stage
+// `shadow_robot`, spec 8.2): the reference robot behind STL and SPL drives to the robot's goal,
+// every step until it collides or arrives, by the ORCA velocity of a fresh simulator that holds
+// every lone human and moving group (it sees everything: `view: None`), converted to the robot's
+// kinematics, then integrated like the robot (`integrate` is a copy of shaders/robot_motion.wgsl's:
+// a stage file cannot require another). Its outcome (`shadow_outcome`) is in termination.wgsl.
+// Same operations in the same order as the Rust file; change both in the same commit.
+//
+// If the ORCA lists overflow (common/orca_world.wgsl), the shadow pose and command become NaN.
+
+struct Moved {
+    x: f32,
+    y: f32,
+    theta: f32,
+    vx: f32,
+    vy: f32,
+}
+
+// Twin of robot_motion::integrate (a copy of shaders/robot_motion.wgsl's `integrate`).
+fn integrate(dt: f32, x: f32, y: f32, theta0: f32, vx: f32, vy: f32, w: f32) -> Moved {
+    let theta = math_wrap_angle(theta0 + w * dt);
+    let sc = math_sin_cos(theta);
+    let s = sc.x;
+    let c = sc.y;
+    if (vy == 0.0) {
+        return Moved(x + vx * c * dt, y + vx * s * dt, theta, vx * c, vx * s);
+    }
+    let sc2 = math_sin_cos(theta + MATH_FRAC_PI_2);
+    let s2 = sc2.x;
+    let c2 = sc2.y;
+    return Moved(
+        x + vx * c * dt + vy * c2 * dt,
+        y + vx * s * dt + vy * s2 * dt,
+        theta,
+        vx * c + vy * c2,
+        vx * s + vy * s2,
+    );
+}
+
+// A world-frame velocity (m/s) as a robot command (v_x, v_y, ω): diff-drive drives at |v| and
+// turns by the (unwrapped) heading error per step; holonomic drives v rotated into the robot
+// frame. Each component is clipped to its maximum.
+fn command_from_velocity(theta: f32, vx: f32, vy: f32) -> vec3<f32> {
+    let v = params.robot_max_speed;
+    let wmax = params.robot_max_rotation;
+    let w = clamp((math_atan2(vy, vx) - theta) / params.dt, -wmax, wmax);
+    if (params.holonomic != 0u) {
+        let sc = math_sin_cos(theta);
+        let sn = sc.x;
+        let c = sc.y;
+        let fx = c * vx + sn * vy;
+        let fy = c * vy - sn * vx;
+        return vec3<f32>(clamp(fx, -v, v), clamp(fy, -v, v), w);
+    }
+    return vec3<f32>(clamp(sqrt(vx * vx + vy * vy), -v, v), 0.0, w);
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = gid.x;
+    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+        return;
+    }
+    if (su[C_SHADOW_COLLIDED + e] != 0u || su[C_SHADOW_REACHED + e] != 0u) {
+        return;
+    }
+    let x = sf[C_SHADOW_X + e];
+    let y = sf[C_SHADOW_Y + e];
+    let theta = sf[C_SHADOW_THETA + e];
+    let pref = orca_world_preferred(x, y, sf[C_GOAL_X + e], sf[C_GOAL_Y + e], params.robot_max_speed);
+    let agent = orca_world_agent(e, vec2<f32>(x, y), vec2<f32>(0.0, 0.0), pref, params.human_radius);
+    // The shadow robot sees everything (0.1.1 adds every entity to its simulator).
+    let others = OrcaWorldOthers(ORCA_WORLD_NONE, ORCA_WORLD_NONE, false);
+    let r = orca_world_velocity(e, agent, others);
+    if (r.overflow != 0u) {
+        // Not the CPU's result: make it loud.
+        let nan = math_nan();
+        sf[C_SHADOW_X + e] = nan;
+        sf[C_SHADOW_Y + e] = nan;
+        sf[C_SHADOW_THETA + e] = nan;
+        sf[C_SHADOW_VX + e] = nan;
+        sf[C_SHADOW_VY + e] = nan;
+        sf[C_SHADOW_W + e] = nan;
+        sf[C_SHADOW_PATH_LENGTH + e] = nan;
+        return;
+    }
+    let cmd = command_from_velocity(theta, r.velocity.x, r.velocity.y);
+    let vx = cmd.x;
+    let vy = cmd.y;
+    let w = cmd.z;
+    let m = integrate(params.dt, x, y, theta, vx, vy, w);
+    sf[C_SHADOW_X + e] = m.x;
+    sf[C_SHADOW_Y + e] = m.y;
+    sf[C_SHADOW_THETA + e] = m.theta;
+    sf[C_SHADOW_VX + e] = vx;
+    sf[C_SHADOW_VY + e] = vy;
+    sf[C_SHADOW_W + e] = w;
+    sf[C_SHADOW_PATH_LENGTH + e] += sqrt(vx * vx + vy * vy) * params.dt;
+}
