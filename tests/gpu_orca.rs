@@ -19,12 +19,11 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::io::Read;
-use std::path::PathBuf;
 
 mod common;
 
 use common::gpu::device;
+use common::reference::Table;
 use socnav::backend::gpu::GpuDevice;
 use socnav::backend::wgsl;
 use socnav::orca::{
@@ -572,90 +571,25 @@ fn check(kernel: &Kernel, name: &str, batch: &Batch) {
 // Reference scenes (RVO2 2.0.3 data, as tests/orca_reference.rs reads them)
 // ---------------------------------------------------------------------------------------------
 
-fn ref_dir() -> PathBuf {
-    std::env::var_os("SOCNAV_REF_DIR").map_or_else(
-        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/ref/orca_sfm"),
-        PathBuf::from,
-    )
-}
-
-/// A CSV file as rows of named fields.
-struct Table {
-    header: Vec<String>,
-    rows: Vec<Vec<String>>,
-}
-
-impl Table {
-    fn load(name: &str) -> Self {
-        let path = ref_dir().join(name);
-        let file = std::fs::File::open(&path)
-            .unwrap_or_else(|e| panic!("cannot open {} ({e}); set SOCNAV_REF_DIR", path.display()));
-        let mut text = String::new();
-        if name.ends_with(".gz") {
-            flate2::read::GzDecoder::new(file).read_to_string(&mut text)
-        } else {
-            std::io::BufReader::new(file).read_to_string(&mut text)
-        }
-        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
-        let mut lines = text.lines().filter(|l| !l.is_empty());
-        let header = lines
-            .next()
-            .expect("empty CSV")
-            .split(',')
-            .map(str::to_owned)
-            .collect();
-        let rows = lines
-            .map(|l| l.split(',').map(str::to_owned).collect())
-            .collect();
-        Self { header, rows }
-    }
-
-    fn col(&self, name: &str) -> usize {
-        self.header
-            .iter()
-            .position(|h| h == name)
-            .unwrap_or_else(|| panic!("no column {name} in {:?}", self.header))
-    }
-
-    fn f32(&self, row: &[String], name: &str) -> f32 {
-        let c = &row[self.col(name)];
-        c.parse().unwrap_or_else(|e| panic!("{c}: {e}"))
-    }
-
-    fn usize(&self, row: &[String], name: &str) -> usize {
-        let c = &row[self.col(name)];
-        c.parse().unwrap_or_else(|e| panic!("{c}: {e}"))
-    }
-
-    /// Rows grouped by the integer key in column `name` (sorted by key, rows in file order).
-    fn group_by(&self, name: &str) -> BTreeMap<usize, Vec<&[String]>> {
-        let mut groups: BTreeMap<usize, Vec<&[String]>> = BTreeMap::new();
-        for r in &self.rows {
-            groups.entry(self.usize(r, name)).or_default().push(r);
-        }
-        groups
-    }
-
-    /// `(pos, vel, pref_vel)` per agent per step of a trajectory file.
-    fn states(&self) -> BTreeMap<usize, Vec<AgentState>> {
-        self.group_by("step")
-            .into_iter()
-            .map(|(step, rows)| {
-                let states = rows
-                    .iter()
-                    .map(|r| {
-                        let f = |n: &str| self.f32(r, n);
-                        (
-                            [f("px"), f("py")],
-                            [f("vx"), f("vy")],
-                            [f("pref_vx"), f("pref_vy")],
-                        )
-                    })
-                    .collect();
-                (step, states)
-            })
-            .collect()
-    }
+/// `(pos, vel, pref_vel)` per agent per step of a trajectory file.
+fn states(t: &Table) -> BTreeMap<usize, Vec<AgentState>> {
+    t.group_by("step")
+        .into_iter()
+        .map(|(step, rows)| {
+            let states = rows
+                .iter()
+                .map(|r| {
+                    let f = |n: &str| t.f32(r, n);
+                    (
+                        [f("px"), f("py")],
+                        [f("vx"), f("vy")],
+                        [f("pref_vx"), f("pref_vy")],
+                    )
+                })
+                .collect();
+            (step, states)
+        })
+        .collect()
 }
 
 /// The one-step cases: 2542 agents with random parameters, many among polygons.
@@ -762,7 +696,7 @@ fn add_trajectory(
     agent: fn([f32; 2], [f32; 2], [f32; 2]) -> OrcaAgent,
 ) {
     let set = obstacles(polygons);
-    for (step, states) in Table::load(name).states() {
+    for (step, states) in states(&Table::load(name)) {
         let agents: Vec<OrcaAgent> = states.iter().map(|&(p, v, pv)| agent(p, v, pv)).collect();
         batch.add(&format!("{name} step {step}"), &agents, &set, 0.25);
     }

@@ -8,92 +8,16 @@
 //! Data directory: `SOCNAV_REF_DIR`, or `../shared/ref/orca_sfm` next to the crate root.
 
 use std::collections::BTreeMap;
-use std::io::Read;
-use std::path::PathBuf;
 
+mod common;
+
+use common::reference::Table;
 use socnav::orca::{
     AgentKdTree, Neighbor, ObstacleScratch, ObstacleSet, ObstacleVerts, OrcaAgent, OrcaError,
     OrcaNeighbor, OrcaScratch, Scene, Simulator, Vec2, agent_neighbors, compute_new_velocity,
     compute_new_velocity_tree, compute_velocities, compute_velocities_batch, obstacle_neighbors,
     obstacle_neighbors_tree, obstacle_range_sq, process_obstacles,
 };
-
-// ---------------------------------------------------------------------------------------------
-// Small CSV helpers
-// ---------------------------------------------------------------------------------------------
-
-fn ref_dir() -> PathBuf {
-    std::env::var_os("SOCNAV_REF_DIR").map_or_else(
-        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/ref/orca_sfm"),
-        PathBuf::from,
-    )
-}
-
-/// A CSV file: header names and rows of string fields.
-struct Table {
-    header: Vec<String>,
-    rows: Vec<Vec<String>>,
-}
-
-impl Table {
-    fn load(name: &str) -> Self {
-        let path = ref_dir().join(name);
-        let mut text = String::new();
-        let file = std::fs::File::open(&path)
-            .unwrap_or_else(|e| panic!("cannot open {} ({e}); set SOCNAV_REF_DIR", path.display()));
-        if name.ends_with(".gz") {
-            flate2::read::GzDecoder::new(file).read_to_string(&mut text)
-        } else {
-            std::io::BufReader::new(file).read_to_string(&mut text)
-        }
-        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
-        let mut lines = text.lines().filter(|l| !l.is_empty());
-        let header = lines
-            .next()
-            .expect("empty CSV")
-            .split(',')
-            .map(str::to_owned)
-            .collect();
-        let rows = lines
-            .map(|l| l.split(',').map(str::to_owned).collect())
-            .collect();
-        Self { header, rows }
-    }
-
-    fn col(&self, name: &str) -> usize {
-        self.header
-            .iter()
-            .position(|h| h == name)
-            .unwrap_or_else(|| panic!("no column {name} in {:?}", self.header))
-    }
-
-    /// Column accessor: `t.f32s("px")(row)`.
-    fn f32s(&self, name: &str) -> impl Fn(&[String]) -> f32 + use<> {
-        let c = self.col(name);
-        move |r: &[String]| {
-            r[c].parse::<f32>()
-                .unwrap_or_else(|e| panic!("{}: {e}", r[c]))
-        }
-    }
-
-    fn usizes(&self, name: &str) -> impl Fn(&[String]) -> usize + use<> {
-        let c = self.col(name);
-        move |r: &[String]| {
-            r[c].parse::<usize>()
-                .unwrap_or_else(|e| panic!("{}: {e}", r[c]))
-        }
-    }
-
-    /// Rows grouped by the integer key in column `name` (sorted by key, rows in file order).
-    fn group_by(&self, name: &str) -> BTreeMap<usize, Vec<&[String]>> {
-        let key = self.usizes(name);
-        let mut groups: BTreeMap<usize, Vec<&[String]>> = BTreeMap::new();
-        for r in &self.rows {
-            groups.entry(key(r)).or_default().push(r);
-        }
-        groups
-    }
-}
 
 fn bits(v: [f32; 2]) -> [u32; 2] {
     [v[0].to_bits(), v[1].to_bits()]

@@ -8,6 +8,7 @@
 
 #[cfg(feature = "gpu")]
 pub mod gpu;
+pub mod reference;
 pub mod scene;
 
 use std::alloc::{GlobalAlloc, Layout, System};

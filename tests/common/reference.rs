@@ -1,0 +1,95 @@
+//! The RVO2 2.0.3 reference data (spec orca-sfm section 4): where it lives and a small reader
+//! for its CSV files, shared by the CPU and GPU ORCA tests.
+
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::PathBuf;
+
+/// The RVO2 reference data: `SOCNAV_REF_DIR`, or `../shared/ref/orca_sfm` next to the crate root.
+pub fn ref_dir() -> PathBuf {
+    std::env::var_os("SOCNAV_REF_DIR").map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/ref/orca_sfm"),
+        PathBuf::from,
+    )
+}
+
+/// A CSV file: header names and rows of string fields.
+pub struct Table {
+    /// Column names.
+    pub header: Vec<String>,
+    /// Rows of fields.
+    pub rows: Vec<Vec<String>>,
+}
+
+impl Table {
+    /// Read `name` from [`ref_dir`] (`.gz` files decompressed).
+    pub fn load(name: &str) -> Self {
+        let path = ref_dir().join(name);
+        let mut text = String::new();
+        let file = std::fs::File::open(&path)
+            .unwrap_or_else(|e| panic!("cannot open {} ({e}); set SOCNAV_REF_DIR", path.display()));
+        if name.ends_with(".gz") {
+            flate2::read::GzDecoder::new(file).read_to_string(&mut text)
+        } else {
+            std::io::BufReader::new(file).read_to_string(&mut text)
+        }
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+        let mut lines = text.lines().filter(|l| !l.is_empty());
+        let header = lines
+            .next()
+            .expect("empty CSV")
+            .split(',')
+            .map(str::to_owned)
+            .collect();
+        let rows = lines
+            .map(|l| l.split(',').map(str::to_owned).collect())
+            .collect();
+        Self { header, rows }
+    }
+
+    /// Index of column `name`.
+    pub fn col(&self, name: &str) -> usize {
+        self.header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("no column {name} in {:?}", self.header))
+    }
+
+    /// Column accessor: `t.f32s("px")(row)`.
+    pub fn f32s(&self, name: &str) -> impl Fn(&[String]) -> f32 + use<> {
+        let c = self.col(name);
+        move |r: &[String]| {
+            r[c].parse::<f32>()
+                .unwrap_or_else(|e| panic!("{}: {e}", r[c]))
+        }
+    }
+
+    /// Column accessor: `t.usizes("case")(row)`.
+    pub fn usizes(&self, name: &str) -> impl Fn(&[String]) -> usize + use<> {
+        let c = self.col(name);
+        move |r: &[String]| {
+            r[c].parse::<usize>()
+                .unwrap_or_else(|e| panic!("{}: {e}", r[c]))
+        }
+    }
+
+    /// Field `name` of `row` as an f32.
+    pub fn f32(&self, row: &[String], name: &str) -> f32 {
+        self.f32s(name)(row)
+    }
+
+    /// Field `name` of `row` as a usize.
+    pub fn usize(&self, row: &[String], name: &str) -> usize {
+        self.usizes(name)(row)
+    }
+
+    /// Rows grouped by the integer key in column `name` (sorted by key, rows in file order).
+    pub fn group_by(&self, name: &str) -> BTreeMap<usize, Vec<&[String]>> {
+        let key = self.usizes(name);
+        let mut groups: BTreeMap<usize, Vec<&[String]>> = BTreeMap::new();
+        for r in &self.rows {
+            groups.entry(key(r)).or_default().push(r);
+        }
+        groups
+    }
+}
