@@ -1,17 +1,9 @@
-// requires: common/math.wgsl
+// requires: common/motion.wgsl
 //
 // Twin of src/systems/robot_motion.rs (stage `robot_motion`, spec 4.1 steps 2-3): scale the
 // action to a physical command and move the robot by semi-implicit Euler (rotate first, then
 // translate along the new heading). Same operations in the same order as the Rust file; change
 // both in the same commit.
-
-struct Moved {
-    x: f32,
-    y: f32,
-    theta: f32,
-    vx: f32,
-    vy: f32,
-}
 
 // The physical command (v_x, v_y in m/s, robot frame; ω in rad/s) of environment e's action.
 fn command(e: u32) -> vec3<f32> {
@@ -24,27 +16,6 @@ fn command(e: u32) -> vec3<f32> {
     }
     let wz = clamp(actions[3u * e + 2u] * w, -w, w);
     return vec3<f32>(vx, vy, wz);
-}
-
-// A pose (m, m, rad) after one step of the command, with the command's world-frame velocity.
-fn integrate(dt: f32, x: f32, y: f32, theta0: f32, vx: f32, vy: f32, w: f32) -> Moved {
-    let theta = math_wrap_angle(theta0 + w * dt);
-    let sc = math_sin_cos(theta);
-    let s = sc.x;
-    let c = sc.y;
-    if (vy == 0.0) {
-        return Moved(x + vx * c * dt, y + vx * s * dt, theta, vx * c, vx * s);
-    }
-    let sc2 = math_sin_cos(theta + MATH_FRAC_PI_2);
-    let s2 = sc2.x;
-    let c2 = sc2.y;
-    return Moved(
-        x + vx * c * dt + vy * c2 * dt,
-        y + vx * s * dt + vy * s2 * dt,
-        theta,
-        vx * c + vy * c2,
-        vx * s + vy * s2,
-    );
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)

@@ -1,43 +1,15 @@
 // requires: common/orca_world.wgsl
+// requires: common/motion.wgsl
 //
 // Twin of `shadow_robot` and `command_from_velocity` in src/systems/shadow_robot.rs (stage
 // `shadow_robot`, spec 8.2): the reference robot behind STL and SPL drives to the robot's goal,
 // every step until it collides or arrives, by the ORCA velocity of a fresh simulator that holds
 // every lone human and moving group (it sees everything: `view: None`), converted to the robot's
-// kinematics, then integrated like the robot (`integrate` is a copy of shaders/robot_motion.wgsl's:
-// a stage file cannot require another). Its outcome (`shadow_outcome`) is in termination.wgsl.
+// kinematics, then integrated like the robot (`integrate`, common/motion.wgsl). Its outcome
+// (`shadow_outcome`) is in termination.wgsl.
 // Same operations in the same order as the Rust file; change both in the same commit.
 //
 // If the ORCA lists overflow (common/orca_world.wgsl), the shadow pose and command become NaN.
-
-struct Moved {
-    x: f32,
-    y: f32,
-    theta: f32,
-    vx: f32,
-    vy: f32,
-}
-
-// Twin of robot_motion::integrate (a copy of shaders/robot_motion.wgsl's `integrate`).
-fn integrate(dt: f32, x: f32, y: f32, theta0: f32, vx: f32, vy: f32, w: f32) -> Moved {
-    let theta = math_wrap_angle(theta0 + w * dt);
-    let sc = math_sin_cos(theta);
-    let s = sc.x;
-    let c = sc.y;
-    if (vy == 0.0) {
-        return Moved(x + vx * c * dt, y + vx * s * dt, theta, vx * c, vx * s);
-    }
-    let sc2 = math_sin_cos(theta + MATH_FRAC_PI_2);
-    let s2 = sc2.x;
-    let c2 = sc2.y;
-    return Moved(
-        x + vx * c * dt + vy * c2 * dt,
-        y + vx * s * dt + vy * s2 * dt,
-        theta,
-        vx * c + vy * c2,
-        vx * s + vy * s2,
-    );
-}
 
 // A world-frame velocity (m/s) as a robot command (v_x, v_y, ω): diff-drive drives at |v| and
 // turns by the (unwrapped) heading error per step; holonomic drives v rotated into the robot

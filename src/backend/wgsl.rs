@@ -35,6 +35,10 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/common/world.wgsl"),
     ),
     (
+        "common/motion.wgsl",
+        include_str!("../../shaders/common/motion.wgsl"),
+    ),
+    (
         "common/orca.wgsl",
         include_str!("../../shaders/common/orca.wgsl"),
     ),
