@@ -9,10 +9,6 @@
 const CONTACT_MARGIN: f32 = 0x1.0624dep-10f;
 // Stiffness of the contact, MPE's `contact_force`.
 const CONTACT_STIFFNESS: f32 = 100.0;
-// `role::STATIC`.
-const ROLE_STATIC: u32 = 0u;
-// `state::NONE`.
-const NONE: u32 = 0xffffffffu;
 
 fn human_disc(i: u32) -> Disc {
     return Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius);

@@ -5,11 +5,6 @@
 // Gaussian noise per member and axis; the stored centre then becomes the members' centroid.
 // Standing groups never move. Change both files in the same commit.
 
-// RNG stream kind of the group velocity noise (Rust `group_motion::STREAM_GROUP_NOISE`).
-const STREAM_GROUP_NOISE: u32 = 4u;
-// `group_kind::MOVING`.
-const GROUP_MOVING: u32 = 0u;
-
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;

@@ -19,7 +19,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let gb = e * S_G_X;
     for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + g] != ORCA_WORLD_GROUP_MOVING) {
+        if (su[C_G_KIND + g] != GROUP_MOVING) {
             continue;
         }
         let x = sf[C_G_X + g];

@@ -7,18 +7,6 @@
 // records compacted to the front of each block, pairs indexing them), and Gaussian noise from the
 // counter-based stream of kind 7. One environment per invocation. Change both in the same commit.
 
-// RNG stream kind of the observation noise (Rust `observation::STREAM_OBS_NOISE`).
-const STREAM_OBS_NOISE: u32 = 7u;
-// `params::NOISE_ROBOT`.
-const NOISE_ROBOT: u32 = 5u;
-// `spec::one_hot`.
-const ONE_HOT_ROBOT: u32 = 0u;
-const ONE_HOT_HUMAN: u32 = 1u;
-const ONE_HOT_TABLE: u32 = 2u;
-const ONE_HOT_LAPTOP: u32 = 3u;
-const ONE_HOT_PLANT: u32 = 4u;
-const ONE_HOT_WALL: u32 = 5u;
-
 // Rust `Frame`: the robot pose and velocities an observation is relative to.
 struct ObsFrame {
     x: f32,

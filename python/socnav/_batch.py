@@ -88,6 +88,15 @@ def split_obs(flat: np.ndarray, layout: dict) -> dict[str, np.ndarray]:
     return out
 
 
+def reset_single(batch: Batch, seed: int | None) -> None:
+    """Reset a batch of one environment: re-seeded when ``seed`` is given, else into its next
+    episode."""
+    if seed is not None:
+        batch.reset(int(seed))
+    else:
+        batch.reset_envs(np.ones(1, dtype=bool))
+
+
 def check_running(ended: bool) -> None:
     """A single environment cannot step past the end of its episode (SocNavGym raises too)."""
     if ended:

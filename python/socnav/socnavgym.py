@@ -90,10 +90,7 @@ class SocNavGymEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
-        if seed is not None:
-            self._batch.reset(int(seed))
-        else:
-            self._batch.reset_envs(np.ones(1, dtype=bool))
+        _batch.reset_single(self._batch, seed)
         self._ended = False
         return self._obs(), {}
 

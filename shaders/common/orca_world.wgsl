@@ -27,8 +27,6 @@
 // when the capacities satisfy humans + groups + 1 <= ORCA_MAX_AGENT_NEIGHBORS and
 // obstacle_vertices <= ORCA_MAX_OBSTACLE_NEIGHBORS (lines then fit too).
 
-// `group_kind::MOVING`.
-const ORCA_WORLD_GROUP_MOVING: u32 = 0u;
 // No slot to skip (Rust `None`).
 const ORCA_WORLD_NONE: u32 = 0xffffffffu;
 // Candidate tags (see the header).
@@ -129,7 +127,7 @@ fn orca_world_select(e: u32, first: OrcaAgent, others: OrcaWorldOthers, list: pt
     }
     let gb = e * S_G_X;
     for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + g] != ORCA_WORLD_GROUP_MOVING || g == others.skip_group) {
+        if (su[C_G_KIND + g] != GROUP_MOVING || g == others.skip_group) {
             continue;
         }
         let pos = vec2<f32>(sf[C_G_X + g], sf[C_G_Y + g]);

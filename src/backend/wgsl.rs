@@ -137,7 +137,8 @@ pub type Columns<'a> = &'a [(&'static str, Elem, usize)];
 /// for u32) and its stride `S_<NAME>` (element `slot` of environment `e` is at `C + e * S +
 /// slot`); the same for the output columns as `CO_<NAME>`/`SO_<NAME>` in `outf`/`outu`; the index of
 /// every info key (`INFO_<KEY>`), episode statistic (`EP_<KEY>`) and event (`EV_<KEY>`) from
-/// [`crate::spec`]; the observation layout (`OBS_DIM`, `OBS_ROBOT`, `OBS_RECORD`, and per entity
+/// [`crate::spec`]; the codes shared with the Rust stages (`NONE`, `ROLE_*`, `GROUP_*`,
+/// `STREAM_*`, `NOISE_ROBOT`, `ONE_HOT_*`); the observation layout (`OBS_DIM`, `OBS_ROBOT`, `OBS_RECORD`, and per entity
 /// type `OBS_OFFSET_<TYPE>` and `OBS_CAPACITY_<TYPE>`, `PAIRS_HUMAN_HUMAN`/`PAIRS_HUMAN_LAPTOP`
 /// pair capacities); the bindings every shader shares; and `WORKGROUP_SIZE`.
 pub fn prelude(
@@ -174,6 +175,9 @@ pub fn prelude(
             ));
         }
     }
+    for (name, value) in shared_constants() {
+        out.push_str(&format!("const {name}: u32 = {value}u;\n"));
+    }
     out.push_str(&format!(
         "const OBS_DIM: u32 = {}u;\nconst OBS_ROBOT: u32 = {}u;\nconst OBS_RECORD: u32 = {}u;\n",
         layout.dim,
@@ -203,6 +207,47 @@ pub fn prelude(
          @group(0) @binding(5) var<storage, read_write> outu: array<u32>;\n",
     );
     out
+}
+
+/// The codes the shaders share with the Rust stages, by their WGSL names: the absent index, human
+/// roles, group kinds, RNG stream kinds, the robot's noise slot and the observation's one-hot
+/// positions.
+fn shared_constants() -> Vec<(&'static str, u32)> {
+    use crate::spec::one_hot;
+    use crate::state::{group_kind, role};
+    use crate::systems;
+    let index = |i: usize| u32::try_from(i).expect("a small index");
+    vec![
+        ("NONE", crate::state::NONE),
+        ("ROLE_STATIC", role::STATIC),
+        ("ROLE_DYNAMIC", role::DYNAMIC),
+        ("ROLE_MOVING_GROUP", role::MOVING_GROUP),
+        ("ROLE_STANDING_GROUP", role::STANDING_GROUP),
+        ("ROLE_LAPTOP_USER", role::LAPTOP_USER),
+        ("GROUP_MOVING", group_kind::MOVING),
+        ("GROUP_STANDING", group_kind::STANDING),
+        ("GROUP_DISSOLVED", group_kind::DISSOLVED),
+        ("STREAM_SCENARIO", crate::scenario::STREAM_SCENARIO),
+        ("STREAM_GOALS", systems::goals::STREAM_GOALS),
+        (
+            "STREAM_AVOID_ROBOT",
+            systems::human_motion::STREAM_AVOID_ROBOT,
+        ),
+        (
+            "STREAM_GROUP_NOISE",
+            systems::group_motion::STREAM_GROUP_NOISE,
+        ),
+        ("STREAM_FORMATION", systems::formation::STREAM_FORMATION),
+        ("STREAM_SOCIAL", systems::social_events::STREAM_SOCIAL),
+        ("STREAM_OBS_NOISE", systems::observation::STREAM_OBS_NOISE),
+        ("NOISE_ROBOT", index(crate::params::NOISE_ROBOT)),
+        ("ONE_HOT_ROBOT", index(one_hot::ROBOT)),
+        ("ONE_HOT_HUMAN", index(one_hot::HUMAN)),
+        ("ONE_HOT_TABLE", index(one_hot::TABLE)),
+        ("ONE_HOT_LAPTOP", index(one_hot::LAPTOP)),
+        ("ONE_HOT_PLANT", index(one_hot::PLANT)),
+        ("ONE_HOT_WALL", index(one_hot::WALL)),
+    ]
 }
 
 /// The complete source of `shaders/<path>` for a batch: the prelude, `common/params.wgsl` (the
