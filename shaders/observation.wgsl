@@ -200,13 +200,24 @@ fn obs_circumradius(length: f32, width: f32) -> f32 {
     return sqrt(0.25 * length * length + 0.25 * width * width);
 }
 
-fn obs_laptops(e: u32, block: u32) -> u32 {
-    let radius = obs_circumradius(params.laptop_length, params.laptop_width);
-    let lb = e * S_L_X;
+// Records of `n` rectangles (laptops or tables) whose x, y and heading columns start at `cx`,
+// `cy`, `ctheta` with stride `stride` (twin of the Rust `rectangles`).
+fn obs_rectangles(
+    e: u32,
+    block: u32,
+    cx: u32,
+    cy: u32,
+    ctheta: u32,
+    stride: u32,
+    n: u32,
+    one_hot: u32,
+    radius: f32,
+) -> u32 {
+    let base = e * stride;
     var k = 0u;
-    for (var i = lb; i < lb + su[C_N_LAPTOPS + e]; i++) {
-        let x = sf[C_L_X + i];
-        let y = sf[C_L_Y + i];
+    for (var i = base; i < base + n; i++) {
+        let x = sf[cx + i];
+        let y = sf[cy + i];
         let l = obs_local(x, y);
         if (!obs_sees(l)) {
             continue;
@@ -215,33 +226,23 @@ fn obs_laptops(e: u32, block: u32) -> u32 {
         if (fr.world) {
             p = vec2<f32>(x, y);
         }
-        let sc = obs_rel_sin_cos(sf[C_L_THETA + i]);
-        obs_object_record(block + k * OBS_RECORD, ONE_HOT_LAPTOP, p.x, p.y, sc, radius);
+        let sc = obs_rel_sin_cos(sf[ctheta + i]);
+        obs_object_record(block + k * OBS_RECORD, one_hot, p.x, p.y, sc, radius);
         k += 1u;
     }
     return k;
 }
 
+fn obs_laptops(e: u32, block: u32) -> u32 {
+    let radius = obs_circumradius(params.laptop_length, params.laptop_width);
+    let n = su[C_N_LAPTOPS + e];
+    return obs_rectangles(e, block, C_L_X, C_L_Y, C_L_THETA, S_L_X, n, ONE_HOT_LAPTOP, radius);
+}
+
 fn obs_tables(e: u32, block: u32) -> u32 {
     let radius = obs_circumradius(params.table_length, params.table_width);
-    let tb = e * S_T_X;
-    var k = 0u;
-    for (var i = tb; i < tb + su[C_N_TABLES + e]; i++) {
-        let x = sf[C_T_X + i];
-        let y = sf[C_T_Y + i];
-        let l = obs_local(x, y);
-        if (!obs_sees(l)) {
-            continue;
-        }
-        var p = l;
-        if (fr.world) {
-            p = vec2<f32>(x, y);
-        }
-        let sc = obs_rel_sin_cos(sf[C_T_THETA + i]);
-        obs_object_record(block + k * OBS_RECORD, ONE_HOT_TABLE, p.x, p.y, sc, radius);
-        k += 1u;
-    }
-    return k;
+    let n = su[C_N_TABLES + e];
+    return obs_rectangles(e, block, C_T_X, C_T_Y, C_T_THETA, S_T_X, n, ONE_HOT_TABLE, radius);
 }
 
 fn obs_plants(e: u32, block: u32) -> u32 {
