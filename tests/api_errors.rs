@@ -21,18 +21,6 @@ fn config(name: &str) -> Config {
     .unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
-fn shipped_config_names() -> Vec<String> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
-
 fn make(config: Config, n_envs: usize, seed: u64) -> BatchEnv {
     let mut env = BatchEnv::new(
         config,
@@ -319,7 +307,7 @@ fn set_state_names_a_radius_that_differs_from_the_config() {
 #[test]
 fn state_documents_round_trip_exactly() {
     let mut checked = 0;
-    for name in shipped_config_names() {
+    for name in common::config_names() {
         let mut c = config(&name);
         c.episode.length = 12; // autoresets inside the run
         let n = 8;
@@ -358,7 +346,7 @@ fn state_documents_round_trip_exactly() {
 /// included: they hold zeros, module docs of `socnav::state`) after every step.
 #[test]
 fn a_loaded_state_steps_identically() {
-    for name in shipped_config_names() {
+    for name in common::config_names() {
         let mut c = config(&name);
         c.episode.length = 15;
         let n = 8;

@@ -147,10 +147,12 @@ fn all_wgsl_shaders_validate() {
     assert!(errors.is_empty(), "{}", errors.join("\n"));
 }
 
-/// Every stage shader is named after a stage of the step and has the entry point `main`.
+/// Every stage shader is named after a stage of the step (or one of the passes beside the step,
+/// `wgsl::PASSES`) and has the entry point `main`.
 #[test]
 fn stage_shaders_are_stages_with_a_main() {
-    let names: Vec<&str> = socnav::pipeline::STAGES.iter().map(|s| s.name).collect();
+    let mut names: Vec<&str> = socnav::pipeline::STAGES.iter().map(|s| s.name).collect();
+    names.extend(wgsl::PASSES);
     for (path, _) in wgsl::FILES.iter().filter(|(p, _)| !p.contains('/')) {
         let stage = path.strip_suffix(".wgsl").expect(".wgsl");
         assert!(

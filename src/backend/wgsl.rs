@@ -77,7 +77,24 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/group_motion.wgsl"),
     ),
     ("contacts.wgsl", include_str!("../../shaders/contacts.wgsl")),
+    (
+        "common/reset.wgsl",
+        include_str!("../../shaders/common/reset.wgsl"),
+    ),
+    (
+        "begin_step.wgsl",
+        include_str!("../../shaders/begin_step.wgsl"),
+    ),
+    (
+        "autoreset.wgsl",
+        include_str!("../../shaders/autoreset.wgsl"),
+    ),
+    ("reset.wgsl", include_str!("../../shaders/reset.wgsl")),
 ];
+
+/// Shaders at the top of `shaders/` that are not stages of the step but passes the GPU backend runs
+/// alone: `reset` (the masked reset of `Backend::reset`).
+pub const PASSES: &[&str] = &["reset"];
 
 /// Invocations per workgroup of the stage shaders (one environment each).
 pub const WORKGROUP_SIZE: u32 = 64;
@@ -204,8 +221,82 @@ pub fn prelude(
          @group(0) @binding(2) var<storage, read_write> su: array<u32>;\n\
          @group(0) @binding(3) var<storage, read> actions: array<f32>;\n\
          @group(0) @binding(4) var<storage, read_write> outf: array<f32>;\n\
-         @group(0) @binding(5) var<storage, read_write> outu: array<u32>;\n",
+         @group(0) @binding(5) var<storage, read_write> outu: array<u32>;\n\
+         @group(0) @binding(6) var<storage, read> pool: array<u32>;\n",
     );
+    out.push_str(&pool_functions(state, outputs));
+    out
+}
+
+/// The output columns a reset writes from the pool (the first observation of an episode); the
+/// rest of what a reset writes (reward, flags, info) are constants.
+pub const POOL_OUTPUT_COLUMNS: [&str; 5] =
+    ["obs", "obs_count", "hh_pairs", "hl_pairs", "pair_count"];
+
+/// 32-bit words of one environment's row in the reset pool: every state column, f32 columns first
+/// then u32 columns, each in declaration order, then the [`POOL_OUTPUT_COLUMNS`] in that order.
+/// A one-environment table packed by `soa!`'s `pack` is exactly the state part.
+pub fn pool_row_words(state: Columns<'_>, outputs: Columns<'_>) -> usize {
+    state.iter().map(|c| c.2).sum::<usize>() + pool_outputs(outputs).map(|c| c.2).sum::<usize>()
+}
+
+fn pool_outputs<'a>(
+    outputs: Columns<'a>,
+) -> impl Iterator<Item = &'a (&'static str, Elem, usize)> + Clone {
+    POOL_OUTPUT_COLUMNS.iter().map(move |name| {
+        outputs
+            .iter()
+            .find(|c| c.0 == *name)
+            .expect("the pool's output columns exist")
+    })
+}
+
+/// `POOL_ROW` (words per pool row) and the generated copies of a pool row into environment `e`'s
+/// state (`pool_copy_state`) and first-observation outputs (`pool_copy_observation`), one loop per
+/// column (layout: [`pool_row_words`]).
+fn pool_functions(state: Columns<'_>, outputs: Columns<'_>) -> String {
+    let mut out = format!(
+        "const POOL_ROW: u32 = {}u;\n",
+        pool_row_words(state, outputs)
+    );
+    let mut word = 0usize;
+    let mut copy = |name: &str,
+                    elem: Elem,
+                    stride: usize,
+                    prefix: (&str, &str),
+                    out: &mut String| {
+        let upper = name.to_uppercase();
+        let (c, st) = prefix;
+        let (buf, value) = match (elem, c) {
+            (Elem::F32, "C_") => ("sf", "bitcast<f32>(pool[r + {w}u + j])"),
+            (Elem::U32, "C_") => ("su", "pool[r + {w}u + j]"),
+            (Elem::F32, _) => ("outf", "bitcast<f32>(pool[r + {w}u + j])"),
+            (Elem::U32, _) => ("outu", "pool[r + {w}u + j]"),
+        };
+        let value = value.replace("{w}", &word.to_string());
+        if stride == 1 {
+            out.push_str(&format!(
+                "    {buf}[{c}{upper} + e] = {};\n",
+                value.replace(" + j]", "]")
+            ));
+        } else {
+            out.push_str(&format!(
+                "    for (var j = 0u; j < {st}{upper}; j++) {{ {buf}[{c}{upper} + e * {st}{upper} + j] = {value}; }}\n"
+            ));
+        }
+        word += stride;
+    };
+    out.push_str("fn pool_copy_state(e: u32) {\n    let r = e * POOL_ROW;\n");
+    for elem in [Elem::F32, Elem::U32] {
+        for &(name, el, stride) in state.iter().filter(|c| c.1 == elem) {
+            copy(name, el, stride, ("C_", "S_"), &mut out);
+        }
+    }
+    out.push_str("}\nfn pool_copy_observation(e: u32) {\n    let r = e * POOL_ROW;\n");
+    for &(name, el, stride) in pool_outputs(outputs) {
+        copy(name, el, stride, ("CO_", "SO_"), &mut out);
+    }
+    out.push_str("}\n");
     out
 }
 
@@ -213,12 +304,15 @@ pub fn prelude(
 /// roles, group kinds, RNG stream kinds, the robot's noise slot and the observation's one-hot
 /// positions.
 fn shared_constants() -> Vec<(&'static str, u32)> {
+    use crate::params::AutoresetMode;
     use crate::spec::one_hot;
     use crate::state::{group_kind, role};
     use crate::systems;
     let index = |i: usize| u32::try_from(i).expect("a small index");
     vec![
         ("NONE", crate::state::NONE),
+        ("AUTORESET_SAME_STEP", AutoresetMode::SameStep.code()),
+        ("AUTORESET_NEXT_STEP", AutoresetMode::NextStep.code()),
         ("ROLE_STATIC", role::STATIC),
         ("ROLE_DYNAMIC", role::DYNAMIC),
         ("ROLE_MOVING_GROUP", role::MOVING_GROUP),

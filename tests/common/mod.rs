@@ -95,3 +95,26 @@ unsafe impl GlobalAlloc for Counting {
         unsafe { System.realloc(ptr, layout, new_size) }
     }
 }
+
+/// The names of the shipped configs (`configs/*.toml`), sorted.
+pub fn config_names() -> Vec<String> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("configs/")
+        .map(|e| e.expect("configs/ entry").path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| {
+            p.file_stem()
+                .expect("a file name")
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    names.sort();
+    names
+}
+
+/// A shipped config by name.
+pub fn load_config(name: &str) -> socnav::Config {
+    socnav::Config::from_name_or_path(name).unwrap_or_else(|e| panic!("{name}: {e}"))
+}

@@ -1,0 +1,142 @@
+//! The reset pool: for every environment of a batch, the state its next episode starts with and
+//! that state's first observation, as one row of 32-bit words, generated on the host by the same
+//! Rust code as the CPU backend's resets (`systems::reset::reset_and_observe`). The GPU backend
+//! keeps the rows on the device; its `begin_step`, `autoreset` and `reset` shaders copy a row
+//! into an environment instead of generating a scenario (`shaders/common/reset.wgsl`).
+//!
+//! This works because a reset is a pure function of the step constants, the environment's batch
+//! index and its episode counter: scenario generation clears every slot and writes every
+//! per-environment column (`tests/reset_pool.rs` checks a row against an in-place reset of a
+//! rolled-out environment for every config). Row layout: [`crate::backend::wgsl::pool_row_words`].
+
+use rayon::prelude::*;
+
+use crate::error::SimError;
+use crate::outputs::Outputs;
+use crate::params::StepParams;
+use crate::pipeline::Batch;
+use crate::spec::ObsLayout;
+use crate::state::{BatchState, Caps};
+
+/// A one-environment table to generate rows in, with the buffers its packing reuses.
+#[derive(Debug)]
+pub struct RowScratch {
+    state: BatchState,
+    out: Outputs,
+    f32s: Vec<f32>,
+    u32s: Vec<u32>,
+}
+
+impl RowScratch {
+    /// Scratch for environments of capacities `caps` and observation layout `layout`.
+    pub fn new(caps: Caps, layout: ObsLayout) -> Self {
+        Self {
+            state: BatchState::new(1, caps),
+            out: Outputs::new(1, layout),
+            f32s: Vec::new(),
+            u32s: Vec::new(),
+        }
+    }
+}
+
+/// Words of one pool row for environments of capacities `caps` and layout `layout`.
+pub fn row_words(caps: Caps, layout: ObsLayout) -> usize {
+    let s = BatchState::new(0, caps);
+    let o = Outputs::new(0, layout);
+    crate::backend::wgsl::pool_row_words(&s.columns(), &o.columns())
+}
+
+/// Write into `row` the pool row of environment `env` (batch index) starting episode number
+/// `episode` (the environment's episode counter before the reset): the state after
+/// `reset_and_observe`, then its first observation. `row` must hold [`row_words`] words.
+///
+/// # Errors
+/// The scenario error of an unsatisfiable configuration, as the CPU backend's reset gives it.
+pub fn write_row(
+    p: &StepParams,
+    env: usize,
+    episode: u32,
+    scratch: &mut RowScratch,
+    row: &mut [u32],
+) -> Result<(), SimError> {
+    let RowScratch {
+        state,
+        out,
+        f32s,
+        u32s,
+    } = scratch;
+    state.episode[0] = episode;
+    let mut s = state.chunk();
+    s.first_env = env;
+    let mut o = out.chunk();
+    o.first_env = env;
+    let mut b = Batch {
+        s,
+        o,
+        actions: &[],
+        error: None,
+    };
+    crate::systems::reset::reset_and_observe(p, &mut b, 0);
+    if let Some(err) = b.error {
+        return Err(err);
+    }
+    f32s.clear();
+    u32s.clear();
+    state.pack(f32s, u32s);
+    let parts: [&mut dyn Iterator<Item = u32>; 7] = [
+        &mut f32s.iter().map(|v| v.to_bits()),
+        &mut u32s.iter().copied(),
+        &mut out.obs.iter().map(|v| v.to_bits()),
+        &mut out.obs_count.iter().copied(),
+        &mut out.hh_pairs.iter().copied(),
+        &mut out.hl_pairs.iter().copied(),
+        &mut out.pair_count.iter().copied(),
+    ];
+    let mut k = 0;
+    for part in parts {
+        for w in part {
+            row[k] = w;
+            k += 1;
+        }
+    }
+    assert_eq!(
+        k,
+        row.len(),
+        "pool row of {k} words in a slot of {}",
+        row.len()
+    );
+    Ok(())
+}
+
+/// Fill `rows` (one [`row_words`]-word row per entry of `envs`, in order) with the rows of
+/// environments `envs` starting episodes `episodes[env]`, on `pool`'s threads. Returns the
+/// environments whose scenario could not be generated, with the error.
+pub fn write_rows(
+    p: &StepParams,
+    caps: Caps,
+    layout: ObsLayout,
+    envs: &[usize],
+    episodes: &[u32],
+    rows: &mut [u32],
+    pool: Option<&rayon::ThreadPool>,
+) -> Vec<(usize, SimError)> {
+    let words = row_words(caps, layout);
+    let mut work = || -> Vec<(usize, SimError)> {
+        rows.par_chunks_mut(words)
+            .zip(envs.par_iter())
+            .map_init(
+                || RowScratch::new(caps, layout),
+                |scratch, (row, &env)| {
+                    write_row(p, env, episodes[env], scratch, row)
+                        .err()
+                        .map(|err| (env, err))
+                },
+            )
+            .flatten()
+            .collect()
+    };
+    match pool {
+        Some(pool) => pool.install(work),
+        None => work(),
+    }
+}
