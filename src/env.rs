@@ -1,8 +1,7 @@
 //! [`BatchEnv`]: the public face of the simulator. It validates what callers hand in (actions,
 //! masks, state documents) with exact messages, then passes plain slices to the backend.
 
-use crate::backend::Backend;
-use crate::backend::cpu::CpuBackend;
+use crate::backend::{Backend, BackendChoice};
 use crate::config::{Config, Kinematics, RewardKind};
 use crate::error::SimError;
 use crate::outputs::Outputs;
@@ -20,8 +19,10 @@ pub struct EnvOptions {
     pub seed: u64,
     /// What happens to finished environments.
     pub autoreset: AutoresetMode,
-    /// CPU threads (all cores when `None`).
+    /// CPU threads (all cores when `None`); the GPU backend generates resets on them.
     pub threads: Option<usize>,
+    /// Which backend steps the batch.
+    pub backend: BackendChoice,
 }
 
 impl Default for EnvOptions {
@@ -31,6 +32,7 @@ impl Default for EnvOptions {
             seed: 0,
             autoreset: AutoresetMode::NextStep,
             threads: None,
+            backend: BackendChoice::Cpu,
         }
     }
 }
@@ -51,7 +53,7 @@ pub struct BatchEnv {
     params: StepParams,
     caps: Caps,
     layout: ObsLayout,
-    backend: CpuBackend,
+    backend: Box<dyn Backend>,
     actions: Vec<f32>,
 }
 
@@ -66,7 +68,7 @@ impl std::fmt::Debug for BatchEnv {
 }
 
 impl BatchEnv {
-    /// A batch of `options.n_envs` environments of `config` on the CPU backend. Call
+    /// A batch of `options.n_envs` environments of `config` on the backend `options.backend`. Call
     /// [`BatchEnv::reset`] before the first step.
     pub fn new(config: Config, options: EnvOptions) -> Result<Self, SimError> {
         let problems = crate::config::validate(&config);
@@ -93,7 +95,7 @@ impl BatchEnv {
         let params = StepParams::new(&config, options.seed, options.autoreset);
         let state = BatchState::new(options.n_envs, caps);
         let out = Outputs::new(options.n_envs, layout);
-        let backend = CpuBackend::new(params, state, out, options.threads)?;
+        let backend = crate::backend::open(options.backend, params, state, out, options.threads)?;
         let actions = vec![0.0; 3 * options.n_envs];
         Ok(Self {
             config,
@@ -149,7 +151,6 @@ impl BatchEnv {
             self.backend.set_params(self.params);
             self.backend.state_mut().episode.fill(0);
         }
-        self.backend.state_mut().pending_reset.fill(0);
         self.backend.reset(None)
     }
 
@@ -161,12 +162,6 @@ impl BatchEnv {
                 mask.len(),
                 self.n_envs()
             )));
-        }
-        let state = self.backend.state_mut();
-        for (e, &m) in mask.iter().enumerate() {
-            if m {
-                state.pending_reset[e] = 0;
-            }
         }
         self.backend.reset(Some(mask))
     }

@@ -11,13 +11,13 @@
 mod common;
 
 use common::gpu::*;
-use socnav::StepParams;
 use socnav::backend::gpu::GpuStages;
 use socnav::config::Kinematics;
 use socnav::outputs::Outputs;
 use socnav::rng::RngStream;
 use socnav::spec::{INFO_KEYS, N_INFO};
 use socnav::state::BatchState;
+use socnav::{AutoresetMode, StepParams};
 
 /// Robots (and shadow robots) anywhere in and just outside the room, some at their goal, ticks
 /// around the episode length, shadow outcomes cleared: every branch of `termination`.
@@ -190,7 +190,7 @@ fn state_round_trip() {
     let env = rolled_out(config("exp3"), 64, 60);
     let state = env.state().clone();
     let outputs = env.outputs().clone();
-    let mut gpu = GpuStages::new(dev, env.params(), &state, &outputs, &[]).expect("GPU stages");
+    let gpu = GpuStages::new(dev, env.params(), &state, &outputs, &[]).expect("GPU stages");
     let mut back = BatchState::zeroed(state.n_envs, state.strides);
     assert!(!state.differing_columns(&back).is_empty());
     gpu.download_state(&mut back).expect("readback");
@@ -207,4 +207,54 @@ fn state_round_trip() {
         "output columns changed on the way: {:?}",
         outputs.differing_columns(&back)
     );
+}
+
+/// Episodes ending, pending resets and stale per-step outputs at random: every branch of
+/// `begin_step` and `autoreset`.
+fn scatter_ends(s: &mut BatchState, o: &mut Outputs, _: &StepParams, rng: &mut RngStream) {
+    for e in 0..s.n_envs {
+        s.done[e] = u32::from(rng.next_f32() < 0.4);
+        s.pending_reset[e] = u32::from(rng.next_f32() < 0.3);
+        s.stepping[e] = u32::from(rng.next_f32() < 0.8);
+        o.has_final[e] = u32::from(rng.next_f32() < 0.5);
+        o.episode_done[e] = u32::from(rng.next_f32() < 0.5);
+        o.reward[e] = uniform(rng, -1.0, 1.0);
+        o.terminated[e] = s.done[e];
+        for v in &mut o.events[e * socnav::spec::N_EVENTS..(e + 1) * socnav::spec::N_EVENTS] {
+            *v = rng.next_u32() % 2;
+        }
+    }
+}
+
+/// Contract: `begin_step`: flags cleared, ticks counted, and NEXT_STEP resets copied from the
+/// reset pool equal the CPU's in-place resets (state, first observation, zeroed info).
+#[test]
+fn begin_step() {
+    for name in ["exp1", "exp3", "lroom_mixed"] {
+        check_parity("begin_step", config(name), 256, 10, Some(scatter_ends));
+    }
+}
+
+/// Contract: `autoreset` in each mode: SAME_STEP keeps the final observation, pairs and info
+/// and resets from the pool keeping the step's reward and flags; NEXT_STEP marks the reset.
+#[test]
+fn autoreset() {
+    for mode in [
+        AutoresetMode::SameStep,
+        AutoresetMode::NextStep,
+        AutoresetMode::Disabled,
+    ] {
+        for name in ["exp2", "corridor_mixed"] {
+            check_parity_mode("autoreset", config(name), mode, 256, 10, Some(scatter_ends));
+        }
+    }
+}
+
+/// Contract: the masked reset pass (`shaders/reset.wgsl`) equals `CpuBackend::reset` over about
+/// half the environments, chained so that reset environments reset again from their next row.
+#[test]
+fn masked_reset() {
+    for name in ["exp2", "stress"] {
+        check_parity("reset", config(name), 128, 6, None);
+    }
 }

@@ -266,6 +266,7 @@ fn gif_of_a_few_steps_decodes_frame_by_frame() {
         seed: 3,
         autoreset: AutoresetMode::Disabled,
         threads: Some(1),
+        ..Default::default()
     };
     let mut env = BatchEnv::new(Config::default(), options).unwrap();
     env.reset(Some(3)).unwrap();

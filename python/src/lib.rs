@@ -129,6 +129,7 @@ impl Batch {
             seed,
             autoreset: parse_autoreset(autoreset_mode)?,
             threads,
+            ..Default::default()
         };
         let env = BatchEnv::new(c, options).map_err(py_err)?;
         Ok(Self { env })

@@ -24,6 +24,25 @@ use super::Backend;
 /// that a chunk's per-stage timing costs nothing next to its work.
 pub const CHUNK_ENVS: usize = 32;
 
+/// `threads`, or all cores when `None`.
+pub fn resolve_threads(threads: Option<usize>) -> usize {
+    threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+}
+
+/// A pool of `workers` threads named `<name>-<i>`, or `None` for no workers.
+pub fn thread_pool(workers: usize, name: &str) -> Result<Option<rayon::ThreadPool>, SimError> {
+    if workers == 0 {
+        return Ok(None);
+    }
+    let name = name.to_owned();
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(workers)
+        .thread_name(move |i| format!("{name}-{i}"))
+        .build()
+        .map(Some)
+        .map_err(|e| SimError::BackendUnavailable(format!("cannot start a thread pool: {e}")))
+}
+
 /// The CPU backend.
 #[derive(Debug)]
 pub struct CpuBackend {
@@ -47,20 +66,8 @@ impl CpuBackend {
         out: Outputs,
         threads: Option<usize>,
     ) -> Result<Self, SimError> {
-        let threads =
-            threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-        let pool = if threads > 1 {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads - 1)
-                .thread_name(|i| format!("socnav-cpu-{i}"))
-                .build()
-                .map_err(|e| {
-                    SimError::BackendUnavailable(format!("cannot start the CPU thread pool: {e}"))
-                })?;
-            Some(pool)
-        } else {
-            None
-        };
+        let threads = resolve_threads(threads);
+        let pool = thread_pool(threads - 1, "socnav-cpu")?;
         let stage_nanos = STAGES.iter().map(|_| AtomicU64::new(0)).collect();
         Ok(Self {
             params,
@@ -76,16 +83,6 @@ impl CpuBackend {
     /// The step constants.
     pub fn params(&self) -> &StepParams {
         &self.params
-    }
-
-    /// Replace the step constants (same config; e.g. a new seed or replay mode).
-    pub fn set_params(&mut self, params: StepParams) {
-        self.params = params;
-    }
-
-    /// Threads stepping the batch, the caller included.
-    pub fn threads(&self) -> usize {
-        self.threads
     }
 
     /// Run `work` over every environment of the batch: the caller and the pool's workers take
@@ -221,6 +218,7 @@ impl Backend for CpuBackend {
             for e in 0..b.n_envs() {
                 let env = b.s.first_env + e;
                 if mask.is_none_or(|m| m[env]) {
+                    b.s.pending_reset[e] = 0;
                     b.o.has_final[e] = 0;
                     b.o.episode_done[e] = 0;
                     crate::systems::reset::reset_and_observe(p, b, e);
@@ -260,6 +258,14 @@ impl Backend for CpuBackend {
         crate::systems::orca_obstacles::rebuild_if_dirty(&p, &mut s, 0);
         let mut o = self.out.env_chunk(env);
         crate::systems::observation::write_observation(&p, &mut s, &mut o, 0);
+    }
+
+    fn set_params(&mut self, params: StepParams) {
+        self.params = params;
+    }
+
+    fn threads(&self) -> usize {
+        self.threads
     }
 
     fn set_stage_timing(&mut self, on: bool) {

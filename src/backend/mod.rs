@@ -9,12 +9,86 @@ pub mod wgsl;
 
 use crate::error::SimError;
 use crate::outputs::Outputs;
+use crate::params::StepParams;
 use crate::state::BatchState;
 
+/// Which backend runs a batch (DESIGN.md section 8).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum BackendChoice {
+    /// The CPU backend.
+    #[default]
+    Cpu,
+    /// The GPU backend on any adapter, software ones included (`WGPU_ADAPTER_NAME` and
+    /// `WGPU_BACKEND` pick one); an error when there is none.
+    Gpu,
+    /// A hardware GPU adapter when one exists, else the CPU backend with one log line on stderr.
+    Auto,
+}
+
+impl std::str::FromStr for BackendChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "cpu" => Ok(Self::Cpu),
+            "gpu" => Ok(Self::Gpu),
+            "auto" => Ok(Self::Auto),
+            other => Err(format!(
+                "unknown backend {other:?}: expected \"auto\", \"cpu\" or \"gpu\""
+            )),
+        }
+    }
+}
+
+/// Open the backend `choice` names over `state` and `out`.
+///
+/// # Errors
+/// `BackendUnavailable` for `Gpu` without a usable adapter (the message says how to install a
+/// driver) or in a build without the `gpu` feature, and for a batch the adapter cannot hold.
+pub fn open(
+    choice: BackendChoice,
+    params: StepParams,
+    state: BatchState,
+    out: Outputs,
+    threads: Option<usize>,
+) -> Result<Box<dyn Backend>, SimError> {
+    match choice {
+        BackendChoice::Cpu => Ok(Box::new(cpu::CpuBackend::new(params, state, out, threads)?)),
+        #[cfg(feature = "gpu")]
+        BackendChoice::Gpu | BackendChoice::Auto => {
+            let policy = if choice == BackendChoice::Gpu {
+                gpu::AdapterPolicy::Any
+            } else {
+                gpu::AdapterPolicy::Hardware
+            };
+            match gpu::GpuDevice::open(policy) {
+                Ok(dev) => Ok(Box::new(gpu::GpuBackend::new(
+                    dev, params, state, out, threads,
+                )?)),
+                Err(e) if choice == BackendChoice::Auto => {
+                    eprintln!("socnav: backend auto: using the CPU backend ({e})");
+                    Ok(Box::new(cpu::CpuBackend::new(params, state, out, threads)?))
+                }
+                Err(e) => Err(e),
+            }
+        }
+        #[cfg(not(feature = "gpu"))]
+        BackendChoice::Gpu => Err(SimError::BackendUnavailable(
+            "this build has no GPU backend (socnav was built without the `gpu` feature)".into(),
+        )),
+        #[cfg(not(feature = "gpu"))]
+        BackendChoice::Auto => {
+            eprintln!(
+                "socnav: backend auto: using the CPU backend (built without the `gpu` feature)"
+            );
+            Ok(Box::new(cpu::CpuBackend::new(params, state, out, threads)?))
+        }
+    }
+}
+
 /// A way of running the step over the whole batch.
-pub trait Backend: Send {
-    /// Reset the environments whose `mask` entry is true (all when `mask` is `None`) and write
-    /// their first observations.
+pub trait Backend: Send + Sync {
+    /// Reset the environments whose `mask` entry is true (all when `mask` is `None`), clearing
+    /// their pending resets, and write their first observations.
     fn reset(&mut self, mask: Option<&[bool]>) -> Result<(), SimError>;
     /// Step every environment with `actions` (3 floats per environment, validated).
     fn step(&mut self, actions: &[f32]) -> Result<(), SimError>;
@@ -27,6 +101,10 @@ pub trait Backend: Send {
     /// Re-derive what depends on a state edited through [`Backend::state_mut`] for environment
     /// `env` (ORCA obstacles, observation) without stepping.
     fn state_changed(&mut self, env: usize);
+    /// Replace the step constants (same config; e.g. a new seed or replay mode).
+    fn set_params(&mut self, params: StepParams);
+    /// Host threads the backend works with, the caller included.
+    fn threads(&self) -> usize;
     /// Time each stage of the following steps (off by default: it costs two clock reads per stage
     /// and chunk).
     fn set_stage_timing(&mut self, on: bool);

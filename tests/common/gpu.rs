@@ -9,13 +9,15 @@
 use std::sync::OnceLock;
 
 use socnav::backend::gpu::{AdapterPolicy, GpuDevice, GpuStages};
+use socnav::backend::reset_pool;
 use socnav::outputs::Outputs;
 use socnav::pipeline::{Batch, STAGES};
 use socnav::rng::RngStream;
 use socnav::spec::N_INFO;
+use socnav::spec::ObsLayout;
 use socnav::state::BatchState;
 use socnav::state::columns::Elem;
-use socnav::{Actions, BatchEnv, Config, EnvOptions, StepParams};
+use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, StepParams};
 
 /// The shared device, or `None` (after saying why) when there is none and none is required.
 pub fn device() -> Option<GpuDevice> {
@@ -46,11 +48,22 @@ pub fn random_actions(rng: &mut RngStream, n: usize, holonomic: bool) -> Vec<f32
 
 /// A batch of `config` after `steps` random steps on the CPU.
 pub fn rolled_out(config: Config, n_envs: usize, steps: usize) -> BatchEnv {
+    rolled_out_mode(config, AutoresetMode::NextStep, n_envs, steps)
+}
+
+/// A batch of `config` in autoreset mode `mode` after `steps` random steps on the CPU.
+pub fn rolled_out_mode(
+    config: Config,
+    mode: AutoresetMode,
+    n_envs: usize,
+    steps: usize,
+) -> BatchEnv {
     let mut env = BatchEnv::new(
         config,
         EnvOptions {
             n_envs,
             seed: 11,
+            autoreset: mode,
             ..Default::default()
         },
     )
@@ -67,7 +80,9 @@ pub fn rolled_out(config: Config, n_envs: usize, steps: usize) -> BatchEnv {
     env
 }
 
-/// Run stage `stage` over every environment of `state` and `outputs` on the CPU.
+/// Run stage `stage` over every environment of `state` and `outputs` on the CPU; `"reset"` is the
+/// GPU's masked-reset pass, whose mask is the first action of each environment (its twin is
+/// `CpuBackend::reset`).
 pub fn cpu_stage(
     stage: &str,
     p: &StepParams,
@@ -75,6 +90,24 @@ pub fn cpu_stage(
     outputs: &mut Outputs,
     actions: &[f32],
 ) {
+    if stage == "reset" {
+        let mut b = Batch {
+            s: state.chunk(),
+            o: outputs.chunk(),
+            actions: &[],
+            error: None,
+        };
+        for e in 0..b.n_envs() {
+            if actions[3 * e] != 0.0 {
+                b.s.pending_reset[e] = 0;
+                b.o.has_final[e] = 0;
+                b.o.episode_done[e] = 0;
+                socnav::systems::reset::reset_and_observe(p, &mut b, e);
+            }
+        }
+        assert!(b.error.is_none(), "reset: {:?}", b.error);
+        return;
+    }
     let run = STAGES
         .iter()
         .find(|s| s.name == stage)
@@ -109,13 +142,52 @@ pub fn check_parity(
     runs: usize,
     perturb: Option<Perturb>,
 ) -> Option<[usize; 7]> {
+    check_parity_mode(
+        stage,
+        config,
+        AutoresetMode::NextStep,
+        n_envs,
+        runs,
+        perturb,
+    )
+}
+
+/// Fill the GPU's reset pool with every environment's next-episode row for `state`'s episode
+/// counters, as `GpuBackend` keeps it.
+pub fn fill_pool(gpu: &mut GpuStages, p: &StepParams, state: &BatchState, layout: ObsLayout) {
+    let envs: Vec<usize> = (0..state.n_envs).collect();
+    let mut rows = vec![0u32; envs.len() * gpu.pool_row_words()];
+    let failed = reset_pool::write_rows(
+        p,
+        state.strides,
+        layout,
+        &envs,
+        &state.episode,
+        &mut rows,
+        None,
+    );
+    assert!(failed.is_empty(), "scenario generation failed: {failed:?}");
+    gpu.write_pool_rows(0, &rows);
+}
+
+/// [`check_parity`] in autoreset mode `mode`.
+pub fn check_parity_mode(
+    stage: &'static str,
+    config: Config,
+    mode: AutoresetMode,
+    n_envs: usize,
+    runs: usize,
+    perturb: Option<Perturb>,
+) -> Option<[usize; 7]> {
     let dev = device()?;
     let mut raised = [0usize; 7];
-    let env = rolled_out(config, n_envs, 40);
+    let env = rolled_out_mode(config, mode, n_envs, 40);
     let p = *env.params();
     let mut cpu = env.state().clone();
     let mut cpu_out = env.outputs().clone();
     let mut gpu = GpuStages::new(dev, &p, &cpu, &cpu_out, &[stage]).expect("GPU stages");
+    let layout = *env.layout();
+    fill_pool(&mut gpu, &p, &cpu, layout);
     let mut from_gpu = cpu.clone();
     let mut from_gpu_out = cpu_out.clone();
     let mut rng = RngStream::new(9, 0, 0, 1);
@@ -130,7 +202,17 @@ pub fn check_parity(
             gpu.upload_state(&cpu);
             gpu.upload_outputs(&cpu_out);
         }
-        let actions = random_actions(&mut rng, n_envs, p.holonomic != 0);
+        // The pool holds each environment's next episode, as GpuBackend keeps it.
+        fill_pool(&mut gpu, &p, &cpu, layout);
+        let mut actions = random_actions(&mut rng, n_envs, p.holonomic != 0);
+        if stage == "reset" {
+            // The reset pass's mask is the first action: reset about half the environments.
+            for e in 0..n_envs {
+                if rng.next_f32() < 0.5 {
+                    actions[3 * e] = 0.0;
+                }
+            }
+        }
         cpu_stage(stage, &p, &mut cpu, &mut cpu_out, &actions);
         gpu.upload_actions(&actions);
         gpu.run(stage).expect("GPU stage");

@@ -14,8 +14,10 @@
 //! whole step in one submit with one readback of the outputs, and resets off the host's critical
 //! path (the plan is in docs/ARCHITECTURE.md).
 
+pub mod backend;
 pub mod device;
 
+pub use backend::GpuBackend;
 pub use device::{AdapterPolicy, AdapterSummary, GpuDevice, list_adapters};
 
 use crate::backend::wgsl;
@@ -26,6 +28,7 @@ use crate::state::BatchState;
 
 /// The stages that have a shader so far, in [`crate::pipeline::STAGES`] order.
 pub const STAGES_WITH_SHADERS: &[&str] = &[
+    "begin_step",
     "robot_motion",
     "shadow_robot",
     "group_velocities",
@@ -35,6 +38,7 @@ pub const STAGES_WITH_SHADERS: &[&str] = &[
     "reward",
     "metrics",
     "observation",
+    "autoreset",
 ];
 
 /// A packed table on the device: every f32 column in one storage buffer, every u32 column in
@@ -53,8 +57,14 @@ pub struct GpuStages {
     n_envs: usize,
     state: DeviceTable,
     outputs: DeviceTable,
+    params: wgpu::Buffer,
     actions: wgpu::Buffer,
+    pool: wgpu::Buffer,
+    pool_row_words: usize,
     readback: wgpu::Buffer,
+    step_readback: wgpu::Buffer,
+    /// Word offset of the `episode` column in the state's u32 buffer.
+    episode_offset: usize,
     bind_group: wgpu::BindGroup,
     pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
 }
@@ -66,6 +76,18 @@ impl std::fmt::Debug for GpuStages {
             .field("n_envs", &self.n_envs)
             .finish_non_exhaustive()
     }
+}
+
+/// Word offset of u32 column `name` in a packed table of `columns` over `n_envs` environments
+/// (every column before it of the same kind, in declaration order).
+fn u32_offset(columns: wgsl::Columns<'_>, n_envs: usize, name: &str) -> usize {
+    n_envs
+        * columns
+            .iter()
+            .filter(|c| c.1 == crate::state::columns::Elem::U32)
+            .take_while(|c| c.0 != name)
+            .map(|c| c.2)
+            .sum::<usize>()
 }
 
 fn bytes_of<T>(n: usize) -> u64 {
@@ -122,7 +144,7 @@ impl DeviceTable {
 
 impl GpuStages {
     /// Upload `state`, `outputs` and `params` and build the pipelines of `stages` (names from
-    /// [`STAGES_WITH_SHADERS`]).
+    /// [`STAGES_WITH_SHADERS`] or [`wgsl::PASSES`]). The reset pool starts zeroed.
     pub fn new(
         dev: GpuDevice,
         params: &StepParams,
@@ -141,13 +163,35 @@ impl GpuStages {
         dev.queue
             .write_buffer(&params_buf, 0, bytemuck::bytes_of(params));
         let actions = storage_buffer(&dev, "actions", bytes_of::<f32>(3 * n_envs));
+        let pool_row_words = wgsl::pool_row_words(&state.columns(), &outputs.columns());
+        let pool_bytes = bytes_of::<u32>(n_envs * pool_row_words);
+        if pool_bytes > dev.limits.max_storage_buffer_binding_size {
+            return Err(SimError::BackendUnavailable(format!(
+                "{n_envs} environments need a reset pool of {pool_bytes} bytes, more than {} \
+                 allows in one binding ({} bytes): use fewer environments",
+                dev.adapter.name, dev.limits.max_storage_buffer_binding_size
+            )));
+        }
+        let pool = storage_buffer(&dev, "reset pool", pool_bytes);
+        let episode_offset = u32_offset(&state.columns(), n_envs, "episode");
+        // The outputs (f32 words, then u32 words) and the state's episode counters, read back
+        // after every step.
+        let step_readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("step readback"),
+            size: bytes_of::<u32>(
+                outputs_table.packed_f32.len() + outputs_table.packed_u32.len() + n_envs,
+            ),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size: bytes_of::<u32>(state_table.largest().max(outputs_table.largest())),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        // Bindings of the prelude (`backend::wgsl::prelude`): params, sf, su, actions, outf, outu.
+        // Bindings of the prelude (`backend::wgsl::prelude`): params, sf, su, actions, outf, outu,
+        // pool.
         let bound = [
             (&params_buf, true),
             (&state_table.f32s, false),
@@ -155,6 +199,7 @@ impl GpuStages {
             (&actions, true),
             (&outputs_table.f32s, false),
             (&outputs_table.u32s, false),
+            (&pool, true),
         ];
         let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..)
             .zip(&bound)
@@ -202,7 +247,7 @@ impl GpuStages {
         );
         let mut pipelines = Vec::new();
         for &stage in stages {
-            if !STAGES_WITH_SHADERS.contains(&stage) {
+            if !STAGES_WITH_SHADERS.contains(&stage) && !wgsl::PASSES.contains(&stage) {
                 return Err(SimError::BackendUnavailable(format!(
                     "stage {stage:?} has no shader yet (stages with shaders: {STAGES_WITH_SHADERS:?})"
                 )));
@@ -233,8 +278,13 @@ impl GpuStages {
             n_envs,
             state: state_table,
             outputs: outputs_table,
+            params: params_buf,
             actions,
+            pool,
+            pool_row_words,
             readback,
+            step_readback,
+            episode_offset,
             bind_group,
             pipelines,
         };
@@ -280,39 +330,107 @@ impl GpuStages {
             .write_buffer(&self.actions, 0, bytemuck::cast_slice(actions));
     }
 
+    /// Replace the step constants.
+    pub fn upload_params(&mut self, params: &StepParams) {
+        self.dev
+            .queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(params));
+    }
+
+    /// Words of one reset-pool row ([`wgsl::pool_row_words`]).
+    pub fn pool_row_words(&self) -> usize {
+        self.pool_row_words
+    }
+
+    /// Write `rows` (whole pool rows) into the reset pool from environment `first_env` on.
+    pub fn write_pool_rows(&mut self, first_env: usize, rows: &[u32]) {
+        assert_eq!(
+            rows.len() % self.pool_row_words.max(1),
+            0,
+            "whole pool rows"
+        );
+        let offset = (first_env * self.pool_row_words * 4) as u64;
+        self.dev
+            .queue
+            .write_buffer(&self.pool, offset, bytemuck::cast_slice(rows));
+    }
+
     /// Run stage `stage` over every environment (one dispatch, one submit).
     pub fn run(&mut self, stage: &str) -> Result<(), SimError> {
-        let Some((_, pipeline)) = self.pipelines.iter().find(|(s, _)| *s == stage) else {
-            return Err(SimError::BackendUnavailable(format!(
-                "stage {stage:?} was not built for this batch"
-            )));
-        };
+        self.run_stages(&[stage], None)
+    }
+
+    /// Run `stages` in order over every environment, one dispatch each, in one submit; with `read`,
+    /// the same submit then copies the outputs and the episode counters into the step readback
+    /// buffer, which is read into `read`'s outputs (same batch size and layout) and counters (one
+    /// per environment) without allocating.
+    pub fn run_stages(
+        &mut self,
+        stages: &[&str],
+        read: Option<(&mut Outputs, &mut [u32])>,
+    ) -> Result<(), SimError> {
         let mut enc = self
             .dev
             .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(stage) });
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("step"),
+            });
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(stage),
+                label: Some("step"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &self.bind_group, &[]);
-            pass.dispatch_workgroups((self.n_envs as u32).div_ceil(wgsl::WORKGROUP_SIZE), 1, 1);
+            for &stage in stages {
+                let Some((_, pipeline)) = self.pipelines.iter().find(|(s, _)| *s == stage) else {
+                    return Err(SimError::BackendUnavailable(format!(
+                        "stage {stage:?} was not built for this batch"
+                    )));
+                };
+                pass.set_pipeline(pipeline);
+                pass.dispatch_workgroups((self.n_envs as u32).div_ceil(wgsl::WORKGROUP_SIZE), 1, 1);
+            }
         }
+        let Some((out, episode)) = read else {
+            self.dev.queue.submit([enc.finish()]);
+            return self.dev.take_errors();
+        };
+        let f_bytes = (self.outputs.packed_f32.len() * 4) as u64;
+        let u_bytes = (self.outputs.packed_u32.len() * 4) as u64;
+        let e_bytes = (self.n_envs * 4) as u64;
+        let rb = &self.step_readback;
+        enc.copy_buffer_to_buffer(&self.outputs.f32s, 0, rb, 0, f_bytes);
+        enc.copy_buffer_to_buffer(&self.outputs.u32s, 0, rb, f_bytes, u_bytes);
+        let episode_at = (self.episode_offset * 4) as u64;
+        enc.copy_buffer_to_buffer(&self.state.u32s, episode_at, rb, f_bytes + u_bytes, e_bytes);
         self.dev.queue.submit([enc.finish()]);
+        let total = f_bytes + u_bytes + e_bytes;
+        self.map_and_read(rb, total, |words| {
+            let (f, rest) = words.split_at((f_bytes / 4) as usize);
+            let (u, ep) = rest.split_at((u_bytes / 4) as usize);
+            out.unpack(bytemuck::cast_slice(f), u);
+            episode.copy_from_slice(ep);
+        })
+    }
+
+    /// Wait until the device has finished the work submitted so far.
+    pub fn wait(&self) -> Result<(), SimError> {
+        self.dev
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| SimError::BackendUnavailable(format!("GPU wait failed: {e}")))?;
         self.dev.take_errors()
     }
 
     /// Read the device's state back into `state` (same batch size and capacities).
-    pub fn download_state(&mut self, state: &mut BatchState) -> Result<(), SimError> {
+    pub fn download_state(&self, state: &mut BatchState) -> Result<(), SimError> {
         let (f, u) = self.read_table(&self.state)?;
         state.unpack(&f, &u);
         Ok(())
     }
 
     /// Read the device's outputs back into `outputs` (same batch size and layout).
-    pub fn download_outputs(&mut self, outputs: &mut Outputs) -> Result<(), SimError> {
+    pub fn download_outputs(&self, outputs: &mut Outputs) -> Result<(), SimError> {
         let (f, u) = self.read_table(&self.outputs)?;
         outputs.unpack(&f, &u);
         Ok(())
@@ -326,9 +444,6 @@ impl GpuStages {
 
     /// The first `n` 32-bit words of `src`.
     fn read_words(&self, src: &wgpu::Buffer, n: usize) -> Result<Vec<u32>, SimError> {
-        let failed = |e: &dyn std::fmt::Display| {
-            SimError::BackendUnavailable(format!("GPU readback failed: {e}"))
-        };
         if n == 0 {
             return Ok(Vec::new());
         }
@@ -341,7 +456,23 @@ impl GpuStages {
             });
         enc.copy_buffer_to_buffer(src, 0, &self.readback, 0, bytes);
         self.dev.queue.submit([enc.finish()]);
-        let slice = self.readback.slice(..bytes);
+        let mut words = Vec::new();
+        self.map_and_read(&self.readback, bytes, |w| words.extend_from_slice(w))?;
+        Ok(words)
+    }
+
+    /// Map the first `bytes` of `buffer` (after the work submitted so far), hand its words to
+    /// `read`, and unmap it.
+    fn map_and_read(
+        &self,
+        buffer: &wgpu::Buffer,
+        bytes: u64,
+        read: impl FnOnce(&[u32]),
+    ) -> Result<(), SimError> {
+        let failed = |e: &dyn std::fmt::Display| {
+            SimError::BackendUnavailable(format!("GPU readback failed: {e}"))
+        };
+        let slice = buffer.slice(..bytes);
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
             // The receiver lives until the poll below has delivered this.
@@ -352,12 +483,12 @@ impl GpuStages {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| failed(&e))?;
         rx.recv().map_err(|e| failed(&e))?.map_err(|e| failed(&e))?;
-        let words = {
+        {
             let view = slice.get_mapped_range().map_err(|e| failed(&e))?;
-            bytemuck::cast_slice::<u8, u32>(&view).to_vec()
-        };
-        self.readback.unmap();
-        self.dev.take_errors()?;
-        Ok(words)
+            let words = bytemuck::try_cast_slice::<u8, u32>(&view).map_err(|e| failed(&e))?;
+            read(words);
+        }
+        buffer.unmap();
+        self.dev.take_errors()
     }
 }

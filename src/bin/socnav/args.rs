@@ -37,6 +37,16 @@ pub enum BackendChoice {
     Gpu,
 }
 
+impl From<BackendChoice> for socnav::backend::BackendChoice {
+    fn from(c: BackendChoice) -> Self {
+        match c {
+            BackendChoice::Auto => Self::Auto,
+            BackendChoice::Cpu => Self::Cpu,
+            BackendChoice::Gpu => Self::Gpu,
+        }
+    }
+}
+
 /// How actions are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum PolicyChoice {

@@ -16,7 +16,7 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
     let config = Config::from_name_or_path(&a.config)?;
     let mut rows = Vec::new();
     for (i, &n) in a.envs.iter().enumerate() {
-        let mut env = make_env(config.clone(), n, 0, a.backend, a.threads, a.json || i > 0)?;
+        let mut env = make_env(config.clone(), n, 0, a.backend, a.threads)?;
         env.reset(Some(0))?;
         let actions: Vec<f32> = [0.8f32, 0.0, 0.3].repeat(n);
         for _ in 0..WARMUP_STEPS {

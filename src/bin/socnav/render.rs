@@ -64,6 +64,7 @@ pub fn render(a: &RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         seed: a.seed,
         autoreset: AutoresetMode::Disabled,
         threads: Some(1),
+        ..Default::default()
     };
     let mut env = BatchEnv::new(config, options)?;
     env.reset(Some(a.seed))?;

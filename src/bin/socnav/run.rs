@@ -14,52 +14,29 @@ use socnav::{Actions, BatchEnv, Config, EnvOptions};
 use crate::args::{BackendChoice, RunArgs};
 use crate::policy::Policy;
 
-/// Why the GPU backend cannot step a batch in this build.
-fn gpu_unfinished() -> String {
-    #[cfg(feature = "gpu")]
-    let shaders = socnav::backend::gpu::STAGES_WITH_SHADERS.len();
-    #[cfg(not(feature = "gpu"))]
-    let shaders = 0;
-    format!(
-        "the GPU backend cannot step a batch yet ({shaders} of {} stages have their shader; \
-         `socnav devices` lists the adapters it would use)",
-        socnav::pipeline::STAGES.len()
-    )
-}
-
-/// Make a batch on the chosen backend, saying which one runs.
+/// Make a batch on the chosen backend (`auto` says on stderr when it falls back to the CPU).
 pub fn make_env(
     config: Config,
     n_envs: usize,
     seed: u64,
     backend: BackendChoice,
     threads: Option<usize>,
-    quiet: bool,
 ) -> Result<BatchEnv, socnav::SimError> {
-    let env = BatchEnv::new(
+    BatchEnv::new(
         config,
         EnvOptions {
             n_envs,
             seed,
             threads,
+            backend: backend.into(),
             ..Default::default()
         },
-    )?;
-    match backend {
-        BackendChoice::Gpu => return Err(socnav::SimError::BackendUnavailable(gpu_unfinished())),
-        BackendChoice::Auto if !quiet => eprintln!(
-            "backend auto: using the CPU backend ({} threads); {}",
-            env.threads(),
-            gpu_unfinished()
-        ),
-        _ => {}
-    }
-    Ok(env)
+    )
 }
 
 pub fn run(a: &RunArgs) -> Result<(), Box<dyn std::error::Error>> {
     let config = Config::from_name_or_path(&a.config)?;
-    let mut env = make_env(config, a.envs, a.seed, a.backend, a.threads, a.json)?;
+    let mut env = make_env(config, a.envs, a.seed, a.backend, a.threads)?;
     env.reset(Some(a.seed))?;
     let mut policy = Policy::new(a.policy, a.seed, &env);
     let mut actions = vec![0.0f32; 3 * a.envs];

@@ -1,0 +1,310 @@
+//! [`GpuBackend`]: the whole step on the device, one submit per step.
+//!
+//! Per step the host uploads the actions, records one compute pass with one dispatch per stage of
+//! [`STAGES`] (wgpu orders the dispatches through their storage-buffer barriers), copies the
+//! outputs and the episode counters into a mapped readback buffer in the same submit, and reads
+//! them into the host outputs it keeps ([`Backend::outputs`]) without allocating.
+//!
+//! Resets copy rows of the reset pool (`src/backend/reset_pool.rs`): an environment whose episode
+//! counter moved on the device has consumed its row, and the host generates its next one (on its
+//! worker threads, for all such environments at once) before the next device work. The state
+//! stays on the device; [`Backend::state`] downloads a host copy when asked and keeps it until the
+//! next step, and [`Backend::state_mut`] edits that copy, which is uploaded before the next device
+//! work.
+
+use std::sync::OnceLock;
+use std::time::Instant;
+
+use crate::backend::Backend;
+use crate::backend::reset_pool;
+use crate::error::SimError;
+use crate::outputs::Outputs;
+use crate::params::StepParams;
+use crate::pipeline::STAGES;
+use crate::spec::ObsLayout;
+use crate::state::{BatchState, Caps};
+
+use super::{GpuDevice, GpuStages};
+
+/// `row_episode` of a pool row that holds nothing valid.
+const NO_ROW: u32 = u32::MAX;
+
+/// The GPU backend.
+pub struct GpuBackend {
+    params: StepParams,
+    gpu: GpuStages,
+    caps: Caps,
+    layout: ObsLayout,
+    out: Outputs,
+    /// The host copy of the device state, when one was asked for since the last device work.
+    state: OnceLock<BatchState>,
+    /// The host copy of the state was edited: upload it before the next device work.
+    state_edited: bool,
+    /// The host outputs were edited: upload them before the next device work.
+    outputs_edited: bool,
+    /// Each environment's episode counter on the device, as last read back.
+    episode: Vec<u32>,
+    /// The episode counter each pool row was generated for ([`NO_ROW`]: none).
+    row_episode: Vec<u32>,
+    /// Rows whose scenario could not be generated: the error, raised when the row is consumed
+    /// (the step at which the CPU backend's reset would fail).
+    row_errors: Vec<Option<SimError>>,
+    /// Episode counters read back by the last device work.
+    read_episode: Vec<u32>,
+    /// Reused buffers of the pool refill.
+    stale: Vec<usize>,
+    rows: Vec<u32>,
+    threads: usize,
+    pool: Option<rayon::ThreadPool>,
+    timing: bool,
+    stage_seconds: Vec<f64>,
+    actions_mask: Vec<f32>,
+}
+
+impl std::fmt::Debug for GpuBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuBackend")
+            .field("adapter", &self.gpu.adapter().name)
+            .field("n_envs", &self.episode.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl GpuBackend {
+    /// A backend over `state` and `out` on `dev`; `threads` host threads generate the reset rows
+    /// (all cores when `None`).
+    ///
+    /// # Errors
+    /// `BackendUnavailable` when a stage has no shader, the batch does not fit the adapter's
+    /// limits, or a shader fails to build.
+    pub fn new(
+        dev: GpuDevice,
+        params: StepParams,
+        state: BatchState,
+        out: Outputs,
+        threads: Option<usize>,
+    ) -> Result<Self, SimError> {
+        let mut passes: Vec<&'static str> = STAGES.iter().map(|s| s.name).collect();
+        passes.extend(crate::backend::wgsl::PASSES);
+        let gpu = GpuStages::new(dev, &params, &state, &out, &passes)?;
+        let threads = crate::backend::cpu::resolve_threads(threads);
+        // The caller waits while the rows are generated: every thread is a worker.
+        let pool = crate::backend::cpu::thread_pool(threads, "socnav-reset")?;
+        let n = state.n_envs;
+        let caps = state.strides;
+        let layout = out.strides.layout;
+        let episode = state.episode.clone();
+        Ok(Self {
+            params,
+            gpu,
+            caps,
+            layout,
+            out,
+            state: OnceLock::from(state),
+            state_edited: false,
+            outputs_edited: false,
+            episode,
+            row_episode: vec![NO_ROW; n],
+            row_errors: (0..n).map(|_| None).collect(),
+            read_episode: vec![0; n],
+            stale: Vec::new(),
+            rows: Vec::new(),
+            threads,
+            pool,
+            timing: false,
+            stage_seconds: vec![0.0; STAGES.len()],
+            actions_mask: vec![0.0; 3 * n],
+        })
+    }
+
+    /// The adapter the batch runs on.
+    pub fn adapter(&self) -> &super::AdapterSummary {
+        self.gpu.adapter()
+    }
+
+    /// Upload what the host edited and refill the pool rows that are stale.
+    fn prepare(&mut self) -> Result<(), SimError> {
+        if self.state_edited {
+            let s = self.state.get().expect("an edited state is present");
+            self.gpu.upload_state(s);
+            self.episode.copy_from_slice(&s.episode);
+            self.state_edited = false;
+        }
+        if self.outputs_edited {
+            self.gpu.upload_outputs(&self.out);
+            self.outputs_edited = false;
+        }
+        self.refill()
+    }
+
+    /// Generate the pool rows of the environments whose row is not for their current episode,
+    /// and write them to the device (consecutive environments in one write).
+    fn refill(&mut self) -> Result<(), SimError> {
+        self.stale.clear();
+        self.stale
+            .extend((0..self.episode.len()).filter(|&e| self.row_episode[e] != self.episode[e]));
+        if self.stale.is_empty() {
+            return Ok(());
+        }
+        let words = self.gpu.pool_row_words();
+        self.rows.clear();
+        self.rows.resize(self.stale.len() * words, 0);
+        let failed = reset_pool::write_rows(
+            &self.params,
+            self.caps,
+            self.layout,
+            &self.stale,
+            &self.episode,
+            &mut self.rows,
+            self.pool.as_ref(),
+        );
+        for &e in &self.stale {
+            self.row_episode[e] = self.episode[e];
+            self.row_errors[e] = None;
+        }
+        for (e, err) in failed {
+            self.row_errors[e] = Some(err);
+        }
+        let mut k = 0;
+        while k < self.stale.len() {
+            let mut end = k + 1;
+            while end < self.stale.len() && self.stale[end] == self.stale[end - 1] + 1 {
+                end += 1;
+            }
+            self.gpu
+                .write_pool_rows(self.stale[k], &self.rows[k * words..end * words]);
+            k = end;
+        }
+        Ok(())
+    }
+
+    /// Run `passes` (one submit, or one per pass and timed), read the outputs and episode
+    /// counters back, and account for the pool rows consumed.
+    fn run(&mut self, passes: &[&str]) -> Result<(), SimError> {
+        let _ = self.state.take();
+        if self.timing {
+            for (k, pass) in passes.iter().enumerate() {
+                let start = Instant::now();
+                self.gpu.run(pass)?;
+                self.gpu.wait()?;
+                self.stage_seconds[k] += start.elapsed().as_secs_f64();
+            }
+            self.gpu
+                .run_stages(&[], Some((&mut self.out, &mut self.read_episode)))?;
+        } else {
+            self.gpu
+                .run_stages(passes, Some((&mut self.out, &mut self.read_episode)))?;
+        }
+        let mut error = None;
+        for e in 0..self.episode.len() {
+            if self.read_episode[e] != self.episode[e] {
+                if let Some(err) = self.row_errors[e].take() {
+                    error.get_or_insert(err);
+                }
+                self.episode[e] = self.read_episode[e];
+            }
+        }
+        error.map_or(Ok(()), Err)
+    }
+
+    /// The host copy of the state, downloaded if there is none.
+    fn host_state(&self) -> &BatchState {
+        self.state.get_or_init(|| {
+            let mut s = BatchState::new(self.episode.len(), self.caps);
+            // A failed readback means a lost device, which wgpu treats as fatal too.
+            self.gpu
+                .download_state(&mut s)
+                .unwrap_or_else(|e| panic!("{e}"));
+            s
+        })
+    }
+}
+
+impl Backend for GpuBackend {
+    fn reset(&mut self, mask: Option<&[bool]>) -> Result<(), SimError> {
+        let n = self.episode.len();
+        if let Some(m) = mask {
+            if m.len() != n {
+                return Err(SimError::Shape(format!(
+                    "reset mask has {} entries for {n} environments",
+                    m.len()
+                )));
+            }
+        }
+        self.prepare()?;
+        for e in 0..n {
+            self.actions_mask[3 * e] = if mask.is_none_or(|m| m[e]) { 1.0 } else { 0.0 };
+        }
+        self.gpu.upload_actions(&self.actions_mask);
+        self.run(&["reset"])
+    }
+
+    fn step(&mut self, actions: &[f32]) -> Result<(), SimError> {
+        assert_eq!(
+            actions.len(),
+            3 * self.episode.len(),
+            "actions are validated by BatchEnv::step"
+        );
+        self.prepare()?;
+        self.gpu.upload_actions(actions);
+        const NAMES: [&str; STAGES.len()] = {
+            let mut names = [""; STAGES.len()];
+            let mut k = 0;
+            while k < STAGES.len() {
+                names[k] = STAGES[k].name;
+                k += 1;
+            }
+            names
+        };
+        self.run(&NAMES)
+    }
+
+    fn outputs(&self) -> &Outputs {
+        &self.out
+    }
+
+    fn state(&self) -> &BatchState {
+        self.host_state()
+    }
+
+    fn state_mut(&mut self) -> &mut BatchState {
+        self.host_state();
+        self.state_edited = true;
+        self.state.get_mut().expect("downloaded above")
+    }
+
+    fn state_changed(&mut self, env: usize) {
+        self.host_state();
+        let p = self.params;
+        let state = self.state.get_mut().expect("downloaded above");
+        let mut s = state.env_chunk(env);
+        crate::systems::orca_obstacles::rebuild_if_dirty(&p, &mut s, 0);
+        let mut o = self.out.env_chunk(env);
+        crate::systems::observation::write_observation(&p, &mut s, &mut o, 0);
+        self.state_edited = true;
+        self.outputs_edited = true;
+    }
+
+    fn set_params(&mut self, params: StepParams) {
+        self.params = params;
+        self.gpu.upload_params(&params);
+        // Every row depends on the constants (the seed above all).
+        self.row_episode.fill(NO_ROW);
+    }
+
+    fn threads(&self) -> usize {
+        self.threads
+    }
+
+    fn set_stage_timing(&mut self, on: bool) {
+        self.timing = on;
+    }
+
+    fn stage_seconds(&self) -> Vec<f64> {
+        self.stage_seconds.clone()
+    }
+
+    fn name(&self) -> &'static str {
+        "gpu"
+    }
+}
