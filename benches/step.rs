@@ -1,5 +1,7 @@
-//! Criterion benches of the CPU step: exp1, exp2, exp3 at 1, 64, 1,024 and 4,096 environments,
-//! observations written, DSRNN reward. Throughput is reported in env-steps per second.
+//! Criterion benches of the step: exp1, exp2, exp3, observations written and read back, DSRNN
+//! reward, throughput in env-steps per second. The CPU backend at 1, 64, 1,024 and 4,096
+//! environments; the GPU backend at 4,096, 16,384 and 65,536 when a hardware GPU adapter exists
+//! (`SOCNAV_BENCH_GPU=any` takes a software one too, for correctness runs only).
 //!
 //! `cargo bench --bench step`; record figures in `benches/RESULTS.md` with the machine, batch size,
 //! backend and commit.
@@ -7,22 +9,49 @@
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use socnav::backend::BackendChoice;
 use socnav::{Actions, BatchEnv, Config, EnvOptions};
 
 fn step(c: &mut Criterion) {
+    bench_backend(c, "step", BackendChoice::Cpu, &[1, 64, 1024, 4096]);
+}
+
+#[cfg(feature = "gpu")]
+fn step_gpu(c: &mut Criterion) {
+    use socnav::backend::gpu::{AdapterPolicy, GpuDevice};
+    let any = std::env::var("SOCNAV_BENCH_GPU").is_ok_and(|v| v == "any");
+    let policy = if any {
+        AdapterPolicy::Any
+    } else {
+        AdapterPolicy::Hardware
+    };
+    if let Err(e) = GpuDevice::open(policy) {
+        eprintln!("step_gpu: SKIPPED ({e}); SOCNAV_BENCH_GPU=any runs it on a software adapter");
+        return;
+    }
+    bench_backend(c, "step_gpu", BackendChoice::Gpu, &[4096, 16384, 65536]);
+}
+
+#[cfg(not(feature = "gpu"))]
+fn step_gpu(_: &mut Criterion) {
+    eprintln!("step_gpu: SKIPPED (built without the `gpu` feature)");
+}
+
+fn bench_backend(c: &mut Criterion, label: &str, backend: BackendChoice, sizes: &[usize]) {
     for name in ["exp1", "exp2", "exp3"] {
         let config = Config::from_name_or_path(name).expect("shipped config");
-        let mut group = c.benchmark_group(format!("step/{name}"));
+        let mut group = c.benchmark_group(format!("{label}/{name}"));
         group
             .measurement_time(Duration::from_secs(3))
             .warm_up_time(Duration::from_secs(1))
             .sample_size(20);
-        for n in [1usize, 64, 1024, 4096] {
+        for &n in sizes {
             let mut env = BatchEnv::new(
                 config.clone(),
                 EnvOptions {
                     n_envs: n,
                     seed: 0,
+                    backend,
                     ..Default::default()
                 },
             )
@@ -39,5 +68,5 @@ fn step(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, step);
+criterion_group!(benches, step, step_gpu);
 criterion_main!(benches);

@@ -137,6 +137,11 @@ impl BatchEnv {
         self.backend.name()
     }
 
+    /// What runs the batch: the CPU threads, or the GPU adapter.
+    pub fn device(&self) -> String {
+        self.backend.device()
+    }
+
     /// CPU threads in use.
     pub fn threads(&self) -> usize {
         self.backend.threads()

@@ -282,4 +282,8 @@ impl Backend for CpuBackend {
     fn name(&self) -> &'static str {
         "cpu"
     }
+
+    fn device(&self) -> String {
+        format!("CPU, {} threads", self.threads)
+    }
 }

@@ -112,4 +112,6 @@ pub trait Backend: Send + Sync {
     fn stage_seconds(&self) -> Vec<f64>;
     /// Short name, e.g. "cpu".
     fn name(&self) -> &'static str;
+    /// What runs the batch, for logs and benchmark records: the CPU threads, or the GPU adapter.
+    fn device(&self) -> String;
 }

@@ -307,4 +307,8 @@ impl Backend for GpuBackend {
     fn name(&self) -> &'static str {
         "gpu"
     }
+
+    fn device(&self) -> String {
+        self.gpu.adapter().to_string()
+    }
 }

@@ -15,6 +15,7 @@ const WARMUP_STEPS: usize = 50;
 pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
     let config = Config::from_name_or_path(&a.config)?;
     let mut rows = Vec::new();
+    let (mut device, mut backend) = (String::new(), "");
     for (i, &n) in a.envs.iter().enumerate() {
         let mut env = make_env(config.clone(), n, 0, a.backend, a.threads)?;
         env.reset(Some(0))?;
@@ -42,25 +43,40 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             "env_steps_per_s": (n * steps) as f64 / secs,
             "state_bytes_per_env": env.state().bytes_per_env(),
             "obs_floats_per_env": env.layout().dim,
-            // Stage time is summed over threads: each stage's share of the step's CPU time.
+            // CPU stage time is summed over threads: each stage's share of the step's CPU time.
+            // GPU stages are timed one submit each, in wall time.
             "stage_share": stages.iter().map(|(k, s)| (k.to_string(), json!(s / stage_total))).collect::<serde_json::Map<_, _>>(),
-            "stage_env_steps_per_s": stages.iter().map(|(k, s)| (k.to_string(), json!((n * timed) as f64 / s * env.threads() as f64))).collect::<serde_json::Map<_, _>>(),
+            "stage_env_steps_per_s": stages.iter().map(|(k, s)| (k.to_string(), json!((n * timed) as f64 / s * stage_parallelism(&env) as f64))).collect::<serde_json::Map<_, _>>(),
         }));
         if !a.json {
-            print_row(rows.last().expect("row just pushed"), i == 0, env.threads());
+            print_row(rows.last().expect("row just pushed"), i == 0, &env);
         }
+        device = env.device();
+        backend = env.backend_name();
     }
     if a.json {
-        let out = json!({"config": a.config, "backend": "cpu", "threads": a.threads, "rows": rows});
+        let out = json!({"config": a.config, "backend": backend, "device": device, "threads": a.threads, "rows": rows});
         println!("{}", serde_json::to_string_pretty(&out)?);
     }
     Ok(())
 }
 
-fn print_row(row: &serde_json::Value, header: bool, threads: usize) {
+/// Threads a stage's measured time is summed over: the CPU backend's threads, 1 for the GPU's
+/// wall-clock stage timing.
+fn stage_parallelism(env: &socnav::BatchEnv) -> usize {
+    if env.backend_name() == "cpu" {
+        env.threads()
+    } else {
+        1
+    }
+}
+
+fn print_row(row: &serde_json::Value, header: bool, env: &socnav::BatchEnv) {
     if header {
         println!(
-            "CPU backend, {threads} threads; per-stage figures are env-steps/s if the stage ran alone"
+            "{} backend on {}; per-stage figures are env-steps/s if the stage ran alone",
+            env.backend_name(),
+            env.device()
         );
     }
     println!(

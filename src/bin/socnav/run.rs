@@ -111,6 +111,7 @@ impl Summary<'_> {
         json!({
             "config": self.a.config,
             "backend": self.env.backend_name(),
+            "device": self.env.device(),
             "threads": self.env.threads(),
             "envs": self.a.envs,
             "steps": self.a.steps,
@@ -137,13 +138,13 @@ impl Summary<'_> {
         let a = self.a;
         let pct = |k: &str| 100.0 * self.agg.mean(k);
         println!(
-            "socnav run: {} | {} envs x {} steps | seed {} | {} backend, {} threads | {} policy",
+            "socnav run: {} | {} envs x {} steps | seed {} | {} backend on {} | {} policy",
             a.config,
             a.envs,
             a.steps,
             a.seed,
             self.env.backend_name(),
-            self.env.threads(),
+            self.env.device(),
             format!("{:?}", a.policy).to_lowercase()
         );
         println!(
