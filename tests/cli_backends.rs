@@ -43,11 +43,20 @@ fn run_reports_match() {
         return;
     }
     for (config, policy) in [("exp2", "random"), ("exp3", "goal")] {
-        let base = ["--config", config, "--envs", "64", "--steps", "400", "--seed", "5", "--policy", policy];
+        let base = [
+            "--config", config, "--envs", "64", "--steps", "400", "--seed", "5", "--policy", policy,
+        ];
         let cpu = run_json(&[&base[..], &["--backend", "cpu"]].concat());
         let gpu = run_json(&[&base[..], &["--backend", "gpu"]].concat());
         assert_eq!(gpu["backend"], "gpu");
-        assert!(cpu["episodes"].as_u64().unwrap_or(0) > 0, "{config}: no episode ended");
-        assert_eq!(comparable(cpu), comparable(gpu), "{config} ({policy}): reports differ");
+        assert!(
+            cpu["episodes"].as_u64().unwrap_or(0) > 0,
+            "{config}: no episode ended"
+        );
+        assert_eq!(
+            comparable(cpu),
+            comparable(gpu),
+            "{config} ({policy}): reports differ"
+        );
     }
 }

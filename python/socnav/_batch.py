@@ -14,6 +14,7 @@ from socnav._socnav import DISCRETE_ACTIONS, Batch, ConfigError
 
 ACTION_TYPES = ("continuous", "discrete")
 OBS_MODES = ("dict", "flat")
+BACKENDS = ("auto", "cpu", "gpu")
 N_DISCRETE = len(DISCRETE_ACTIONS)
 
 
@@ -23,6 +24,7 @@ def build_batch(
     seed: int | None,
     autoreset_mode: str,
     threads: int | None,
+    backend: str = "cpu",
 ) -> Batch:
     """``config``: a shipped name or a TOML path, or a dict of overrides with an optional
     ``"base"`` key naming the config they apply to (default ``"exp1"``)."""
@@ -39,7 +41,10 @@ def build_batch(
         raise TypeError(f"config must be a name, a path or a dict, got {type(config).__name__}")
     if not isinstance(num_envs, (int, np.integer)) or isinstance(num_envs, bool) or num_envs < 1:
         raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
-    return Batch(base, int(num_envs), 0 if seed is None else int(seed), autoreset_mode, threads, text)
+    check_choice("backend", backend, BACKENDS)
+    return Batch(
+        base, int(num_envs), 0 if seed is None else int(seed), autoreset_mode, threads, text, None, backend
+    )
 
 
 def _non_finite(table: Mapping[str, Any], prefix: str):

@@ -15,7 +15,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from socnav import _batch
-from socnav._socnav import BackendUnavailableError, Batch
+from socnav._socnav import Batch
 
 _AUTORESET = {
     "next_step": AutoresetMode.NEXT_STEP,
@@ -36,6 +36,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         obs_mode: str = "dict",
         action_type: str = "continuous",
         autoreset_mode: str | AutoresetMode = "next_step",
+        backend: str = "auto",
         threads: int | None = None,
         copy: bool = False,
         reward_fn: _batch.RewardFn | None = None,
@@ -45,7 +46,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self.obs_mode = _batch.check_choice("obs_mode", obs_mode, _batch.OBS_MODES)
         self.action_type = _batch.check_choice("action_type", action_type, _batch.ACTION_TYPES)
         self.copy = copy
-        self._batch: Batch = _batch.build_batch(config, num_envs, seed, mode, threads)
+        self._batch: Batch = _batch.build_batch(config, num_envs, seed, mode, threads, backend)
         self.num_envs = self._batch.num_envs
         self.metadata = {"autoreset_mode": _AUTORESET[mode], "render_modes": []}
         self._layout = self._batch.layout()
@@ -66,8 +67,13 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
 
     @property
     def backend(self) -> str:
-        """The backend stepping the batch (``"cpu"``)."""
+        """The backend stepping the batch: ``"cpu"`` or ``"gpu"``."""
         return self._batch.backend
+
+    @property
+    def device(self) -> str:
+        """What runs the batch: the CPU threads, or the GPU adapter."""
+        return self._batch.device
 
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
@@ -201,7 +207,9 @@ def make_vec(
         obs_mode: ``"dict"`` (SocNavGym's blocks, zero-padded) or ``"flat"`` (one row).
         action_type: ``"continuous"`` (``Box(-1, 1, (3,))``) or ``"discrete"`` (``Discrete(7)``).
         autoreset_mode: ``"next_step"`` (default), ``"same_step"`` or ``"disabled"``.
-        backend: ``"auto"`` or ``"cpu"`` (the GPU backend is not built yet).
+        backend: ``"auto"`` (a hardware GPU when one exists, else the CPU with one line on
+            stderr), ``"cpu"`` or ``"gpu"`` (any adapter, software ones included; an error
+            without one). ``env.backend`` and ``env.device`` say what runs the batch.
         threads: CPU threads (all cores when ``None``).
         copy: return fresh arrays instead of views of the batch's buffers.
         reward_fn: a vectorised reward: called after every step with the step's arrays
@@ -209,10 +217,6 @@ def make_vec(
             the built-in one (also in the episode returns of ``info["episode"]``). Plain numpy
             over the batch costs microseconds; a Python loop over environments does not.
     """
-    if backend not in ("auto", "cpu"):
-        raise BackendUnavailableError(
-            f"backend {backend!r} is not available: this build has the 'cpu' backend only"
-        )
     return SocNavVectorEnv(
         config,
         num_envs,
@@ -220,6 +224,7 @@ def make_vec(
         obs_mode=obs_mode,
         action_type=action_type,
         autoreset_mode=autoreset_mode,
+        backend=backend,
         threads=threads,
         copy=copy,
         reward_fn=reward_fn,

@@ -100,7 +100,7 @@ impl Batch {
     /// config is then that TOML text); `overrides`: a JSON object of keys applied on top
     /// (`Config::with_overrides`).
     #[new]
-    #[pyo3(signature = (config, num_envs, seed=0, autoreset_mode="next_step", threads=None, overrides=None, toml_text=None))]
+    #[pyo3(signature = (config, num_envs, seed=0, autoreset_mode="next_step", threads=None, overrides=None, toml_text=None, backend="cpu"))]
     #[allow(
         clippy::too_many_arguments,
         reason = "the Python constructor's keyword arguments"
@@ -113,7 +113,11 @@ impl Batch {
         threads: Option<usize>,
         overrides: Option<&str>,
         toml_text: Option<&str>,
+        backend: &str,
     ) -> PyResult<Self> {
+        let backend: socnav::backend::BackendChoice = backend
+            .parse()
+            .map_err(|e: String| pyo3::exceptions::PyValueError::new_err(e))?;
         let mut c = match toml_text {
             Some(text) => Config::from_toml_str(text),
             None => Config::from_name_or_path(config),
@@ -129,7 +133,7 @@ impl Batch {
             seed,
             autoreset: parse_autoreset(autoreset_mode)?,
             threads,
-            ..Default::default()
+            backend,
         };
         let env = BatchEnv::new(c, options).map_err(py_err)?;
         Ok(Self { env })
@@ -145,6 +149,12 @@ impl Batch {
     #[getter]
     fn backend(&self) -> &'static str {
         self.env.backend_name()
+    }
+
+    /// What runs the batch: the CPU threads, or the GPU adapter.
+    #[getter]
+    fn device(&self) -> String {
+        self.env.device()
     }
 
     /// Whether the robot is holonomic (else differential drive: the lateral action must be 0).
