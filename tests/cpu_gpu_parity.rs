@@ -40,7 +40,8 @@ fn actions(env: &BatchEnv, rng: &mut RngStream, out: &mut [f32]) {
     for e in 0..n {
         let a = &mut out[3 * e..3 * e + 3];
         if e < n / 2 {
-            let bearing = (s.goal_y[e] - s.robot_y[e]).atan2(s.goal_x[e] - s.robot_x[e]);
+            let bearing =
+                socnav::math::atan2(s.goal_y[e] - s.robot_y[e], s.goal_x[e] - s.robot_x[e]);
             let mut turn = bearing - s.robot_theta[e];
             turn = (turn + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
                 - std::f32::consts::PI;
