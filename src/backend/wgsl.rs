@@ -59,6 +59,10 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/common/orca_world.wgsl"),
     ),
     (
+        "common/orca_obstacles.wgsl",
+        include_str!("../../shaders/common/orca_obstacles.wgsl"),
+    ),
+    (
         "shadow_robot.wgsl",
         include_str!("../../shaders/shadow_robot.wgsl"),
     ),
