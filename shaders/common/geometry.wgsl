@@ -45,22 +45,6 @@ fn geo_add_sum(a: f32, s: f32) -> f32 {
     return select(a + s, s, math_is_nan_bits(s));
 }
 
-// Corner k in 0.1.1's counter-clockwise order: local (+L/2,+W/2), (−L/2,+W/2), (−L/2,−W/2),
-// (+L/2,−W/2), rotated and translated (also RVO2's obstacle vertices).
-fn geo_rect_corner(r: Rect, k: u32) -> vec2<f32> {
-    var lx = r.hl;
-    var ly = -r.hw;
-    if (k == 0u) {
-        ly = r.hw;
-    } else if (k == 1u) {
-        lx = -r.hl;
-        ly = r.hw;
-    } else if (k == 2u) {
-        lx = -r.hl;
-    }
-    return vec2<f32>(geo_add_sum(r.x, lx * r.c - ly * r.s), geo_add_sum(r.y, lx * r.s + ly * r.c));
-}
-
 // The point of the rectangle nearest to (px, py) (the point itself when inside).
 fn geo_rect_nearest_point(r: Rect, px: f32, py: f32) -> vec2<f32> {
     let l = geo_rect_to_local(r, px, py);

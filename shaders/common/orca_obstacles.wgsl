@@ -103,7 +103,7 @@ fn orca_obstacles_corners(r: Rect) -> array<vec2<f32>, 4> {
         } else if (k == 3u) {
             ly = -r.hw;
         }
-        out[k] = vec2<f32>(r.x + (lx * r.c - ly * r.s), r.y + (lx * r.s + ly * r.c));
+        out[k] = vec2<f32>(geo_add_sum(r.x, lx * r.c - ly * r.s), geo_add_sum(r.y, lx * r.s + ly * r.c));
     }
     return out;
 }

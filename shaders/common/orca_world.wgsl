@@ -1,6 +1,6 @@
 // requires: common/orca.wgsl
 // requires: common/perception.wgsl
-// requires: common/world.wgsl
+// requires: common/orca_obstacles.wgsl
 //
 // Twin of src/systems/orca_world.rs (and of `with_visible` in src/systems/orca_obstacles.rs, the
 // obstacles a walker with a narrow field of view takes part with).
@@ -20,7 +20,10 @@
 // Otherwise only the lone humans and moving groups the view sees are candidates
 // (common/perception.wgsl), and the obstacles are those of Rust `with_visible`: the cached set
 // when every obstacle polygon is seen, none when none of those seen comes within the obstacle
-// range, else the visible polygons processed afresh (`orca_world_visible`).
+// range, else the visible polygons processed afresh (`orca_world_visible`, then
+// common/orca_obstacles.wgsl's `orca_obstacles_process`, RVO2's `processObstacles`). A processed
+// set that would overflow its capacity (S_OV_X vertices, as the `ov_*` columns) makes the
+// velocity NaN, like the list overflows below.
 //
 // Candidate identity. Rust collects the candidates into a list and selects by list index; the
 // selection only compares distances (ties keep the visiting order), so here a candidate is
@@ -164,113 +167,38 @@ fn orca_world_vertex(e: u32, v: u32) -> OrcaVertex {
 const ORCA_WORLD_OBSTACLES_CACHED: u32 = 0u;
 const ORCA_WORLD_OBSTACLES_NONE: u32 = 1u;
 const ORCA_WORLD_OBSTACLES_SUBSET: u32 = 2u;
-// Overflow bit (beyond common/orca.wgsl's): the visible subset must be processed, which this
-// build cannot do yet (RVO2's obstacle processing in WGSL is missing).
-const ORCA_WORLD_OVERFLOW_UNSUPPORTED: u32 = 0x100u;
 
-// An obstacle polygon (Rust `orca_obstacles::Polygon`), counter-clockwise.
-struct OrcaWorldPolygon {
-    v: array<vec2<f32>, 4>,
-}
-
-// Rust `orca_obstacles::corners`: the rectangle's corners in 0.1.1's order.
-fn orca_world_corners(r: Rect) -> OrcaWorldPolygon {
-    return OrcaWorldPolygon(array<vec2<f32>, 4>(
-        geo_rect_corner(r, 0u), geo_rect_corner(r, 1u), geo_rect_corner(r, 2u), geo_rect_corner(r, 3u),
-    ));
-}
-
-// Rust `orca_obstacles::square`: the axis-aligned square of half-side `h` around (x, y),
-// counter-clockwise from (+h, +h).
-fn orca_world_square(x: f32, y: f32, h: f32) -> OrcaWorldPolygon {
-    return OrcaWorldPolygon(array<vec2<f32>, 4>(
-        vec2<f32>(x + h, y + h), vec2<f32>(x - h, y + h), vec2<f32>(x - h, y - h), vec2<f32>(x + h, y - h),
-    ));
-}
-
-// Rust `orca_obstacles::box_distance_sq`: squared distance (m²) from `pos` to the polygon's
-// bounding box (0 inside).
-fn orca_world_box_distance_sq(pos: vec2<f32>, polygon: OrcaWorldPolygon) -> f32 {
-    var lo = polygon.v[0];
-    var hi = polygon.v[0];
-    for (var k = 1u; k < 4u; k++) {
-        lo.x = min(lo.x, polygon.v[k].x);
-        lo.y = min(lo.y, polygon.v[k].y);
-        hi.x = max(hi.x, polygon.v[k].x);
-        hi.y = max(hi.y, polygon.v[k].y);
-    }
-    let dx = max(max(lo.x - pos.x, pos.x - hi.x), 0.0);
-    let dy = max(max(lo.y - pos.y, pos.y - hi.y), 0.0);
-    return dx * dx + dy * dy;
-}
-
-// The accumulator of Rust `with_visible`'s walk over the polygons: how many there are, how many
-// the view sees, and whether one of those is near.
-struct OrcaWorldSeen {
-    all: u32,
-    seen: u32,
-    near: bool,
-}
-
-// The body of Rust `with_visible`'s closure for one polygon seen as `seen_as` (`seen`: whether
-// the view sees that shape).
-fn orca_world_count_polygon(acc: ptr<function, OrcaWorldSeen>, seen: bool, pos: vec2<f32>, reject_sq: f32, polygon: OrcaWorldPolygon) {
-    (*acc).all += 1u;
-    if (seen) {
-        (*acc).near = (*acc).near || orca_world_box_distance_sq(pos, polygon) <= reject_sq;
-        (*acc).seen += 1u;
-    }
-}
-
-// Rust `with_visible`'s choice for `agent` with view `v` in environment e, walking the polygons of
-// Rust `for_each_polygon` in its order (tables, free laptops, plants, walls, laptop users,
-// standing groups), each tested as the shape 0.1.1 sees.
-fn orca_world_visible(e: u32, v: View, agent: OrcaAgent) -> u32 {
+// Rust `with_visible`'s choice for `agent` with view `v` in environment e: the polygons of Rust
+// `for_each_polygon` (common/orca_obstacles.wgsl's indexed walk, in its order), each tested as
+// the shape 0.1.1 sees; those seen are appended to `seen` (empty on entry), in order.
+fn orca_world_visible(e: u32, v: View, agent: OrcaAgent, seen: ptr<function, OrcaObstaclePolygons>) -> u32 {
+    // As RVO2's neighbour search, with Rust's margin `range_sq * (1.0 + 1e-3)`.
     let range_sq = orca_obstacle_range_sq(agent.time_horizon_obst, agent.max_speed, agent.radius);
-    // Rust `range_sq * (1.0 + 1e-3)`.
     let reject_sq = range_sq * ORCA_OBSTACLE_REJECT_FACTOR;
-    let pos = agent.pos;
-    var acc = OrcaWorldSeen(0u, 0u, false);
-    for (var t = 0u; t < su[C_N_TABLES + e]; t++) {
-        let r = world_table_rect(e, t);
-        orca_world_count_polygon(&acc, perception_sees_rect(v, r), pos, reject_sq, orca_world_corners(r));
-    }
-    let lb = e * S_L_X;
-    for (var l = 0u; l < su[C_N_LAPTOPS + e]; l++) {
-        if (su[C_L_USER + lb + l] == NONE) {
-            let r = world_laptop_rect(e, l);
-            orca_world_count_polygon(&acc, perception_sees_rect(v, r), pos, reject_sq, orca_world_corners(r));
+    var all = 0u;
+    var near = false;
+    let raw = orca_obstacles_raw_count(e);
+    for (var k = 0u; k < raw; k++) {
+        let poly = orca_obstacles_polygon(e, k);
+        if (!poly.present) {
+            continue;
+        }
+        all += 1u;
+        var sees: bool;
+        if (poly.seen_as_rect) {
+            sees = perception_sees_rect(v, poly.rect);
+        } else {
+            sees = perception_sees_disc(v, poly.disc);
+        }
+        if (sees) {
+            near = near || orca_obstacles_box_distance_sq(agent.pos, poly.v) <= reject_sq;
+            orca_obstacles_push(seen, poly.v);
         }
     }
-    let pb = e * S_P_X;
-    for (var i = pb; i < pb + su[C_N_PLANTS + e]; i++) {
-        let x = sf[C_P_X + i];
-        let y = sf[C_P_Y + i];
-        let r = params.plant_radius;
-        orca_world_count_polygon(&acc, perception_sees_disc(v, Disc(x, y, r)), pos, reject_sq, orca_world_square(x, y, r));
-    }
-    for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
-        let r = world_wall_rect(e, w);
-        orca_world_count_polygon(&acc, perception_sees_rect(v, r), pos, reject_sq, orca_world_corners(r));
-    }
-    let hb = e * S_H_X;
-    let ub = e * S_LU_HUMAN;
-    for (var u = ub; u < ub + su[C_N_LAPTOP_USERS + e]; u++) {
-        let h = hb + su[C_LU_HUMAN + u];
-        let seen = perception_sees_disc(v, perception_laptop_use_disc(e, u));
-        orca_world_count_polygon(&acc, seen, pos, reject_sq, orca_world_square(sf[C_H_X + h], sf[C_H_Y + h], params.laptop_user_half_side));
-    }
-    let gb = e * S_G_X;
-    for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + g] == GROUP_STANDING) {
-            let seen = perception_sees_disc(v, perception_group_disc(g));
-            orca_world_count_polygon(&acc, seen, pos, reject_sq, orca_world_square(sf[C_G_X + g], sf[C_G_Y + g], params.group_radius));
-        }
-    }
-    if (acc.seen == acc.all) {
+    if ((*seen).len == all && (*seen).overflow == 0u) {
         return ORCA_WORLD_OBSTACLES_CACHED;
     }
-    if (!acc.near) {
+    if (!near) {
         return ORCA_WORLD_OBSTACLES_NONE;
     }
     return ORCA_WORLD_OBSTACLES_SUBSET;
@@ -284,16 +212,17 @@ fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> Orc
     orca_world_select(e, first, others, &nb);
 
     var obstacles = ORCA_WORLD_OBSTACLES_CACHED;
+    var seen: OrcaObstaclePolygons;
     if (others.view.some) {
-        obstacles = orca_world_visible(e, others.view.view, first);
+        obstacles = orca_world_visible(e, others.view.view, first, &seen);
     }
     var lines: OrcaLines;
     var proj: OrcaLines;
     var onb: OrcaObstacleNeighbors;
-    var unsupported = 0u;
+    var set_overflow = 0u;
+    let range_sq = orca_obstacle_range_sq(first.time_horizon_obst, first.max_speed, first.radius);
     if (obstacles == ORCA_WORLD_OBSTACLES_CACHED) {
         // `obstacle_neighbors` over the environment's vertices, in index order.
-        let range_sq = orca_obstacle_range_sq(first.time_horizon_obst, first.max_speed, first.radius);
         let ob = e * S_OV_X;
         for (var v = 0u; v < su[C_N_OBSTACLE_VERTICES + e]; v++) {
             let g = ob + v;
@@ -309,14 +238,26 @@ fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> Orc
             orca_push_obstacle_line(first, orca_world_vertex(e, o1), orca_world_vertex(e, o2), &lines);
         }
     } else if (obstacles == ORCA_WORLD_OBSTACLES_SUBSET) {
-        unsupported = ORCA_WORLD_OVERFLOW_UNSUPPORTED;
+        // The visible polygons processed afresh (Rust `with_processed`), then the same as above
+        // over that set.
+        var visible: OrcaObstacleSet;
+        orca_obstacles_process(&seen, &visible);
+        set_overflow = visible.overflow;
+        for (var v = 0u; v < visible.len; v++) {
+            orca_obstacle_neighbor_candidate(&onb, first.pos, range_sq, v, visible.point[v], visible.point[visible.next[v]]);
+        }
+        for (var k = 0u; k < onb.len; k++) {
+            let o1 = onb.items[k].index;
+            let o2 = visible.next[o1];
+            orca_push_obstacle_line(first, orca_obstacles_set_vertex(&visible, o1), orca_obstacles_set_vertex(&visible, o2), &lines);
+        }
     }
     lines.num_obstacle_lines = lines.len;
     for (var k = 0u; k < nb.len; k++) {
         orca_push_agent_line(first, orca_world_candidate(e, nb.items[k].index), params.dt, &lines);
     }
     let r = orca_solve(first, &lines, &proj);
-    let overflow = r.overflow | nb.overflow | onb.overflow | unsupported;
+    let overflow = r.overflow | nb.overflow | onb.overflow | set_overflow;
     if (overflow != 0u) {
         return OrcaWorldVelocity(vec2<f32>(math_nan(), math_nan()), overflow);
     }
