@@ -74,8 +74,8 @@ fn count(s: &BatchState, p: &StepParams) {
     REACHED.set(r);
 }
 
-/// About a third of the walkers get their goal moved to within reach (some of them marked as
-/// heading to a forming crowd), and about half of the moving groups get their goal moved next
+/// About a third of the walkers get their goal moved to within reach (a tenth of them marked as
+/// heading to a forming crowd, the others as ordinary walkers), and about half of the moving groups get their goal moved next
 /// to their centre (all members within reach); the ticks are varied so the goal streams differ.
 fn onto_goals(s: &mut BatchState, _: &mut Outputs, p: &StepParams, rng: &mut RngStream) {
     for e in 0..s.n_envs {
@@ -87,9 +87,11 @@ fn onto_goals(s: &mut BatchState, _: &mut Outputs, p: &StepParams, rng: &mut Rng
                 let d = 0.9 * (p.human_radius + p.human_goal_radius);
                 s.h_goal_x[i] = s.h_x[i] + uniform(rng, -d, d) * 0.7;
                 s.h_goal_y[i] = s.h_y[i] + uniform(rng, -d, d) * 0.7;
-                if s.h_forming[i] == forming::NONE && rng.next_f32() < 0.1 {
-                    s.h_forming[i] = forming::CROWD;
-                }
+                s.h_forming[i] = if rng.next_f32() < 0.1 {
+                    forming::CROWD
+                } else {
+                    forming::NONE
+                };
             }
         }
         let gb = e * s.strides.groups;
