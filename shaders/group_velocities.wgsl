@@ -32,7 +32,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         var agent = orca_world_agent(e, vec2<f32>(x, y), vel, pref, radius);
         agent.neighbor_dist = 2.0 * radius;
-        let others = OrcaWorldOthers(ORCA_WORLD_NONE, g, false);
+        let others = OrcaWorldOthers(ORCA_WORLD_NONE, g, false, perception_everything());
         let r = orca_world_velocity(e, agent, others);
         sf[C_G_VX + g] = r.velocity.x;
         sf[C_G_VY + g] = r.velocity.y;

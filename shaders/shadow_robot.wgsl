@@ -44,7 +44,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let pref = orca_world_preferred(x, y, sf[C_GOAL_X + e], sf[C_GOAL_Y + e], params.robot_max_speed);
     let agent = orca_world_agent(e, vec2<f32>(x, y), vec2<f32>(0.0, 0.0), pref, params.human_radius);
     // The shadow robot sees everything (0.1.1 adds every entity to its simulator).
-    let others = OrcaWorldOthers(ORCA_WORLD_NONE, ORCA_WORLD_NONE, false);
+    let others = OrcaWorldOthers(ORCA_WORLD_NONE, ORCA_WORLD_NONE, false, perception_everything());
     let r = orca_world_velocity(e, agent, others);
     if (r.overflow != 0u) {
         // Not the CPU's result: make it loud.

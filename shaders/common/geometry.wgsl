@@ -37,6 +37,22 @@ fn geo_rect_to_local(r: Rect, px: f32, py: f32) -> vec2<f32> {
     return vec2<f32>(dx * r.c + dy * r.s, dy * r.c - dx * r.s);
 }
 
+// `a + s` for `s` a sum of two products, rounded as Rust's `a + (p + q)`. Mesa's NIR optimiser
+// rewrites `(p + q) + a` into `(p + a) + q` when the inner sum has a single use ("FMA-friendly",
+// see common/orca.wgsl's `orca_lp1`), which rounds differently; a second use of `s`, a NaN test
+// of its bits that changes nothing (a NaN `s` makes `a + s` NaN too), keeps the Rust order.
+fn geo_add_sum(a: f32, s: f32) -> f32 {
+    return select(a + s, s, math_is_nan_bits(s));
+}
+
+// The point of the rectangle nearest to (px, py) (the point itself when inside).
+fn geo_rect_nearest_point(r: Rect, px: f32, py: f32) -> vec2<f32> {
+    let l = geo_rect_to_local(r, px, py);
+    let qx = clamp(l.x, -r.hl, r.hl);
+    let qy = clamp(l.y, -r.hw, r.hw);
+    return vec2<f32>(geo_add_sum(r.x, qx * r.c - qy * r.s), geo_add_sum(r.y, qx * r.s + qy * r.c));
+}
+
 // Squared distance from (px, py) to the rectangle (0 inside).
 fn geo_rect_distance_sq(r: Rect, px: f32, py: f32) -> f32 {
     let l = geo_rect_to_local(r, px, py);

@@ -1,9 +1,9 @@
 // requires: common/orca.wgsl
+// requires: common/perception.wgsl
+// requires: common/orca_obstacles.wgsl
 //
-// Twin of src/systems/orca_world.rs for `view: None` only (the agent sees everything: moving
-// groups and the shadow robot; the environment's processed obstacles are used as they are). The
-// field-of-view path (`Some(view)`, which filters the others by perception and re-processes the
-// obstacles per walker through `orca_obstacles::with_visible`) is NOT covered here.
+// Twin of src/systems/orca_world.rs (and of `with_visible` in src/systems/orca_obstacles.rs, the
+// obstacles a walker with a narrow field of view takes part with).
 //
 // How SocNavGym 0.1.1 puts one agent into RVO2: a fresh simulator per agent per step whose other
 // agents are the lone humans, optionally the robot, and the moving groups as super-agents, over
@@ -12,7 +12,18 @@
 // order of `gather`) and runs the solver once through the building blocks of common/orca.wgsl,
 // reading the packed state directly (no function-scope copies). Library file (no entry point),
 // for stage shaders (it reads the prelude's `sf`/`su`/`params`). Same operations in the same
-// order as the Rust file; change both in the same commit.
+// order as the Rust files; change both in the same commit.
+//
+// Field of view. `OrcaWorldOthers.view` is Rust's `Others::view`: with `some == false` (moving
+// groups, the shadow robot, walkers whose field of view sees everything) every lone human and
+// moving group is a candidate and the environment's processed obstacles are used as they are.
+// Otherwise only the lone humans and moving groups the view sees are candidates
+// (common/perception.wgsl), and the obstacles are those of Rust `with_visible`: the cached set
+// when every obstacle polygon is seen, none when none of those seen comes within the obstacle
+// range, else the visible polygons processed afresh (`orca_world_visible`, then
+// common/orca_obstacles.wgsl's `orca_obstacles_process`, RVO2's `processObstacles`). A processed
+// set that would overflow its capacity (S_OV_X vertices, as the `ov_*` columns) makes the
+// velocity NaN, like the list overflows below.
 //
 // Candidate identity. Rust collects the candidates into a list and selects by list index; the
 // selection only compares distances (ties keep the visiting order), so here a candidate is
@@ -35,12 +46,13 @@ const ORCA_WORLD_HUMAN: u32 = 0x00000000u;
 const ORCA_WORLD_ROBOT: u32 = 0x40000000u;
 const ORCA_WORLD_GROUP: u32 = 0x80000000u;
 
-// Rust `Others` with `view: None`: global slots to skip (ORCA_WORLD_NONE: none) and whether the
-// robot is one of the agents.
+// Rust `Others`: global slots to skip (ORCA_WORLD_NONE: none), whether the robot is one of the
+// agents, and the first agent's view (`perception_everything()`: it sees everything).
 struct OrcaWorldOthers {
     skip_human: u32,
     skip_group: u32,
     robot: bool,
+    view: MaybeView,
 }
 
 // The new velocity (m/s) and the OR of the ORCA_OVERFLOW_* bits (0: the CPU's result; otherwise
@@ -115,7 +127,7 @@ fn orca_world_select(e: u32, first: OrcaAgent, others: OrcaWorldOthers, list: pt
     let hb = e * S_H_X;
     let n_lone = su[C_N_STATIC + e] + su[C_N_DYNAMIC + e];
     for (var i = hb; i < hb + n_lone; i++) {
-        if (i == others.skip_human) {
+        if (i == others.skip_human || !perception_sees_human(others.view, e, i)) {
             continue;
         }
         let pos = vec2<f32>(sf[C_H_X + i], sf[C_H_Y + i]);
@@ -127,7 +139,8 @@ fn orca_world_select(e: u32, first: OrcaAgent, others: OrcaWorldOthers, list: pt
     }
     let gb = e * S_G_X;
     for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + g] != GROUP_MOVING || g == others.skip_group) {
+        if (su[C_G_KIND + g] != GROUP_MOVING || g == others.skip_group
+            || !perception_maybe_sees_disc(others.view, perception_group_disc(g))) {
             continue;
         }
         let pos = vec2<f32>(sf[C_G_X + g], sf[C_G_Y + g]);
@@ -149,38 +162,102 @@ fn orca_world_vertex(e: u32, v: u32) -> OrcaVertex {
     );
 }
 
-// Rust `OrcaWorld::velocity` with `view: None`: the new velocity (m/s) of `first` in a simulator
-// holding `others` of environment e, over e's processed obstacles (`compute_new_velocity`).
+// What Rust `with_visible` hands the solver: the cached set, no obstacles, or the visible subset
+// processed afresh.
+const ORCA_WORLD_OBSTACLES_CACHED: u32 = 0u;
+const ORCA_WORLD_OBSTACLES_NONE: u32 = 1u;
+const ORCA_WORLD_OBSTACLES_SUBSET: u32 = 2u;
+
+// Rust `with_visible`'s choice for `agent` with view `v` in environment e: the polygons of Rust
+// `for_each_polygon` (common/orca_obstacles.wgsl's indexed walk, in its order), each tested as
+// the shape 0.1.1 sees; those seen are appended to `seen` (empty on entry), in order.
+fn orca_world_visible(e: u32, v: View, agent: OrcaAgent, seen: ptr<function, OrcaObstaclePolygons>) -> u32 {
+    // As RVO2's neighbour search, with Rust's margin `range_sq * (1.0 + 1e-3)`.
+    let range_sq = orca_obstacle_range_sq(agent.time_horizon_obst, agent.max_speed, agent.radius);
+    let reject_sq = range_sq * ORCA_OBSTACLE_REJECT_FACTOR;
+    var all = 0u;
+    var near = false;
+    let raw = orca_obstacles_raw_count(e);
+    for (var k = 0u; k < raw; k++) {
+        let poly = orca_obstacles_polygon(e, k);
+        if (!poly.present) {
+            continue;
+        }
+        all += 1u;
+        var sees: bool;
+        if (poly.seen_as_rect) {
+            sees = perception_sees_rect(v, poly.rect);
+        } else {
+            sees = perception_sees_disc(v, poly.disc);
+        }
+        if (sees) {
+            near = near || orca_obstacles_box_distance_sq(agent.pos, poly.v) <= reject_sq;
+            orca_obstacles_push(seen, poly.v);
+        }
+    }
+    if ((*seen).len == all && (*seen).overflow == 0u) {
+        return ORCA_WORLD_OBSTACLES_CACHED;
+    }
+    if (!near) {
+        return ORCA_WORLD_OBSTACLES_NONE;
+    }
+    return ORCA_WORLD_OBSTACLES_SUBSET;
+}
+
+// Rust `OrcaWorld::velocity`: the new velocity (m/s) of `first` in a simulator holding `others`
+// of environment e, over e's processed obstacles or, with a view, those of Rust `with_visible`
+// (`compute_new_velocity`).
 fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> OrcaWorldVelocity {
     var nb: OrcaAgentNeighbors;
     orca_world_select(e, first, others, &nb);
 
-    // `obstacle_neighbors` over the environment's vertices, in index order.
-    var onb: OrcaObstacleNeighbors;
-    let range_sq = orca_obstacle_range_sq(first.time_horizon_obst, first.max_speed, first.radius);
-    let ob = e * S_OV_X;
-    for (var v = 0u; v < su[C_N_OBSTACLE_VERTICES + e]; v++) {
-        let g = ob + v;
-        let n = ob + su[C_OV_NEXT + g];
-        let a = vec2<f32>(sf[C_OV_X + g], sf[C_OV_Y + g]);
-        let b = vec2<f32>(sf[C_OV_X + n], sf[C_OV_Y + n]);
-        orca_obstacle_neighbor_candidate(&onb, first.pos, range_sq, v, a, b);
+    var obstacles = ORCA_WORLD_OBSTACLES_CACHED;
+    var seen: OrcaObstaclePolygons;
+    if (others.view.some) {
+        obstacles = orca_world_visible(e, others.view.view, first, &seen);
     }
-
-    // `solve`: obstacle lines, then agent lines, then LP2/LP3.
     var lines: OrcaLines;
     var proj: OrcaLines;
-    for (var k = 0u; k < onb.len; k++) {
-        let o1 = onb.items[k].index;
-        let o2 = su[C_OV_NEXT + ob + o1];
-        orca_push_obstacle_line(first, orca_world_vertex(e, o1), orca_world_vertex(e, o2), &lines);
+    var onb: OrcaObstacleNeighbors;
+    var set_overflow = 0u;
+    let range_sq = orca_obstacle_range_sq(first.time_horizon_obst, first.max_speed, first.radius);
+    if (obstacles == ORCA_WORLD_OBSTACLES_CACHED) {
+        // `obstacle_neighbors` over the environment's vertices, in index order.
+        let ob = e * S_OV_X;
+        for (var v = 0u; v < su[C_N_OBSTACLE_VERTICES + e]; v++) {
+            let g = ob + v;
+            let n = ob + su[C_OV_NEXT + g];
+            let a = vec2<f32>(sf[C_OV_X + g], sf[C_OV_Y + g]);
+            let b = vec2<f32>(sf[C_OV_X + n], sf[C_OV_Y + n]);
+            orca_obstacle_neighbor_candidate(&onb, first.pos, range_sq, v, a, b);
+        }
+        // `solve`: obstacle lines, then agent lines, then LP2/LP3.
+        for (var k = 0u; k < onb.len; k++) {
+            let o1 = onb.items[k].index;
+            let o2 = su[C_OV_NEXT + ob + o1];
+            orca_push_obstacle_line(first, orca_world_vertex(e, o1), orca_world_vertex(e, o2), &lines);
+        }
+    } else if (obstacles == ORCA_WORLD_OBSTACLES_SUBSET) {
+        // The visible polygons processed afresh (Rust `with_processed`), then the same as above
+        // over that set.
+        var visible: OrcaObstacleSet;
+        orca_obstacles_process(&seen, &visible);
+        set_overflow = visible.overflow;
+        for (var v = 0u; v < visible.len; v++) {
+            orca_obstacle_neighbor_candidate(&onb, first.pos, range_sq, v, visible.point[v], visible.point[visible.next[v]]);
+        }
+        for (var k = 0u; k < onb.len; k++) {
+            let o1 = onb.items[k].index;
+            let o2 = visible.next[o1];
+            orca_push_obstacle_line(first, orca_obstacles_set_vertex(&visible, o1), orca_obstacles_set_vertex(&visible, o2), &lines);
+        }
     }
     lines.num_obstacle_lines = lines.len;
     for (var k = 0u; k < nb.len; k++) {
         orca_push_agent_line(first, orca_world_candidate(e, nb.items[k].index), params.dt, &lines);
     }
     let r = orca_solve(first, &lines, &proj);
-    let overflow = r.overflow | nb.overflow | onb.overflow;
+    let overflow = r.overflow | nb.overflow | onb.overflow | set_overflow;
     if (overflow != 0u) {
         return OrcaWorldVelocity(vec2<f32>(math_nan(), math_nan()), overflow);
     }

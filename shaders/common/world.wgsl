@@ -75,3 +75,49 @@ fn world_touches(e: u32, d: Disc) -> Touches {
     t.object = t.wall || plant || table || laptop;
     return t;
 }
+
+fn world_blocker_rect(e: u32, b: u32) -> Rect {
+    let i = e * S_B_X + b;
+    return geo_rect_new(sf[C_B_X + i], sf[C_B_Y + i], sf[C_B_THETA + i], sf[C_B_LENGTH + i], sf[C_B_WIDTH + i]);
+}
+
+// Rust `blocks_goal` for a disc (the only shape goal sampling tests): does `d` intersect anything
+// that goal sampling avoids, every entity where it is now, walls and spawn blockers?
+fn world_blocks_goal_disc(e: u32, d: Disc) -> bool {
+    if (geo_disc_disc(Disc(sf[C_ROBOT_X + e], sf[C_ROBOT_Y + e], params.robot_radius), d)) {
+        return true;
+    }
+    let hb = e * S_H_X;
+    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
+        if (geo_disc_disc(Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius), d)) {
+            return true;
+        }
+    }
+    let pb = e * S_P_X;
+    for (var i = pb; i < pb + su[C_N_PLANTS + e]; i++) {
+        if (geo_disc_disc(Disc(sf[C_P_X + i], sf[C_P_Y + i], params.plant_radius), d)) {
+            return true;
+        }
+    }
+    for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
+        if (geo_disc_rect(d, world_wall_rect(e, w))) {
+            return true;
+        }
+    }
+    for (var k = 0u; k < su[C_N_TABLES + e]; k++) {
+        if (geo_disc_rect(d, world_table_rect(e, k))) {
+            return true;
+        }
+    }
+    for (var k = 0u; k < su[C_N_LAPTOPS + e]; k++) {
+        if (geo_disc_rect(d, world_laptop_rect(e, k))) {
+            return true;
+        }
+    }
+    for (var b = 0u; b < su[C_N_BLOCKERS + e]; b++) {
+        if (geo_disc_rect(d, world_blocker_rect(e, b))) {
+            return true;
+        }
+    }
+    return false;
+}

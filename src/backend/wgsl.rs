@@ -47,8 +47,20 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/robot_motion.wgsl"),
     ),
     (
+        "common/perception.wgsl",
+        include_str!("../../shaders/common/perception.wgsl"),
+    ),
+    (
+        "common/sfm.wgsl",
+        include_str!("../../shaders/common/sfm.wgsl"),
+    ),
+    (
         "common/orca_world.wgsl",
         include_str!("../../shaders/common/orca_world.wgsl"),
+    ),
+    (
+        "common/orca_obstacles.wgsl",
+        include_str!("../../shaders/common/orca_obstacles.wgsl"),
     ),
     (
         "shadow_robot.wgsl",
@@ -90,6 +102,11 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/autoreset.wgsl"),
     ),
     ("reset.wgsl", include_str!("../../shaders/reset.wgsl")),
+    (
+        "human_motion.wgsl",
+        include_str!("../../shaders/human_motion.wgsl"),
+    ),
+    ("goals.wgsl", include_str!("../../shaders/goals.wgsl")),
 ];
 
 /// Shaders at the top of `shaders/` that are not stages of the step but passes the GPU backend runs
@@ -155,7 +172,8 @@ pub type Columns<'a> = &'a [(&'static str, Elem, usize)];
 /// slot`); the same for the output columns as `CO_<NAME>`/`SO_<NAME>` in `outf`/`outu`; the index of
 /// every info key (`INFO_<KEY>`), episode statistic (`EP_<KEY>`) and event (`EV_<KEY>`) from
 /// [`crate::spec`]; the codes shared with the Rust stages (`NONE`, `ROLE_*`, `GROUP_*`,
-/// `STREAM_*`, `NOISE_ROBOT`, `ONE_HOT_*`); the observation layout (`OBS_DIM`, `OBS_ROBOT`, `OBS_RECORD`, and per entity
+/// `POLICY_ORCA`, `FORMING_CROWD`, `MAX_TRIES`, `STREAM_*`, `NOISE_ROBOT`, `ONE_HOT_*`); the
+/// observation layout (`OBS_DIM`, `OBS_ROBOT`, `OBS_RECORD`, and per entity
 /// type `OBS_OFFSET_<TYPE>` and `OBS_CAPACITY_<TYPE>`, `PAIRS_HUMAN_HUMAN`/`PAIRS_HUMAN_LAPTOP`
 /// pair capacities); the bindings every shader shares; and `WORKGROUP_SIZE`.
 pub fn prelude(
@@ -301,12 +319,13 @@ fn pool_functions(state: Columns<'_>, outputs: Columns<'_>) -> String {
 }
 
 /// The codes the shaders share with the Rust stages, by their WGSL names: the absent index, human
-/// roles, group kinds, RNG stream kinds, the robot's noise slot and the observation's one-hot
+/// roles, group kinds, the ORCA policy, a walker's forming-crowd mark, the rejection samplers'
+/// try limit, RNG stream kinds, the robot's noise slot and the observation's one-hot
 /// positions.
 fn shared_constants() -> Vec<(&'static str, u32)> {
     use crate::params::AutoresetMode;
     use crate::spec::one_hot;
-    use crate::state::{group_kind, role};
+    use crate::state::{forming, group_kind, policy, role};
     use crate::systems;
     let index = |i: usize| u32::try_from(i).expect("a small index");
     vec![
@@ -321,6 +340,9 @@ fn shared_constants() -> Vec<(&'static str, u32)> {
         ("GROUP_MOVING", group_kind::MOVING),
         ("GROUP_STANDING", group_kind::STANDING),
         ("GROUP_DISSOLVED", group_kind::DISSOLVED),
+        ("POLICY_ORCA", policy::ORCA),
+        ("FORMING_CROWD", forming::CROWD),
+        ("MAX_TRIES", crate::scenario::place::MAX_TRIES),
         ("STREAM_SCENARIO", crate::scenario::STREAM_SCENARIO),
         ("STREAM_GOALS", systems::goals::STREAM_GOALS),
         (

@@ -1,0 +1,174 @@
+// requires: common/world.wgsl
+// requires: common/perception.wgsl
+//
+// Twin of src/systems/sfm.rs: SocNavGym 0.1.1's one-shot social force model (spec 4.3,
+// orca-sfm.md 3.5). The velocity of a lone walker is recomputed from scratch every step as
+// (f/mass)·dt, capped at the human speed, with f = w·(desired + Σ obstacle + Σ pedestrian
+// forces), w = 1/√3. Only the obstacles and humans in the walker's field of view push it
+// (common/perception.wgsl); the robot, when the walker avoids it this step, pushes it seen or not.
+// Library file (no entry point) over the prelude's `sf`/`su`/`params`. Same operations in the
+// same order as the Rust file; change both files in the same commit.
+
+// Rust `W`: the weight of each force group, the f32 of 0.577_350_26 (1/√3).
+const SFM_W: f32 = 0x1.279a74p-1f;
+
+// Rust `Params`: the per-episode SFM parameters of an environment.
+struct SfmParams {
+    r0: f32,
+    gamma: f32,
+    n: f32,
+    n_prime: f32,
+    lambda: f32,
+}
+
+fn sfm_length(x: f32, y: f32) -> f32 {
+    return sqrt(x * x + y * y);
+}
+
+// Unit vector of (x, y); zero for the zero vector.
+fn sfm_unit(x: f32, y: f32) -> vec2<f32> {
+    let l = sfm_length(x, y);
+    if (l > 0.0) {
+        return vec2<f32>(x / l, y / l);
+    }
+    return vec2<f32>(0.0, 0.0);
+}
+
+// The `obstacle` closure of Rust `velocity`: the push on the walker at `pos` from a point
+// (ox, oy) at `surface_gap` (m), added to `fo`.
+fn sfm_obstacle(pos: vec2<f32>, r0: f32, ox: f32, oy: f32, surface_gap: f32, fo: ptr<function, vec2<f32>>) {
+    let u = sfm_unit(pos.x - ox, pos.y - oy);
+    let m = math_exp(-surface_gap / r0);
+    (*fo).x += m * u.x;
+    (*fo).y += m * u.y;
+}
+
+// The `disc_gap` closure: the gap (m) between the walker's disc and the disc (ox, oy, ro).
+fn sfm_disc_gap(pos: vec2<f32>, ox: f32, oy: f32, ro: f32) -> f32 {
+    return sfm_length(pos.x - ox, pos.y - oy) - ro - params.human_radius;
+}
+
+// The `push` closure for a disc: from its centre, when seen.
+fn sfm_push_disc(view: MaybeView, pos: vec2<f32>, r0: f32, d: Disc, fo: ptr<function, vec2<f32>>) {
+    if (!perception_maybe_sees_disc(view, d)) {
+        return;
+    }
+    sfm_obstacle(pos, r0, d.x, d.y, sfm_disc_gap(pos, d.x, d.y, d.r), fo);
+}
+
+// The `push` closure for a rectangle: from its nearest point, when seen.
+fn sfm_push_rect(view: MaybeView, pos: vec2<f32>, r0: f32, rc: Rect, fo: ptr<function, vec2<f32>>) {
+    if (!perception_maybe_sees_rect(view, rc)) {
+        return;
+    }
+    let q = geo_rect_nearest_point(rc, pos.x, pos.y);
+    sfm_obstacle(pos, r0, q.x, q.y, sfm_length(pos.x - q.x, pos.y - q.y) - params.human_radius, fo);
+}
+
+// Rust `pedestrian_forces`: Σ f_ij over the lone humans, moving-group members and laptop users
+// `view` sees (standing-group members are obstacles through their group's disc).
+fn sfm_pedestrian_forces(e: u32, i: u32, sp: SfmParams, view: MaybeView) -> vec2<f32> {
+    let hb = e * S_H_X;
+    let xi = sf[C_H_X + i];
+    let yi = sf[C_H_Y + i];
+    let vix = sf[C_H_VX + i];
+    let viy = sf[C_H_VY + i];
+    var fx = 0.0;
+    var fy = 0.0;
+    for (var j = hb; j < hb + su[C_N_HUMANS + e]; j++) {
+        if (j == i || su[C_H_ROLE + j] == ROLE_STANDING_GROUP || !perception_sees_human(view, e, j)) {
+            continue;
+        }
+        let vjx = sf[C_H_VX + j];
+        let vjy = sf[C_H_VY + j];
+        let u = sfm_unit(sf[C_H_X + j] - xi, sf[C_H_Y + j] - yi);
+        let ex = u.x;
+        let ey = u.y;
+        let dx = sp.lambda * (vjx - vix) + ex;
+        let dy = sp.lambda * (vjy - viy) + ey;
+        let d_len = sfm_length(dx, dy);
+        let b = sp.gamma * d_len;
+        var tx = 0.0;
+        var ty = 0.0;
+        if (d_len > 0.0) {
+            tx = dx / d_len;
+            ty = dy / d_len;
+        }
+        let theta = math_acos(clamp(ex * tx + ey * ty, -1.0, 1.0));
+        let nx = -ey;
+        let ny = ex;
+        let d = sfm_length(xi - sf[C_H_X + j], yi - sf[C_H_Y + j]);
+        let m = -math_exp(-d / b);
+        let a1 = sp.n_prime * b * theta;
+        let a2 = sp.n * b * theta;
+        let k1 = math_exp(-(a1 * a1));
+        let k2 = math_exp(-(a2 * a2));
+        fx += m * (k1 * tx + k2 * nx);
+        fy += m * (k1 * ty + k2 * ny);
+    }
+    return vec2<f32>(fx, fy);
+}
+
+// Rust `velocity`: the SFM velocity (m/s, world frame) of human slot `i` (global) of environment
+// e; `robot`: whether it takes the robot into account this step; `view`: what it sees.
+fn sfm_velocity(e: u32, i: u32, robot: bool, view: MaybeView) -> vec2<f32> {
+    let sp = SfmParams(
+        sf[C_SFM_R0 + e],
+        sf[C_SFM_GAMMA + e],
+        sf[C_SFM_N + e],
+        sf[C_SFM_N_PRIME + e],
+        sf[C_SFM_LAMBDA + e],
+    );
+    let pos = vec2<f32>(sf[C_H_X + i], sf[C_H_Y + i]);
+    let du = sfm_unit(sf[C_H_GOAL_X + i] - pos.x, sf[C_H_GOAL_Y + i] - pos.y);
+    var fdx = params.human_max_speed * du.x;
+    var fdy = params.human_max_speed * du.y;
+    var fo = vec2<f32>(0.0, 0.0);
+    let pb = e * S_P_X;
+    for (var k = pb; k < pb + su[C_N_PLANTS + e]; k++) {
+        sfm_push_disc(view, pos, sp.r0, Disc(sf[C_P_X + k], sf[C_P_Y + k], params.plant_radius), &fo);
+    }
+    for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
+        sfm_push_rect(view, pos, sp.r0, world_wall_rect(e, w), &fo);
+    }
+    for (var t = 0u; t < su[C_N_TABLES + e]; t++) {
+        sfm_push_rect(view, pos, sp.r0, world_table_rect(e, t), &fo);
+    }
+    let lb = e * S_L_X;
+    for (var l = 0u; l < su[C_N_LAPTOPS + e]; l++) {
+        if (su[C_L_USER + lb + l] == NONE) {
+            sfm_push_rect(view, pos, sp.r0, world_laptop_rect(e, l), &fo);
+        }
+    }
+    let gb = e * S_G_X;
+    for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
+        if (su[C_G_KIND + g] == GROUP_STANDING) {
+            sfm_push_disc(view, pos, sp.r0, perception_group_disc(g), &fo);
+        }
+    }
+    if (robot) {
+        let rx = sf[C_ROBOT_X + e];
+        let ry = sf[C_ROBOT_Y + e];
+        sfm_obstacle(pos, sp.r0, rx, ry, sfm_disc_gap(pos, rx, ry, params.robot_radius), &fo);
+    }
+    let fp = sfm_pedestrian_forces(e, i, sp, view);
+    // Rust: `W * fd + W * fo + W * fp`, fd = speed · unit. Mesa's NIR optimiser reassociates a
+    // constant factor into a product (`W·(s·u)` became `(W·s)·u`) and factors `a·b + a·c` into
+    // `a·(b + c)`, both of which round differently. So each weight is SFM_W through a select NIR
+    // cannot fold (the time step is never negative): not a constant, and three distinct values.
+    let never = params.dt < 0.0;
+    let w_desired = select(SFM_W, 0.0, never);
+    let w_obstacles = select(SFM_W, 1.0, never);
+    let w_pedestrians = select(SFM_W, 2.0, never);
+    fdx = w_desired * fdx + w_obstacles * fo.x + w_pedestrians * fp.x;
+    fdy = w_desired * fdy + w_obstacles * fo.y + w_pedestrians * fp.y;
+    // mass 1: v = f·dt, capped at the human speed.
+    let vx = fdx * params.dt;
+    let vy = fdy * params.dt;
+    let v = sfm_length(vx, vy);
+    if (v > params.human_max_speed) {
+        let k = params.human_max_speed / v;
+        return vec2<f32>(vx * k, vy * k);
+    }
+    return vec2<f32>(vx, vy);
+}
