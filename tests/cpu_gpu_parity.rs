@@ -148,10 +148,10 @@ fn corridor_mixed() {
     check("corridor_mixed", 256, 1000, AutoresetMode::SameStep);
 }
 
-/// Contract: the stress config (34 humans), fewer environments and steps to keep CI short.
+/// Contract: the stress config (34 humans), fewer steps to keep CI short.
 #[test]
 fn stress() {
-    check("stress", 64, 400, AutoresetMode::NextStep);
+    check("stress", 256, 300, AutoresetMode::NextStep);
 }
 
 /// Every shipped config is covered above (a new config must get its test).

@@ -255,6 +255,6 @@ fn autoreset() {
 #[test]
 fn masked_reset() {
     for name in ["exp2", "stress"] {
-        check_parity("reset", config(name), 128, 6, None);
+        check_parity("reset", config(name), 256, 6, None);
     }
 }
