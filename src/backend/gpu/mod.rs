@@ -30,11 +30,13 @@ pub const STAGES_WITH_SHADERS: &[&str] = &[
     "shadow_robot",
     "group_velocities",
     "group_motion",
+    "formation",
     "contacts",
     "termination",
     "reward",
     "metrics",
     "observation",
+    "social_events",
 ];
 
 /// A packed table on the device: every f32 column in one storage buffer, every u32 column in
