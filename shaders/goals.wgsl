@@ -1,63 +1,18 @@
 // requires: common/rng.wgsl
-// requires: common/world.wgsl
+// requires: common/goals.wgsl
 //
 // Twin of src/systems/goals.rs (stage `goals`, spec 4.1 step 8): a lone walker within reach of
 // its goal (human radius + goal radius) gets a new goal; a moving group whose members are all
 // within reach of the group goal gets a new group goal (and so do its members). New goals are
-// rejection-sampled in the margin box (Rust `SamplingBox`), free of every entity where it is now
-// (`world_blocks_goal_disc`) and of every current goal (`touches_goal`); after MAX_TRIES tries
-// the goal stays unchanged. Draws come from the step's STREAM_GOALS stream, in the Rust order.
+// rejection-sampled in the margin box by `goals_sample_goal` (common/goals.wgsl, shared with the
+// social events and formation), free of every entity where it is now and of every current goal;
+// after PLACE_MAX_TRIES tries the goal stays unchanged. Draws come from the step's STREAM_GOALS stream, in the Rust order.
 // Same operations in the same order as the Rust file; change both files in the same commit.
-
-// Rust `Option<Disc>` of `sample_goal` (the radius is the caller's).
-struct GoalSample {
-    found: bool,
-    x: f32,
-    y: f32,
-}
 
 fn goal_distance(ax: f32, ay: f32, bx: f32, by: f32) -> f32 {
     let dx = ax - bx;
     let dy = ay - by;
     return sqrt(dx * dx + dy * dy);
-}
-
-// Rust `touches_goal`: does the disc touch a current goal, the robot's, a lone human's or a
-// moving group's?
-fn touches_goal(e: u32, d: Disc) -> bool {
-    if (geo_disc_disc(d, Disc(sf[C_GOAL_X + e], sf[C_GOAL_Y + e], params.goal_radius))) {
-        return true;
-    }
-    let hb = e * S_H_X;
-    for (var i = hb; i < hb + su[C_N_STATIC + e] + su[C_N_DYNAMIC + e]; i++) {
-        if (geo_disc_disc(d, Disc(sf[C_H_GOAL_X + i], sf[C_H_GOAL_Y + i], params.human_goal_radius))) {
-            return true;
-        }
-    }
-    let gb = e * S_G_X;
-    for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + g] == GROUP_MOVING
-            && geo_disc_disc(d, Disc(sf[C_G_GOAL_X + g], sf[C_G_GOAL_Y + g], params.group_goal_radius))) {
-            return true;
-        }
-    }
-    return false;
-}
-
-// Rust `sample_goal`: a goal disc of radius `r` in environment e free of every entity and every
-// current goal, or none after MAX_TRIES tries. `SamplingBox::new` and `point` inline.
-fn sample_goal(e: u32, rng: ptr<function, RngStream>, r: f32) -> GoalSample {
-    let hx = 0.5 * sf[C_MAP_X + e] - params.margin;
-    let hy = 0.5 * sf[C_MAP_Y + e] - params.margin;
-    for (var k = 0u; k < MAX_TRIES; k++) {
-        let x = rng_uniform(rng, -hx, hx);
-        let y = rng_uniform(rng, -hy, hy);
-        let d = Disc(x, y, r);
-        if (!world_blocks_goal_disc(e, d) && !touches_goal(e, d)) {
-            return GoalSample(true, x, y);
-        }
-    }
-    return GoalSample(false, 0.0, 0.0);
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
@@ -80,10 +35,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let reach = params.human_radius + params.human_goal_radius;
         if (su[C_H_FORMING + i] == 0u
             && goal_distance(sf[C_H_X + i], sf[C_H_Y + i], sf[C_H_GOAL_X + i], sf[C_H_GOAL_Y + i]) < reach) {
-            let g = sample_goal(e, &rng, params.human_goal_radius);
+            let g = goals_sample_goal(e, &rng, params.human_goal_radius);
             if (g.found) {
-                sf[C_H_GOAL_X + i] = g.x;
-                sf[C_H_GOAL_Y + i] = g.y;
+                sf[C_H_GOAL_X + i] = g.disc.x;
+                sf[C_H_GOAL_Y + i] = g.disc.y;
             }
         }
     }
@@ -104,13 +59,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             break;
         }
         if (arrived) {
-            let goal = sample_goal(e, &rng, params.group_goal_radius);
+            let goal = goals_sample_goal(e, &rng, params.group_goal_radius);
             if (goal.found) {
-                sf[C_G_GOAL_X + g] = goal.x;
-                sf[C_G_GOAL_Y + g] = goal.y;
+                sf[C_G_GOAL_X + g] = goal.disc.x;
+                sf[C_G_GOAL_Y + g] = goal.disc.y;
                 for (var i = m0; i < m1; i++) {
-                    sf[C_H_GOAL_X + i] = goal.x;
-                    sf[C_H_GOAL_Y + i] = goal.y;
+                    sf[C_H_GOAL_X + i] = goal.disc.x;
+                    sf[C_H_GOAL_Y + i] = goal.disc.y;
                 }
             }
         }

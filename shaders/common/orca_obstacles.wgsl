@@ -37,7 +37,10 @@
 //
 // Capacities and overflow. The processed obs holds ORCA_OBSTACLES_CAP = S_OV_X vertices, the
 // per-environment capacity of the `ov_*` columns (Rust `store` asserts the same bound); a list
-// holds S_OV_X / 4 polygons (more would already have more input vertices than that). The tree
+// holds S_OV_X / 8 polygons (`Caps` gives every polygon room for 8 processed vertices: its 4
+// and as many split vertices, so an environment never has more). Large private arrays make
+// llvmpipe's compile time grow quickly: keep one call site of `orca_obstacles_process` per
+// shader where possible (Mesa inlines every call). The tree
 // build keeps its edge lists on an explicit stack: a node's list is popped, split into its left
 // and right lists, and those are pushed (right first), so the left subtree is built completely
 // before the right one, as in the recursive Rust. The lists on the stack hold distinct vertex
@@ -51,9 +54,14 @@
 // every one of the S_OV_X vertices gets NaN coordinates and directions (`n_obstacle_vertices` =
 // S_OV_X), and `obstacles_dirty` is left at ORCA_OBSTACLES_FAILED (2) instead of 0, so the host
 // can see it. Neither can happen under the shipped capacities (the CPU would have panicked).
+//
+// Loop budget on lavapipe: llvmpipe stops every loop of an invocation after 65535 loop
+// iterations in total (docs/ARCHITECTURE.md). `choose_split` costs up to n² iterations per node
+// (fewer with RVO2's early exit); the shipped configs' rebuilds (tests/gpu_social.rs, stress
+// included) stay within it, but a much larger obstacle set could exceed it there.
 
 const ORCA_OBSTACLES_CAP: u32 = max(S_OV_X, 1u);
-const ORCA_OBSTACLES_MAX_POLYGONS: u32 = max(S_OV_X / 4u, 1u);
+const ORCA_OBSTACLES_MAX_POLYGONS: u32 = max(S_OV_X / 8u, 1u);
 // `overflow` bit of a polygon list the Rust scenario would reject (see the header).
 const ORCA_OBSTACLES_INVALID: u32 = 16u;
 // `obstacles_dirty` after a rebuild that failed (see the header).
@@ -103,9 +111,19 @@ fn orca_obstacles_corners(r: Rect) -> array<vec2<f32>, 4> {
         } else if (k == 3u) {
             ly = -r.hw;
         }
-        out[k] = vec2<f32>(geo_add_sum(r.x, lx * r.c - ly * r.s), geo_add_sum(r.y, lx * r.s + ly * r.c));
+        let dx = orca_obstacles_keep(lx * r.c - ly * r.s);
+        let dy = orca_obstacles_keep(lx * r.s + ly * r.c);
+        out[k] = vec2<f32>(r.x + dx, r.y + dy);
     }
     return out;
+}
+
+// The identity, opaque to the compiler: Mesa's NIR reassociates `e + (a·b + c·d)` (the inner sum
+// used once) into `(e + a·b) + c·d`, which rounds differently from Rust (see common/orca.wgsl's
+// header); an inner sum passed through this keeps Rust's order. `params.pad[0]` is always 0 (Rust
+// `StepParams::_pad`), which the compiler cannot know.
+fn orca_obstacles_keep(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) ^ params.pad[0]);
 }
 
 // Rust `square`: the axis-aligned square of half-side h around (x, y), counter-clockwise from

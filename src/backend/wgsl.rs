@@ -107,6 +107,26 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/human_motion.wgsl"),
     ),
     ("goals.wgsl", include_str!("../../shaders/goals.wgsl")),
+    (
+        "common/place.wgsl",
+        include_str!("../../shaders/common/place.wgsl"),
+    ),
+    (
+        "common/goals.wgsl",
+        include_str!("../../shaders/common/goals.wgsl"),
+    ),
+    (
+        "common/regroup.wgsl",
+        include_str!("../../shaders/common/regroup.wgsl"),
+    ),
+    (
+        "social_events.wgsl",
+        include_str!("../../shaders/social_events.wgsl"),
+    ),
+    (
+        "formation.wgsl",
+        include_str!("../../shaders/formation.wgsl"),
+    ),
 ];
 
 /// Shaders at the top of `shaders/` that are not stages of the step but passes the GPU backend runs
@@ -172,8 +192,9 @@ pub type Columns<'a> = &'a [(&'static str, Elem, usize)];
 /// slot`); the same for the output columns as `CO_<NAME>`/`SO_<NAME>` in `outf`/`outu`; the index of
 /// every info key (`INFO_<KEY>`), episode statistic (`EP_<KEY>`) and event (`EV_<KEY>`) from
 /// [`crate::spec`]; the codes shared with the Rust stages (`NONE`, `ROLE_*`, `GROUP_*`,
-/// `POLICY_ORCA`, `FORMING_CROWD`, `MAX_TRIES`, `STREAM_*`, `NOISE_ROBOT`, `ONE_HOT_*`); the
-/// observation layout (`OBS_DIM`, `OBS_ROBOT`, `OBS_RECORD`, and per entity
+/// `STREAM_*`, `FORMING_*`, `POLICY_*`, `COUNT_GROUP_SIZE`, `PLACE_*`, `NOISE_ROBOT`,
+/// `ONE_HOT_*`, ...); the slot permutations of the social events (`PERMUTE_CAP`,
+/// `state_permute_*`, see [`permute_functions`]); the observation layout (`OBS_DIM`, `OBS_ROBOT`, `OBS_RECORD`, and per entity
 /// type `OBS_OFFSET_<TYPE>` and `OBS_CAPACITY_<TYPE>`, `PAIRS_HUMAN_HUMAN`/`PAIRS_HUMAN_LAPTOP`
 /// pair capacities); the bindings every shader shares; and `WORKGROUP_SIZE`.
 pub fn prelude(
@@ -213,6 +234,7 @@ pub fn prelude(
     for (name, value) in shared_constants() {
         out.push_str(&format!("const {name}: u32 = {value}u;\n"));
     }
+    out.push_str(&permute_functions(state));
     out.push_str(&format!(
         "const OBS_DIM: u32 = {}u;\nconst OBS_ROBOT: u32 = {}u;\nconst OBS_RECORD: u32 = {}u;\n",
         layout.dim,
@@ -318,6 +340,63 @@ fn pool_functions(state: Columns<'_>, outputs: Columns<'_>) -> String {
     out
 }
 
+/// The slot kinds whose slots the social events reorder, with the WGSL name of their permutation.
+const PERMUTED_KINDS: [(&str, &str); 4] = [
+    ("human", "state_permute_humans"),
+    ("group", "state_permute_groups"),
+    ("laptop_user", "state_permute_laptop_users"),
+    ("laptop", "state_permute_laptops"),
+];
+
+/// The twins of `StateChunk::permute` for the kinds the social events reorder, generated from the
+/// state's column list (so a column added to a kind is permuted without touching a shader):
+/// `PERMUTE_CAP`, the largest capacity of those kinds (at least 1), and per kind
+/// `fn state_permute_<kinds>(e: u32, perm: array<u32, PERMUTE_CAP>, n: u32, used: u32)`, which
+/// reorders the first `used` slots of that kind of environment `e` in every column of the kind:
+/// slot `k` receives the old slot `perm[k]` for `k < n`, and slots `n..used` are zeroed.
+fn permute_functions(state: Columns<'_>) -> String {
+    use crate::state::BatchState;
+    let kind_of = |col: &str| {
+        BatchState::COLUMN_KINDS
+            .iter()
+            .find(|&&(c, _)| c == col)
+            .map(|&(_, k)| k)
+    };
+    let cap = state
+        .iter()
+        .filter(|&&(col, _, _)| {
+            kind_of(col).is_some_and(|k| PERMUTED_KINDS.iter().any(|&(pk, _)| pk == k))
+        })
+        .map(|&(_, _, stride)| stride)
+        .max()
+        .unwrap_or(0)
+        .max(1);
+    let mut out = format!("const PERMUTE_CAP: u32 = {cap}u;\n");
+    for (kind, name) in PERMUTED_KINDS {
+        out.push_str(&format!(
+            "fn {name}(e: u32, perm: array<u32, PERMUTE_CAP>, n: u32, used: u32) {{\n\
+             \x20   var tf: array<f32, PERMUTE_CAP>;\n\
+             \x20   var tu: array<u32, PERMUTE_CAP>;\n"
+        ));
+        for &(col, elem, _) in state {
+            if kind_of(col) != Some(kind) {
+                continue;
+            }
+            let upper = col.to_uppercase();
+            let (buf, tmp, zero) = match elem {
+                Elem::F32 => ("sf", "tf", "0.0"),
+                Elem::U32 => ("su", "tu", "0u"),
+            };
+            out.push_str(&format!(
+                "    for (var k = 0u; k < n; k++) {{ {tmp}[k] = {buf}[C_{upper} + e * S_{upper} + perm[k]]; }}\n\
+                 \x20   for (var k = 0u; k < used; k++) {{ var v = {zero}; if (k < n) {{ v = {tmp}[k]; }} {buf}[C_{upper} + e * S_{upper} + k] = v; }}\n"
+            ));
+        }
+        out.push_str("}\n");
+    }
+    out
+}
+
 /// The codes the shaders share with the Rust stages, by their WGSL names: the absent index, human
 /// roles, group kinds, the ORCA policy, a walker's forming-crowd mark, the rejection samplers'
 /// try limit, RNG stream kinds, the robot's noise slot and the observation's one-hot
@@ -340,9 +419,6 @@ fn shared_constants() -> Vec<(&'static str, u32)> {
         ("GROUP_MOVING", group_kind::MOVING),
         ("GROUP_STANDING", group_kind::STANDING),
         ("GROUP_DISSOLVED", group_kind::DISSOLVED),
-        ("POLICY_ORCA", policy::ORCA),
-        ("FORMING_CROWD", forming::CROWD),
-        ("MAX_TRIES", crate::scenario::place::MAX_TRIES),
         ("STREAM_SCENARIO", crate::scenario::STREAM_SCENARIO),
         ("STREAM_GOALS", systems::goals::STREAM_GOALS),
         (
@@ -356,6 +432,18 @@ fn shared_constants() -> Vec<(&'static str, u32)> {
         ("STREAM_FORMATION", systems::formation::STREAM_FORMATION),
         ("STREAM_SOCIAL", systems::social_events::STREAM_SOCIAL),
         ("STREAM_OBS_NOISE", systems::observation::STREAM_OBS_NOISE),
+        ("FORMING_NONE", forming::NONE),
+        ("FORMING_CROWD", forming::CROWD),
+        ("FORMING_LAPTOP", forming::LAPTOP),
+        ("POLICY_ORCA", policy::ORCA),
+        ("POLICY_SFM", policy::SFM),
+        ("COUNT_GROUP_SIZE", index(crate::params::count::GROUP_SIZE)),
+        ("PLACE_MAX_TRIES", crate::scenario::place::MAX_TRIES),
+        ("PLACE_MAX_GROUP", index(crate::scenario::place::MAX_GROUP)),
+        (
+            "FORMATION_APPROXIMATE_AFTER",
+            systems::formation::APPROXIMATE_AFTER,
+        ),
         ("NOISE_ROBOT", index(crate::params::NOISE_ROBOT)),
         ("ONE_HOT_ROBOT", index(one_hot::ROBOT)),
         ("ONE_HOT_HUMAN", index(one_hot::HUMAN)),

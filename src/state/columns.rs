@@ -114,6 +114,11 @@ macro_rules! soa {
                 rest.split_at(1).0
             }
 
+            /// Every column's name and the kind of slot it is indexed by (`human`, `group`, ...:
+            /// the ident before the dot in the declaration), in declaration order.
+            pub const COLUMN_KINDS: &'static [(&'static str, &'static str)] =
+                &[$( (stringify!($col), stringify!($kind)), )*];
+
             /// Column metadata: name, element kind, stride.
             pub fn columns(&self) -> Vec<(&'static str, $crate::state::columns::Elem, usize)> {
                 vec![$( (

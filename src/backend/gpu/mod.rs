@@ -35,11 +35,13 @@ pub const STAGES_WITH_SHADERS: &[&str] = &[
     "human_motion",
     "group_motion",
     "goals",
+    "formation",
     "contacts",
     "termination",
     "reward",
     "metrics",
     "observation",
+    "social_events",
     "autoreset",
 ];
 

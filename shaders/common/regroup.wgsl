@@ -1,0 +1,298 @@
+// requires: common/goals.wgsl
+// requires: common/orca_obstacles.wgsl
+//
+// Twin of src/systems/regroup.rs: what the social events do to the lists of 0.1.1 (lone static
+// humans, lone walkers, moving groups, standing groups, laptop users, free laptops) and how the
+// slots follow: `regroup_next_seq`, `regroup_number_lists`, `regroup_to_lone_walker`,
+// `regroup_to_lone_static`, `regroup_stop` and `regroup_canonicalize` (stable insertion sorts of
+// the slots back into observation order, the permutation of every column of each slot kind by the
+// prelude's generated `state_permute_*`, the remapping of every slot index, the recount, the
+// renumbering of the lists and the rebuild of the ORCA obstacles). Library file (no entry point,
+// reads and writes the prelude's `sf`/`su`). Same operations in the same order as the Rust file;
+// change both in the same commit. `i` arguments are global human slots (as the Rust `usize`
+// slots), `e` the environment.
+//
+// The permutations, their keys and inverses are PERMUTE_CAP long (the prelude's largest capacity
+// of humans, groups, laptop users and laptops), so they cannot overflow. Every large local lives
+// in one place (one canonicalize per call site): Mesa inlines
+// every call, and llvmpipe's compile time grows quickly with the private memory of a shader.
+
+// A permutation of slot indices (Rust `Perm`).
+struct RegroupPerm {
+    len: u32,
+    v: array<u32, PERMUTE_CAP>,
+}
+
+// Rust `next_seq`: the next list position of environment e.
+fn regroup_next_seq(e: u32) -> u32 {
+    let v = su[C_SEQ_NEXT + e];
+    su[C_SEQ_NEXT + e] = v + 1u;
+    return v;
+}
+
+// Rust `number_lists`: list positions from the current slot order.
+fn regroup_number_lists(e: u32) {
+    let hb = e * S_H_SEQ;
+    let gb = e * S_G_SEQ;
+    let lb = e * S_L_SEQ;
+    let ub = e * S_LU_SEQ;
+    for (var k = 0u; k < su[C_N_HUMANS + e]; k++) {
+        su[C_H_SEQ + hb + k] = k;
+    }
+    for (var k = 0u; k < su[C_N_GROUPS + e]; k++) {
+        su[C_G_SEQ + gb + k] = k;
+    }
+    for (var k = 0u; k < su[C_N_LAPTOPS + e]; k++) {
+        su[C_L_SEQ + lb + k] = k;
+    }
+    for (var k = 0u; k < su[C_N_LAPTOP_USERS + e]; k++) {
+        su[C_LU_SEQ + ub + k] = k;
+    }
+    su[C_SEQ_NEXT + e] = su[C_N_HUMANS + e] + su[C_N_GROUPS + e] + su[C_N_LAPTOPS + e]
+        + su[C_N_LAPTOP_USERS + e];
+}
+
+// Rust `to_lone_walker`: human slot i becomes a lone walker at the end of the walkers' list, with
+// a new goal if one is free.
+fn regroup_to_lone_walker(e: u32, i: u32, rng: ptr<function, RngStream>) {
+    su[C_H_ROLE + i] = ROLE_DYNAMIC;
+    su[C_H_GROUP + i] = NONE;
+    su[C_H_LAPTOP_USER + i] = NONE;
+    su[C_H_FORMING + i] = FORMING_NONE;
+    su[C_H_SEQ + i] = regroup_next_seq(e);
+    let g = goals_sample_goal(e, rng, params.human_goal_radius);
+    if (g.found) {
+        sf[C_H_GOAL_X + i] = g.disc.x;
+        sf[C_H_GOAL_Y + i] = g.disc.y;
+    }
+}
+
+// Rust `stop`: speed 0 (and world velocity 0) for human slot i.
+fn regroup_stop(i: u32) {
+    sf[C_H_SPEED + i] = 0.0;
+    sf[C_H_VX + i] = 0.0;
+    sf[C_H_VY + i] = 0.0;
+}
+
+// Rust `to_lone_static`: human slot i becomes a lone static human at the end of their list.
+fn regroup_to_lone_static(e: u32, i: u32) {
+    su[C_H_ROLE + i] = ROLE_STATIC;
+    su[C_H_GROUP + i] = NONE;
+    su[C_H_LAPTOP_USER + i] = NONE;
+    su[C_H_FORMING + i] = FORMING_NONE;
+    su[C_H_SEQ + i] = regroup_next_seq(e);
+    regroup_stop(i);
+    sf[C_H_GOAL_X + i] = sf[C_H_X + i];
+    sf[C_H_GOAL_Y + i] = sf[C_H_Y + i];
+}
+
+// Lexicographic `a < b` of the Rust tuple keys (shorter tuples padded with zeros).
+fn regroup_key_less(a: vec4<u32>, b: vec4<u32>) -> bool {
+    if (a.x != b.x) {
+        return a.x < b.x;
+    }
+    if (a.y != b.y) {
+        return a.y < b.y;
+    }
+    if (a.z != b.z) {
+        return a.z < b.z;
+    }
+    return a.w < b.w;
+}
+
+// The sort key of slot k of kind `kind` (0 groups, 1 laptop users, 2 humans, 3 laptops) of
+// environment e: Rust `sorted_groups`' (group kind, list position), `sorted_users`' (ended,
+// list position), `sorted_humans`' (lone static, lone walkers, group members in their groups'
+// order, laptop users; then list position) and `sorted_laptops`' (free laptops in list order,
+// then those in use in their users' order).
+fn regroup_key(e: u32, kind: u32, k: u32) -> vec4<u32> {
+    if (kind == 0u) {
+        let g = e * S_G_KIND + k;
+        return vec4<u32>(su[C_G_KIND + g], su[C_G_SEQ + g], 0u, 0u);
+    }
+    let ub = e * S_LU_SEQ;
+    if (kind == 1u) {
+        let u = ub + k;
+        return vec4<u32>(u32(su[C_LU_HUMAN + u] == NONE), su[C_LU_SEQ + u], 0u, 0u);
+    }
+    if (kind == 2u) {
+        let i = e * S_H_ROLE + k;
+        let r = su[C_H_ROLE + i];
+        let seq = su[C_H_SEQ + i];
+        if (r == ROLE_STATIC) {
+            return vec4<u32>(0u, 0u, 0u, seq);
+        } else if (r == ROLE_DYNAMIC) {
+            return vec4<u32>(1u, 0u, 0u, seq);
+        } else if (r == ROLE_MOVING_GROUP || r == ROLE_STANDING_GROUP) {
+            let g = e * S_G_KIND + su[C_H_GROUP + i];
+            return vec4<u32>(2u, su[C_G_KIND + g], su[C_G_SEQ + g], seq);
+        }
+        return vec4<u32>(3u, 0u, su[C_LU_SEQ + ub + su[C_H_LAPTOP_USER + i]], seq);
+    }
+    let l = e * S_L_USER + k;
+    let u = su[C_L_USER + l];
+    if (u == NONE) {
+        return vec4<u32>(0u, su[C_L_SEQ + l], 0u, 0u);
+    }
+    return vec4<u32>(1u, su[C_LU_SEQ + ub + u], 0u, 0u);
+}
+
+// Whether sorted entry `old` of kind `kind` is kept: Rust `sorted_groups` and `sorted_users`
+// keep the leading live entries (dissolved groups and ended uses sort last).
+fn regroup_live(e: u32, kind: u32, old: u32) -> bool {
+    if (kind == 0u) {
+        return su[C_G_KIND + e * S_G_KIND + old] != GROUP_DISSOLVED;
+    }
+    if (kind == 1u) {
+        return su[C_LU_HUMAN + e * S_LU_HUMAN + old] != NONE;
+    }
+    return true;
+}
+
+// The slot count of kind `kind` (as `regroup_key`) of environment e.
+fn regroup_count(e: u32, kind: u32) -> u32 {
+    if (kind == 0u) {
+        return su[C_N_GROUPS + e];
+    }
+    if (kind == 1u) {
+        return su[C_N_LAPTOP_USERS + e];
+    }
+    if (kind == 2u) {
+        return su[C_N_HUMANS + e];
+    }
+    return su[C_N_LAPTOPS + e];
+}
+
+// Rust `sorted_groups`, `sorted_users`, `sorted_humans` or `sorted_laptops` (index `kind` of
+// `regroup_key`): Rust `sort_by_key` (indices sorted by key, stable insertion sort with the same
+// swaps; the keys are sorted in place, which is Rust's `keys` list), then the truncation to the
+// live entries.
+fn regroup_sorted(e: u32, kind: u32) -> RegroupPerm {
+    let n = regroup_count(e, kind);
+    var keys: array<vec4<u32>, PERMUTE_CAP>;
+    var perm: RegroupPerm;
+    perm.len = 0u;
+    for (var k = 0u; k < n; k++) {
+        let kk = regroup_key(e, kind, k);
+        perm.v[k] = k;
+        keys[k] = kk;
+        perm.len = k + 1u;
+        var j = k;
+        while (j > 0u) {
+            if (!regroup_key_less(kk, keys[j - 1u])) {
+                break;
+            }
+            let p = perm.v[j];
+            perm.v[j] = perm.v[j - 1u];
+            perm.v[j - 1u] = p;
+            let s = keys[j];
+            keys[j] = keys[j - 1u];
+            keys[j - 1u] = s;
+            j -= 1u;
+        }
+    }
+    var live = 0u;
+    while (live < perm.len) {
+        if (!regroup_live(e, kind, perm.v[live])) {
+            break;
+        }
+        live += 1u;
+    }
+    perm.len = live;
+    return perm;
+}
+
+// Rust `inverse`: old index -> new index of `perm` over n entries (NONE for dropped ones).
+fn regroup_inverse(perm: RegroupPerm, n: u32) -> array<u32, PERMUTE_CAP> {
+    var inv: array<u32, PERMUTE_CAP>;
+    for (var k = 0u; k < n; k++) {
+        inv[k] = NONE;
+    }
+    for (var k = 0u; k < perm.len; k++) {
+        inv[perm.v[k]] = k;
+    }
+    return inv;
+}
+
+// Rust `remap`'s `map`.
+fn regroup_map(inv: ptr<function, array<u32, PERMUTE_CAP>>, v: u32) -> u32 {
+    if (v == NONE) {
+        return NONE;
+    }
+    return (*inv)[v];
+}
+
+// Rust `remap`.
+fn regroup_remap(e: u32, perms: ptr<function, array<RegroupPerm, 4>>) {
+    let hb = e * S_H_GROUP;
+    let gb = e * S_G_COUNT;
+    let lb = e * S_L_USER;
+    let ub = e * S_LU_HUMAN;
+    let n_humans = su[C_N_HUMANS + e];
+    var inv_g = regroup_inverse((*perms)[0], su[C_N_GROUPS + e]);
+    var inv_u = regroup_inverse((*perms)[1], su[C_N_LAPTOP_USERS + e]);
+    var inv_h = regroup_inverse((*perms)[2], n_humans);
+    var inv_l = regroup_inverse((*perms)[3], su[C_N_LAPTOPS + e]);
+    var n_static = 0u;
+    var n_dynamic = 0u;
+    for (var i = hb; i < hb + n_humans; i++) {
+        su[C_H_GROUP + i] = regroup_map(&inv_g, su[C_H_GROUP + i]);
+        su[C_H_LAPTOP_USER + i] = regroup_map(&inv_u, su[C_H_LAPTOP_USER + i]);
+        n_static += u32(su[C_H_ROLE + i] == ROLE_STATIC);
+        n_dynamic += u32(su[C_H_ROLE + i] == ROLE_DYNAMIC);
+    }
+    su[C_N_STATIC + e] = n_static;
+    su[C_N_DYNAMIC + e] = n_dynamic;
+    su[C_N_GROUPS + e] = (*perms)[0].len;
+    su[C_N_LAPTOP_USERS + e] = (*perms)[1].len;
+    for (var u = ub; u < ub + (*perms)[1].len; u++) {
+        su[C_LU_HUMAN + u] = regroup_map(&inv_h, su[C_LU_HUMAN + u]);
+        su[C_LU_LAPTOP + u] = regroup_map(&inv_l, su[C_LU_LAPTOP + u]);
+    }
+    for (var l = lb; l < lb + su[C_N_LAPTOPS + e]; l++) {
+        su[C_L_USER + l] = regroup_map(&inv_u, su[C_L_USER + l]);
+    }
+    // Members are consecutive now: each group's first slot and count from the humans.
+    for (var g = gb; g < gb + (*perms)[0].len; g++) {
+        su[C_G_COUNT + g] = 0u;
+    }
+    for (var k = 0u; k < n_humans; k++) {
+        let g = su[C_H_GROUP + hb + k];
+        if (g != NONE) {
+            let gg = gb + g;
+            if (su[C_G_COUNT + gg] == 0u) {
+                su[C_G_FIRST + gg] = k;
+            }
+            su[C_G_COUNT + gg] += 1u;
+        }
+    }
+    let sb = e * S_CF_HUMAN;
+    for (var k = sb; k < sb + su[C_CF_COUNT + e]; k++) {
+        su[C_CF_HUMAN + k] = regroup_map(&inv_h, su[C_CF_HUMAN + k]);
+    }
+    if (su[C_LF_ACTIVE + e] != 0u) {
+        su[C_LF_HUMAN + e] = regroup_map(&inv_h, su[C_LF_HUMAN + e]);
+        su[C_LF_LAPTOP + e] = regroup_map(&inv_l, su[C_LF_LAPTOP + e]);
+    }
+}
+
+// Rust `canonicalize`: slots back into observation order, dissolved groups and ended laptop uses
+// dropped, every slot index remapped, counts and list positions renewed, obstacles rebuilt.
+fn regroup_canonicalize(e: u32) {
+    var perms: array<RegroupPerm, 4>;
+    perms[0] = regroup_sorted(e, 0u);
+    perms[1] = regroup_sorted(e, 1u);
+    perms[2] = regroup_sorted(e, 2u);
+    perms[3] = regroup_sorted(e, 3u);
+    let n_groups = su[C_N_GROUPS + e];
+    let n_users = su[C_N_LAPTOP_USERS + e];
+    state_permute_groups(e, perms[0].v, perms[0].len, n_groups);
+    state_permute_laptop_users(e, perms[1].v, perms[1].len, n_users);
+    state_permute_humans(e, perms[2].v, perms[2].len, su[C_N_HUMANS + e]);
+    state_permute_laptops(e, perms[3].v, perms[3].len, su[C_N_LAPTOPS + e]);
+    regroup_remap(e, &perms);
+    // Compact list positions, as a loaded document numbers them.
+    regroup_number_lists(e);
+    su[C_OBSTACLES_DIRTY + e] = 1u;
+    orca_obstacles_rebuild_if_dirty(e);
+}

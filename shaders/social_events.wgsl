@@ -1,0 +1,331 @@
+// requires: common/regroup.wgsl
+//
+// Twin of src/systems/social_events.rs (stage `social_events`, spec 4.1 step 12, 4.5): the random
+// social events, in 0.1.1's order: crowd dispersal, laptop-use dispersal, crowd formation,
+// laptop-use formation, each counted in the `events` output when it happens. Nothing is drawn in
+// replay mode. Same operations and draws in the same order as the Rust file; change both in the
+// same commit. Local slot lists (`free_walkers`, the dispersable groups and users, the free
+// laptops) are PERMUTE_CAP long (the largest of those capacities); a group's members and poses
+// PLACE_GROUP_CAP (common/place.wgsl). A dispersal regroups the environment
+// (`regroup_canonicalize`) at the end of the Rust `disperse_group` and `end_laptop_use`; here
+// `main` calls it right after them, from one place (Mesa inlines every call, and each copy of
+// the regrouping and obstacle rebuild costs llvmpipe compile time).
+
+// Outcome of an attempt to start a formation (Rust `Start`).
+const START_STARTED: u32 = 0u;
+const START_BLOCKED: u32 = 1u;
+const START_IMPOSSIBLE: u32 = 2u;
+
+struct SlotList {
+    len: u32,
+    v: array<u32, PERMUTE_CAP>,
+}
+
+fn count_event(e: u32, ev: u32) {
+    outu[CO_EVENTS + e * SO_EVENTS + ev] += 1u;
+}
+
+// Rust `dispersable_groups`: local indices of the dispersable groups of `kind`, in group order.
+fn dispersable_groups(e: u32, kind: u32, out: ptr<function, SlotList>) {
+    let gb = e * S_G_KIND;
+    (*out).len = 0u;
+    for (var g = 0u; g < su[C_N_GROUPS + e]; g++) {
+        if (su[C_G_KIND + gb + g] == kind && su[C_G_DISPERSABLE + gb + g] != 0u) {
+            (*out).v[(*out).len] = g;
+            (*out).len += 1u;
+        }
+    }
+}
+
+// Rust `disperse_group` for local group g; stays[k] for its n members.
+fn disperse_group(
+    e: u32,
+    g: u32,
+    stays: ptr<function, array<bool, PLACE_GROUP_CAP>>,
+    n: u32,
+    became_standing: bool,
+    rng: ptr<function, RngStream>,
+) {
+    let gg = e * S_G_KIND + g;
+    let first = e * S_H_X + su[C_G_FIRST + gg];
+    var stayers = 0u;
+    for (var k = 0u; k < n; k++) {
+        stayers += u32((*stays)[k]);
+    }
+    let dissolve = stayers <= 1u;
+    for (var k = 0u; k < n; k++) {
+        let i = first + k;
+        if (!(*stays)[k]) {
+            regroup_to_lone_walker(e, i, rng);
+        } else if (dissolve) {
+            regroup_to_lone_static(e, i);
+        } else if (su[C_G_KIND + gg] == GROUP_MOVING) {
+            regroup_stop(i);
+        }
+    }
+    if (dissolve) {
+        su[C_G_KIND + gg] = GROUP_DISSOLVED;
+    } else if (su[C_G_KIND + gg] == GROUP_MOVING && became_standing) {
+        su[C_G_KIND + gg] = GROUP_STANDING;
+        su[C_G_SEQ + gg] = regroup_next_seq(e);
+        for (var k = 0u; k < n; k++) {
+            if ((*stays)[k]) {
+                su[C_H_ROLE + first + k] = ROLE_STANDING_GROUP;
+            }
+        }
+    }
+    // Rust: `regroup::canonicalize`, called by `main` (see the header).
+}
+
+// Rust `crowd_dispersal`.
+fn crowd_dispersal(e: u32, rng: ptr<function, RngStream>) -> bool {
+    var kind = GROUP_MOVING;
+    if (rng_below(rng, 2u) == 0u) {
+        kind = GROUP_STANDING;
+    }
+    var groups: SlotList;
+    dispersable_groups(e, kind, &groups);
+    if (groups.len == 0u) {
+        return false;
+    }
+    let g = groups.v[rng_below(rng, groups.len)];
+    let n = min(su[C_G_COUNT + e * S_G_COUNT + g], PLACE_GROUP_CAP);
+    var stays: array<bool, PLACE_GROUP_CAP>;
+    for (var k = 0u; k < n; k++) {
+        stays[k] = rng_chance(rng, 0.5);
+    }
+    let became_standing = rng_chance(rng, 0.5);
+    disperse_group(e, g, &stays, n, became_standing, rng);
+    return true;
+}
+
+// Rust `end_laptop_use` for local user u.
+fn end_laptop_use(e: u32, u: u32, rng: ptr<function, RngStream>) {
+    let uu = e * S_LU_HUMAN + u;
+    let i = e * S_H_X + su[C_LU_HUMAN + uu];
+    let l = e * S_L_X + su[C_LU_LAPTOP + uu];
+    regroup_to_lone_walker(e, i, rng);
+    su[C_L_USER + l] = NONE;
+    su[C_L_SEQ + l] = regroup_next_seq(e);
+    su[C_LU_HUMAN + uu] = NONE;
+    // Rust: `regroup::canonicalize`, called by `main` (see the header).
+}
+
+// Rust `laptop_dispersal`.
+fn laptop_dispersal(e: u32, rng: ptr<function, RngStream>) -> bool {
+    let ub = e * S_LU_DISPERSABLE;
+    var users: SlotList;
+    for (var u = 0u; u < su[C_N_LAPTOP_USERS + e]; u++) {
+        if (su[C_LU_DISPERSABLE + ub + u] != 0u) {
+            users.v[users.len] = u;
+            users.len += 1u;
+        }
+    }
+    if (users.len == 0u) {
+        return false;
+    }
+    let u = users.v[rng_below(rng, users.len)];
+    end_laptop_use(e, u, rng);
+    return true;
+}
+
+// Rust `free_walkers`: lone walkers not heading anywhere special, in slot order (local slots).
+fn free_walkers(e: u32, out: ptr<function, SlotList>) {
+    let hb = e * S_H_ROLE;
+    (*out).len = 0u;
+    for (var k = 0u; k < su[C_N_HUMANS + e]; k++) {
+        if (su[C_H_ROLE + hb + k] == ROLE_DYNAMIC && su[C_H_FORMING + hb + k] == FORMING_NONE) {
+            (*out).v[(*out).len] = k;
+            (*out).len += 1u;
+        }
+    }
+}
+
+// Rust `spot_free`: is a human-sized disc at (x, y) free of every entity and every goal?
+fn spot_free(e: u32, x: f32, y: f32) -> bool {
+    let d = Disc(x, y, params.human_radius);
+    return !world_blocks_goal(e, d) && !goals_touches_goal(e, d);
+}
+
+// Rust `start_crowd_formation`: the walkers chosen[0..n] (local slots) head for poses[0..n].
+fn start_crowd_formation(
+    e: u32,
+    chosen: ptr<function, array<u32, PLACE_GROUP_CAP>>,
+    poses: ptr<function, array<vec3<f32>, PLACE_GROUP_CAP>>,
+    n: u32,
+) {
+    let hb = e * S_H_X;
+    let sb = e * S_CF_HUMAN;
+    var cx = 0.0;
+    var cy = 0.0;
+    for (var k = 0u; k < n; k++) {
+        let h = (*chosen)[k];
+        let pose = (*poses)[k];
+        let i = hb + h;
+        su[C_CF_HUMAN + sb + k] = h;
+        sf[C_CF_SLOT_X + sb + k] = pose.x;
+        sf[C_CF_SLOT_Y + sb + k] = pose.y;
+        sf[C_CF_SLOT_THETA + sb + k] = pose.z;
+        sf[C_H_GOAL_X + i] = pose.x;
+        sf[C_H_GOAL_Y + i] = pose.y;
+        su[C_H_FORMING + i] = FORMING_CROWD;
+        su[C_H_POLICY + i] = POLICY_ORCA;
+        cx += pose.x;
+        cy += pose.y;
+    }
+    sf[C_CF_X + e] = cx / f32(n);
+    sf[C_CF_Y + e] = cy / f32(n);
+    su[C_CF_COUNT + e] = n;
+    su[C_CF_CLOSE_STEPS + e] = 0u;
+    su[C_CF_ACTIVE + e] = 1u;
+}
+
+// Rust `crowd_formation`.
+fn crowd_formation(e: u32, rng: ptr<function, RngStream>) -> u32 {
+    let lo = params.counts[2u * COUNT_GROUP_SIZE];
+    let hi = params.counts[2u * COUNT_GROUP_SIZE + 1u];
+    let n_signed = rng_randint(rng, lo, hi);
+    var walkers: SlotList;
+    free_walkers(e, &walkers);
+    // Rust casts a negative size to a huge usize, which no walker list reaches.
+    if (n_signed < 2 || u32(n_signed) > walkers.len || u32(n_signed) > PLACE_GROUP_CAP) {
+        return START_IMPOSSIBLE;
+    }
+    let n = u32(n_signed);
+    var chosen: array<u32, PLACE_GROUP_CAP>;
+    for (var c = 0u; c < n; c++) {
+        let k = rng_below(rng, walkers.len);
+        chosen[c] = walkers.v[k];
+        // `walkers.remove(k)`.
+        for (var j = k; j + 1u < walkers.len; j++) {
+            walkers.v[j] = walkers.v[j + 1u];
+        }
+        walkers.len -= 1u;
+    }
+    let area = place_sampling_box(sf[C_MAP_X + e], sf[C_MAP_Y + e]);
+    var poses: array<vec3<f32>, PLACE_GROUP_CAP>;
+    var found = false;
+    for (var t = 0u; t < PLACE_MAX_TRIES; t++) {
+        let c = place_box_point(area, rng);
+        place_group_layout(rng, c.x, c.y, n, true, &poses);
+        var all_free = true;
+        for (var k = 0u; k < n; k++) {
+            if (!spot_free(e, poses[k].x, poses[k].y)) {
+                all_free = false;
+                break;
+            }
+        }
+        if (all_free) {
+            found = true;
+            break;
+        }
+    }
+    if (!found) {
+        return START_BLOCKED;
+    }
+    start_crowd_formation(e, &chosen, &poses, n);
+    return START_STARTED;
+}
+
+// Rust `start_laptop_formation`: walker h (local slot) heads for the seat of laptop l.
+fn start_laptop_formation(e: u32, h: u32, l: u32, seat: vec3<f32>) {
+    let i = e * S_H_X + h;
+    sf[C_H_GOAL_X + i] = seat.x;
+    sf[C_H_GOAL_Y + i] = seat.y;
+    su[C_H_FORMING + i] = FORMING_LAPTOP;
+    su[C_H_POLICY + i] = POLICY_ORCA;
+    su[C_LF_HUMAN + e] = h;
+    su[C_LF_LAPTOP + e] = l;
+    sf[C_LF_SEAT_X + e] = seat.x;
+    sf[C_LF_SEAT_Y + e] = seat.y;
+    sf[C_LF_SEAT_THETA + e] = seat.z;
+    su[C_LF_ACTIVE + e] = 1u;
+}
+
+// Rust `send_to_laptop`.
+fn send_to_laptop(e: u32, h: u32, l: u32) -> bool {
+    let i = e * S_H_X + h;
+    su[C_H_POLICY + i] = POLICY_ORCA;
+    let ll = e * S_L_X + l;
+    let seat = place_seat(sf[C_L_X + ll], sf[C_L_Y + ll], sf[C_L_THETA + ll]);
+    if (!spot_free(e, seat.x, seat.y)) {
+        return false;
+    }
+    start_laptop_formation(e, h, l, seat);
+    return true;
+}
+
+// Rust `laptop_formation`.
+fn laptop_formation(e: u32, rng: ptr<function, RngStream>) -> u32 {
+    let lb = e * S_L_USER;
+    var laptops: SlotList;
+    for (var l = 0u; l < su[C_N_LAPTOPS + e]; l++) {
+        if (su[C_L_USER + lb + l] == NONE) {
+            laptops.v[laptops.len] = l;
+            laptops.len += 1u;
+        }
+    }
+    var walkers: SlotList;
+    free_walkers(e, &walkers);
+    if (laptops.len == 0u || walkers.len == 0u) {
+        return START_IMPOSSIBLE;
+    }
+    let l = laptops.v[rng_below(rng, laptops.len)];
+    let h = walkers.v[rng_below(rng, walkers.len)];
+    if (send_to_laptop(e, h, l)) {
+        return START_STARTED;
+    }
+    return START_BLOCKED;
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = gid.x;
+    if (e >= N_ENVS || su[C_STEPPING + e] == 0u || su[C_DONE + e] != 0u || params.replay != 0u) {
+        return;
+    }
+    // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
+    var rng = rng_new(
+        params.seed_lo,
+        params.seed_hi,
+        e,
+        su[C_EPISODE + e],
+        rng_stream_id(STREAM_SOCIAL, su[C_TICK + e]),
+    );
+    // The two dispersals, each followed by the regrouping when it happened (see the header).
+    for (var phase = 0u; phase < 2u; phase++) {
+        var dispersed = false;
+        if (phase == 0u) {
+            if (params.p_crowd_dispersal > 0.0 && rng_chance(&rng, params.p_crowd_dispersal)
+                && crowd_dispersal(e, &rng)) {
+                count_event(e, EV_CROWD_DISPERSAL);
+                dispersed = true;
+            }
+        } else if (params.p_laptop_dispersal > 0.0 && rng_chance(&rng, params.p_laptop_dispersal)
+            && laptop_dispersal(e, &rng)) {
+            count_event(e, EV_LAPTOP_DISPERSAL);
+            dispersed = true;
+        }
+        if (dispersed) {
+            regroup_canonicalize(e);
+        }
+    }
+    var idle = su[C_CF_ACTIVE + e] == 0u && su[C_LF_ACTIVE + e] == 0u;
+    if (idle && params.p_crowd_formation > 0.0 && rng_chance(&rng, params.p_crowd_formation)) {
+        let start = crowd_formation(e, &rng);
+        if (start == START_STARTED) {
+            count_event(e, EV_CROWD_FORMATION_START);
+        } else if (start == START_BLOCKED) {
+            count_event(e, EV_CROWD_FORMATION_GAVE_UP);
+        }
+    }
+    idle = su[C_CF_ACTIVE + e] == 0u && su[C_LF_ACTIVE + e] == 0u;
+    if (idle && params.p_laptop_formation > 0.0 && rng_chance(&rng, params.p_laptop_formation)) {
+        let start = laptop_formation(e, &rng);
+        if (start == START_STARTED) {
+            count_event(e, EV_LAPTOP_FORMATION_START);
+        } else if (start == START_BLOCKED) {
+            count_event(e, EV_LAPTOP_FORMATION_BLOCKED);
+        }
+    }
+}
