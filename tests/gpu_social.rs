@@ -295,7 +295,7 @@ fn social_events_parity() {
         ("exp3", exp3, 256),
         ("lroom_mixed", eventful("lroom_mixed", 0.5), 256),
         ("corridor_mixed", eventful("corridor_mixed", 0.5), 256),
-        ("stress", eventful("stress", 0.5), 64),
+        ("stress", eventful("stress", 0.5), 256),
     ];
     for (name, c, n) in configs {
         if !selected(name) {
