@@ -108,31 +108,56 @@ pub fn write_row(
     Ok(())
 }
 
+/// One [`RowScratch`] per thread that may generate rows (a pool's workers and the caller), kept
+/// across calls so that a warm refill allocates nothing.
+#[derive(Debug)]
+pub struct Scratches(Vec<std::sync::Mutex<RowScratch>>);
+
+impl Scratches {
+    /// Scratch tables for `pool`'s threads (or the caller alone).
+    pub fn new(caps: Caps, layout: ObsLayout, pool: Option<&rayon::ThreadPool>) -> Self {
+        let n = pool.map_or(0, rayon::ThreadPool::current_num_threads) + 1;
+        Self(
+            (0..n)
+                .map(|_| std::sync::Mutex::new(RowScratch::new(caps, layout)))
+                .collect(),
+        )
+    }
+
+    /// The calling thread's scratch (the last one for a thread outside the pool).
+    fn get(&self) -> std::sync::MutexGuard<'_, RowScratch> {
+        let k = rayon::current_thread_index().map_or(self.0.len() - 1, |i| i.min(self.0.len() - 1));
+        // Each thread takes its own entry, so the lock is never contended; a poisoned one only
+        // means an earlier row panicked, and every row overwrites what it reads.
+        self.0[k]
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+}
+
 /// Fill `rows` (one [`row_words`]-word row per entry of `envs`, in order) with the rows of
-/// environments `envs` starting episodes `episodes[env]`, on `pool`'s threads. Returns the
-/// environments whose scenario could not be generated, with the error.
+/// environments `envs` starting episodes `episodes[env]`, on `pool`'s threads with `scratches`
+/// made for that pool. Returns the environments whose scenario could not be generated, with the
+/// error (allocating only then).
 pub fn write_rows(
     p: &StepParams,
-    caps: Caps,
-    layout: ObsLayout,
     envs: &[usize],
     episodes: &[u32],
     rows: &mut [u32],
     pool: Option<&rayon::ThreadPool>,
+    scratches: &Scratches,
 ) -> Vec<(usize, SimError)> {
-    let words = row_words(caps, layout);
+    let Some(words) = rows.len().checked_div(envs.len()) else {
+        return Vec::new();
+    };
     let mut work = || -> Vec<(usize, SimError)> {
         rows.par_chunks_mut(words)
             .zip(envs.par_iter())
-            .map_init(
-                || RowScratch::new(caps, layout),
-                |scratch, (row, &env)| {
-                    write_row(p, env, episodes[env], scratch, row)
-                        .err()
-                        .map(|err| (env, err))
-                },
-            )
-            .flatten()
+            .filter_map(|(row, &env)| {
+                write_row(p, env, episodes[env], &mut scratches.get(), row)
+                    .err()
+                    .map(|err| (env, err))
+            })
             .collect()
     };
     match pool {

@@ -157,15 +157,8 @@ pub fn check_parity(
 pub fn fill_pool(gpu: &mut GpuStages, p: &StepParams, state: &BatchState, layout: ObsLayout) {
     let envs: Vec<usize> = (0..state.n_envs).collect();
     let mut rows = vec![0u32; envs.len() * gpu.pool_row_words()];
-    let failed = reset_pool::write_rows(
-        p,
-        state.strides,
-        layout,
-        &envs,
-        &state.episode,
-        &mut rows,
-        None,
-    );
+    let scratches = reset_pool::Scratches::new(state.strides, layout, None);
+    let failed = reset_pool::write_rows(p, &envs, &state.episode, &mut rows, None, &scratches);
     assert!(failed.is_empty(), "scenario generation failed: {failed:?}");
     gpu.write_pool_rows(0, &rows);
 }

@@ -21,7 +21,6 @@ use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
 use crate::pipeline::STAGES;
-use crate::spec::ObsLayout;
 use crate::state::{BatchState, Caps};
 
 use super::{GpuDevice, GpuStages};
@@ -34,7 +33,6 @@ pub struct GpuBackend {
     params: StepParams,
     gpu: GpuStages,
     caps: Caps,
-    layout: ObsLayout,
     out: Outputs,
     /// The host copy of the device state, when one was asked for since the last device work.
     state: OnceLock<BatchState>,
@@ -54,6 +52,7 @@ pub struct GpuBackend {
     /// Reused buffers of the pool refill.
     stale: Vec<usize>,
     rows: Vec<u32>,
+    scratches: reset_pool::Scratches,
     threads: usize,
     pool: Option<rayon::ThreadPool>,
     timing: bool,
@@ -98,7 +97,6 @@ impl GpuBackend {
             params,
             gpu,
             caps,
-            layout,
             out,
             state: OnceLock::from(state),
             state_edited: false,
@@ -109,6 +107,7 @@ impl GpuBackend {
             read_episode: vec![0; n],
             stale: Vec::new(),
             rows: Vec::new(),
+            scratches: reset_pool::Scratches::new(caps, layout, pool.as_ref()),
             threads,
             pool,
             timing: false,
@@ -151,12 +150,11 @@ impl GpuBackend {
         self.rows.resize(self.stale.len() * words, 0);
         let failed = reset_pool::write_rows(
             &self.params,
-            self.caps,
-            self.layout,
             &self.stale,
             &self.episode,
             &mut self.rows,
             self.pool.as_ref(),
+            &self.scratches,
         );
         for &e in &self.stale {
             self.row_episode[e] = self.episode[e];
@@ -182,7 +180,8 @@ impl GpuBackend {
     /// counters back, and account for the pool rows consumed.
     fn run(&mut self, passes: &[&str]) -> Result<(), SimError> {
         let _ = self.state.take();
-        if self.timing {
+        // Stage timing covers the step's stages (a reset pass alone is not one of them).
+        if self.timing && passes.len() == STAGES.len() {
             for (k, pass) in passes.iter().enumerate() {
                 let start = Instant::now();
                 self.gpu.run(pass)?;
