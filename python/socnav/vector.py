@@ -36,7 +36,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         obs_mode: str = "dict",
         action_type: str = "continuous",
         autoreset_mode: str | AutoresetMode = "next_step",
-        backend: str = "auto",
+        backend: str = "cpu",
         threads: int | None = None,
         copy: bool = False,
         reward_fn: _batch.RewardFn | None = None,
@@ -193,7 +193,7 @@ def make_vec(
     obs_mode: str = "dict",
     action_type: str = "continuous",
     autoreset_mode: str | AutoresetMode = "next_step",
-    backend: str = "auto",
+    backend: str = "cpu",
     threads: int | None = None,
     copy: bool = False,
     reward_fn: _batch.RewardFn | None = None,
@@ -207,9 +207,12 @@ def make_vec(
         obs_mode: ``"dict"`` (SocNavGym's blocks, zero-padded) or ``"flat"`` (one row).
         action_type: ``"continuous"`` (``Box(-1, 1, (3,))``) or ``"discrete"`` (``Discrete(7)``).
         autoreset_mode: ``"next_step"`` (default), ``"same_step"`` or ``"disabled"``.
-        backend: ``"auto"`` (a hardware GPU when one exists, else the CPU with one line on
-            stderr), ``"cpu"`` or ``"gpu"`` (any adapter, software ones included; an error
-            without one). ``env.backend`` and ``env.device`` say what runs the batch.
+        backend: ``"cpu"`` (default), ``"gpu"`` (any adapter, software ones included; an error
+            without one) or ``"auto"`` (a hardware GPU when one exists, else the CPU with one
+            line on stderr). ``env.backend`` and ``env.device`` say what runs the batch. The
+            GPU choices load the machine's Vulkan drivers into the process; Mesa's software
+            driver brings its own LLVM, which crashes torch when it later imports triton, so
+            the default never probes for an adapter.
         threads: CPU threads (all cores when ``None``).
         copy: return fresh arrays instead of views of the batch's buffers.
         reward_fn: a vectorised reward: called after every step with the step's arrays
