@@ -37,6 +37,7 @@ pub mod pipeline;
 pub mod render;
 pub mod rng;
 pub mod scenario;
+pub mod sngnn;
 pub mod spec;
 pub mod state;
 pub mod systems;

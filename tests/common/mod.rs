@@ -8,6 +8,7 @@
 
 #[cfg(feature = "gpu")]
 pub mod gpu;
+pub mod npz;
 pub mod reference;
 pub mod scene;
 

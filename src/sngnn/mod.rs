@@ -1,0 +1,86 @@
+//! SNGNN-v2, the learned social-compliance reward (spec sections 6.3 and 7): weight loading,
+//! graph building and batched inference.
+//!
+//! The weights are GPL-3.0 and never part of this repository: `socnav sngnn install` fetches
+//! them from the socnavgym 0.1.1 wheel into a cache directory, and the config
+//! (`reward.sngnn_weights`, overridden by `SOCNAV_SNGNN_WEIGHTS`) points to the file.
+
+use std::collections::BTreeMap;
+
+/// One float32 tensor of the model's state dict, row-major (PyTorch's `Linear` weight is
+/// `(out, in)`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tensor {
+    /// Extent of each dimension.
+    pub shape: Vec<usize>,
+    /// The values, row-major, `shape.iter().product()` of them.
+    pub data: Vec<f32>,
+}
+
+/// The model's 42 named tensors (spec 7.1), names as in the PyTorch state dict
+/// (`gnn_object.layers.0.edge_func.2.weight`, ...).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Weights {
+    /// Tensors by state-dict name.
+    pub tensors: BTreeMap<String, Tensor>,
+}
+
+impl Weights {
+    /// The tensor called `name`; the names are checked when the weights are loaded, so a
+    /// missing one here is a bug.
+    pub fn get(&self, name: &str) -> &Tensor {
+        self.tensors
+            .get(name)
+            .unwrap_or_else(|| panic!("SNGNN weights lack {name:?} (checked at load time)"))
+    }
+}
+
+/// Features per node (spec 7.3).
+pub const NODE_FEATURES: usize = 42;
+/// Features per edge: the one-hot of the spatial relation (0-13) or the temporal one (14-17),
+/// and the distance at index 17 (spec 7.3-7.4).
+pub const EDGE_FEATURES: usize = 18;
+/// Relations, spatial and temporal.
+pub const RELATIONS: usize = 18;
+/// The relation whose one-hot is overwritten by its zero distance: its edge feature is all zero
+/// (spec 7.4's quirk, reproduced because it defines the model's input).
+pub const ZERO_FEATURE_RELATION: u8 = 17;
+
+/// The graph the network sees for one environment and step: up to three frames stacked
+/// (spec 7.3-7.4). An edge's feature is a function of its relation and distance only
+/// ([`Graph::edge_feature`]), so edges carry those two instead of 18 floats.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Graph {
+    /// Number of nodes; node 0 is the room node of the newest frame.
+    pub nodes: usize,
+    /// Node features, `nodes × NODE_FEATURES`, row-major.
+    pub features: Vec<f32>,
+    /// Source node of each edge.
+    pub src: Vec<u32>,
+    /// Destination node of each edge (messages flow src → dst).
+    pub dst: Vec<u32>,
+    /// Relation index of each edge (`0..RELATIONS`).
+    pub rel: Vec<u8>,
+    /// The edge's scalar distance feature (index 17), 0 for self-loops and temporal edges.
+    pub dist: Vec<f32>,
+}
+
+impl Graph {
+    /// The 18 edge features of edge `i` as the original builds them.
+    pub fn edge_feature(&self, i: usize) -> [f32; EDGE_FEATURES] {
+        let mut f = [0.0; EDGE_FEATURES];
+        f[usize::from(self.rel[i])] = 1.0;
+        f[EDGE_FEATURES - 1] = self.dist[i];
+        f
+    }
+
+    /// Empty the graph, keeping its allocations.
+    pub fn clear(&mut self) {
+        self.nodes = 0;
+        self.features.clear();
+        self.src.clear();
+        self.dst.clear();
+        self.rel.clear();
+        self.dist.clear();
+    }
+}
