@@ -5,6 +5,9 @@
 //! them from the socnavgym 0.1.1 wheel into a cache directory, and the config
 //! (`reward.sngnn_weights`, overridden by `SOCNAV_SNGNN_WEIGHTS`) points to the file.
 
+pub mod model;
+pub mod pieces;
+
 use std::collections::BTreeMap;
 
 /// One float32 tensor of the model's state dict, row-major (PyTorch's `Linear` weight is
