@@ -359,3 +359,74 @@ fn missing_files_say_how_to_install() {
         assert!(m.contains("socnav sngnn install"), "{m}");
     }
 }
+
+/// `socnav sngnn <args>` with the weight variables replaced by `env`: (status, stdout, stderr).
+#[cfg(feature = "cli")]
+fn socnav_sngnn(args: &[&str], env: &[(&str, &Path)]) -> (Option<i32>, String, String) {
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_socnav"));
+    cmd.arg("sngnn")
+        .args(args)
+        .env_remove(sngnn::WEIGHTS_ENV)
+        .env_remove(sngnn::CACHE_ENV);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let out = cmd.output().expect("socnav runs");
+    let text = |b: Vec<u8>| String::from_utf8(b).unwrap();
+    (out.status.code(), text(out.stdout), text(out.stderr))
+}
+
+#[cfg(feature = "cli")]
+#[test]
+fn cli_path_shows_the_resolved_file() {
+    let dir = temp_dir("sngnn-cli-path");
+    let file = dir.join("w.tch");
+    std::fs::write(&file, b"1234").unwrap();
+    let (code, out, _) = socnav_sngnn(&["path"], &[(sngnn::WEIGHTS_ENV, &file)]);
+    assert_eq!(code, Some(0));
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines[0], file.display().to_string());
+    assert_eq!(lines[1], "source: from SOCNAV_SNGNN_WEIGHTS");
+    assert_eq!(lines[2], "exists: yes (4 bytes)");
+
+    let (code, out, _) = socnav_sngnn(&["path"], &[(sngnn::CACHE_ENV, &dir)]);
+    assert_eq!(code, Some(0));
+    let expected = dir.join("sngnn").join("SOCNAV_V2.tch");
+    assert_eq!(
+        out.lines().next(),
+        Some(expected.display().to_string().as_str())
+    );
+    assert!(
+        out.contains("exists: no (install with `socnav sngnn install`)"),
+        "{out}"
+    );
+
+    let config = dir.join("c.toml");
+    std::fs::write(&config, "[reward]\nsngnn_weights = \"x/w.tch\"\n").unwrap();
+    let args = ["path", "--config", config.to_str().unwrap()];
+    let (code, out, _) = socnav_sngnn(&args, &[]);
+    assert_eq!(code, Some(0));
+    assert!(
+        out.starts_with("x/w.tch\nsource: from the config's reward.sngnn_weights\n"),
+        "{out}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Without Python, install fails with exit status 3 (what CI reads as "skip") and says why.
+#[cfg(feature = "cli")]
+#[test]
+fn cli_install_without_python_says_why() {
+    let dir = temp_dir("sngnn-cli-install");
+    let python = dir.join("no-python");
+    let cache = dir.join("cache");
+    let args = ["install", "--cache-dir", cache.to_str().unwrap()];
+    let (code, _, err) = socnav_sngnn(&args, &[("SOCNAV_PYTHON", &python)]);
+    assert_eq!(code, Some(3), "{err}");
+    assert!(
+        err.contains("not found: install Python 3 with pip"),
+        "{err}"
+    );
+    assert!(!cache.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
