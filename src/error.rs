@@ -24,6 +24,10 @@ pub enum SimError {
     /// Reading or writing a file failed.
     #[error("{0}")]
     Io(String),
+    /// The SNGNN-v2 weights are missing or invalid; the message names the file and every
+    /// problem found (a bad tensor, shape or value), or says how to install the weights.
+    #[error("SNGNN-v2 weights: {0}")]
+    Sngnn(String),
 }
 
 impl SimError {

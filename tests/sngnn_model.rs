@@ -8,10 +8,11 @@
 //! edge network (sums of up to 1,124 products). Both are a few ulps of the largest entries.
 
 mod common;
+mod golden;
 
-use socnav::sngnn::model::{EdgeMlp, LAYERS, MAX_WIDTH, Model, Scratch};
+use socnav::sngnn::model::{EdgeMlp, MAX_WIDTH, Model, Scratch};
 use socnav::sngnn::pieces::Tables;
-use socnav::sngnn::{Graph, NODE_FEATURES, RELATIONS, Tensor, Weights};
+use socnav::sngnn::{Graph, LAYERS, NODE_FEATURES, RELATIONS, Tensor, Weights};
 
 /// A small deterministic generator (splitmix64) for test data.
 struct Rand(u64);
@@ -43,25 +44,16 @@ fn random_weights(seed: u64) -> Weights {
             .collect();
         tensors.insert(name, Tensor { shape, data });
     };
-    for (prefix, inputs, outputs) in LAYERS {
-        let io = inputs * outputs;
-        let a = (18.0 * 0.666 + io as f64 * 0.334) as usize;
-        let b = (18.0 * 0.334 + io as f64 * 0.666) as usize;
-        for (k, rows, cols) in [(0, a, 18), (2, b, a), (4, io, b)] {
-            add(
-                format!("{prefix}.edge_func.{k}.weight"),
-                vec![rows, cols],
-                cols,
-                &mut r,
-            );
-            add(
-                format!("{prefix}.edge_func.{k}.bias"),
-                vec![rows],
-                cols,
-                &mut r,
-            );
+    for layer in LAYERS {
+        for (name, shape) in layer.tensors() {
+            // A Linear weight is (out, in); a bias's fan-in is its layer's input width.
+            let fan_in = if shape.len() == 2 {
+                shape[1]
+            } else {
+                layer.inputs
+            };
+            add(name, shape, fan_in, &mut r);
         }
-        add(format!("{prefix}.bias"), vec![outputs], inputs, &mut r);
     }
     Weights { tensors }
 }
@@ -202,4 +194,66 @@ fn fast_and_reference_forward_passes_agree() {
             );
         }
     }
+}
+
+/// The six golden episodes with SNGNN graph dumps.
+const GOLDEN: [(&str, usize); 6] = [
+    ("exp1_with_sngnn", 0),
+    ("exp1_with_sngnn", 1),
+    ("exp1_with_sngnn", 2),
+    ("exp2_with_sngnn", 0),
+    ("exp2_with_sngnn", 1),
+    ("exp2_with_sngnn", 2),
+];
+
+/// Issue 6's bound on the difference from the original's output.
+const GOLDEN_TOLERANCE: f32 = 1e-4;
+
+/// Both forward passes on the graphs the original fed its network (steps 1, 2 and 25 of every
+/// SNGNN episode: one, two and three stacked frames) give its recorded output within 1e-4.
+#[test]
+fn recorded_graphs_give_the_recorded_output() {
+    let Some(weights) = common::sngnn::real_weights() else {
+        return;
+    };
+    let model = Model::new(&weights);
+    let tables = Tables::new(&model, 1.5);
+    let mut s = Scratch::default();
+    let dir = golden::golden_dir();
+    let mut worst = 0.0f32;
+    for (config, seed) in GOLDEN {
+        for golden in common::sngnn::golden_graphs(&dir, config, seed) {
+            let g = &golden.graph;
+            for e in 0..g.src.len() {
+                let recorded = &golden.edge_feats[e * 18..(e + 1) * 18];
+                assert_eq!(
+                    g.edge_feature(e),
+                    recorded,
+                    "{config} seed {seed} step {}: edge {e}",
+                    golden.step
+                );
+            }
+            // The reference pass is slow (2.5 M multiply-adds per edge of the first layer):
+            // one graph per episode, the three-frame one.
+            let exact = (golden.step == 25).then(|| model.forward_exact(g, &mut s));
+            let fast = tables.forward(&model, g, &mut s);
+            for (pass, out) in [("tables", Some(fast)), ("reference", exact)] {
+                let Some(out) = out else { continue };
+                for k in 0..2 {
+                    let diff = (out[k] - golden.output[k]).abs();
+                    worst = worst.max(diff);
+                    assert!(
+                        diff <= GOLDEN_TOLERANCE,
+                        "{config} seed {seed} step {} ({} nodes, {} edges), {pass} pass: output {k} is {} where 0.1.1 gave {}",
+                        golden.step,
+                        g.nodes,
+                        g.src.len(),
+                        out[k],
+                        golden.output[k]
+                    );
+                }
+            }
+        }
+    }
+    eprintln!("largest difference from the recorded outputs: {worst:e}");
 }

@@ -11,6 +11,7 @@ from socnav._socnav import (
     BackendUnavailableError,
     ConfigError,
     ScenarioError,
+    SngnnError,
     SocNavError,
     shipped_configs,
 )
@@ -26,6 +27,7 @@ __all__ = [
     "ConfigError",
     "RewardInputs",
     "ScenarioError",
+    "SngnnError",
     "SocNavEnv",
     "SocNavError",
     "SocNavVectorEnv",

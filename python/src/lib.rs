@@ -45,6 +45,12 @@ create_exception!(
     SocNavError,
     "The requested backend cannot run on this machine."
 );
+create_exception!(
+    _socnav,
+    SngnnError,
+    SocNavError,
+    "The SNGNN-v2 weights are missing or invalid; the message says how to install them."
+);
 
 /// The Python exception for a core error.
 fn py_err(e: SimError) -> PyErr {
@@ -55,6 +61,7 @@ fn py_err(e: SimError) -> PyErr {
         SimError::BackendUnavailable(_) => BackendUnavailableError::new_err(msg),
         SimError::Shape(_) | SimError::Action(_) => PyValueError::new_err(msg),
         SimError::Io(_) => PyFileNotFoundError::new_err(msg),
+        SimError::Sngnn(_) => SngnnError::new_err(msg),
     }
 }
 
@@ -346,5 +353,6 @@ fn _socnav(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "BackendUnavailableError",
         py.get_type::<BackendUnavailableError>(),
     )?;
+    m.add("SngnnError", py.get_type::<SngnnError>())?;
     Ok(())
 }

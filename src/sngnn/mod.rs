@@ -5,10 +5,19 @@
 //! them from the socnavgym 0.1.1 wheel into a cache directory, and the config
 //! (`reward.sngnn_weights`, overridden by `SOCNAV_SNGNN_WEIGHTS`) points to the file.
 
+mod cache;
 pub mod model;
+mod pickle;
 pub mod pieces;
+mod weights;
 
 use std::collections::BTreeMap;
+
+pub use cache::{
+    CACHE_ENV, CACHE_FILE, WEIGHTS_ENV, WeightsPath, WeightsSource, cache_dir, cached_weights,
+    install_from_wheel, install_hint, load_weights, weights_path,
+};
+pub use weights::{LAYERS, Layer, PARAMETERS, WHEEL_ENTRY, expected_tensors};
 
 /// One float32 tensor of the model's state dict, row-major (PyTorch's `Linear` weight is
 /// `(out, in)`).

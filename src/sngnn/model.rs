@@ -12,21 +12,11 @@
 //! first-layer column lookup). The fast pass of the reward, which never runs an edge network
 //! per edge, is [`super::pieces`]; both share the message passing here ([`Model::forward_with`]).
 
-use super::{Graph, Weights, ZERO_FEATURE_RELATION};
+use super::{Graph, LAYERS, Weights, ZERO_FEATURE_RELATION};
 use crate::math;
 
 /// Index of the distance in the edge feature vector.
 const DIST_FEATURE: usize = super::EDGE_FEATURES - 1;
-
-/// The six `NNConv` layers in order: state-dict prefix, input width, output width.
-pub const LAYERS: [(&str, usize, usize); 6] = [
-    ("gnn_object.NNconv_input", 42, 40),
-    ("gnn_object.layers.0", 40, 30),
-    ("gnn_object.layers.1", 30, 21),
-    ("gnn_object.layers.2", 21, 12),
-    ("gnn_object.layers.3", 12, 3),
-    ("gnn_object.NNConv_output", 3, 2),
-];
 
 /// The widest layer input or output (node feature rows are stored at this stride).
 pub const MAX_WIDTH: usize = 42;
@@ -190,9 +180,9 @@ impl Model {
         let layers = LAYERS
             .iter()
             .enumerate()
-            .map(|(i, &(prefix, inputs, outputs))| Layer {
-                mlp: EdgeMlp::new(w, prefix, inputs, outputs),
-                bias: w.get(&format!("{prefix}.bias")).data.clone(),
+            .map(|(i, l)| Layer {
+                mlp: EdgeMlp::new(w, l.name, l.inputs, l.outputs),
+                bias: w.get(&format!("{}.bias", l.name)).data.clone(),
                 activation: if i + 1 == LAYERS.len() {
                     Activation::Relu
                 } else {

@@ -11,6 +11,8 @@ pub mod gpu;
 pub mod npz;
 pub mod reference;
 pub mod scene;
+pub mod sngnn;
+pub mod torch_zip;
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -24,6 +24,38 @@ pub enum Command {
     Render(RenderArgs),
     /// List the GPU adapters wgpu finds and which one each backend choice would take.
     Devices,
+    /// The SNGNN-v2 reward's weights (GPL-3.0, not shipped): install them, show where they are.
+    #[command(subcommand)]
+    Sngnn(SngnnCommand),
+}
+
+#[derive(Debug, Subcommand)]
+pub enum SngnnCommand {
+    /// Download the socnavgym 0.1.1 wheel with pip, copy SOCNAV_V2.tch out of it into the
+    /// cache and check it. The interpreter is `$SOCNAV_PYTHON`, else `python3`. Exit status 3
+    /// when the download fails (no pip, no network).
+    Install(InstallArgs),
+    /// Print the weight file socnav would load (first line), the rule that chose it and whether
+    /// it exists.
+    Path(PathArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct InstallArgs {
+    /// Cache directory (default: $SOCNAV_CACHE_DIR, else $XDG_CACHE_HOME/socnav, else
+    /// ~/.cache/socnav); the file goes to `sngnn/SOCNAV_V2.tch` below it.
+    #[arg(long)]
+    pub cache_dir: Option<PathBuf>,
+    /// Download and replace the file even when a valid one is installed.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct PathArgs {
+    /// Config whose `reward.sngnn_weights` takes part (a shipped name or a TOML path).
+    #[arg(long)]
+    pub config: Option<String>,
 }
 
 /// Which backend runs the batch.

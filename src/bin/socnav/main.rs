@@ -1,7 +1,7 @@
 //! `socnav`: the command-line tool. `run` rolls out a batch and prints outcome rates, the paper's
 //! metrics and throughput; `bench` measures env-steps/s per stage over batch sizes;
 //! `check-config` validates a config and prints it resolved; `render` draws an episode; `devices`
-//! lists the GPU adapters.
+//! lists the GPU adapters; `sngnn` installs the SNGNN-v2 weights and shows where they are.
 
 mod args;
 mod bench;
@@ -10,6 +10,7 @@ mod devices;
 mod policy;
 mod render;
 mod run;
+mod sngnn;
 
 use std::process::ExitCode;
 
@@ -23,6 +24,8 @@ fn main() -> ExitCode {
         args::Command::CheckConfig(a) => check::check(&a),
         args::Command::Render(a) => render::render(&a),
         args::Command::Devices => devices::devices(),
+        // Its own exit statuses: CI tells a failed download from a broken install.
+        args::Command::Sngnn(c) => return sngnn::sngnn(&c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
