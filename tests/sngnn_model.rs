@@ -239,8 +239,8 @@ fn recorded_graphs_give_the_recorded_output() {
             let fast = tables.forward(&model, g, &mut s);
             for (pass, out) in [("tables", Some(fast)), ("reference", exact)] {
                 let Some(out) = out else { continue };
-                for k in 0..2 {
-                    let diff = (out[k] - golden.output[k]).abs();
+                for (k, (&got, &want)) in out.iter().zip(&golden.output).enumerate() {
+                    let diff = (got - want).abs();
                     worst = worst.max(diff);
                     assert!(
                         diff <= GOLDEN_TOLERANCE,
@@ -248,8 +248,8 @@ fn recorded_graphs_give_the_recorded_output() {
                         golden.step,
                         g.nodes,
                         g.src.len(),
-                        out[k],
-                        golden.output[k]
+                        got,
+                        want
                     );
                 }
             }
