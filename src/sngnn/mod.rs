@@ -1,11 +1,19 @@
 //! SNGNN-v2, the learned social-compliance reward (spec sections 6.3 and 7): weight loading,
 //! graph building and batched inference.
 //!
+//! - [`frame`]: the input frame of the current step (spec 7.2); [`frame::record`] pushes it into
+//!   the environment's history (call it on every non-terminal step, after the motion).
+//! - [`history`]: the per-environment frame history in the state's columns and the choice of a
+//!   graph's frames (spec 7.4).
+//!
 //! The weights are GPL-3.0 and never part of this repository: `socnav sngnn install` fetches
 //! them from the socnavgym 0.1.1 wheel into a cache directory, and the config
 //! (`reward.sngnn_weights`, overridden by `SOCNAV_SNGNN_WEIGHTS`) points to the file.
 
 use std::collections::BTreeMap;
+
+pub mod frame;
+pub mod history;
 
 /// One float32 tensor of the model's state dict, row-major (PyTorch's `Linear` weight is
 /// `(out, in)`).
