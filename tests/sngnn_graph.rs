@@ -1,6 +1,6 @@
-//! SNGNN-v2 input against SocNavGym 0.1.1: the frames socnav records (spec 7.2) and the history
-//! that keeps them (spec 7.4), on the golden `exp1_with_sngnn` and `exp2_with_sngnn` episodes
-//! (golden README section 7).
+//! SNGNN-v2 input against SocNavGym 0.1.1: the frames socnav records (spec 7.2) and the graphs
+//! it builds from them (spec 7.3-7.4), on the golden `exp1_with_sngnn` and `exp2_with_sngnn`
+//! episodes (golden README section 7).
 //!
 //! Every episode is replayed as the golden README (section 8) says: before each step the
 //! reference state is loaded through a state document whose `sngnn_frames` are socnav's own
@@ -10,8 +10,13 @@
 //!
 //! - Frames: every field of socnav's frame against `steps[i].sngnn.frame` (ids, order, positions,
 //!   angles, velocities, sizes, interaction entries, goal, command, timestamp, wall end points).
+//! - Graphs: for the dumped steps (1, 2, 25: one, two and three frames), the graph built from the
+//!   recorded frames (loaded through the document with their step's tick and robot pose) and the
+//!   graph built from socnav's own frames against the dump, node for node (42 features) and edge
+//!   for edge (source, destination, relation, the 18 edge features); frames stacked, nodes and
+//!   edges on every step.
 //!
-//! Failure messages name the episode, step, entity and field. Tolerances sit next to their
+//! Failure messages name the episode, step, node or edge and field. Tolerances sit next to their
 //! reason below; the largest error of each kind is printed.
 
 mod common;
@@ -25,11 +30,13 @@ use socnav::outputs::Outputs;
 use socnav::pipeline::{Batch, STAGES};
 use socnav::sngnn::frame::{RobotPose, wall_ends};
 use socnav::sngnn::history::{self, History};
+use socnav::sngnn::{EDGE_FEATURES, Graph, NODE_FEATURES, feature as graph_feature, graph};
 use socnav::spec::ObsLayout;
 use socnav::state::document;
 use socnav::state::{BatchState, Caps};
 use socnav::{AutoresetMode, Config, StepParams};
 
+use common::npz::{self, Array};
 use golden::{Episode, Step, golden_dir, load_episodes, num};
 
 /// The golden configs with the SNGNN reward.
@@ -47,6 +54,17 @@ const FRAME_ANGLE: f64 = 2e-6;
 const FRAME_VELOCITY: f64 = 1e-6;
 /// Sizes and the command: f32 of the same config values and command, relative.
 const FRAME_RELATIVE: f64 = 1e-6;
+/// Node features of the graph of the recorded frames: 0.1.1 computes them in f64 from the
+/// frame's values and stores f32; socnav computes in f32 from the f32-rounded frame (values of
+/// order 1, a few ulp), wall midpoints from the state's walls and the frame's robot pose.
+const GRAPH_FEATURE: f64 = 1e-6;
+/// Edge distances (index 17): ρ as above; person-wall distances in metres (up to 1.5 m).
+const GRAPH_DISTANCE: f64 = 2e-6;
+/// Features and distances of the graph of socnav's own frames: its frames differ from the
+/// recorded ones within the frame tolerances above, which the /10 scaling shrinks; angles keep
+/// theirs (sin and cos of the angle).
+const OWN_FEATURE: f64 = 2e-6;
+const OWN_DISTANCE: f64 = 2e-6;
 
 /// What a comparison found: failures (shown up to a limit) and the largest error per kind.
 #[derive(Default)]
@@ -154,6 +172,10 @@ impl Sim {
         }
         assert!(b.error.is_none(), "step failed: {:?}", b.error);
         recorded
+    }
+
+    fn graph(&mut self, out: &mut Graph) -> usize {
+        graph::build(&self.p, &self.s.env_chunk(0), 0, out)
     }
 
     /// The history as a document's `sngnn_frames`.
@@ -345,6 +367,202 @@ fn compare_entity(check: &mut Check, at: &str, ours: &history::Person, g: &Value
     }
 }
 
+/// The node feature names (spec 7.3), for messages.
+const FEATURE_NAMES: [&str; NODE_FEATURES] = [
+    "human",
+    "object",
+    "room",
+    "wall",
+    "goal",
+    "is_t_0",
+    "is_t_m1",
+    "is_t_m2",
+    "hum_x_pos",
+    "hum_y_pos",
+    "human_a_vel",
+    "human_x_vel",
+    "human_y_vel",
+    "hum_orientation_sin",
+    "hum_orientation_cos",
+    "hum_dist",
+    "hum_inv_dist",
+    "robot_adv_vel",
+    "robot_rot_vel",
+    "obj_x_pos",
+    "obj_y_pos",
+    "obj_a_vel",
+    "obj_x_vel",
+    "obj_y_vel",
+    "obj_orientation_sin",
+    "obj_orientation_cos",
+    "obj_x_size",
+    "obj_y_size",
+    "obj_dist",
+    "obj_inv_dist",
+    "room_humans",
+    "room_humans2",
+    "wall_x_pos",
+    "wall_y_pos",
+    "wall_orientation_sin",
+    "wall_orientation_cos",
+    "wall_dist",
+    "wall_inv_dist",
+    "goal_x_pos",
+    "goal_y_pos",
+    "goal_dist",
+    "goal_inv_dist",
+];
+
+/// One step's graph from the npz dump.
+struct Dump<'a> {
+    arrays: &'a BTreeMap<String, Array>,
+    t: u64,
+}
+
+impl Dump<'_> {
+    fn get(&self, what: &str) -> &Array {
+        let key = format!("step{}_{what}", self.t);
+        self.arrays
+            .get(&key)
+            .unwrap_or_else(|| panic!("no {key} in the dump"))
+    }
+}
+
+/// The golden frame of `step` with the tick and robot pose a state document needs.
+fn frame_with_pose(step: &Step<'_>) -> Value {
+    let mut frame = step.v["sngnn"]["frame"].clone();
+    let robot = &step.state_after_motion()["robot"];
+    frame["tick"] = json!(step.t());
+    frame["robot"] = json!({"x": robot["x"], "y": robot["y"], "theta": robot["theta"]});
+    frame
+}
+
+/// Compare `g` with the dumped graph, node for node and edge for edge.
+fn compare_graph(check: &mut Check, at: &str, g: &Graph, dump: &Dump<'_>, tol: [f64; 2]) {
+    let feats = dump.get("node_feats");
+    if !check.equal(&format!("{at} nodes"), g.nodes, feats.shape[0]) {
+        return;
+    }
+    for n in 0..g.nodes {
+        for (k, name) in FEATURE_NAMES.iter().enumerate() {
+            let i = n * NODE_FEATURES + k;
+            let at = format!("{at} node {n} feature {k} ({name})");
+            check.close(
+                "node feature",
+                &at,
+                g.features[i].into(),
+                feats.data[i],
+                tol[0],
+            );
+        }
+    }
+    let (src, dst, rel) = (dump.get("src"), dump.get("dst"), dump.get("rel_type"));
+    let edge_feats = dump.get("edge_feats");
+    if !check.equal(&format!("{at} edges"), g.src.len(), src.data.len()) {
+        return;
+    }
+    for i in 0..g.src.len() {
+        let ours = (g.src[i], g.dst[i], g.rel[i]);
+        let theirs = (src.data[i] as u32, dst.data[i] as u32, rel.data[i] as u8);
+        if !check.equal(&format!("{at} edge {i} (src, dst, rel)"), ours, theirs) {
+            // Every later edge is shifted: one message says where the order parts.
+            return;
+        }
+        let feature = g.edge_feature(i);
+        for (k, &ours) in feature.iter().enumerate() {
+            let theirs = edge_feats.data[i * EDGE_FEATURES + k];
+            let tol = if k == EDGE_FEATURES - 1 { tol[1] } else { 0.0 };
+            let at = format!("{at} edge {i} feature {k}");
+            check.close("edge feature", &at, ours.into(), theirs, tol);
+        }
+    }
+}
+
+#[test]
+fn graphs_match_the_dumps() {
+    let mut recorded = Check::default();
+    let mut own = Check::default();
+    let mut dumped = 0;
+    for (name, ep, config) in episodes() {
+        let path = golden_dir().join(format!("{name}_graphs.npz"));
+        let arrays = npz::read_npz(&path);
+        let dumped_steps: Vec<u64> = arrays["steps"].data.iter().map(|&t| t as u64).collect();
+        let steps: Vec<Step<'_>> = ep.steps().collect();
+        let mut from_recorded = Sim::new(&config);
+        let mut g = Graph::default();
+        replay(&name, &ep, &config, |step, sim| {
+            let golden = &step.v["sngnn"];
+            if golden.is_null() {
+                return;
+            }
+            let t = step.t();
+            let at = format!("{name} step {t}");
+            // The graph of 0.1.1's own frames, loaded with the state after the motion.
+            let mut doc = ep.document(step.state_after_motion());
+            let frames: Vec<Value> = steps[..t as usize]
+                .iter()
+                .rev()
+                .map(frame_with_pose)
+                .collect();
+            doc["state"]["sngnn_frames"] = Value::Array(frames);
+            from_recorded.load(&doc, &at);
+            let n = from_recorded.graph(&mut g);
+            compare_sizes(
+                &mut recorded,
+                &format!("{at} (recorded frames)"),
+                &g,
+                n,
+                golden,
+            );
+            if dumped_steps.contains(&t) {
+                dumped += 1;
+                let dump = Dump { arrays: &arrays, t };
+                let tol = [GRAPH_FEATURE, GRAPH_DISTANCE];
+                compare_graph(
+                    &mut recorded,
+                    &format!("{at} (recorded frames)"),
+                    &g,
+                    &dump,
+                    tol,
+                );
+            }
+            // The graph of socnav's own frames (all replayable so far: a crowd formed at random
+            // would make its frame differ from 0.1.1's).
+            let own_frames_replayable = steps[..t as usize]
+                .iter()
+                .rev()
+                .take(3)
+                .all(Step::replayable);
+            if !own_frames_replayable {
+                println!("{at}: own frames include a non-replayable step, not compared");
+                return;
+            }
+            let n = sim.graph(&mut g);
+            compare_sizes(&mut own, &format!("{at} (own frames)"), &g, n, golden);
+            if dumped_steps.contains(&t) {
+                let dump = Dump { arrays: &arrays, t };
+                let tol = [OWN_FEATURE, OWN_DISTANCE];
+                compare_graph(&mut own, &format!("{at} (own frames)"), &g, &dump, tol);
+            }
+        });
+    }
+    assert_eq!(dumped, 18, "3 dumped steps in each of the 6 episodes");
+    recorded.assert_ok("graphs of the recorded frames");
+    own.assert_ok("graphs of socnav's frames");
+}
+
+/// Frames stacked, nodes and edges against the step's record.
+fn compare_sizes(check: &mut Check, at: &str, g: &Graph, frames: usize, golden: &Value) {
+    let size = |key: &str| golden[key].as_u64().expect(key) as usize;
+    check.equal(
+        &format!("{at} frames_in_graph"),
+        frames,
+        size("frames_in_graph"),
+    );
+    check.equal(&format!("{at} n_nodes"), g.nodes, size("n_nodes"));
+    check.equal(&format!("{at} n_edges"), g.src.len(), size("n_edges"));
+}
+
 /// A one-environment SNGNN state of `config` with time step `dt` (s) whose history holds
 /// frames at ticks 1..=`ticks` (no entities).
 fn history_of_ticks(dt: f32, ticks: u32) -> (StepParams, BatchState) {
@@ -465,3 +683,94 @@ fn sngnn_documents_need_the_entity_ids_1_to_n() {
         "{name}: unexpected message {err}"
     );
 }
+
+/// 0.1.1 counts the segments of each wall once per process (spec 14); socnav counts them on
+/// every graph's newest frame, so the same batch gives a 7 m room its 8 segments per wall
+/// (⌊700 / 97⌋ + 1) after a 10 m room's 11, and back.
+#[test]
+fn wall_segments_are_counted_per_graph() {
+    let (name, ep, config) = episodes().remove(0);
+    let steps: Vec<Step<'_>> = ep.steps().collect();
+    let mut sim = Sim::new(&config);
+    let mut g = Graph::default();
+    for (side, per_wall) in [(10.0, 11), (7.0, 8), (10.0, 11)] {
+        let mut doc = ep.document(steps[0].state_after_motion());
+        let inner = 0.5 * side - 0.1;
+        for (wall, (x, y)) in doc["walls"].as_array_mut().unwrap().iter_mut().zip([
+            (inner, 0.0),
+            (0.0, -inner),
+            (-inner, 0.0),
+            (0.0, inner),
+        ]) {
+            wall["x"] = json!(x);
+            wall["y"] = json!(y);
+            wall["length"] = json!(side);
+        }
+        doc["room"]["map_x"] = json!(side);
+        doc["room"]["map_y"] = json!(side);
+        doc["state"]["sngnn_frames"] = json!([frame_with_pose(&steps[0])]);
+        sim.load(&doc, &format!("{name}, {side} m room"));
+        sim.graph(&mut g);
+        let wall_nodes = (0..g.nodes)
+            .filter(|&n| g.features[n * NODE_FEATURES + graph_feature::WALL] == 1.0)
+            .count();
+        assert_eq!(wall_nodes, 4 * per_wall, "{name}: a {side} m room");
+    }
+}
+
+#[test]
+fn a_warm_build_allocates_nothing() {
+    let (name, ep, config) = episodes().remove(4);
+    let mut g = Graph::default();
+    let mut warm = None;
+    replay(&name, &ep, &config, |step, sim| {
+        if step.t() == 3 {
+            sim.graph(&mut g);
+        }
+        if step.t() == 4 {
+            let before = thread_allocations();
+            let frames = sim.graph(&mut g);
+            warm = Some((frames, thread_allocations() - before));
+        }
+    });
+    let (frames, allocations) = warm.expect("step 4 replayed");
+    assert_eq!(frames, 3);
+    assert_eq!(allocations, 0, "{name}: graph::build allocated when warm");
+}
+
+// A global allocator that counts allocations per thread (the test harness runs tests on
+// several threads at once).
+std::thread_local! {
+    static THREAD_ALLOCATIONS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+fn thread_allocations() -> usize {
+    THREAD_ALLOCATIONS.with(|c| c.get())
+}
+
+struct CountingPerThread;
+
+#[expect(
+    unsafe_code,
+    reason = "a GlobalAlloc impl is unsafe by definition; it only counts"
+)]
+// SAFETY: forwards every call unchanged to the system allocator.
+unsafe impl std::alloc::GlobalAlloc for CountingPerThread {
+    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
+        THREAD_ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { std::alloc::System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { std::alloc::System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: std::alloc::Layout, new_size: usize) -> *mut u8 {
+        THREAD_ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { std::alloc::System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingPerThread = CountingPerThread;

@@ -47,10 +47,14 @@ fn parse_npy(bytes: &[u8]) -> Result<Array, String> {
     }
     let (header_len, start) = match bytes[6] {
         1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
-        2 | 3 => (u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize, 12),
+        2 | 3 => (
+            u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize,
+            12,
+        ),
         v => return Err(format!(".npy version {v}")),
     };
-    let header = std::str::from_utf8(&bytes[start..start + header_len]).map_err(|e| e.to_string())?;
+    let header =
+        std::str::from_utf8(&bytes[start..start + header_len]).map_err(|e| e.to_string())?;
     if !header.contains("'fortran_order': False") {
         return Err(format!("Fortran order: {header}"));
     }
@@ -69,10 +73,22 @@ fn parse_npy(bytes: &[u8]) -> Result<Array, String> {
         .collect::<Result<_, _>>()?;
     let raw = &bytes[start + header_len..];
     let data: Vec<f64> = match descr {
-        "<f4" => raw.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap()) as f64).collect(),
-        "<f8" => raw.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap())).collect(),
-        "<i4" => raw.chunks_exact(4).map(|c| i32::from_le_bytes(c.try_into().unwrap()) as f64).collect(),
-        "<i8" => raw.chunks_exact(8).map(|c| i64::from_le_bytes(c.try_into().unwrap()) as f64).collect(),
+        "<f4" => raw
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()) as f64)
+            .collect(),
+        "<f8" => raw
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+            .collect(),
+        "<i4" => raw
+            .chunks_exact(4)
+            .map(|c| i32::from_le_bytes(c.try_into().unwrap()) as f64)
+            .collect(),
+        "<i8" => raw
+            .chunks_exact(8)
+            .map(|c| i64::from_le_bytes(c.try_into().unwrap()) as f64)
+            .collect(),
         other => return Err(format!("dtype {other}")),
     };
     let n: usize = shape.iter().product();
