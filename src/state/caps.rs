@@ -1,7 +1,7 @@
 //! Fixed capacities of the batched state, taken from a config's maximum counts. Every per-entity
 //! column has one of these strides; the GPU backend sizes its buffers and shader arrays from them.
 
-use crate::config::{Config, Shape};
+use crate::config::{Config, RewardKind, Shape};
 
 /// Capacities (slots per environment) of every entity kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -28,6 +28,19 @@ pub struct Caps {
     pub blockers: usize,
     /// ORCA obstacle vertices after RVO2's processing (which may split edges).
     pub obstacle_vertices: usize,
+    /// Frames the SNGNN frame history holds (`sngnn::history::capacity_for` the time step); 0
+    /// without the SNGNN reward, so that other configs carry no SNGNN columns at all.
+    pub frames: usize,
+    /// People per frame: every human (0 without the SNGNN reward).
+    pub frame_people: usize,
+    /// Objects per frame: laptops, plants and tables (0 without the SNGNN reward).
+    pub frame_objects: usize,
+    /// Interaction entries per frame: two per ordered pair of group members, one per laptop
+    /// user (0 without the SNGNN reward).
+    pub frame_links: usize,
+    /// Entities whose previous pose the SNGNN frame needs, by id: ids 1 to humans + laptops +
+    /// plants + tables (0 without the SNGNN reward).
+    pub sngnn_entities: usize,
 }
 
 /// Extra obstacle vertices allowed for edges that RVO2's obstacle tree splits, per polygon vertex.
@@ -143,6 +156,45 @@ fn max_walls(c: &Config) -> usize {
     base + corridors
 }
 
+/// Capacities of the SNGNN frame history and previous-pose cache (spec 7.2-7.4).
+struct SngnnCaps {
+    frames: usize,
+    people: usize,
+    objects: usize,
+    links: usize,
+    entities: usize,
+}
+
+/// All zero unless the config's reward is SNGNN-v2, so that every other config keeps its memory.
+fn sngnn_caps(
+    c: &Config,
+    humans: usize,
+    laptops: usize,
+    laptop_users: usize,
+    group_size: usize,
+) -> SngnnCaps {
+    if c.reward.kind != RewardKind::Sngnn {
+        return SngnnCaps {
+            frames: 0,
+            people: 0,
+            objects: 0,
+            links: 0,
+            entities: 0,
+        };
+    }
+    let max = |r: [i32; 2]| r[1].max(0) as usize;
+    let objects = laptops + max(c.counts.plants) + max(c.counts.tables);
+    SngnnCaps {
+        frames: crate::sngnn::history::capacity_for(c.episode.time_step),
+        people: humans,
+        objects,
+        // A group of n members gives n (n − 1) entries (each pair twice, spec 7.2): at most
+        // group size − 1 per grouped human.
+        links: humans * group_size.saturating_sub(1) + laptop_users,
+        entities: humans + objects,
+    }
+}
+
 impl Caps {
     /// Capacities for `config`.
     pub fn from_config(c: &Config) -> Self {
@@ -161,10 +213,12 @@ impl Caps {
             + if corridors { 2 } else { 0 };
         let polygons = max_obstacle_polygons(c);
         let obstacle_vertices = 4 * polygons * (1 + SPLIT_VERTICES_PER_VERTEX);
+        let group_size = max(n.group_size);
+        let sngnn = sngnn_caps(c, humans, laptops, laptop_users, group_size);
         Self {
             humans,
             groups,
-            group_size: max(n.group_size),
+            group_size,
             laptop_users,
             laptops,
             tables: max(n.tables),
@@ -173,6 +227,11 @@ impl Caps {
             wall_segments,
             blockers,
             obstacle_vertices,
+            frames: sngnn.frames,
+            frame_people: sngnn.people,
+            frame_objects: sngnn.objects,
+            frame_links: sngnn.links,
+            sngnn_entities: sngnn.entities,
         }
     }
 
@@ -219,5 +278,29 @@ impl Caps {
     /// Stride of per-obstacle-vertex columns.
     pub fn obstacle_vertex(&self) -> usize {
         self.obstacle_vertices
+    }
+    /// Stride of the SNGNN per-environment columns: 1 with the SNGNN reward, else 0.
+    pub fn sngnn(&self) -> usize {
+        usize::from(self.frames > 0)
+    }
+    /// Stride of per-frame columns of the SNGNN history.
+    pub fn frame(&self) -> usize {
+        self.frames
+    }
+    /// Stride of the history's per-person columns (every frame's people).
+    pub fn frame_person(&self) -> usize {
+        self.frames * self.frame_people
+    }
+    /// Stride of the history's per-object columns.
+    pub fn frame_object(&self) -> usize {
+        self.frames * self.frame_objects
+    }
+    /// Stride of the history's per-interaction columns.
+    pub fn frame_link(&self) -> usize {
+        self.frames * self.frame_links
+    }
+    /// Stride of the SNGNN previous-pose cache (indexed by entity id − 1).
+    pub fn sngnn_entity(&self) -> usize {
+        self.sngnn_entities
     }
 }

@@ -2,6 +2,8 @@
 //! part of a golden episode header (`room`, `walls`, `spawn_blockers`, `human_params`, `counts`)
 //! plus a golden state snapshot (`state`, format in the golden README section 5), plus a
 //! `socnav` object with what 0.1.1 does not have (episode counter, done flag, per-episode sums).
+//! Batches with the SNGNN reward add the frame history to the snapshot (`state.sngnn_frames`,
+//! module `sngnn`).
 //! Tests synchronise with the reference through it; users load fixed scenarios with it.
 //!
 //! Numbers are rounded to f32 on the way in; non-finite numbers are the strings "inf", "-inf",
@@ -17,6 +19,7 @@ use crate::math;
 use crate::params::StepParams;
 
 mod read;
+mod sngnn;
 
 use read::Reader;
 
@@ -182,7 +185,7 @@ fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
     let plants: Vec<Value> = (pb..pb + s.n_plants[e] as usize)
         .map(|i| json!({"id": s.p_id[i], "x": num(s.p_x[i]), "y": num(s.p_y[i]), "radius": num(p.plant_radius)}))
         .collect();
-    json!({
+    let mut snapshot = json!({
         "tick": s.tick[e],
         "robot": {"x": num(s.robot_x[e]), "y": num(s.robot_y[e]), "theta": num(s.robot_theta[e]),
                   "radius": num(p.robot_radius), "goal": [num(s.goal_x[e]), num(s.goal_y[e])],
@@ -220,7 +223,11 @@ fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
                      "sngnn_reward": num(s.r_sngnn[e])},
         },
         "goals": Value::Object(goals),
-    })
+    });
+    if s.strides.frames > 0 {
+        snapshot["sngnn_frames"] = sngnn::export(p, s, e);
+    }
+    snapshot
 }
 
 fn export_crowd_forming(s: &BatchState, e: usize) -> Value {
@@ -262,6 +269,7 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
     read::human_params(&r.at("human_params")?, s, e)?;
     let st = r.at("state")?;
     read::snapshot(p, &st, s, e)?;
+    sngnn::check_entity_ids(s, e)?;
     match r.opt("socnav") {
         Some(x) => read::extras(&x, s, e)?,
         None => {
@@ -286,6 +294,9 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
         s.h_vx[i] = s.h_speed[i] * c;
         s.h_vy[i] = s.h_speed[i] * sn;
     }
+    // The SNGNN previous poses (derived, like the caches above) and the frame history.
+    crate::sngnn::frame::start_episode(&mut s.env_chunk(e), 0);
+    sngnn::import(&st, s, e)?;
     s.stepping[e] = 0;
     s.obstacles_dirty[e] = 1;
     Ok(())

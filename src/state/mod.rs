@@ -11,6 +11,8 @@
 //! - Group `g`'s members are the `g_count[g]` consecutive human slots from `g_first[g]`.
 //! - Entity ids (`*_id`) persist for the episode: robot 0, then spawn order (spec 3.1).
 //! - Unused slots hold zeros; `NONE` marks absent references.
+//! - The SNGNN frame history (`sngnn` to `sngnn_entity` kinds) has zero capacity unless the
+//!   config's reward is SNGNN-v2; its invariants are in [`crate::sngnn::history`].
 
 pub mod caps;
 pub mod columns;
@@ -454,6 +456,78 @@ soa! {
         obstacle_vertex.ov_prev: u32,
         /// 1 if the vertex is convex.
         obstacle_vertex.ov_convex: u32,
+
+        // ---- SNGNN-v2 frame history (`sngnn::history`; zero-sized without the SNGNN reward) ----
+        /// Frames held (at most `Caps::frames`).
+        sngnn.sn_frame_count: u32,
+        /// Ring slot of the newest frame.
+        sngnn.sn_newest: u32,
+        /// Tick of the step the frame was taken at (its timestamp is tick · dt).
+        frame.sf_tick: u32,
+        /// Robot x (m, world frame) when the frame was taken: places the walls in it.
+        frame.sf_robot_x: f32,
+        /// Robot y (m, world frame).
+        frame.sf_robot_y: f32,
+        /// Robot heading (rad, world frame).
+        frame.sf_robot_theta: f32,
+        /// Goal x (m, SNGNN axes: right of the robot).
+        frame.sf_goal_x: f32,
+        /// Goal y (m, SNGNN axes: ahead of the robot).
+        frame.sf_goal_y: f32,
+        /// Command: advance (SNGNN units, at most 3.5).
+        frame.sf_advance: f32,
+        /// Command: lateral advance (SNGNN units; 0 for a differential-drive robot).
+        frame.sf_lateral: f32,
+        /// Command: rotation (SNGNN units, within ±4).
+        frame.sf_rotation: f32,
+        /// People in the frame.
+        frame.sf_n_people: u32,
+        /// Objects in the frame.
+        frame.sf_n_objects: u32,
+        /// Interaction entries in the frame.
+        frame.sf_n_links: u32,
+        /// Entity id of a person.
+        frame_person.fp_id: u32,
+        /// x (m, SNGNN axes).
+        frame_person.fp_x: f32,
+        /// y (m, SNGNN axes).
+        frame_person.fp_y: f32,
+        /// Angle (rad, SNGNN convention −(π/2 + relative heading), not wrapped).
+        frame_person.fp_a: f32,
+        /// Backward difference of the robot-frame x per 0.2 s (m per SNGNN frame).
+        frame_person.fp_vx: f32,
+        /// Backward difference of the robot-frame y per 0.2 s.
+        frame_person.fp_vy: f32,
+        /// Backward difference of the relative heading per 0.2 s (rad, not wrapped).
+        frame_person.fp_va: f32,
+        /// Entity id of an object.
+        frame_object.fo_id: u32,
+        /// x (m, SNGNN axes).
+        frame_object.fo_x: f32,
+        /// y (m, SNGNN axes).
+        frame_object.fo_y: f32,
+        /// Angle (rad, SNGNN convention).
+        frame_object.fo_a: f32,
+        /// Backward difference of the robot-frame x per 0.2 s.
+        frame_object.fo_vx: f32,
+        /// Backward difference of the robot-frame y per 0.2 s.
+        frame_object.fo_vy: f32,
+        /// Backward difference of the relative heading per 0.2 s (rad).
+        frame_object.fo_va: f32,
+        /// Size along the object's x (m): laptop and table length, plant diameter.
+        frame_object.fo_size_x: f32,
+        /// Size along the object's y (m): laptop and table width, plant diameter.
+        frame_object.fo_size_y: f32,
+        /// Source entity id of an interaction entry.
+        frame_link.fl_src: u32,
+        /// Destination entity id of an interaction entry.
+        frame_link.fl_dst: u32,
+        /// Robot-frame x (m) of entity `id` (at index id − 1) at the end of the previous step.
+        sngnn_entity.sn_prev_x: f32,
+        /// Robot-frame y (m) at the end of the previous step.
+        sngnn_entity.sn_prev_y: f32,
+        /// Relative heading (rad, wrapped) at the end of the previous step.
+        sngnn_entity.sn_prev_theta: f32,
     }
 }
 

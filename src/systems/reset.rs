@@ -8,7 +8,8 @@ use crate::scenario;
 use crate::state::StateChunk;
 
 /// Initialise everything of environment `e` that is not drawn by the scenario: counters, robot
-/// command, shadow robot, metric accumulators, reward memory, observation caches, ORCA obstacles.
+/// command, shadow robot, metric accumulators, reward memory, observation caches, the SNGNN frame
+/// history, ORCA obstacles.
 pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize) {
     s.tick[e] = 0;
     s.done[e] = 0;
@@ -52,6 +53,7 @@ pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize) {
         s.h_vy[i] = s.h_speed[i] * sn;
     }
     super::regroup::number_lists(s, e);
+    crate::sngnn::frame::start_episode(s, e);
     s.obstacles_dirty[e] = 1;
     super::orca_obstacles::rebuild_if_dirty(p, s, e);
 }

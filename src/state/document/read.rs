@@ -15,7 +15,7 @@ pub(super) struct Reader<'a> {
     path: String,
 }
 
-fn err(path: &str, what: impl std::fmt::Display) -> SimError {
+pub(super) fn err(path: &str, what: impl std::fmt::Display) -> SimError {
     SimError::Shape(format!("state document: `{path}` {what}"))
 }
 
@@ -35,6 +35,11 @@ impl<'a> Reader<'a> {
         }
     }
 
+    /// The path this value was reached by (`state.humans[3]`), for error messages.
+    pub(super) fn path(&self) -> &str {
+        &self.path
+    }
+
     pub(super) fn at(&self, key: &str) -> Result<Reader<'a>, SimError> {
         self.opt(key)
             .ok_or_else(|| err(&self.child_path(key), "is missing"))
@@ -50,7 +55,7 @@ impl<'a> Reader<'a> {
             })
     }
 
-    fn items(&self) -> Result<Vec<Reader<'a>>, SimError> {
+    pub(super) fn items(&self) -> Result<Vec<Reader<'a>>, SimError> {
         let list = self
             .value
             .as_array()
@@ -65,7 +70,7 @@ impl<'a> Reader<'a> {
             .collect())
     }
 
-    fn list(&self, key: &str) -> Result<Vec<Reader<'a>>, SimError> {
+    pub(super) fn list(&self, key: &str) -> Result<Vec<Reader<'a>>, SimError> {
         match self.opt(key) {
             Some(r) => r.items(),
             None => Ok(Vec::new()),
@@ -87,11 +92,11 @@ impl<'a> Reader<'a> {
         }
     }
 
-    fn f(&self, key: &str) -> Result<f32, SimError> {
+    pub(super) fn f(&self, key: &str) -> Result<f32, SimError> {
         self.at(key)?.as_f32()
     }
 
-    fn u(&self, key: &str) -> Result<u32, SimError> {
+    pub(super) fn u(&self, key: &str) -> Result<u32, SimError> {
         self.at(key)?.as_u32()
     }
 
@@ -129,7 +134,7 @@ impl<'a> Reader<'a> {
     }
 
     /// A list of exactly `N` numbers.
-    fn vec<const N: usize>(&self, key: &str) -> Result<[f32; N], SimError> {
+    pub(super) fn vec<const N: usize>(&self, key: &str) -> Result<[f32; N], SimError> {
         let r = self.at(key)?;
         let items = r.items()?;
         if items.len() != N {
@@ -160,7 +165,7 @@ impl<'a> Reader<'a> {
     }
 }
 
-fn capacity(what: &str, n: usize, cap: usize, why: &str) -> Result<(), SimError> {
+pub(super) fn capacity(what: &str, n: usize, cap: usize, why: &str) -> Result<(), SimError> {
     if n > cap {
         return Err(SimError::Shape(format!(
             "state document has {n} {what} but the batch's capacity is {cap} ({why}); make the batch from a config whose maximum counts cover it"

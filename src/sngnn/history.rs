@@ -1,0 +1,173 @@
+//! The SNGNN frame history of each environment and the rule that picks a graph's frames from it
+//! (spec 7.4).
+//!
+//! 0.1.1 prepends the frame of every non-terminal step to a list that grows for the whole
+//! episode; a graph takes the newest frame, then walks back and takes a frame whenever its
+//! timestamp lies at least [`FRAMES_INTERVAL`] from the last one taken, until it holds
+//! [`MAX_GRAPH_FRAMES`]. Only the newest few frames can ever be taken, so socnav keeps a ring of
+//! [`capacity_for`]`(dt)` frames (F) per environment in the state's columns:
+//!
+//! | kind | capacity per environment | columns |
+//! |---|---|---|
+//! | `sngnn` | 1 | `sn_frame_count`, `sn_newest` |
+//! | `frame` | F | tick, robot pose, goal, command, counts (`sf_*`) |
+//! | `frame_person` | F × P | `fp_*` (P = `Caps::frame_people`) |
+//! | `frame_object` | F × O | `fo_*` (O = `Caps::frame_objects`) |
+//! | `frame_link` | F × L | `fl_*` (L = `Caps::frame_links`) |
+//!
+//! every one of capacity 0 without the SNGNN reward. Ring slot f of environment e holds its
+//! frame columns at e·F + f and its person j at (e·F + f)·P + j (objects and links likewise).
+//!
+//! Invariants: `sn_frame_count[e]` ≤ F frames are held, the newest in ring slot `sn_newest[e]`,
+//! each older one in the slot before (mod F); rows a frame does not use and slots that hold no
+//! frame are zero. Frames are appended only on non-terminal steps (0.1.1 does not call SNGNN on
+//! terminal ones); the history is emptied at reset, and `set_state` replaces it with the
+//! document's `state.sngnn_frames`.
+//!
+//! Walls are not stored: they are static within an episode, so a frame keeps the robot pose it
+//! was taken from and the graph places the state's walls with it.
+
+mod view;
+mod write;
+
+pub use view::{Frame, History};
+pub use write::{begin_frame, clear, push_link, push_object, push_person};
+
+/// Seconds between the frames a graph stacks (0.1.1's `FRAMES_INTERVAL`).
+pub const FRAMES_INTERVAL: f64 = 1.0;
+/// Frames stacked in one graph at most (0.1.1's `N_INTERVALS`).
+pub const MAX_GRAPH_FRAMES: usize = 3;
+
+/// Frames a history must hold so that [`select`] finds every frame it would take in 0.1.1's
+/// unbounded list, at time step `dt` (s). The last frame taken lies two intervals back; an
+/// interval is ⌈1 s / dt⌉ steps, or one more where dt divides 1 s in decimal but not in binary
+/// (dt = 0.1 or 0.2: 0.1.1's f64 timestamps can fall a rounding short of 1 s apart), so F =
+/// 2 (⌈1/dt⌉ + 1) + 1 (25 frames at dt = 0.1 s). At dt ≥ 1 s every step is an interval: F = 3.
+pub fn capacity_for(dt: f32) -> usize {
+    if dt >= 1.0 {
+        return MAX_GRAPH_FRAMES;
+    }
+    let interval_steps = (1.0 / f64::from(dt)).ceil() as usize + 1;
+    (MAX_GRAPH_FRAMES - 1) * interval_steps + 1
+}
+
+/// The time step (s) as 0.1.1 holds it: the config's decimal value as an f64 (`time_step: 0.2`
+/// is the f64 0.2, not the f32 0.2000000030), recovered as the decimal with the fewest digits
+/// after the point that rounds to `dt` (at most 12; otherwise `dt` itself).
+pub fn decimal_time_step(dt: f32) -> f64 {
+    let x = f64::from(dt);
+    let mut scale = 1.0f64;
+    for _ in 0..=12 {
+        let decimal = (x * scale).round() / scale;
+        if decimal as f32 == dt {
+            return decimal;
+        }
+        scale *= 10.0;
+    }
+    x
+}
+
+/// The timestamp (s) of a frame taken at `tick`: tick · dt in f64, as 0.1.1 computes it.
+pub fn timestamp(dt: f32, tick: u32) -> f64 {
+    f64::from(tick) * decimal_time_step(dt)
+}
+
+/// A person of a frame (spec 7.2): entity id, position (m) and angle (rad) in SNGNN's axes
+/// (x right, y ahead of the robot; angle −(π/2 + relative heading)), and the backward
+/// differences of the robot-frame pose per 0.2 s (m, m, rad; robot-frame axes, not SNGNN's).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Person {
+    /// Entity id (its node index in the graph).
+    pub id: u32,
+    /// x (m, SNGNN axes).
+    pub x: f32,
+    /// y (m, SNGNN axes).
+    pub y: f32,
+    /// Angle (rad, SNGNN convention, not wrapped).
+    pub a: f32,
+    /// (previous − current) robot-frame x per 0.2 s (m).
+    pub vx: f32,
+    /// (previous − current) robot-frame y per 0.2 s (m).
+    pub vy: f32,
+    /// (previous − current) relative heading per 0.2 s (rad, not wrapped).
+    pub va: f32,
+}
+
+/// An object of a frame: a person's fields plus its size (m).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Object {
+    /// Pose and velocities, as for a person.
+    pub pose: Person,
+    /// Size along the object's x (m).
+    pub size_x: f32,
+    /// Size along the object's y (m).
+    pub size_y: f32,
+}
+
+/// An interaction entry of a frame: the graph links `src` → `dst` and back.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Link {
+    /// Source entity id.
+    pub src: u32,
+    /// Destination entity id.
+    pub dst: u32,
+}
+
+/// What a frame holds besides its entities.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameHead {
+    /// Tick of the step it was taken at.
+    pub tick: u32,
+    /// Robot pose (m, m, rad; world frame) it was taken from.
+    pub robot: [f32; 3],
+    /// Goal (m, SNGNN axes).
+    pub goal: [f32; 2],
+    /// Command: advance, lateral advance, rotation (SNGNN units, spec 7.2).
+    pub command: [f32; 3],
+}
+
+/// The ring slots of the frames one graph stacks, newest first (spec 7.4).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Selection {
+    slots: [usize; MAX_GRAPH_FRAMES],
+    len: usize,
+}
+
+impl Selection {
+    /// The slots, newest first.
+    pub fn slots(&self) -> &[usize] {
+        &self.slots[..self.len]
+    }
+
+    fn push(&mut self, slot: usize) {
+        self.slots[self.len] = slot;
+        self.len += 1;
+    }
+}
+
+/// 0.1.1's choice of frames at time step `dt` (s): the newest, then walking back, every frame
+/// whose timestamp is at least [`FRAMES_INTERVAL`] from the last one taken, up to
+/// [`MAX_GRAPH_FRAMES`]. With dt = 1 s: the frames of steps t, t − 1, t − 2 (fewer at the start
+/// of an episode). Empty if no frame is held.
+pub fn select(dt: f32, h: &History<'_>) -> Selection {
+    let mut selection = Selection::default();
+    if h.is_empty() {
+        return selection;
+    }
+    let step = decimal_time_step(dt);
+    let stamp = |age: usize| f64::from(h.frame(age).head().tick) * step;
+    selection.push(h.frame(0).slot());
+    let mut last = stamp(0);
+    for age in 1..h.len() {
+        let t = stamp(age);
+        if (t - last).abs() < FRAMES_INTERVAL {
+            continue;
+        }
+        selection.push(h.frame(age).slot());
+        last = t;
+        if selection.len == MAX_GRAPH_FRAMES {
+            break;
+        }
+    }
+    selection
+}
