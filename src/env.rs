@@ -7,6 +7,7 @@ use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::{AutoresetMode, StepParams};
 use crate::pipeline::STAGES;
+use crate::sngnn::Scorer;
 use crate::spec::{DISCRETE_ACTIONS, ObsLayout};
 use crate::state::{BatchState, Caps, document};
 
@@ -75,11 +76,6 @@ impl BatchEnv {
         if !problems.is_empty() {
             return Err(SimError::Config(problems));
         }
-        if config.reward.kind == RewardKind::Sngnn {
-            return Err(SimError::Config(vec![
-                "`reward.kind = \"sngnn\"`: the SNGNN-v2 reward is not available in this build yet; use \"dsrnn\"".into(),
-            ]));
-        }
         if options.n_envs == 0 {
             return Err(SimError::Shape(
                 "a batch needs at least one environment, got n_envs = 0".into(),
@@ -95,7 +91,12 @@ impl BatchEnv {
         let params = StepParams::new(&config, options.seed, options.autoreset);
         let state = BatchState::new(options.n_envs, caps);
         let out = Outputs::new(options.n_envs, layout);
-        let backend = crate::backend::open(options.backend, params, state, out, options.threads)?;
+        let sngnn = match config.reward.kind {
+            RewardKind::Sngnn => Some(Scorer::for_config(&config)?),
+            RewardKind::Dsrnn => None,
+        };
+        let backend =
+            crate::backend::open(options.backend, params, state, out, options.threads, sngnn)?;
         let actions = vec![0.0; 3 * options.n_envs];
         Ok(Self {
             config,

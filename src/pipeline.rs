@@ -6,6 +6,7 @@
 use crate::error::SimError;
 use crate::outputs::OutChunk;
 use crate::params::StepParams;
+use crate::sngnn::Scorer;
 use crate::state::StateChunk;
 use crate::systems;
 
@@ -19,6 +20,8 @@ pub struct Batch<'a> {
     /// Their actions: 3 floats per environment in [-1, 1] (forward, lateral, rotation), already
     /// validated at the API boundary.
     pub actions: &'a [f32],
+    /// The SNGNN-v2 scorer, when the reward is SNGNN-v2's (shared, read-only).
+    pub sngnn: Option<&'a Scorer>,
     /// The first error a stage met (only resets can fail: an unsatisfiable scenario).
     pub error: Option<SimError>,
 }
@@ -39,12 +42,14 @@ impl<'a> Batch<'a> {
                 s: s0,
                 o: o0,
                 actions: a0,
+                sngnn: self.sngnn,
                 error: None,
             },
             Batch {
                 s: s1,
                 o: o1,
                 actions: a1,
+                sngnn: self.sngnn,
                 error: self.error,
             },
         )

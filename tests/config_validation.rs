@@ -352,6 +352,8 @@ fn golden_socnavgym_configs_equal_shipped_tomls() {
         ("exp1_no_sngnn", "exp1"),
         ("exp2_no_sngnn", "exp2"),
         ("exp3_no_sngnn", "exp3"),
+        ("exp1_with_sngnn", "exp1_sngnn"),
+        ("exp2_with_sngnn", "exp2_sngnn"),
         ("lroom_mixed", "lroom_mixed"),
         ("corridor_mixed", "corridor_mixed"),
     ];

@@ -15,18 +15,23 @@
 //! Decisions within a documented epsilon of their threshold may flip; flips are counted and
 //! printed, and the test fails if there are too many or if anything else differs.
 
+mod common;
 mod golden;
 
 use golden::{Episode, Report, config_for, golden_dir, load_episodes};
+use socnav::config::RewardKind;
 use socnav::{Actions, BatchEnv, EnvOptions};
 
-/// Configs whose every feature this build implements (the SNGNN reward is not built yet).
-const REPLAYABLE: [&str; 5] = [
+/// Configs this build replays; the SNGNN-v2 ones need the weight file (skipped loudly without
+/// it unless `REQUIRE_SNGNN=1`).
+const REPLAYABLE: [&str; 7] = [
     "exp1_no_sngnn",
     "exp2_no_sngnn",
     "exp3_no_sngnn",
     "lroom_mixed",
     "corridor_mixed",
+    "exp1_with_sngnn",
+    "exp2_with_sngnn",
 ];
 
 #[test]
@@ -44,9 +49,10 @@ fn golden_replay() {
     for (name, ep) in &episodes {
         let config_name = ep.config_name();
         if !REPLAYABLE.contains(&config_name.as_str()) {
-            println!(
-                "SKIP {name}: config `{config_name}` uses the SNGNN-v2 reward, which this build does not have yet"
-            );
+            println!("SKIP {name}: config `{config_name}` is not one this build replays");
+            continue;
+        }
+        if config_name.ends_with("_with_sngnn") && common::sngnn::real_weights().is_none() {
             continue;
         }
         let report = replay(name, ep);
@@ -80,12 +86,21 @@ fn replay(name: &str, ep: &Episode) -> Report {
         .unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
     report.compare_obs(&env, ep.initial_obs(), &[], &[], "initial");
     let mut prev = ep.initial_state();
+    // SNGNN-v2 episodes: 0.1.1's frames of the earlier steps, newest first.
+    let mut frames: Vec<serde_json::Value> = Vec::new();
     for step in ep.steps() {
-        env.set_state(0, &ep.step_document(prev, &step))
+        let mut doc = ep.step_document(prev, &step);
+        if env.config().reward.kind == RewardKind::Sngnn {
+            doc["state"]["sngnn_frames"] = serde_json::Value::Array(frames.clone());
+        }
+        env.set_state(0, &doc)
             .unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
         env.step(Actions::Continuous(&step.action()))
             .unwrap_or_else(|e| panic!("{name}: step: {e}"));
         report.compare_step(&env, ep, step, prev);
+        if let Some(frame) = step.sngnn_frame() {
+            frames.insert(0, frame);
+        }
         prev = step.state();
     }
     report

@@ -21,6 +21,7 @@ fn reset_in_place(env: &BatchEnv, e: usize) -> Vec<u32> {
         s: state.chunk(),
         o: out.chunk(),
         actions: &[],
+        sngnn: None,
         error: None,
     };
     socnav::systems::reset::reset_and_observe(&p, &mut b, e);

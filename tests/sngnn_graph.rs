@@ -154,17 +154,22 @@ impl Sim {
     }
 
     /// Take `action` through every stage, recording the SNGNN frame right after the reward
-    /// stage of a non-terminal step; returns whether a frame was recorded.
+    /// stage of a non-terminal step; returns whether a frame was recorded. The stages score
+    /// with the DSRNN reward, so that no network (and no weight file) is needed: the reward
+    /// stage records the same frame itself when it scores with SNGNN-v2.
     fn step(&mut self, action: &[f32]) -> bool {
         let mut b = Batch {
             s: self.s.chunk(),
             o: self.o.chunk(),
             actions: action,
+            sngnn: None,
             error: None,
         };
+        let mut dsrnn = self.p;
+        dsrnn.reward_kind = 0;
         let mut recorded = false;
         for stage in &STAGES {
-            (stage.run)(&self.p, &mut b, 0);
+            (stage.run)(&dsrnn, &mut b, 0);
             if stage.name == "reward" && b.o.terminated[0] == 0 && b.o.truncated[0] == 0 {
                 socnav::sngnn::frame::record(&self.p, &mut b.s, 0);
                 recorded = true;
@@ -428,15 +433,6 @@ impl Dump<'_> {
     }
 }
 
-/// The golden frame of `step` with the tick and robot pose a state document needs.
-fn frame_with_pose(step: &Step<'_>) -> Value {
-    let mut frame = step.v["sngnn"]["frame"].clone();
-    let robot = &step.state_after_motion()["robot"];
-    frame["tick"] = json!(step.t());
-    frame["robot"] = json!({"x": robot["x"], "y": robot["y"], "theta": robot["theta"]});
-    frame
-}
-
 /// Compare `g` with the dumped graph, node for node and edge for edge.
 fn compare_graph(check: &mut Check, at: &str, g: &Graph, dump: &Dump<'_>, tol: [f64; 2]) {
     let feats = dump.get("node_feats");
@@ -502,7 +498,7 @@ fn graphs_match_the_dumps() {
             let frames: Vec<Value> = steps[..t as usize]
                 .iter()
                 .rev()
-                .map(frame_with_pose)
+                .filter_map(Step::sngnn_frame)
                 .collect();
             doc["state"]["sngnn_frames"] = Value::Array(frames);
             from_recorded.load(&doc, &at);
@@ -708,7 +704,7 @@ fn wall_segments_are_counted_per_graph() {
         }
         doc["room"]["map_x"] = json!(side);
         doc["room"]["map_y"] = json!(side);
-        doc["state"]["sngnn_frames"] = json!([frame_with_pose(&steps[0])]);
+        doc["state"]["sngnn_frames"] = json!([steps[0].sngnn_frame().expect("a frame at step 1")]);
         sim.load(&doc, &format!("{name}, {side} m room"));
         sim.graph(&mut g);
         let wall_nodes = (0..g.nodes)

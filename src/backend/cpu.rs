@@ -8,14 +8,15 @@
 //! woken at the end of every step, which on virtual machines cost up to a third of a 1 ms step;
 //! a fixed share per thread would leave threads idle behind one slowed by resets.
 
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
 use crate::pipeline::{Batch, STAGES};
+use crate::sngnn::Scorer;
 use crate::state::BatchState;
 
 use super::Backend;
@@ -56,6 +57,8 @@ pub struct CpuBackend {
     stage_nanos: Vec<AtomicU64>,
     /// Whether steps time their stages.
     timing: bool,
+    /// The SNGNN-v2 scorer when the reward is SNGNN-v2's.
+    sngnn: Option<Arc<Scorer>>,
 }
 
 impl CpuBackend {
@@ -77,7 +80,14 @@ impl CpuBackend {
             pool,
             stage_nanos,
             timing: false,
+            sngnn: None,
         })
+    }
+
+    /// The same backend, scoring steps with `sngnn` (the SNGNN-v2 reward needs it).
+    pub fn with_sngnn(mut self, sngnn: Option<Arc<Scorer>>) -> Self {
+        self.sngnn = sngnn;
+        self
     }
 
     /// The step constants.
@@ -97,6 +107,7 @@ impl CpuBackend {
             s: self.state.chunk(),
             o: self.out.chunk(),
             actions,
+            sngnn: self.sngnn.as_deref(),
             error: None,
         };
         let params = &self.params;

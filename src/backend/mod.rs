@@ -7,9 +7,12 @@ pub mod gpu;
 pub mod reset_pool;
 pub mod wgsl;
 
+use std::sync::Arc;
+
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
+use crate::sngnn::Scorer;
 use crate::state::BatchState;
 
 /// Which backend runs a batch (DESIGN.md section 8).
@@ -39,20 +42,35 @@ impl std::str::FromStr for BackendChoice {
     }
 }
 
-/// Open the backend `choice` names over `state` and `out`.
+/// Open the backend `choice` names over `state` and `out`; `sngnn` scores the steps when the
+/// reward is SNGNN-v2's.
 ///
 /// # Errors
 /// `BackendUnavailable` for `Gpu` without a usable adapter (the message says how to install a
-/// driver) or in a build without the `gpu` feature, and for a batch the adapter cannot hold.
+/// driver) or in a build without the `gpu` feature, for a batch the adapter cannot hold, and
+/// for the SNGNN-v2 reward, which runs on the CPU backend only (`Auto` then takes the CPU).
 pub fn open(
     choice: BackendChoice,
     params: StepParams,
     state: BatchState,
     out: Outputs,
     threads: Option<usize>,
+    sngnn: Option<Arc<Scorer>>,
 ) -> Result<Box<dyn Backend>, SimError> {
+    let on_cpu = |why: &str, state, out| -> Result<Box<dyn Backend>, SimError> {
+        if !why.is_empty() {
+            eprintln!("socnav: backend auto: using the CPU backend ({why})");
+        }
+        let cpu = cpu::CpuBackend::new(params, state, out, threads)?;
+        Ok(Box::new(cpu.with_sngnn(sngnn.clone())))
+    };
+    let sngnn_on_gpu = "the SNGNN-v2 reward runs on the CPU backend only in this version";
     match choice {
-        BackendChoice::Cpu => Ok(Box::new(cpu::CpuBackend::new(params, state, out, threads)?)),
+        BackendChoice::Cpu => on_cpu("", state, out),
+        BackendChoice::Auto if sngnn.is_some() => on_cpu(sngnn_on_gpu, state, out),
+        BackendChoice::Gpu if sngnn.is_some() => Err(SimError::BackendUnavailable(format!(
+            "{sngnn_on_gpu}: use --backend cpu (or auto)"
+        ))),
         #[cfg(feature = "gpu")]
         BackendChoice::Gpu | BackendChoice::Auto => {
             let policy = if choice == BackendChoice::Gpu {
@@ -64,10 +82,7 @@ pub fn open(
                 Ok(dev) => Ok(Box::new(gpu::GpuBackend::new(
                     dev, params, state, out, threads,
                 )?)),
-                Err(e) if choice == BackendChoice::Auto => {
-                    eprintln!("socnav: backend auto: using the CPU backend ({e})");
-                    Ok(Box::new(cpu::CpuBackend::new(params, state, out, threads)?))
-                }
+                Err(e) if choice == BackendChoice::Auto => on_cpu(&e.to_string(), state, out),
                 Err(e) => Err(e),
             }
         }
@@ -76,12 +91,7 @@ pub fn open(
             "this build has no GPU backend (socnav was built without the `gpu` feature)".into(),
         )),
         #[cfg(not(feature = "gpu"))]
-        BackendChoice::Auto => {
-            eprintln!(
-                "socnav: backend auto: using the CPU backend (built without the `gpu` feature)"
-            );
-            Ok(Box::new(cpu::CpuBackend::new(params, state, out, threads)?))
-        }
+        BackendChoice::Auto => on_cpu("built without the `gpu` feature", state, out),
     }
 }
 

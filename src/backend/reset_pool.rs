@@ -74,6 +74,7 @@ pub fn write_row(
         s,
         o,
         actions: &[],
+        sngnn: None,
         error: None,
     };
     crate::systems::reset::reset_and_observe(p, &mut b, 0);

@@ -20,10 +20,13 @@ use crate::error::SimError;
 pub use validate::validate;
 
 /// The shipped configs, built into the library so that their names work wherever it runs.
-const SHIPPED: [(&str, &str); 6] = [
+const SHIPPED: [(&str, &str); 9] = [
     ("exp1", include_str!("../../configs/exp1.toml")),
     ("exp2", include_str!("../../configs/exp2.toml")),
     ("exp3", include_str!("../../configs/exp3.toml")),
+    ("exp1_sngnn", include_str!("../../configs/exp1_sngnn.toml")),
+    ("exp2_sngnn", include_str!("../../configs/exp2_sngnn.toml")),
+    ("exp3_sngnn", include_str!("../../configs/exp3_sngnn.toml")),
     (
         "lroom_mixed",
         include_str!("../../configs/lroom_mixed.toml"),

@@ -1,5 +1,6 @@
-//! Stage `reward`: the DSRNN-style reward (spec 6.2). Terminal steps get the outcome's constant;
-//! other steps the potential-based distance term, the discomfort term and the alive term. The
+//! Stage `reward`: the DSRNN-style reward (spec 6.2) or SNGNN-v2's (spec 6.3). Terminal steps
+//! get the outcome's constant; other steps the potential-based distance term, the discomfort term
+//! (DSRNN's predicted clearance, or SNGNN-v2's score of the scene) and the alive term. The
 //! reward's info values persist: a terminal step reports those of the previous step (0.1.1).
 //!
 //! Fixed 0.1.1 bugs (docs/fidelity.md): the robot velocity uses the robot's heading once (0.1.1
@@ -11,6 +12,7 @@ use crate::geometry::origin_segment_distance;
 use crate::math;
 use crate::params::StepParams;
 use crate::pipeline::Batch;
+use crate::sngnn::{self, Scorer};
 use crate::spec::info;
 use crate::state::StateChunk;
 
@@ -30,7 +32,7 @@ pub fn reward(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     } else if flag(info::TIMEOUT) {
         p.reward_timeout
     } else {
-        step_reward(p, &mut b.s, e)
+        step_reward(p, &mut b.s, b.sngnn, e)
     };
     b.o.reward[e] = r;
     let s = &b.s;
@@ -43,7 +45,7 @@ pub fn reward(p: &StepParams, b: &mut Batch<'_>, e: usize) {
 }
 
 /// The reward of a non-terminal step; updates the reward memory.
-fn step_reward(p: &StepParams, s: &mut StateChunk, e: usize) -> f32 {
+fn step_reward(p: &StepParams, s: &mut StateChunk, sngnn: Option<&Scorer>, e: usize) -> f32 {
     let dx = s.goal_x[e] - s.robot_x[e];
     let dy = s.goal_y[e] - s.robot_y[e];
     let d = (dx * dx + dy * dy).sqrt();
@@ -63,9 +65,36 @@ fn step_reward(p: &StepParams, s: &mut StateChunk, e: usize) -> f32 {
     s.r_has_prev[e] = 1;
     s.r_distance[e] = r_dist;
     s.r_discomfort_dsrnn[e] = r_disc;
-    s.r_discomfort_sngnn[e] = 0.0;
     s.r_alive[e] = p.reward_alive;
-    with_extra_terms(p, s, e, r_disc + r_dist + p.reward_alive)
+    let r = if p.reward_kind == REWARD_SNGNN {
+        let scorer = sngnn.expect("BatchEnv gives a batch with the SNGNN-v2 reward its scorer");
+        let discomfort = sngnn_discomfort(p, s, scorer, e);
+        s.r_discomfort_sngnn[e] = discomfort;
+        s.r_sngnn[e] = discomfort - 1.0;
+        // Spec 6.3: the DSRNN discomfort is computed for the info only.
+        (discomfort - 1.0) * SNGNN_WEIGHT + r_dist + p.reward_alive
+    } else {
+        s.r_discomfort_sngnn[e] = 0.0;
+        r_disc + r_dist + p.reward_alive
+    };
+    with_extra_terms(p, s, e, r)
+}
+
+/// `StepParams::reward_kind` of the SNGNN-v2 reward.
+const REWARD_SNGNN: u32 = 1;
+/// 0.1.1's weight of the SNGNN term.
+const SNGNN_WEIGHT: f32 = 1.0;
+
+/// SNGNN-v2's discomfort of this step in [0, 1]: the step's frame joins the history, the graph
+/// of the selected frames goes through the network, and the room node's first output is
+/// clipped to [0, 1] (spec 6.3).
+fn sngnn_discomfort(p: &StepParams, s: &mut StateChunk, scorer: &Scorer, e: usize) -> f32 {
+    sngnn::frame::record(p, s, e);
+    let s = &*s;
+    let [q1, _] = scorer.score_with(|graph| {
+        sngnn::graph::build(p, s, e, graph);
+    });
+    q1.clamp(0.0, 1.0)
 }
 
 /// `r` plus the weighted terms beyond 0.1.1 (`reward.*_weight`). A term whose weight is 0 is not

@@ -95,6 +95,7 @@ pub fn cpu_stage(
             s: state.chunk(),
             o: outputs.chunk(),
             actions: &[],
+            sngnn: None,
             error: None,
         };
         for e in 0..b.n_envs() {
@@ -118,6 +119,7 @@ pub fn cpu_stage(
         s: state.chunk(),
         o: outputs.chunk(),
         actions,
+        sngnn: None,
         error: None,
     };
     for e in 0..n_envs {

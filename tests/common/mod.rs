@@ -99,8 +99,24 @@ unsafe impl GlobalAlloc for Counting {
     }
 }
 
-/// The names of the shipped configs (`configs/*.toml`), sorted.
+/// The names of the shipped configs (`configs/*.toml`) with the DSRNN reward, sorted; the
+/// SNGNN-v2 ones are [`sngnn_config_names`].
 pub fn config_names() -> Vec<String> {
+    all_config_names()
+        .into_iter()
+        .filter(|n| !n.ends_with("_sngnn"))
+        .collect()
+}
+
+/// The shipped configs with the SNGNN-v2 reward (their batches need the weight file).
+pub fn sngnn_config_names() -> Vec<String> {
+    all_config_names()
+        .into_iter()
+        .filter(|n| n.ends_with("_sngnn"))
+        .collect()
+}
+
+fn all_config_names() -> Vec<String> {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
     let mut names: Vec<String> = std::fs::read_dir(dir)
         .expect("configs/")

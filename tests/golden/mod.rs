@@ -129,6 +129,18 @@ impl<'a> Step<'a> {
     }
 
     /// The state the step's outputs describe (before the after-observation events).
+    /// The SNGNN-v2 frame 0.1.1 recorded at this step, as a state document's `sngnn_frames`
+    /// entry: its `sngnn.frame` plus the tick and the robot pose it was taken from (`None` on
+    /// a terminal step, which records no frame).
+    pub fn sngnn_frame(&self) -> Option<Value> {
+        let frame = self.v.get("sngnn")?.get("frame")?;
+        let mut frame = frame.clone();
+        let robot = &self.state_after_motion()["robot"];
+        frame["tick"] = json!(self.t());
+        frame["robot"] = json!({"x": robot["x"], "y": robot["y"], "theta": robot["theta"]});
+        Some(frame)
+    }
+
     pub fn state_after_motion(&self) -> &'a Value {
         self.v
             .get("state_before_events")
