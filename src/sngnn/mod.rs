@@ -20,6 +20,7 @@ pub mod frame;
 pub mod graph;
 pub mod history;
 pub mod model;
+pub mod packed;
 mod pickle;
 pub mod pieces;
 mod scorer;
