@@ -1,5 +1,6 @@
 //! Criterion benches of the step: exp1, exp2, exp3, observations written and read back, DSRNN
-//! reward, throughput in env-steps per second. The CPU backend at 1, 64, 1,024 and 4,096
+//! reward (and SNGNN-v2's in `step_sngnn`, when its weights are installed), throughput in
+//! env-steps per second. The CPU backend at 1, 64, 1,024 and 4,096
 //! environments; the GPU backend at 4,096, 16,384 and 65,536 when a hardware GPU adapter exists
 //! (`SOCNAV_BENCH_GPU=any` takes a software one too, for correctness runs only).
 //!
@@ -37,8 +38,32 @@ fn step_gpu(_: &mut Criterion) {
     eprintln!("step_gpu: SKIPPED (built without the `gpu` feature)");
 }
 
+/// The SNGNN-v2 reward on the CPU backend (needs the weights: `socnav sngnn install`).
+fn step_sngnn(c: &mut Criterion) {
+    let weights = socnav::sngnn::weights_path(None).path;
+    if !weights.is_file() {
+        eprintln!(
+            "step_sngnn: SKIPPED (no SNGNN-v2 weights at {}; `socnav sngnn install`)",
+            weights.display()
+        );
+        return;
+    }
+    let configs = ["exp1_sngnn", "exp2_sngnn", "exp3_sngnn"];
+    bench_configs(c, "step_sngnn", BackendChoice::Cpu, &configs, &[1, 64, 256]);
+}
+
 fn bench_backend(c: &mut Criterion, label: &str, backend: BackendChoice, sizes: &[usize]) {
-    for name in ["exp1", "exp2", "exp3"] {
+    bench_configs(c, label, backend, &["exp1", "exp2", "exp3"], sizes);
+}
+
+fn bench_configs(
+    c: &mut Criterion,
+    label: &str,
+    backend: BackendChoice,
+    configs: &[&str],
+    sizes: &[usize],
+) {
+    for &name in configs {
         let config = Config::from_name_or_path(name).expect("shipped config");
         let mut group = c.benchmark_group(format!("{label}/{name}"));
         group
@@ -68,5 +93,5 @@ fn bench_backend(c: &mut Criterion, label: &str, backend: BackendChoice, sizes: 
     }
 }
 
-criterion_group!(benches, step, step_gpu);
+criterion_group!(benches, step, step_gpu, step_sngnn);
 criterion_main!(benches);
