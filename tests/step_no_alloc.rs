@@ -77,6 +77,15 @@ fn a_warm_step_does_not_allocate() {
             "{name}: {n} allocations in 250 warm steps on one thread"
         );
     }
+    // The SNGNN-v2 reward: frames go into the state's history columns, the graph and the
+    // forward pass into the thread's scratch (weights needed; skipped loudly without them).
+    if common::sngnn::real_weights().is_some() {
+        let n = allocations_per_run(named("exp2_sngnn"), 8, 1, 60);
+        assert_eq!(
+            n, 0,
+            "exp2_sngnn: {n} allocations in 60 warm steps on one thread"
+        );
+    }
     let steps = 250;
     let n = allocations_per_run(named("exp2"), 256, 2, steps);
     // One worker beside the caller: one boxed job per step, plus its thread-local buffers

@@ -184,3 +184,30 @@ def test_gpu_backend_steps_like_the_cpu_backend():
         np.testing.assert_array_equal(ug, uc)
         ended += int(tc.sum() + uc.sum())
     assert ended > 0
+
+
+def test_sngnn_reward_scores_steps():
+    """The SNGNN-v2 reward from Python: `exp2_sngnn` steps and reports SNGNN-v2's discomfort in
+    [0, 1], and the reward of a non-terminal step is (s − 1) + distance + alive (spec 6.3).
+    Skips without the weights unless REQUIRE_SNGNN=1 (as the Rust tests)."""
+    try:
+        env = socnav.make_vec("exp2_sngnn", num_envs=8, seed=5, obs_mode="flat")
+    except socnav.SngnnError as e:
+        if os.environ.get("REQUIRE_SNGNN") == "1":
+            raise
+        pytest.skip(f"no SNGNN-v2 weights: {e}")
+    env.reset()
+    rng = np.random.default_rng(1)
+    scored = 0
+    for _ in range(20):
+        a = rng.uniform(-1, 1, size=(8, 3)).astype(np.float32)
+        a[:, 1] = 0.0
+        _, reward, terminated, truncated, info = env.step(a)
+        live = ~(terminated | truncated)
+        s = info["DISCOMFORT_SNGNN"][live]
+        assert ((s >= 0) & (s <= 1)).all(), s
+        expected = (s - 1) + info["distance_reward"][live] + info["alive_reward"][live]
+        np.testing.assert_allclose(reward[live], expected, atol=1e-6)
+        np.testing.assert_allclose(info["sngnn_reward"][live], s - 1, atol=1e-7)
+        scored += int(live.sum())
+    assert scored > 0

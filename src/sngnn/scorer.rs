@@ -92,10 +92,10 @@ impl Scorer {
 
 /// The distance range of the tables for `config`: every distance feature is a distance
 /// between two points of a room (in units of 10 m, spec 7.3) or a wall-person distance below
-/// 1.5 m, so the largest room's diagonal bounds it.
+/// 1.5 m, so the diagonal of a square as large as the config's largest room side bounds it
+/// (whatever the room's shape).
 pub fn table_range(config: &Config) -> f32 {
-    let x = config.room.size_x[1].max(1) as f32;
-    let y = config.room.size_y[1].max(1) as f32;
-    let diagonal_in_10_m = (x * x + y * y).sqrt() / 10.0;
+    let side = config.room.size_x[1].max(config.room.size_y[1]).max(1) as f32;
+    let diagonal_in_10_m = side * std::f32::consts::SQRT_2 / 10.0;
     diagonal_in_10_m.max(WALL_PERSON_RANGE) * RANGE_MARGIN
 }
