@@ -199,11 +199,15 @@ def test_sngnn_reward_scores_steps():
     env.reset()
     rng = np.random.default_rng(1)
     scored = 0
+    # NEXT_STEP autoreset: the step after an episode's end resets it (reward 0, nothing scored).
+    resetting = np.zeros(8, dtype=bool)
     for _ in range(20):
         a = rng.uniform(-1, 1, size=(8, 3)).astype(np.float32)
         a[:, 1] = 0.0
         _, reward, terminated, truncated, info = env.step(a)
-        live = ~(terminated | truncated)
+        done = terminated | truncated
+        live = ~done & ~resetting
+        resetting = done
         s = info["DISCOMFORT_SNGNN"][live]
         assert ((s >= 0) & (s <= 1)).all(), s
         expected = (s - 1) + info["distance_reward"][live] + info["alive_reward"][live]
