@@ -36,6 +36,7 @@
 //! ```
 
 mod canvas;
+pub mod heatmap;
 mod output;
 pub mod palette;
 mod quantize;
