@@ -71,11 +71,19 @@ pub fn colour(t: f32) -> Rgb {
 /// Height of a text line (px): 8 font pixels at scale 2 and a gap.
 const LINE_PX: f32 = 20.0;
 
-/// Draw `text` with its top-left corner at (x, y) (px) within `max_w` px: font pixels of 2 px
-/// when it fits, else of 1 px, cut at `max_w`. Characters outside ASCII are drawn as '?'.
-fn text(c: &mut Canvas, x: f32, y: f32, text: &str, max_w: f32) {
-    let n = text.chars().count() as f32;
-    let scale = if n * 16.0 <= max_w { 2.0 } else { 1.0 };
+/// The font pixel size (px) at which every one of `texts` fits in `max_w` px: 2, else 1 (text
+/// that still does not fit is cut), so that lines side by side share one size.
+fn fit_scale(texts: &[&str], max_w: f32) -> f32 {
+    if texts.iter().all(|t| text_width(t) <= max_w) {
+        2.0
+    } else {
+        1.0
+    }
+}
+
+/// Draw `text` with its top-left corner at (x, y) (px) in font pixels of `scale` px (1 or 2),
+/// cut at `max_w` px. Characters outside ASCII are drawn as '?'.
+fn text(c: &mut Canvas, (x, y): (f32, f32), text: &str, scale: f32, max_w: f32) {
     let fits = (max_w / (8.0 * scale)).floor().max(0.0) as usize;
     // Smaller text sits in the middle of the line.
     let y = y + (2.0 - scale) * 4.0;
@@ -214,8 +222,9 @@ pub fn draw(f: &Figure<'_>) -> Result<Pixmap, SimError> {
     )
     .ok_or_else(|| SimError::Shape("heatmap figure: cannot allocate the image".into()))?;
     let line_w = width - 2.0 * pad;
-    text(&mut c, pad, pad, f.caption, line_w);
-    text(&mut c, pad, pad + LINE_PX, MASK_NOTE, line_w);
+    let scale = fit_scale(&[f.caption, MASK_NOTE], line_w);
+    text(&mut c, (pad, pad), f.caption, scale, line_w);
+    text(&mut c, (pad, pad + LINE_PX), MASK_NOTE, scale, line_w);
     let panels = [
         (
             &left,
@@ -228,9 +237,21 @@ pub fn draw(f: &Figure<'_>) -> Result<Pixmap, SimError> {
             [0.0, 0.5 * floor, floor].map(|v| format!("{v:.3}")),
         ),
     ];
+    let title_scale = fit_scale(&[panels[0].1, panels[1].1], pw + gap);
+    let all_labels: Vec<&str> = panels
+        .iter()
+        .flat_map(|p| p.2.iter().map(String::as_str))
+        .collect();
+    let ls = fit_scale(&all_labels, pw / 3.0);
     for (i, (pix, title, labels)) in panels.into_iter().enumerate() {
         let x0 = pad + i as f32 * (pw + gap);
-        text(&mut c, x0, pad + 2.3 * LINE_PX, title, pw + gap);
+        text(
+            &mut c,
+            (x0, pad + 2.3 * LINE_PX),
+            title,
+            title_scale,
+            pw + gap,
+        );
         c.pixmap.draw_pixmap(
             x0 as i32,
             top as i32,
@@ -249,9 +270,10 @@ pub fn draw(f: &Figure<'_>) -> Result<Pixmap, SimError> {
         let ly = by + bar_h + 6.0;
         let [a, m, b] = &labels;
         let third = pw / 3.0;
-        text(&mut c, x0, ly, a, third);
-        text(&mut c, x0 + 0.5 * (pw - text_width(m)), ly, m, third);
-        text(&mut c, x0 + pw - text_width(b), ly, b, third);
+        let w = |t: &str| text_width(t) * 0.5 * ls;
+        text(&mut c, (x0, ly), a, ls, third);
+        text(&mut c, (x0 + 0.5 * (pw - w(m)), ly), m, ls, third);
+        text(&mut c, (x0 + pw - w(b), ly), b, ls, third);
     }
     Ok(c.pixmap)
 }

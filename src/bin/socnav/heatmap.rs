@@ -46,9 +46,17 @@ pub fn heatmap(a: &HeatmapArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
     };
     let h = scene.heatmap(a.grid, heading, Some(&scorer), &progress)?;
+    // A config file is named by its stem, so that a long path does not crowd the title.
+    let path = std::path::Path::new(&a.config);
+    let name = match path.extension() {
+        Some(_) => path
+            .file_stem()
+            .map_or(a.config.clone(), |s| s.to_string_lossy().into_owned()),
+        None => a.config.clone(),
+    };
     let caption = format!(
-        "{} seed {}: robot at rest, heading {heading:.2} rad, {}x{}",
-        a.config, a.seed, a.grid, a.grid
+        "{name} seed {}, {}x{}, heading {heading:.2} rad, robot at rest",
+        a.seed, a.grid, a.grid
     );
     let figure = Figure {
         heatmap: &h,
