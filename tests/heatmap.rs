@@ -242,7 +242,19 @@ fn cli_rejects_bad_input_clearly() {
         assert!(!o.status.success(), "{args:?} succeeded");
         assert!(stderr(&o).contains(want), "{args:?}: {}", stderr(&o));
     }
+    let o = Command::new(env!("CARGO_BIN_EXE_socnav"))
+        .args(["heatmap", "--config", "exp2_sngnn", "--out", png])
+        .env("SOCNAV_SNGNN_WEIGHTS", dir.join("missing.tch"))
+        .output()
+        .expect("socnav runs");
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("socnav sngnn install"),
+        "{}",
+        stderr(&o)
+    );
     assert!(!std::path::Path::new(png).exists());
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

@@ -29,6 +29,10 @@ pub fn heatmap(a: &HeatmapArgs) -> Result<(), Box<dyn std::error::Error>> {
     let config = Config::from_name_or_path(&a.config)?;
     heatmap::require_sngnn(&config, &a.config)?;
     let scorer = Scorer::for_config(&config)?;
+    eprintln!(
+        "socnav heatmap: SNGNN-v2 ready ({:.1} s)",
+        start.elapsed().as_secs_f64()
+    );
     let scene = Scene::new(&config, a.seed)?;
     let heading = a.heading.unwrap_or_else(|| scene.robot_heading());
     let total = a.grid * a.grid;
