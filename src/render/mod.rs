@@ -24,7 +24,8 @@
 //! - the ORCA shadow robot (faint outline with heading) and the robot (red disc with heading);
 //! - a progress bar along the bottom edge: `tick / episode_length`.
 //!
-//! Frames carry no text (no fonts ship with the crate). Rendering only reads the state, so it
+//! Episode frames carry no text. [`heatmap`] draws the discomfort heatmap figure (titles and
+//! colour bars, in a bitmap font). Rendering only reads the state, so it
 //! never changes a trajectory.
 //!
 //! ```
@@ -36,6 +37,7 @@
 //! ```
 
 mod canvas;
+pub mod heatmap;
 mod output;
 pub mod palette;
 mod quantize;

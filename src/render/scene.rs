@@ -41,9 +41,19 @@ pub fn draw_scene(c: &mut Canvas, scene: &Scene<'_>) {
     progress(c, scene);
 }
 
+/// What a heatmap panel draws over its field: the robot's goal, furniture, walls, humans and
+/// their links (no fields of view, formations, trail, robot or progress bar).
+pub fn draw_overlay(c: &mut Canvas, sc: &Scene<'_>) {
+    robot_goal(c, sc);
+    furniture(c, sc);
+    walls(c, sc);
+    humans(c, sc);
+    links(c, sc);
+}
+
 /// The room floor; an L room's removed block (its spawn blocker) is painted back as outside.
 /// Corridor doors are gaps between wall pieces and need nothing.
-fn floor(c: &mut Canvas, sc: &Scene<'_>) {
+pub fn floor(c: &mut Canvas, sc: &Scene<'_>) {
     let (s, e) = (sc.s, sc.e);
     let room = Rect::new(0.0, 0.0, 0.0, s.map_x[e], s.map_y[e]);
     c.rect(
@@ -75,7 +85,7 @@ fn floor(c: &mut Canvas, sc: &Scene<'_>) {
 }
 
 /// 1 m tick marks in the margin along the room's bottom and left edges, every 5th one longer.
-fn ticks(c: &mut Canvas) {
+pub fn ticks(c: &mut Canvas) {
     let v = c.view;
     let w = v.line();
     let (left, bottom) = v.px(-0.5 * v.map_x, -0.5 * v.map_y);
@@ -138,15 +148,21 @@ fn views(c: &mut Canvas, sc: &Scene<'_>) {
     c.clip_to(None);
 }
 
-/// The robot's goal (disc of `goal_radius`), lone walkers' goals (crosses), moving groups' goals
-/// (crosses) and every group's stored centre (a faint circle of `group_radius`).
-fn goals(c: &mut Canvas, sc: &Scene<'_>) {
+/// The robot's goal: a disc of `goal_radius`.
+fn robot_goal(c: &mut Canvas, sc: &Scene<'_>) {
     let (p, s, e) = (sc.p, sc.s, sc.e);
     let goal = Style {
         fill: Some((palette::ROBOT, 0.12)),
         stroke: Some((palette::ROBOT, 0.9, 1.5)),
     };
     c.disc(s.goal_x[e], s.goal_y[e], p.goal_radius, goal);
+}
+
+/// The robot's goal (disc of `goal_radius`), lone walkers' goals (crosses), moving groups' goals
+/// (crosses) and every group's stored centre (a faint circle of `group_radius`).
+fn goals(c: &mut Canvas, sc: &Scene<'_>) {
+    let (p, s, e) = (sc.p, sc.s, sc.e);
+    robot_goal(c, sc);
     let cross = 0.6 * p.human_radius;
     let hb = e * s.strides.humans;
     for i in hb..hb + s.n_humans[e] as usize {

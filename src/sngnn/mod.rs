@@ -18,6 +18,7 @@
 mod cache;
 pub mod frame;
 pub mod graph;
+pub mod heatmap;
 pub mod history;
 pub mod model;
 pub mod packed;

@@ -55,12 +55,7 @@ fn step_reward(p: &StepParams, s: &mut StateChunk, sngnn: Option<&Scorer>, e: us
     } else {
         0.0
     };
-    let d_min = min_predicted_clearance(p, s, e);
-    let r_disc = if d_min < p.reward_discomfort_distance {
-        (d_min - p.reward_discomfort_distance) * p.reward_discomfort_factor * p.dt
-    } else {
-        0.0
-    };
+    let r_disc = dsrnn_discomfort(p, min_predicted_clearance(p, s, e));
     s.r_prev_dist[e] = d;
     s.r_has_prev[e] = 1;
     s.r_distance[e] = r_dist;
@@ -78,6 +73,16 @@ fn step_reward(p: &StepParams, s: &mut StateChunk, sngnn: Option<&Scorer>, e: us
         r_disc + r_dist + p.reward_alive
     };
     with_extra_terms(p, s, e, r)
+}
+
+/// The DSRNN discomfort term (spec 6.2) of a predicted clearance `d_min` (m):
+/// (d_min − 0.6)·0.5·dt below the discomfort distance, else 0.
+pub fn dsrnn_discomfort(p: &StepParams, d_min: f32) -> f32 {
+    if d_min < p.reward_discomfort_distance {
+        (d_min - p.reward_discomfort_distance) * p.reward_discomfort_factor * p.dt
+    } else {
+        0.0
+    }
 }
 
 /// `StepParams::reward_kind` of the SNGNN-v2 reward.

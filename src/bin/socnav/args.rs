@@ -22,6 +22,9 @@ pub enum Command {
     CheckConfig(CheckArgs),
     /// Draw an episode to an animated GIF (or its first frame to a PNG).
     Render(RenderArgs),
+    /// Draw the discomfort around people in one scene: SNGNN-v2 and DSRNN with the robot placed
+    /// at every point of a grid (PNG).
+    Heatmap(HeatmapArgs),
     /// List the GPU adapters wgpu finds and which one each backend choice would take.
     Devices,
     /// The SNGNN-v2 reward's weights (GPL-3.0, not shipped): install them, show where they are.
@@ -164,4 +167,28 @@ pub struct RenderArgs {
     /// Most steps to draw (default: the whole episode).
     #[arg(long)]
     pub steps: Option<usize>,
+}
+
+#[derive(Debug, Args)]
+pub struct HeatmapArgs {
+    /// Config with the SNGNN-v2 reward: a shipped name (exp1_sngnn, exp2_sngnn, exp3_sngnn) or a
+    /// TOML path.
+    #[arg(long, default_value = "exp2_sngnn")]
+    pub config: String,
+    /// Seed of the scene.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output PNG file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Grid side: the robot is placed at the centres of N × N cells over the room.
+    #[arg(long, default_value_t = 40)]
+    pub grid: usize,
+    /// The robot's heading at every placement (rad, world frame; default: its heading in the
+    /// scene).
+    #[arg(long, allow_hyphen_values = true)]
+    pub heading: Option<f32>,
+    /// Longer side of each panel (px).
+    #[arg(long, default_value_t = 480)]
+    pub size: u32,
 }
