@@ -94,13 +94,13 @@ fn u32_offset(columns: wgsl::Columns<'_>, n_envs: usize, name: &str) -> usize {
             .sum::<usize>()
 }
 
-fn bytes_of<T>(n: usize) -> u64 {
+pub(crate) fn bytes_of<T>(n: usize) -> u64 {
     // A binding may not be empty: at least one element.
     (n.max(1) * std::mem::size_of::<T>()) as u64
 }
 
 /// A storage buffer the host writes and reads back.
-fn storage_buffer(dev: &GpuDevice, label: &str, size: u64) -> wgpu::Buffer {
+pub(crate) fn storage_buffer(dev: &GpuDevice, label: &str, size: u64) -> wgpu::Buffer {
     dev.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size,
@@ -465,34 +465,42 @@ impl GpuStages {
         Ok(words)
     }
 
-    /// Map the first `bytes` of `buffer` (after the work submitted so far), hand its words to
-    /// `read`, and unmap it.
     fn map_and_read(
         &self,
         buffer: &wgpu::Buffer,
         bytes: u64,
         read: impl FnOnce(&[u32]),
     ) -> Result<(), SimError> {
-        let failed = |e: &dyn std::fmt::Display| {
-            SimError::BackendUnavailable(format!("GPU readback failed: {e}"))
-        };
-        let slice = buffer.slice(..bytes);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            // The receiver lives until the poll below has delivered this.
-            let _ = tx.send(r);
-        });
-        self.dev
-            .device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| failed(&e))?;
-        rx.recv().map_err(|e| failed(&e))?.map_err(|e| failed(&e))?;
-        {
-            let view = slice.get_mapped_range().map_err(|e| failed(&e))?;
-            let words = bytemuck::try_cast_slice::<u8, u32>(&view).map_err(|e| failed(&e))?;
-            read(words);
-        }
-        buffer.unmap();
-        self.dev.take_errors()
+        map_and_read(&self.dev, buffer, bytes, read)
     }
+}
+
+/// Map the first `bytes` of `buffer` (after the work submitted so far), hand its words to
+/// `read`, and unmap it; then report any validation error of the device.
+pub(crate) fn map_and_read(
+    dev: &GpuDevice,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    read: impl FnOnce(&[u32]),
+) -> Result<(), SimError> {
+    let failed = |e: &dyn std::fmt::Display| {
+        SimError::BackendUnavailable(format!("GPU readback failed: {e}"))
+    };
+    let slice = buffer.slice(..bytes);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        // The receiver lives until the poll below has delivered this.
+        let _ = tx.send(r);
+    });
+    dev.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| failed(&e))?;
+    rx.recv().map_err(|e| failed(&e))?.map_err(|e| failed(&e))?;
+    {
+        let view = slice.get_mapped_range().map_err(|e| failed(&e))?;
+        let words = bytemuck::try_cast_slice::<u8, u32>(&view).map_err(|e| failed(&e))?;
+        read(words);
+    }
+    buffer.unmap();
+    dev.take_errors()
 }
