@@ -20,7 +20,7 @@
 // distance of the config's rooms.
 //
 // llvmpipe stops every loop of an invocation after 65535 iterations in all (docs/ARCHITECTURE.md):
-// `sort` runs about 3 nodes + 2 edges iterations, `layer` about (inputs + 14) per incoming edge,
+// `sort` runs about 3 nodes + 3 edges iterations, `layer` about (inputs + 14) per incoming edge,
 // far below it for SNGNN's graphs.
 
 // Graph words (src/sngnn/packed.rs `words`).

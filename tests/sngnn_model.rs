@@ -213,13 +213,10 @@ fn flat_tables_hold_the_cpu_tables() {
                 let t = (d - at[k]) / (at[k + 1] - at[k]);
                 let lo = entry[flat::VALUES] as usize + k * len;
                 tables.matrix(layer, rel, d, &mut want).unwrap();
-                for i in 0..len {
-                    let w = f.floats[lo + i] * (1.0 - t) + f.floats[lo + len + i] * t;
-                    assert_eq!(
-                        w.to_bits(),
-                        want[i].to_bits(),
-                        "layer {layer} rel {rel} d {d}"
-                    );
+                let (l, h) = (&f.floats[lo..lo + len], &f.floats[lo + len..lo + 2 * len]);
+                for ((l, h), want) in l.iter().zip(h).zip(&want[..len]) {
+                    let w = l * (1.0 - t) + h * t;
+                    assert_eq!(w.to_bits(), want.to_bits(), "layer {layer} rel {rel} d {d}");
                 }
             }
         }

@@ -5,7 +5,7 @@
 //! (stable, so build order is kept), then one dispatch per layer with one invocation per
 //! (environment, node, output), which sums its messages in the CPU's order; lavapipe therefore
 //! computes the CPU's bits. Each layer's tables live in their own buffers (the first layer's
-//! are the largest, tens of MB), so one binding never has to hold all of them.
+//! are the largest: 54 of 88 MB for exp1/exp2), so one binding never has to hold all of them.
 //!
 //! The device has no edge network: an edge the tables do not cover makes [`GpuNet::forward`]
 //! fail with `SimError::Sngnn` (the CPU would take the edge network). The tables of
@@ -113,7 +113,7 @@ impl GpuNet {
     ///
     /// # Errors
     /// `SimError::BackendUnavailable` when a buffer exceeds the adapter's limits (the tables'
-    /// largest layer is tens of MB), there are more environments than one dispatch dimension
+    /// largest layer is about 54 MB), there are more environments than one dispatch dimension
     /// holds, or the shader fails to build.
     pub fn new(
         dev: GpuDevice,

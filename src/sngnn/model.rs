@@ -46,7 +46,7 @@ pub struct EdgeMlp {
     pub w2: Vec<f32>,
     /// `hidden2`.
     pub b2: Vec<f32>,
-    /// `(inputs·outputs) × hidden2`; output row `i·outputs + o` is W(e)[i][o].
+    /// `(inputs·outputs) × hidden2`; output row `i·outputs + o` is `W(e)[i][o]`.
     pub w3: Vec<f32>,
     /// `inputs·outputs`.
     pub b3: Vec<f32>,
