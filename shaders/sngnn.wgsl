@@ -77,10 +77,11 @@ fn csr_base(e: u32) -> u32 {
     return e * (p.max_nodes + 1u + p.max_edges);
 }
 
-// Whether an environment's graph fits its layout and names only its own nodes and relations:
-// the kernels then stay inside the environment's regions.
+// Whether an environment's graph fits its layout, has the room node 0 whose values are the
+// output, and names only its own nodes and relations: the kernels then stay inside the
+// environment's regions.
 fn graph_is_valid(g: u32, nodes: u32, edges: u32) -> bool {
-    if (nodes > p.max_nodes || edges > p.max_edges) {
+    if (nodes == 0u || nodes > p.max_nodes || edges > p.max_edges) {
         return false;
     }
     var ok = true;

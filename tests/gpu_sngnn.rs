@@ -11,8 +11,6 @@
 mod common;
 mod golden;
 
-use std::time::Instant;
-
 use common::sngnn::{Rand, random_graph, random_weights};
 use socnav::Config;
 use socnav::backend::gpu::GpuDevice;
@@ -59,17 +57,16 @@ fn compare(dev: &GpuDevice, model: &Model, tables: &Tables, graphs: &[&Graph]) -
     let mut net = GpuNet::new(dev.clone(), model, tables, layout, graphs.len()).expect("net");
     net.upload(&u, &f).expect("upload");
     let mut out = vec![[0.0; 2]; graphs.len()];
-    net.forward(&mut out).expect("forward");
-    let reps = 5;
-    let t0 = Instant::now();
-    for _ in 0..reps {
-        net.forward(&mut out).expect("forward");
-    }
-    let per = t0.elapsed() / reps;
+    let per = net.time_forward(&mut out, 5).expect("forward");
     let mut s = Scratch::default();
+    let start = std::time::Instant::now();
+    let cpu: Vec<Output> = graphs
+        .iter()
+        .map(|g| tables.forward(model, g, &mut s))
+        .collect();
+    let cpu_time = start.elapsed();
     let (mut worst, mut differing) = (0.0f32, 0);
-    for (k, g) in graphs.iter().enumerate() {
-        let cpu = tables.forward(model, g, &mut s);
+    for (k, (g, cpu)) in graphs.iter().zip(&cpu).enumerate() {
         for j in 0..2 {
             let (a, b) = (out[k][j], cpu[j]);
             worst = worst.max((a - b).abs());
@@ -93,7 +90,8 @@ fn compare(dev: &GpuDevice, model: &Model, tables: &Tables, graphs: &[&Graph]) -
     }
     eprintln!(
         "{}: {} graphs (layout {} nodes, {} edges): {differing} outputs differ from the CPU's \
-         bits, largest difference {worst:e}; forward {per:?} per batch",
+         bits, largest difference {worst:e}; forward {per:?} per batch (CPU tables pass, one \
+         thread: {cpu_time:?})",
         dev.adapter,
         graphs.len(),
         layout.max_nodes,
@@ -195,4 +193,28 @@ fn distances_outside_the_tables_are_reported() {
         e.to_string().contains("outside the edge-weight tables"),
         "{e}"
     );
+}
+
+/// A graph the layout cannot hold, or an empty one, is reported, not scored.
+#[test]
+fn invalid_graphs_are_reported() {
+    let Some(dev) = common::gpu::device() else {
+        return;
+    };
+    let model = Model::new(&random_weights(12));
+    let tables = Tables::new(&model, 1.5);
+    let g = random_graph(&mut Rand(13), 5, 8, 1.0);
+    let layout = PackedLayout::fitting([&g]);
+    let (mut u, f) = pack(&layout, &[&g]);
+    let mut net = GpuNet::new(dev, &model, &tables, layout, 1).expect("net");
+    // A destination beyond the graph's nodes.
+    u[socnav::sngnn::packed::words::SRC + layout.max_edges] = 5;
+    net.upload(&u, &f).expect("upload");
+    let e = net.forward(&mut [[0.0; 2]]).unwrap_err();
+    assert!(e.to_string().contains("names a node or relation"), "{e}");
+    // No nodes at all.
+    u.fill(0);
+    net.upload(&u, &f).expect("upload");
+    let e = net.forward(&mut [[0.0; 2]]).unwrap_err();
+    assert!(e.to_string().contains("empty"), "{e}");
 }

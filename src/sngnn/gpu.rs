@@ -289,6 +289,24 @@ impl GpuNet {
         }
     }
 
+    /// Wall time of one [`GpuNet::forward`] (readback included), the mean of `reps` after one
+    /// warm-up run: a benchmark helper.
+    ///
+    /// # Errors
+    /// As [`GpuNet::forward`].
+    pub fn time_forward(
+        &mut self,
+        out: &mut [Output],
+        reps: u32,
+    ) -> Result<std::time::Duration, SimError> {
+        self.forward(out)?;
+        let start = std::time::Instant::now();
+        for _ in 0..reps.max(1) {
+            self.forward(out)?;
+        }
+        Ok(start.elapsed() / reps.max(1))
+    }
+
     /// The sort and the layers, one compute pass.
     fn encode(&self, enc: &mut wgpu::CommandEncoder) {
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -311,8 +329,8 @@ impl GpuNet {
 fn status_message(e: usize, status: u32) -> String {
     if status & STATUS_BAD_GRAPH != 0 {
         format!(
-            "environment {e}: the SNGNN graph exceeds its packed layout or names a node or \
-             relation that does not exist"
+            "environment {e}: the SNGNN graph is empty, exceeds its packed layout, or names a \
+             node or relation that does not exist"
         )
     } else {
         debug_assert_eq!(status, STATUS_UNSUPPORTED);
