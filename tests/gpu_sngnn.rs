@@ -11,7 +11,7 @@
 mod common;
 mod golden;
 
-use common::sngnn::{Rand, random_graph, random_weights};
+use common::sngnn::{GOLDEN, GOLDEN_TOLERANCE, Rand, random_graph, random_weights};
 use socnav::Config;
 use socnav::backend::gpu::GpuDevice;
 use socnav::sngnn::gpu::GpuNet;
@@ -20,8 +20,6 @@ use socnav::sngnn::packed::PackedLayout;
 use socnav::sngnn::pieces::Tables;
 use socnav::sngnn::{Graph, table_range};
 
-/// Issue 6's bound on the difference from the original's output.
-const GOLDEN_TOLERANCE: f32 = 1e-4;
 /// Relative bound on a hardware GPU, which may contract `a·b + c` and round `exp` and division
 /// differently.
 const HARDWARE_TOLERANCE: f32 = 1e-4;
@@ -99,16 +97,6 @@ fn compare(dev: &GpuDevice, model: &Model, tables: &Tables, graphs: &[&Graph]) -
     );
     out
 }
-
-/// The six golden episodes with SNGNN graph dumps.
-const GOLDEN: [(&str, usize); 6] = [
-    ("exp1_with_sngnn", 0),
-    ("exp1_with_sngnn", 1),
-    ("exp1_with_sngnn", 2),
-    ("exp2_with_sngnn", 0),
-    ("exp2_with_sngnn", 1),
-    ("exp2_with_sngnn", 2),
-];
 
 #[test]
 fn golden_graphs_on_the_device() {

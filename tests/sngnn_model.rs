@@ -10,7 +10,7 @@
 mod common;
 mod golden;
 
-use common::sngnn::{Rand, random_graph, random_weights};
+use common::sngnn::{GOLDEN, GOLDEN_TOLERANCE, Rand, random_graph, random_weights};
 use socnav::sngnn::model::{EdgeMlp, MAX_WIDTH, Model, Scratch};
 use socnav::sngnn::pieces::Tables;
 use socnav::sngnn::{NODE_FEATURES, RELATIONS};
@@ -113,19 +113,6 @@ fn fast_and_reference_forward_passes_agree() {
         }
     }
 }
-
-/// The six golden episodes with SNGNN graph dumps.
-const GOLDEN: [(&str, usize); 6] = [
-    ("exp1_with_sngnn", 0),
-    ("exp1_with_sngnn", 1),
-    ("exp1_with_sngnn", 2),
-    ("exp2_with_sngnn", 0),
-    ("exp2_with_sngnn", 1),
-    ("exp2_with_sngnn", 2),
-];
-
-/// Issue 6's bound on the difference from the original's output.
-const GOLDEN_TOLERANCE: f32 = 1e-4;
 
 /// Both forward passes on the graphs the original fed its network (steps 1, 2 and 25 of every
 /// SNGNN episode: one, two and three stacked frames) give its recorded output within 1e-4.

@@ -14,7 +14,9 @@
 use super::model::{MAX_WIDTH, Model, Output};
 use super::packed::PackedLayout;
 use super::pieces::Tables;
-use crate::backend::gpu::{AdapterSummary, GpuDevice, bytes_of, map_and_read, storage_buffer};
+use crate::backend::gpu::{
+    AdapterSummary, GpuDevice, bind_buffers, bytes_of, map_and_read, storage_buffer, storage_layout,
+};
 use crate::backend::wgsl;
 use crate::error::SimError;
 
@@ -146,7 +148,7 @@ impl GpuNet {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let bind_layout = bind_group_layout(&dev);
+        let bind_layout = storage_layout(&dev, "SNGNN bindings", &BINDINGS);
         let (sort, layer) = pipelines(&dev, &bind_layout)?;
         let mut groups = Vec::with_capacity(model.layers.len());
         for (l, mlp_layer) in model.layers.iter().enumerate() {
@@ -189,7 +191,7 @@ impl GpuNet {
                 &q,
                 &status,
             ];
-            let group = bind_group(&dev, &bind_layout, &bound);
+            let group = bind_buffers(&dev, "SNGNN bindings", &bind_layout, &bound);
             let x = word(layout.max_nodes * outputs).div_ceil(WORKGROUP);
             groups.push((group, x));
         }
@@ -359,46 +361,6 @@ impl LayerParams {
             max_dist.to_bits(),
         ]
     }
-}
-
-fn bind_group_layout(dev: &GpuDevice) -> wgpu::BindGroupLayout {
-    let entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..)
-        .zip(BINDINGS)
-        .map(|(binding, read_only)| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        })
-        .collect();
-    dev.device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("SNGNN bindings"),
-            entries: &entries,
-        })
-}
-
-fn bind_group(
-    dev: &GpuDevice,
-    layout: &wgpu::BindGroupLayout,
-    bound: &[&wgpu::Buffer; BINDINGS.len()],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry<'_>> = (0u32..)
-        .zip(bound)
-        .map(|(binding, buf)| wgpu::BindGroupEntry {
-            binding,
-            resource: buf.as_entire_binding(),
-        })
-        .collect();
-    dev.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("SNGNN bindings"),
-        layout,
-        entries: &entries,
-    })
 }
 
 /// The `sort` and `layer` pipelines of `shaders/sngnn.wgsl`.

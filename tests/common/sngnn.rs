@@ -25,6 +25,19 @@ pub fn real_weights() -> Option<Weights> {
     Some(Weights::load(&path).expect("the installed weights load"))
 }
 
+/// The six golden episodes with SNGNN graph dumps.
+pub const GOLDEN: [(&str, usize); 6] = [
+    ("exp1_with_sngnn", 0),
+    ("exp1_with_sngnn", 1),
+    ("exp1_with_sngnn", 2),
+    ("exp2_with_sngnn", 0),
+    ("exp2_with_sngnn", 1),
+    ("exp2_with_sngnn", 2),
+];
+
+/// Issue 6's bound on the difference from the original's output.
+pub const GOLDEN_TOLERANCE: f32 = 1e-4;
+
 /// One dumped graph of a golden SNGNN episode: the graph, its 18-float edge features as
 /// recorded, and the recorded output `[q1, q2]`.
 pub struct GoldenGraph {

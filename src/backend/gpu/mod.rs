@@ -111,6 +111,54 @@ pub(crate) fn storage_buffer(dev: &GpuDevice, label: &str, size: u64) -> wgpu::B
     })
 }
 
+/// A bind group layout of storage buffers at bindings 0, 1, ..., read-only where `read_only`
+/// says so, for compute shaders.
+pub(crate) fn storage_layout(
+    dev: &GpuDevice,
+    label: &str,
+    read_only: &[bool],
+) -> wgpu::BindGroupLayout {
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..)
+        .zip(read_only)
+        .map(|(binding, &read_only)| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        })
+        .collect();
+    dev.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &entries,
+        })
+}
+
+/// A bind group of `layout` with `buffers`, whole, at bindings 0, 1, ...
+pub(crate) fn bind_buffers(
+    dev: &GpuDevice,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = (0u32..)
+        .zip(buffers)
+        .map(|(binding, buf)| wgpu::BindGroupEntry {
+            binding,
+            resource: buf.as_entire_binding(),
+        })
+        .collect();
+    dev.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
 impl DeviceTable {
     /// Buffers for a table packed into `packed_f32`/`packed_u32`, or why they do not fit.
     fn new(
@@ -205,37 +253,10 @@ impl GpuStages {
             (&outputs_table.u32s, false),
             (&pool, true),
         ];
-        let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..)
-            .zip(&bound)
-            .map(|(binding, &(_, read_only))| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            })
-            .collect();
-        let layout = dev
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("stage bindings"),
-                entries: &layout_entries,
-            });
-        let group_entries: Vec<wgpu::BindGroupEntry<'_>> = (0u32..)
-            .zip(&bound)
-            .map(|(binding, &(buf, _))| wgpu::BindGroupEntry {
-                binding,
-                resource: buf.as_entire_binding(),
-            })
-            .collect();
-        let bind_group = dev.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("stage bindings"),
-            layout: &layout,
-            entries: &group_entries,
-        });
+        let read_only: Vec<bool> = bound.iter().map(|&(_, r)| r).collect();
+        let layout = storage_layout(&dev, "stage bindings", &read_only);
+        let buffers: Vec<&wgpu::Buffer> = bound.iter().map(|&(b, _)| b).collect();
+        let bind_group = bind_buffers(&dev, "stage bindings", &layout, &buffers);
         let pipeline_layout = dev
             .device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
