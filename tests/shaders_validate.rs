@@ -134,6 +134,12 @@ fn all_wgsl_shaders_validate() {
             Some(_) => errors.push(format!("{rel}: the embedded copy differs (rebuild)")),
             None => errors.push(format!("{rel} is not listed in backend::wgsl::FILES")),
         }
+        if wgsl::STANDALONE.contains(&rel) {
+            // Its own bindings, no batch prelude: validated as the SNGNN host assembles it.
+            let src = wgsl::assemble_standalone(rel).expect("assembled");
+            errors.extend(validate_source(&src, rel).err());
+            continue;
+        }
         errors.extend(validate_assembled(rel).err());
         // The pure libraries also stand alone, with their requirements only.
         if matches!(
@@ -148,12 +154,15 @@ fn all_wgsl_shaders_validate() {
 }
 
 /// Every stage shader is named after a stage of the step (or one of the passes beside the step,
-/// `wgsl::PASSES`) and has the entry point `main`.
+/// `wgsl::PASSES`) and has the entry point `main`; `wgsl::STANDALONE` shaders are not stages.
 #[test]
 fn stage_shaders_are_stages_with_a_main() {
     let mut names: Vec<&str> = socnav::pipeline::STAGES.iter().map(|s| s.name).collect();
     names.extend(wgsl::PASSES);
-    for (path, _) in wgsl::FILES.iter().filter(|(p, _)| !p.contains('/')) {
+    let stage_files = wgsl::FILES
+        .iter()
+        .filter(|(p, _)| !p.contains('/') && !wgsl::STANDALONE.contains(p));
+    for (path, _) in stage_files {
         let stage = path.strip_suffix(".wgsl").expect(".wgsl");
         assert!(
             names.contains(&stage),

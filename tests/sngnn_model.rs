@@ -10,53 +10,10 @@
 mod common;
 mod golden;
 
+use common::sngnn::{GOLDEN, GOLDEN_TOLERANCE, Rand, random_graph, random_weights};
 use socnav::sngnn::model::{EdgeMlp, MAX_WIDTH, Model, Scratch};
 use socnav::sngnn::pieces::Tables;
-use socnav::sngnn::{Graph, LAYERS, NODE_FEATURES, RELATIONS, Tensor, Weights};
-
-/// A small deterministic generator (splitmix64) for test data.
-struct Rand(u64);
-
-impl Rand {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [lo, hi).
-    fn uniform(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * ((self.next() >> 40) as f32 / (1u64 << 24) as f32)
-    }
-}
-
-/// Random weights with the real names and shapes (spec 7.1), initialised like PyTorch's
-/// `Linear` (uniform in ±1/√fan_in).
-fn random_weights(seed: u64) -> Weights {
-    let mut r = Rand(seed);
-    let mut tensors = std::collections::BTreeMap::new();
-    let mut add = |name: String, shape: Vec<usize>, fan_in: usize, r: &mut Rand| {
-        let bound = 1.0 / (fan_in as f32).sqrt();
-        let data = (0..shape.iter().product())
-            .map(|_| r.uniform(-bound, bound))
-            .collect();
-        tensors.insert(name, Tensor { shape, data });
-    };
-    for layer in LAYERS {
-        for (name, shape) in layer.tensors() {
-            // A Linear weight is (out, in); a bias's fan-in is its layer's input width.
-            let fan_in = if shape.len() == 2 {
-                shape[1]
-            } else {
-                layer.inputs
-            };
-            add(name, shape, fan_in, &mut r);
-        }
-    }
-    Weights { tensors }
-}
+use socnav::sngnn::{NODE_FEATURES, RELATIONS};
 
 /// The largest absolute entry of an edge network's output over a few distances, the scale the
 /// tolerances are relative to.
@@ -130,45 +87,6 @@ fn distances_outside_the_tables_take_the_edge_network() {
     assert!(tables.matrix(0, 14, 0.0, &mut out).is_some());
 }
 
-/// A random graph shaped like SNGNN's: every node has a self-loop, plus random spatial edges
-/// with distances in `[0, max_dist)` and temporal edges at distance 0.
-fn random_graph(r: &mut Rand, nodes: usize, edges: usize, max_dist: f32) -> Graph {
-    let mut g = Graph {
-        nodes,
-        ..Default::default()
-    };
-    g.features = (0..nodes * NODE_FEATURES)
-        .map(|_| {
-            if r.uniform(0.0, 1.0) < 0.3 {
-                r.uniform(-1.0, 1.0)
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let mut edge = |src: usize, dst: usize, rel: u8, dist: f32| {
-        g.src.push(src as u32);
-        g.dst.push(dst as u32);
-        g.rel.push(rel);
-        g.dist.push(dist);
-    };
-    for v in 0..nodes {
-        edge(v, v, 11, 0.0);
-    }
-    for _ in 0..edges {
-        let src = (r.next() % nodes as u64) as usize;
-        let dst = (r.next() % nodes as u64) as usize;
-        let rel = (r.next() % 18) as u8;
-        let dist = if rel < 14 && rel != 11 {
-            r.uniform(0.0, max_dist)
-        } else {
-            0.0
-        };
-        edge(src, dst, rel, dist);
-    }
-    g
-}
-
 #[test]
 fn fast_and_reference_forward_passes_agree() {
     assert_eq!(
@@ -195,19 +113,6 @@ fn fast_and_reference_forward_passes_agree() {
         }
     }
 }
-
-/// The six golden episodes with SNGNN graph dumps.
-const GOLDEN: [(&str, usize); 6] = [
-    ("exp1_with_sngnn", 0),
-    ("exp1_with_sngnn", 1),
-    ("exp1_with_sngnn", 2),
-    ("exp2_with_sngnn", 0),
-    ("exp2_with_sngnn", 1),
-    ("exp2_with_sngnn", 2),
-];
-
-/// Issue 6's bound on the difference from the original's output.
-const GOLDEN_TOLERANCE: f32 = 1e-4;
 
 /// Both forward passes on the graphs the original fed its network (steps 1, 2 and 25 of every
 /// SNGNN episode: one, two and three stacked frames) give its recorded output within 1e-4.
@@ -256,4 +161,51 @@ fn recorded_graphs_give_the_recorded_output() {
         }
     }
     eprintln!("largest difference from the recorded outputs: {worst:e}");
+}
+
+/// The flat export a device reads (`Tables::flat_layer`) holds the very floats the CPU
+/// interpolates: W(e) rebuilt from it matches `Tables::matrix` bit for bit.
+#[test]
+fn flat_tables_hold_the_cpu_tables() {
+    use socnav::sngnn::pieces::flat;
+    let model = Model::new(&random_weights(6));
+    let tables = Tables::new(&model, 1.5);
+    let mut r = Rand(7);
+    let mut want = vec![0.0; 42 * 40];
+    for (layer, l) in model.layers.iter().enumerate() {
+        let f = tables.flat_layer(layer);
+        let len = l.mlp.matrix_len();
+        for rel in 0..RELATIONS as u8 {
+            let entry = &f.index[usize::from(rel) * flat::WORDS..][..flat::WORDS];
+            let zero = entry[flat::ZERO] as usize;
+            tables.matrix(layer, rel, 0.0, &mut want).unwrap();
+            assert_eq!(
+                &f.floats[zero..zero + len],
+                &want[..len],
+                "layer {layer} rel {rel} at 0"
+            );
+            let knots = entry[flat::KNOTS] as usize;
+            assert_eq!(
+                knots == 0,
+                rel >= 14 || rel == 11,
+                "layer {layer} rel {rel}"
+            );
+            if knots == 0 {
+                continue;
+            }
+            let at = &f.floats[entry[flat::AT] as usize..][..knots];
+            for _ in 0..20 {
+                let d = r.uniform(0.0, 1.5);
+                let k = at.partition_point(|&x| x <= d).clamp(1, knots - 1) - 1;
+                let t = (d - at[k]) / (at[k + 1] - at[k]);
+                let lo = entry[flat::VALUES] as usize + k * len;
+                tables.matrix(layer, rel, d, &mut want).unwrap();
+                let (l, h) = (&f.floats[lo..lo + len], &f.floats[lo + len..lo + 2 * len]);
+                for ((l, h), want) in l.iter().zip(h).zip(&want[..len]) {
+                    let w = l * (1.0 - t) + h * t;
+                    assert_eq!(w.to_bits(), want.to_bits(), "layer {layer} rel {rel} d {d}");
+                }
+            }
+        }
+    }
 }

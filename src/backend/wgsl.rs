@@ -102,6 +102,7 @@ pub const FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/autoreset.wgsl"),
     ),
     ("reset.wgsl", include_str!("../../shaders/reset.wgsl")),
+    ("sngnn.wgsl", include_str!("../../shaders/sngnn.wgsl")),
     (
         "human_motion.wgsl",
         include_str!("../../shaders/human_motion.wgsl"),
@@ -132,6 +133,10 @@ pub const FILES: &[(&str, &str)] = &[
 /// Shaders at the top of `shaders/` that are not stages of the step but passes the GPU backend runs
 /// alone: `reset` (the masked reset of `Backend::reset`).
 pub const PASSES: &[&str] = &["reset"];
+
+/// Shaders with bindings of their own, outside the step (no batch prelude): SNGNN-v2's network
+/// (`crate::sngnn::gpu`). [`assemble_standalone`] builds them.
+pub const STANDALONE: &[&str] = &["sngnn.wgsl"];
 
 /// Invocations per workgroup of the stage shaders (one environment each).
 pub const WORKGROUP_SIZE: u32 = 64;
@@ -465,11 +470,20 @@ pub fn assemble(path: &str, prelude: &str) -> Result<String, String> {
             order.push(p);
         }
     }
-    let mut src = prelude.to_owned();
-    for p in &order {
+    Ok(concatenate(prelude.to_owned(), &order))
+}
+
+/// The complete source of a [`STANDALONE`] shader: its requirements, then the file.
+pub fn assemble_standalone(path: &str) -> Result<String, String> {
+    Ok(concatenate(String::new(), &resolve(path)?))
+}
+
+/// `head`, then the embedded files `order`, each after a line naming it.
+fn concatenate(mut src: String, order: &[&str]) -> String {
+    for p in order {
         src.push_str(&format!("// ---- shaders/{p}\n"));
         src.push_str(source(p).expect("resolved files are embedded"));
         src.push('\n');
     }
-    Ok(src)
+    src
 }

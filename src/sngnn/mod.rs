@@ -9,6 +9,8 @@
 //!   (spec 7.3), node for node and edge for edge as 0.1.1.
 //! - [`model`]: the network and its reference forward pass; [`pieces`]: its edge weights as
 //!   exact piecewise-linear tables, the fast pass; [`Scorer`]: both, shared per process.
+//! - `gpu` (feature `gpu`): the tables' pass on a device for a batch of packed graphs
+//!   ([`packed`]).
 //! - Weights: [`Weights::load`] reads the PyTorch file without torch; [`weights_path`] finds it.
 //!
 //! The weights are GPL-3.0 and never part of this repository: `socnav sngnn install` fetches
@@ -17,6 +19,8 @@
 
 mod cache;
 pub mod frame;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod graph;
 pub mod heatmap;
 pub mod history;

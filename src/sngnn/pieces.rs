@@ -138,6 +138,61 @@ impl Tables {
     }
 }
 
+/// Word positions in a relation's entry of [`FlatLayer::index`].
+pub mod flat {
+    /// Offset in [`super::FlatLayer::floats`] of the relation's matrix at distance 0.
+    pub const ZERO: usize = 0;
+    /// Number of knots (0: the relation's distance is always 0, any other takes the edge
+    /// network).
+    pub const KNOTS: usize = 1;
+    /// Offset of the knots' distances (increasing).
+    pub const AT: usize = 2;
+    /// Offset of the first knot's matrix; knot `k`'s is `len` floats further per `k`.
+    pub const VALUES: usize = 3;
+    /// Words per relation.
+    pub const WORDS: usize = 4;
+}
+
+/// One layer's tables as one float array and an index, the form a device reads them in
+/// ([`Tables::flat_layer`]). Matrices are `inputs × outputs`, row-major, as on the CPU.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlatLayer {
+    /// Every stored matrix and knot distance of the layer.
+    pub floats: Vec<f32>,
+    /// [`flat::WORDS`] words per relation (`RELATIONS` of them): where its values lie in
+    /// `floats`.
+    pub index: Vec<u32>,
+}
+
+impl Tables {
+    /// Number of layers.
+    pub fn layers(&self) -> usize {
+        self.layers.len()
+    }
+
+    /// Layer `layer`'s tables flattened: the 18 matrices at distance 0 first, then each
+    /// spatial relation's knot distances and knot matrices. The values are the very floats the
+    /// CPU reads, so a device that interpolates them the same way gets the same bits.
+    pub fn flat_layer(&self, layer: usize) -> FlatLayer {
+        let table = &self.layers[layer];
+        let word = |n: usize| u32::try_from(n).expect("a layer's tables stay below 2^32 floats");
+        let mut floats = table.at_zero.clone();
+        let mut index = Vec::with_capacity(RELATIONS * flat::WORDS);
+        for (rel, knots) in table.spatial.iter().enumerate() {
+            let mut entry = [word(rel * table.len), 0, 0, 0];
+            if let Some(k) = knots {
+                entry[flat::KNOTS] = word(k.at.len());
+                entry[flat::AT] = word(floats.len());
+                floats.extend_from_slice(&k.at);
+                entry[flat::VALUES] = word(floats.len());
+                floats.extend_from_slice(&k.values);
+            }
+            index.extend_from_slice(&entry);
+        }
+        FlatLayer { floats, index }
+    }
+}
+
 /// The source of one W(e).
 enum Lookup<'t> {
     /// One stored matrix.

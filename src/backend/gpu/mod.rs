@@ -94,13 +94,13 @@ fn u32_offset(columns: wgsl::Columns<'_>, n_envs: usize, name: &str) -> usize {
             .sum::<usize>()
 }
 
-fn bytes_of<T>(n: usize) -> u64 {
+pub(crate) fn bytes_of<T>(n: usize) -> u64 {
     // A binding may not be empty: at least one element.
     (n.max(1) * std::mem::size_of::<T>()) as u64
 }
 
 /// A storage buffer the host writes and reads back.
-fn storage_buffer(dev: &GpuDevice, label: &str, size: u64) -> wgpu::Buffer {
+pub(crate) fn storage_buffer(dev: &GpuDevice, label: &str, size: u64) -> wgpu::Buffer {
     dev.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size,
@@ -108,6 +108,54 @@ fn storage_buffer(dev: &GpuDevice, label: &str, size: u64) -> wgpu::Buffer {
             | wgpu::BufferUsages::COPY_DST
             | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
+    })
+}
+
+/// A bind group layout of storage buffers at bindings 0, 1, ..., read-only where `read_only`
+/// says so, for compute shaders.
+pub(crate) fn storage_layout(
+    dev: &GpuDevice,
+    label: &str,
+    read_only: &[bool],
+) -> wgpu::BindGroupLayout {
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..)
+        .zip(read_only)
+        .map(|(binding, &read_only)| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        })
+        .collect();
+    dev.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &entries,
+        })
+}
+
+/// A bind group of `layout` with `buffers`, whole, at bindings 0, 1, ...
+pub(crate) fn bind_buffers(
+    dev: &GpuDevice,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = (0u32..)
+        .zip(buffers)
+        .map(|(binding, buf)| wgpu::BindGroupEntry {
+            binding,
+            resource: buf.as_entire_binding(),
+        })
+        .collect();
+    dev.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
     })
 }
 
@@ -205,37 +253,10 @@ impl GpuStages {
             (&outputs_table.u32s, false),
             (&pool, true),
         ];
-        let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..)
-            .zip(&bound)
-            .map(|(binding, &(_, read_only))| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            })
-            .collect();
-        let layout = dev
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("stage bindings"),
-                entries: &layout_entries,
-            });
-        let group_entries: Vec<wgpu::BindGroupEntry<'_>> = (0u32..)
-            .zip(&bound)
-            .map(|(binding, &(buf, _))| wgpu::BindGroupEntry {
-                binding,
-                resource: buf.as_entire_binding(),
-            })
-            .collect();
-        let bind_group = dev.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("stage bindings"),
-            layout: &layout,
-            entries: &group_entries,
-        });
+        let read_only: Vec<bool> = bound.iter().map(|&(_, r)| r).collect();
+        let layout = storage_layout(&dev, "stage bindings", &read_only);
+        let buffers: Vec<&wgpu::Buffer> = bound.iter().map(|&(b, _)| b).collect();
+        let bind_group = bind_buffers(&dev, "stage bindings", &layout, &buffers);
         let pipeline_layout = dev
             .device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -465,34 +486,42 @@ impl GpuStages {
         Ok(words)
     }
 
-    /// Map the first `bytes` of `buffer` (after the work submitted so far), hand its words to
-    /// `read`, and unmap it.
     fn map_and_read(
         &self,
         buffer: &wgpu::Buffer,
         bytes: u64,
         read: impl FnOnce(&[u32]),
     ) -> Result<(), SimError> {
-        let failed = |e: &dyn std::fmt::Display| {
-            SimError::BackendUnavailable(format!("GPU readback failed: {e}"))
-        };
-        let slice = buffer.slice(..bytes);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            // The receiver lives until the poll below has delivered this.
-            let _ = tx.send(r);
-        });
-        self.dev
-            .device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| failed(&e))?;
-        rx.recv().map_err(|e| failed(&e))?.map_err(|e| failed(&e))?;
-        {
-            let view = slice.get_mapped_range().map_err(|e| failed(&e))?;
-            let words = bytemuck::try_cast_slice::<u8, u32>(&view).map_err(|e| failed(&e))?;
-            read(words);
-        }
-        buffer.unmap();
-        self.dev.take_errors()
+        map_and_read(&self.dev, buffer, bytes, read)
     }
+}
+
+/// Map the first `bytes` of `buffer` (after the work submitted so far), hand its words to
+/// `read`, and unmap it; then report any validation error of the device.
+pub(crate) fn map_and_read(
+    dev: &GpuDevice,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    read: impl FnOnce(&[u32]),
+) -> Result<(), SimError> {
+    let failed = |e: &dyn std::fmt::Display| {
+        SimError::BackendUnavailable(format!("GPU readback failed: {e}"))
+    };
+    let slice = buffer.slice(..bytes);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        // The receiver lives until the poll below has delivered this.
+        let _ = tx.send(r);
+    });
+    dev.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| failed(&e))?;
+    rx.recv().map_err(|e| failed(&e))?.map_err(|e| failed(&e))?;
+    {
+        let view = slice.get_mapped_range().map_err(|e| failed(&e))?;
+        let words = bytemuck::try_cast_slice::<u8, u32>(&view).map_err(|e| failed(&e))?;
+        read(words);
+    }
+    buffer.unmap();
+    dev.take_errors()
 }

@@ -1,0 +1,400 @@
+//! SNGNN-v2 inference on the device: [`GpuNet`] scores a batch of graphs packed per environment
+//! ([`PackedLayout`]) with `shaders/sngnn.wgsl`, the twin of [`Tables::forward`].
+//!
+//! One forward is one submit: a dispatch that sorts each environment's edges by destination
+//! (stable, so build order is kept), then one dispatch per layer with one invocation per
+//! (environment, node, output), which sums its messages in the CPU's order; lavapipe therefore
+//! computes the CPU's bits. Each layer's tables live in their own buffers (the first layer's
+//! are the largest: 54 of 88 MB for exp1/exp2), so one binding never has to hold all of them.
+//!
+//! The device has no edge network: an edge the tables do not cover makes [`GpuNet::forward`]
+//! fail with `SimError::Sngnn` (the CPU would take the edge network). The tables of
+//! [`super::table_range`] cover every distance of the config's rooms.
+
+use super::model::{MAX_WIDTH, Model, Output};
+use super::packed::PackedLayout;
+use super::pieces::Tables;
+use crate::backend::gpu::{
+    AdapterSummary, GpuDevice, bind_buffers, bytes_of, map_and_read, storage_buffer, storage_layout,
+};
+use crate::backend::wgsl;
+use crate::error::SimError;
+
+/// Invocations per workgroup of both entry points.
+const WORKGROUP: u32 = 64;
+/// Status bits of an environment (`shaders/sngnn.wgsl`).
+const STATUS_UNSUPPORTED: u32 = 1;
+const STATUS_BAD_GRAPH: u32 = 2;
+/// Storage bindings of the shader, in order: params, graph u32, graph f32, CSR, table floats,
+/// table index, h in, h out, outputs, status; `true` where read-only.
+const BINDINGS: [bool; 10] = [
+    true, true, true, false, true, true, true, false, false, false,
+];
+
+/// A layer's constants, `NetParams` in the shader (same order; `max_dist` as bits).
+#[derive(Debug, Clone, Copy)]
+struct LayerParams {
+    inputs: usize,
+    outputs: usize,
+    relu: bool,
+    h_in_stride: usize,
+    bias: usize,
+    last: bool,
+}
+
+/// SNGNN-v2 on a device for a batch of `n_envs` graphs of one layout: buffers, pipelines and
+/// bind groups built once.
+pub struct GpuNet {
+    dev: GpuDevice,
+    layout: PackedLayout,
+    n_envs: usize,
+    graph_u32: wgpu::Buffer,
+    graph_f32: wgpu::Buffer,
+    q: wgpu::Buffer,
+    status: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    sort: wgpu::ComputePipeline,
+    layer: wgpu::ComputePipeline,
+    /// Per layer: its bind group and the workgroups along x.
+    groups: Vec<(wgpu::BindGroup, u32)>,
+}
+
+impl std::fmt::Debug for GpuNet {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuNet")
+            .field("adapter", &self.dev.adapter)
+            .field("layout", &self.layout)
+            .field("n_envs", &self.n_envs)
+            .finish_non_exhaustive()
+    }
+}
+
+/// `BackendUnavailable` unless a buffer of `bytes` fits one binding of `dev`.
+fn check_fits(dev: &GpuDevice, what: &str, bytes: u64) -> Result<(), SimError> {
+    let max = dev
+        .limits
+        .max_storage_buffer_binding_size
+        .min(dev.limits.max_buffer_size);
+    if bytes > max {
+        return Err(SimError::BackendUnavailable(format!(
+            "SNGNN-v2 needs {bytes} bytes of {what} in one buffer, more than {} allows ({max} \
+             bytes)",
+            dev.adapter.name
+        )));
+    }
+    Ok(())
+}
+
+/// A storage buffer holding `data`, after checking that it fits.
+fn filled_buffer<T: bytemuck::Pod>(
+    dev: &GpuDevice,
+    what: &str,
+    data: &[T],
+) -> Result<wgpu::Buffer, SimError> {
+    let bytes = bytes_of::<T>(data.len());
+    check_fits(dev, what, bytes)?;
+    let buffer = storage_buffer(dev, what, bytes);
+    dev.queue
+        .write_buffer(&buffer, 0, bytemuck::cast_slice(data));
+    Ok(buffer)
+}
+
+/// An empty storage buffer of `n` elements of `T`, after checking that it fits.
+fn empty_buffer<T>(dev: &GpuDevice, what: &str, n: usize) -> Result<wgpu::Buffer, SimError> {
+    let bytes = bytes_of::<T>(n);
+    check_fits(dev, what, bytes)?;
+    Ok(storage_buffer(dev, what, bytes))
+}
+
+fn word(n: usize) -> u32 {
+    u32::try_from(n).expect("SNGNN-v2 sizes fit in 32 bits (checked against the buffer limits)")
+}
+
+impl GpuNet {
+    /// The network of `model` with `tables` on `dev`, for `n_envs` graphs packed in `layout`.
+    ///
+    /// # Errors
+    /// `SimError::BackendUnavailable` when a buffer exceeds the adapter's limits (the tables'
+    /// largest layer is about 54 MB), there are more environments than one dispatch dimension
+    /// holds, or the shader fails to build.
+    pub fn new(
+        dev: GpuDevice,
+        model: &Model,
+        tables: &Tables,
+        layout: PackedLayout,
+        n_envs: usize,
+    ) -> Result<Self, SimError> {
+        let max_groups = dev.limits.max_compute_workgroups_per_dimension as usize;
+        if n_envs == 0 || n_envs > max_groups {
+            return Err(SimError::BackendUnavailable(format!(
+                "SNGNN-v2 on {} scores 1 to {max_groups} environments per batch, not {n_envs}",
+                dev.adapter.name
+            )));
+        }
+        let graph_u32 = empty_buffer::<u32>(&dev, "packed graphs", n_envs * layout.u32_stride())?;
+        let graph_f32 = empty_buffer::<f32>(&dev, "packed graphs", n_envs * layout.f32_stride())?;
+        let csr_words = n_envs * (layout.max_nodes + 1 + layout.max_edges);
+        let csr = empty_buffer::<u32>(&dev, "edge order", csr_words)?;
+        let h_len = n_envs * layout.max_nodes * MAX_WIDTH;
+        let h = [
+            empty_buffer::<f32>(&dev, "node features", h_len)?,
+            empty_buffer::<f32>(&dev, "node features", h_len)?,
+        ];
+        let q = empty_buffer::<f32>(&dev, "outputs", 2 * n_envs)?;
+        let status = empty_buffer::<u32>(&dev, "status", n_envs)?;
+        let readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("SNGNN readback"),
+            size: bytes_of::<u32>(3 * n_envs),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_layout = storage_layout(&dev, "SNGNN bindings", &BINDINGS);
+        let (sort, layer) = pipelines(&dev, &bind_layout)?;
+        let mut groups = Vec::with_capacity(model.layers.len());
+        for (l, mlp_layer) in model.layers.iter().enumerate() {
+            let flat = tables.flat_layer(l);
+            let (inputs, outputs) = (mlp_layer.mlp.inputs, mlp_layer.mlp.outputs);
+            let mut floats = flat.floats;
+            let bias = floats.len();
+            floats.extend_from_slice(&mlp_layer.bias);
+            let params = LayerParams {
+                inputs,
+                outputs,
+                relu: l + 1 == model.layers.len(),
+                h_in_stride: if l == 0 {
+                    layout.f32_stride()
+                } else {
+                    layout.max_nodes * MAX_WIDTH
+                },
+                bias,
+                last: l + 1 == model.layers.len(),
+            };
+            let params = filled_buffer(
+                &dev,
+                "layer constants",
+                &params.words(&layout, n_envs, tables.max_dist()),
+            )?;
+            let tf = filled_buffer(&dev, "edge-weight tables", &floats)?;
+            let ti = filled_buffer(&dev, "edge-weight table index", &flat.index)?;
+            // Layer l reads the packed features (l = 0) or the previous layer's output, and
+            // writes the other buffer of the pair.
+            let h_in = if l == 0 { &graph_f32 } else { &h[(l + 1) % 2] };
+            let bound = [
+                &params,
+                &graph_u32,
+                &graph_f32,
+                &csr,
+                &tf,
+                &ti,
+                h_in,
+                &h[l % 2],
+                &q,
+                &status,
+            ];
+            let group = bind_buffers(&dev, "SNGNN bindings", &bind_layout, &bound);
+            let x = word(layout.max_nodes * outputs).div_ceil(WORKGROUP);
+            groups.push((group, x));
+        }
+        dev.take_errors()?;
+        Ok(GpuNet {
+            dev,
+            layout,
+            n_envs,
+            graph_u32,
+            graph_f32,
+            q,
+            status,
+            readback,
+            sort,
+            layer,
+            groups,
+        })
+    }
+
+    /// The graph layout the batch was built for.
+    pub fn layout(&self) -> PackedLayout {
+        self.layout
+    }
+
+    /// The adapter it runs on.
+    pub fn adapter(&self) -> &AdapterSummary {
+        &self.dev.adapter
+    }
+
+    /// The device buffers of the packed graphs (u32 words, f32 values), for a producer on the
+    /// device to write into.
+    pub fn graph_buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
+        (&self.graph_u32, &self.graph_f32)
+    }
+
+    /// Upload the packed graphs of the whole batch: `n_envs` strides of each region, as
+    /// [`PackedLayout::pack`] writes them.
+    ///
+    /// # Errors
+    /// `SimError::Shape` when the slices have the wrong length.
+    pub fn upload(&mut self, u32s: &[u32], f32s: &[f32]) -> Result<(), SimError> {
+        let (wu, wf) = (
+            self.n_envs * self.layout.u32_stride(),
+            self.n_envs * self.layout.f32_stride(),
+        );
+        if u32s.len() != wu || f32s.len() != wf {
+            return Err(SimError::Shape(format!(
+                "packed SNGNN graphs of {} u32 and {} f32 values, expected {wu} and {wf}",
+                u32s.len(),
+                f32s.len()
+            )));
+        }
+        let q = &self.dev.queue;
+        q.write_buffer(&self.graph_u32, 0, bytemuck::cast_slice(u32s));
+        q.write_buffer(&self.graph_f32, 0, bytemuck::cast_slice(f32s));
+        Ok(())
+    }
+
+    /// Score every environment's graph into `out` (one per environment): one submit, one
+    /// readback, nothing allocated.
+    ///
+    /// # Errors
+    /// `SimError::Shape` when `out` has the wrong length; `SimError::Sngnn` when a graph does
+    /// not fit its layout or has an edge outside the tables; `BackendUnavailable` when the
+    /// device fails.
+    pub fn forward(&mut self, out: &mut [Output]) -> Result<(), SimError> {
+        if out.len() != self.n_envs {
+            return Err(SimError::Shape(format!(
+                "{} SNGNN outputs for a batch of {}",
+                out.len(),
+                self.n_envs
+            )));
+        }
+        let mut enc = self
+            .dev
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("SNGNN forward"),
+            });
+        self.encode(&mut enc);
+        let q_bytes = bytes_of::<f32>(2 * self.n_envs);
+        let s_bytes = bytes_of::<u32>(self.n_envs);
+        enc.copy_buffer_to_buffer(&self.q, 0, &self.readback, 0, q_bytes);
+        enc.copy_buffer_to_buffer(&self.status, 0, &self.readback, q_bytes, s_bytes);
+        self.dev.queue.submit([enc.finish()]);
+        let mut failed = None;
+        map_and_read(&self.dev, &self.readback, q_bytes + s_bytes, |words| {
+            let (q, status) = words.split_at(2 * self.n_envs);
+            for (o, w) in out.iter_mut().zip(q.chunks_exact(2)) {
+                *o = [f32::from_bits(w[0]), f32::from_bits(w[1])];
+            }
+            failed = status.iter().position(|&s| s != 0).map(|e| (e, status[e]));
+        })?;
+        match failed {
+            None => Ok(()),
+            Some((e, s)) => Err(SimError::Sngnn(status_message(e, s))),
+        }
+    }
+
+    /// Wall time of one [`GpuNet::forward`] (readback included), the mean of `reps` after one
+    /// warm-up run: a benchmark helper.
+    ///
+    /// # Errors
+    /// As [`GpuNet::forward`].
+    pub fn time_forward(
+        &mut self,
+        out: &mut [Output],
+        reps: u32,
+    ) -> Result<std::time::Duration, SimError> {
+        self.forward(out)?;
+        let start = std::time::Instant::now();
+        for _ in 0..reps.max(1) {
+            self.forward(out)?;
+        }
+        Ok(start.elapsed() / reps.max(1))
+    }
+
+    /// The sort and the layers, one compute pass.
+    fn encode(&self, enc: &mut wgpu::CommandEncoder) {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("SNGNN forward"),
+            timestamp_writes: None,
+        });
+        let envs = word(self.n_envs);
+        pass.set_pipeline(&self.sort);
+        pass.set_bind_group(0, &self.groups[0].0, &[]);
+        pass.dispatch_workgroups(envs.div_ceil(WORKGROUP), 1, 1);
+        pass.set_pipeline(&self.layer);
+        for (group, x) in &self.groups {
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(*x, envs, 1);
+        }
+    }
+}
+
+/// Why environment `e`'s forward failed, from its status bits.
+fn status_message(e: usize, status: u32) -> String {
+    if status & STATUS_BAD_GRAPH != 0 {
+        format!(
+            "environment {e}: the SNGNN graph is empty, exceeds its packed layout, or names a \
+             node or relation that does not exist"
+        )
+    } else {
+        debug_assert_eq!(status, STATUS_UNSUPPORTED);
+        format!(
+            "environment {e}: an SNGNN edge distance lies outside the edge-weight tables, and \
+             the device has no edge network (score it on the CPU)"
+        )
+    }
+}
+
+impl LayerParams {
+    /// `NetParams` of the shader.
+    fn words(&self, layout: &PackedLayout, n_envs: usize, max_dist: f32) -> [u32; 12] {
+        [
+            word(n_envs),
+            word(layout.max_nodes),
+            word(layout.max_edges),
+            word(layout.u32_stride()),
+            word(layout.f32_stride()),
+            word(self.inputs),
+            word(self.outputs),
+            u32::from(self.relu),
+            word(self.h_in_stride),
+            word(self.bias),
+            u32::from(self.last),
+            max_dist.to_bits(),
+        ]
+    }
+}
+
+/// The `sort` and `layer` pipelines of `shaders/sngnn.wgsl`.
+fn pipelines(
+    dev: &GpuDevice,
+    layout: &wgpu::BindGroupLayout,
+) -> Result<(wgpu::ComputePipeline, wgpu::ComputePipeline), SimError> {
+    let src = wgsl::assemble_standalone("sngnn.wgsl").map_err(SimError::BackendUnavailable)?;
+    let module = dev
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("sngnn"),
+            source: wgpu::ShaderSource::Wgsl(src.into()),
+        });
+    let pipeline_layout = dev
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("SNGNN"),
+            bind_group_layouts: &[Some(layout)],
+            immediate_size: 0,
+        });
+    let pipeline = |entry: &str| {
+        dev.device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+    };
+    let sort = pipeline("sort");
+    let layer = pipeline("layer");
+    dev.take_errors()?;
+    Ok((sort, layer))
+}
