@@ -280,6 +280,26 @@ impl BatchEnv {
         Ok(())
     }
 
+    /// Replace the whole batch state with `other`'s (a batch of the same config and size,
+    /// possibly on another backend): both then step from identical states. The outputs are
+    /// left as they are until the next step or reset.
+    ///
+    /// # Errors
+    /// `SimError::Shape` when the batches differ in size or capacities.
+    pub fn copy_state_from(&mut self, other: &BatchEnv) -> Result<(), SimError> {
+        if other.n_envs() != self.n_envs() || other.caps != self.caps {
+            return Err(SimError::Shape(format!(
+                "cannot copy the state of a batch of {} environments with capacities {:?} into one of {} with {:?}",
+                other.n_envs(),
+                other.caps,
+                self.n_envs(),
+                self.caps
+            )));
+        }
+        self.backend.state_mut().clone_from(other.state());
+        Ok(())
+    }
+
     fn check_env(&self, env: usize) -> Result<(), SimError> {
         if env >= self.n_envs() {
             return Err(SimError::Shape(format!(

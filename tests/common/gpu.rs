@@ -294,3 +294,52 @@ pub fn uniform(rng: &mut RngStream, lo: f32, hi: f32) -> f32 {
 pub fn config(name: &str) -> Config {
     Config::from_name_or_path(name).expect("shipped config")
 }
+
+/// Per-environment comparison of two packed tables under a tolerance: an environment
+/// *diverged* when any of its u32 values differs or a float differs by more than
+/// `atol + rtol·max(|a|, |b|)` (NaN equals NaN, infinities must match); among the others, the
+/// largest float difference relative to that bound is returned with its column.
+pub fn diverged_envs(
+    columns: &[(&'static str, Elem, usize)],
+    n_envs: usize,
+    pack_cpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
+    pack_gpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
+    (atol, rtol): (f32, f32),
+) -> (Vec<bool>, f32, &'static str) {
+    let (mut cf, mut cu, mut gf, mut gu) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    pack_cpu(&mut cf, &mut cu);
+    pack_gpu(&mut gf, &mut gu);
+    let mut diverged = vec![false; n_envs];
+    let mut errors: Vec<(usize, f32, &'static str)> = Vec::new();
+    let mut offset = [0usize; 2];
+    for &(name, elem, stride) in columns {
+        let k = usize::from(elem == Elem::U32);
+        let start = offset[k];
+        offset[k] += n_envs * stride;
+        for j in 0..n_envs * stride {
+            let env = j / stride.max(1);
+            let i = start + j;
+            match elem {
+                Elem::U32 => diverged[env] |= cu[i] != gu[i],
+                Elem::F32 => {
+                    let (a, b) = (cf[i], gf[i]);
+                    if a == b || (a.is_nan() && b.is_nan()) {
+                        continue;
+                    }
+                    let bound = atol + rtol * a.abs().max(b.abs());
+                    let ratio = (a - b).abs() / bound;
+                    if ratio.is_nan() || ratio > 1.0 {
+                        diverged[env] = true;
+                    } else {
+                        errors.push((env, ratio, name));
+                    }
+                }
+            }
+        }
+    }
+    let (worst, column) = errors.iter().filter(|(env, _, _)| !diverged[*env]).fold(
+        (0.0f32, ""),
+        |(w, c), &(_, r, n)| if r > w { (r, n) } else { (w, c) },
+    );
+    (diverged, worst, column)
+}
