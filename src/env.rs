@@ -174,6 +174,29 @@ impl BatchEnv {
 
     /// Step every environment. Invalid actions are rejected before anything moves.
     pub fn step(&mut self, actions: Actions<'_>) -> Result<(), SimError> {
+        self.load_actions(actions)?;
+        self.backend.step(&self.actions)
+    }
+
+    /// Seconds that `steps` steps with `actions` take on the device alone, or `None` on a
+    /// backend without one (the CPU's). For benchmarks of the simulation on a GPU: the stages
+    /// run back to back, no output reaches the host and no reset row is refilled, so an
+    /// environment that ends twice within the window replays its row. The batch stays usable,
+    /// but its trajectory is no longer the one `step` would have given.
+    ///
+    /// # Errors
+    /// As [`BatchEnv::step`] for bad actions; `BackendUnavailable` if the device fails.
+    pub fn time_device_steps(
+        &mut self,
+        actions: Actions<'_>,
+        steps: usize,
+    ) -> Result<Option<f64>, SimError> {
+        self.load_actions(actions)?;
+        self.backend.time_device_steps(&self.actions, steps)
+    }
+
+    /// Validate `actions` into the batch's action buffer (3 floats per environment).
+    fn load_actions(&mut self, actions: Actions<'_>) -> Result<(), SimError> {
         let n = self.n_envs();
         match actions {
             Actions::Continuous(a) => {
@@ -221,7 +244,7 @@ impl BatchEnv {
                 }
             }
         }
-        self.backend.step(&self.actions)
+        Ok(())
     }
 
     /// The outputs of the last step or reset (overwritten by the next one).

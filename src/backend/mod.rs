@@ -124,4 +124,13 @@ pub trait Backend: Send + Sync {
     fn name(&self) -> &'static str;
     /// What runs the batch, for logs and benchmark records: the CPU threads, or the GPU adapter.
     fn device(&self) -> String;
+    /// Seconds `steps` steps take on the device alone (see `BatchEnv::time_device_steps`);
+    /// `None` without a device.
+    fn time_device_steps(
+        &mut self,
+        _actions: &[f32],
+        _steps: usize,
+    ) -> Result<Option<f64>, SimError> {
+        Ok(None)
+    }
 }

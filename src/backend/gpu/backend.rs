@@ -219,6 +219,17 @@ impl GpuBackend {
     }
 }
 
+/// The passes of a step: every stage of `STAGES`, in order.
+const STEP_PASSES: [&str; STAGES.len()] = {
+    let mut names = [""; STAGES.len()];
+    let mut k = 0;
+    while k < STAGES.len() {
+        names[k] = STAGES[k].name;
+        k += 1;
+    }
+    names
+};
+
 impl Backend for GpuBackend {
     fn reset(&mut self, mask: Option<&[bool]>) -> Result<(), SimError> {
         let n = self.episode.len();
@@ -246,16 +257,24 @@ impl Backend for GpuBackend {
         );
         self.prepare()?;
         self.gpu.upload_actions(actions);
-        const NAMES: [&str; STAGES.len()] = {
-            let mut names = [""; STAGES.len()];
-            let mut k = 0;
-            while k < STAGES.len() {
-                names[k] = STAGES[k].name;
-                k += 1;
-            }
-            names
-        };
-        self.run(&NAMES)
+        self.run(&STEP_PASSES)
+    }
+
+    fn time_device_steps(
+        &mut self,
+        actions: &[f32],
+        steps: usize,
+    ) -> Result<Option<f64>, SimError> {
+        self.prepare()?;
+        self.gpu.upload_actions(actions);
+        let _ = self.state.take();
+        self.gpu.wait()?;
+        let start = Instant::now();
+        for _ in 0..steps {
+            self.gpu.run_stages(&STEP_PASSES, None)?;
+        }
+        self.gpu.wait()?;
+        Ok(Some(start.elapsed().as_secs_f64()))
     }
 
     fn outputs(&self) -> &Outputs {

@@ -136,6 +136,10 @@ pub struct BenchArgs {
     /// CPU threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Deliver padded observations (every type padded to its capacity, walls omitted: 135
+    /// floats for exp2) instead of the config's.
+    #[arg(long)]
+    pub padded: bool,
     /// Print one JSON object on stdout instead of the table.
     #[arg(long)]
     pub json: bool,

@@ -1,5 +1,7 @@
 //! `socnav bench`: env-steps/s of the step, in total and per stage, for a table of batch sizes.
-//! Actions are fixed (forward and turning) so the policy costs nothing.
+//! Actions are fixed (forward and turning) so the policy costs nothing. On a GPU it also times
+//! the simulation on the device alone (issue 4's first target); `--padded` delivers 0.1.1's
+//! padded observations (walls omitted; the second target) instead of the full ones.
 
 use std::time::Instant;
 
@@ -13,7 +15,11 @@ use crate::run::make_env;
 const WARMUP_STEPS: usize = 50;
 
 pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
-    let config = Config::from_name_or_path(&a.config)?;
+    let mut config = Config::from_name_or_path(&a.config)?;
+    if a.padded {
+        // 0.1.1's `get_padded_observations`: every type padded to its capacity, walls omitted.
+        config.observation.padded = true;
+    }
     let mut rows = Vec::new();
     let (mut device, mut backend) = (String::new(), "");
     for (i, &n) in a.envs.iter().enumerate() {
@@ -25,6 +31,10 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
         // Throughput with stage timing off (it costs two clock reads per stage and chunk)...
         let (steps, secs) = timed_steps(&mut env, &actions, a.seconds)?;
+        // On a GPU, the simulation alone: the same steps with nothing delivered to the host.
+        let device_only = env
+            .time_device_steps(Actions::Continuous(&actions), steps)?
+            .map(|s| (n * steps) as f64 / s);
         // ...then the stage shares from a shorter timed run.
         env.set_stage_timing(true);
         let before: Vec<f64> = env.stage_seconds().iter().map(|s| s.1).collect();
@@ -41,6 +51,7 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             "steps": steps,
             "seconds": secs,
             "env_steps_per_s": (n * steps) as f64 / secs,
+            "device_only_env_steps_per_s": device_only,
             "state_bytes_per_env": env.state().bytes_per_env(),
             "obs_floats_per_env": env.layout().dim,
             // CPU stage time is summed over threads: each stage's share of the step's CPU time.
@@ -55,7 +66,7 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
         backend = env.backend_name();
     }
     if a.json {
-        let out = json!({"config": a.config, "backend": backend, "device": device, "threads": a.threads, "rows": rows});
+        let out = json!({"config": a.config, "padded": a.padded, "backend": backend, "device": device, "threads": a.threads, "rows": rows});
         println!("{}", serde_json::to_string_pretty(&out)?);
     }
     Ok(())
@@ -88,6 +99,11 @@ fn print_row(row: &serde_json::Value, header: bool, env: &socnav::BatchEnv) {
         row["state_bytes_per_env"],
         row["obs_floats_per_env"]
     );
+    if let Some(d) = row["device_only_env_steps_per_s"].as_f64() {
+        println!(
+            "    simulation on the device alone: {d:.0} env-steps/s (no outputs to the host, no reset rows refilled)"
+        );
+    }
     if let Some(stages) = row["stage_env_steps_per_s"].as_object() {
         let cells: Vec<String> = stages
             .iter()
