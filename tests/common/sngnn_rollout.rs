@@ -8,7 +8,7 @@ use socnav::outputs::Outputs;
 use socnav::pipeline::{Batch, STAGES};
 use socnav::rng::RngStream;
 use socnav::sngnn::packed::PackedLayout;
-use socnav::sngnn::{Graph, frame, graph};
+use socnav::sngnn::{Graph, RELATIONS, frame, graph};
 use socnav::spec::{N_INFO, ObsLayout, info};
 use socnav::state::{BatchState, Caps};
 use socnav::{AutoresetMode, Config, StepParams};
@@ -27,6 +27,8 @@ pub struct SngnnRollout {
     pub packed_f32: Vec<f32>,
     /// Largest graph built so far: nodes, edges, frames.
     pub largest: (usize, usize, usize),
+    /// Edges built so far, per relation.
+    pub relations: [usize; RELATIONS],
     graph: Graph,
 }
 
@@ -45,6 +47,7 @@ impl SngnnRollout {
             packed_f32: vec![0.0; n_envs * graphs.f32_stride()],
             graphs,
             largest: (0, 0, 0),
+            relations: [0; RELATIONS],
             graph: Graph::default(),
         };
         let mut b = this.batch(&[]);
@@ -138,6 +141,9 @@ impl SngnnRollout {
             frame::record(&self.p, &mut chunk, e);
             let frames = graph::build(&self.p, &chunk, e, &mut self.graph);
             let g = &self.graph;
+            for &r in &g.rel {
+                self.relations[usize::from(r)] += 1;
+            }
             self.largest = (
                 self.largest.0.max(g.nodes),
                 self.largest.1.max(g.src.len()),
