@@ -20,10 +20,10 @@ use super::frame::{MAX_ADVANCE, MAX_ROTATION, RobotPose, wall_ends};
 use super::history::{self, Frame, History, MAX_GRAPH_FRAMES, Person};
 use super::packed::PackedLayout;
 use super::{Graph, NODE_FEATURES, feature, rel};
-use crate::config::{Config, Shape};
+use crate::config::Config;
 use crate::math;
 use crate::params::StepParams;
-use crate::state::{Caps, StateChunk, room_shape};
+use crate::state::{Caps, StateChunk, caps};
 
 /// Positions are divided by this (m) for the node features (0.1.1: /10, walls cm/1000).
 const POSITION_SCALE: f32 = 10.0;
@@ -79,60 +79,31 @@ pub struct WallBounds {
 /// for the f32 rounding of the robot-frame wall ends. Corridor walls (doors are continuous
 /// draws) add ⌈L / 0.97 m⌉ + 2 segments per corridor line, all counted as near.
 pub fn wall_bounds(c: &Config) -> WallBounds {
-    use crate::scenario::layout::{self, RoomLayout};
     const MARGIN: f64 = 1.0 + 1e-5;
-    let shapes: &[u32] = match c.room.shape {
-        Shape::Square => &[room_shape::SQUARE],
-        Shape::Rectangle => &[room_shape::RECTANGLE],
-        Shape::L => &[room_shape::L],
-        Shape::NoWalls => &[],
-        Shape::Random => &[room_shape::RECTANGLE, room_shape::SQUARE, room_shape::L],
-    };
-    let mut p = StepParams::new(c, 0, Default::default());
-    p.corridors = 0;
-    let mut rng = crate::rng::RngStream::new(0, 0, 0, 0);
-    let mut room = RoomLayout::default();
+    let segment_m = f64::from(WALL_SEGMENT_CM) / 100.0;
+    let reach = 2.0 * f64::from(HUMAN_WALL_THRESHOLD);
     let mut most = WallBounds {
         segments: 0,
         near_per_person: 0,
     };
-    let segment_m = f64::from(WALL_SEGMENT_CM) / 100.0;
-    let reach = 2.0 * f64::from(HUMAN_WALL_THRESHOLD);
-    for &shape in shapes {
-        let square = shape != room_shape::RECTANGLE;
-        for x in c.room.size_x[0]..=c.room.size_x[1] {
-            let ys = if square {
-                x..=x
-            } else {
-                c.room.size_y[0]..=c.room.size_y[1]
-            };
-            for y in ys {
-                let locations = if shape == room_shape::L { 0..4 } else { 0..1 };
-                for loc in locations {
-                    layout::build(&p, &mut rng, shape, x as f32, y as f32, loc, &mut room);
-                    let mut b = WallBounds {
-                        segments: 0,
-                        near_per_person: 0,
-                    };
-                    for w in room.walls.as_slice() {
-                        let length = f64::from(w.length);
-                        let n = (length * MARGIN / segment_m).floor() as usize + 1;
-                        let near = (reach * n as f64 * MARGIN / length).floor() as usize + 1;
-                        b.segments += n;
-                        b.near_per_person += near.min(n);
-                    }
-                    if c.room.corridors {
-                        let line = f64::from(x.max(y));
-                        let n = 2 * ((line / segment_m).ceil() as usize + 2);
-                        b.segments += n;
-                        b.near_per_person += n;
-                    }
-                    most.segments = most.segments.max(b.segments);
-                    most.near_per_person = most.near_per_person.max(b.near_per_person);
-                }
-            }
+    caps::for_each_room(c, |room, x, y| {
+        let (mut segments, mut near_per_person) = (0, 0);
+        for w in room.walls.as_slice() {
+            let length = f64::from(w.length);
+            let n = (length * MARGIN / segment_m).floor() as usize + 1;
+            let near = (reach * n as f64 * MARGIN / length).floor() as usize + 1;
+            segments += n;
+            near_per_person += near.min(n);
         }
-    }
+        if c.room.corridors {
+            let line = f64::from(x.max(y));
+            let n = 2 * ((line / segment_m).ceil() as usize + 2);
+            segments += n;
+            near_per_person += n;
+        }
+        most.segments = most.segments.max(segments);
+        most.near_per_person = most.near_per_person.max(near_per_person);
+    });
     most
 }
 
