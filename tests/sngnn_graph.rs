@@ -627,6 +627,40 @@ fn rolled_out_graphs_fit_the_capacity() {
     }
 }
 
+/// llvmpipe ends every loop of an invocation after 65,535 iterations in all (docs/ARCHITECTURE.md):
+/// the device pass `sngnn_graph` must stay below that for every shipped config with the SNGNN
+/// reward. Its loops, bounded from the capacities: zeroing the packed regions (eight words per
+/// iteration, plus the tails); clearing the
+/// ring slot and recording (people, objects, links, the previous poses); per frame of the graph,
+/// the selection, the nodes and room edges, both wall-person loops (people × segments each, and
+/// the walls' loops around them),
+/// the interaction ends' searches (links × (people + objects)) and the self-loops and temporal
+/// edges (2 N).
+#[test]
+fn the_device_pass_stays_within_llvmpipes_loop_budget() {
+    const BUDGET: usize = 65_535;
+    for name in Config::shipped_names() {
+        let mut config = Config::from_name_or_path(name).expect(name);
+        config.reward.kind = RewardKind::Sngnn;
+        let caps = Caps::from_config(&config);
+        let l = graph::capacity(&config);
+        let (people, objects, links) = (caps.frame_people, caps.frame_objects, caps.frame_links);
+        let segments = graph::wall_bounds(&config).segments;
+        let nodes = l.max_nodes / history::MAX_GRAPH_FRAMES;
+        let record = 2 * (people + objects + links) + caps.sngnn_entities;
+        let frame = caps.frames
+            + nodes
+            + caps.walls
+            + 2 * people * (segments + caps.walls)
+            + 2 * links * (people + objects)
+            + 2 * nodes;
+        let zeroing = (l.u32_stride() + l.f32_stride()) / 8 + 14;
+        let total = zeroing + record + history::MAX_GRAPH_FRAMES * frame;
+        println!("{name}: at most {total} loop iterations per environment ({l:?})");
+        assert!(total < BUDGET, "{name}: {total} loop iterations");
+    }
+}
+
 /// A one-environment SNGNN state of `config` with time step `dt` (s) whose history holds
 /// frames at ticks 1..=`ticks` (no entities).
 fn history_of_ticks(dt: f32, ticks: u32) -> (StepParams, BatchState) {
