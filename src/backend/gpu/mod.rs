@@ -8,7 +8,10 @@
 //!   reach the shaders as generated constants, [`crate::backend::wgsl::prelude`]), the step
 //!   parameters and the actions, and one compute pipeline per stage shader, built once. It runs
 //!   single stages, which is what the CPU/GPU parity tests of each stage need
-//!   (`tests/gpu_stages.rs`, `tests/gpu_observation.rs`).
+//!   (`tests/gpu_stages.rs`, `tests/gpu_observation.rs`). [`GpuStages::with_sngnn_graphs`]
+//!   adds every environment's packed SNGNN-v2 graph (bindings 7 and 8) and the pass
+//!   `sngnn_graph`, which records the frame and builds the graph on the device
+//!   (`tests/gpu_sngnn_graph.rs`).
 //!
 //! Still to build before `--backend gpu` can step a batch: the shaders of the other stages, the
 //! whole step in one submit with one readback of the outputs, and resets off the host's critical
