@@ -104,6 +104,9 @@ fn validate(path: &Path) -> Result<(), String> {
 /// `shaders/<path>` as the GPU backend assembles it for a batch of experiment 2 (every column
 /// kind in use): the generated prelude, `common/params.wgsl`, the file's requirements, the file.
 fn validate_assembled(path: &str) -> Result<naga::Module, String> {
+    if wgsl::needs_sngnn(path) {
+        return validate_assembled_sngnn(path);
+    }
     let env = socnav::BatchEnv::new(
         socnav::Config::from_name_or_path("exp2").expect("exp2"),
         socnav::EnvOptions::default(),
@@ -117,6 +120,23 @@ fn validate_assembled(path: &str) -> Result<naga::Module, String> {
     );
     let src = wgsl::assemble(path, &prelude)?;
     validate_source(&src, &format!("{path} (assembled)"))
+}
+
+/// An SNGNN shader as `GpuStages::with_sngnn_graphs` assembles it for experiment 2 with the
+/// SNGNN-v2 reward: the prelude of a state with the frame history (built without `BatchEnv`,
+/// which would need the weights), then the SNGNN part for the config's graph capacity.
+fn validate_assembled_sngnn(path: &str) -> Result<naga::Module, String> {
+    let config = socnav::Config::from_name_or_path("exp2_sngnn").expect("exp2_sngnn");
+    let caps = socnav::state::Caps::from_config(&config);
+    let state = socnav::state::BatchState::new(4, caps);
+    let layout = socnav::spec::ObsLayout::new(&caps, &config.observation);
+    let outputs = socnav::outputs::Outputs::new(4, layout);
+    let mut prelude = wgsl::prelude(4, &state.columns(), &outputs.columns(), &layout);
+    let graphs = socnav::sngnn::graph::capacity(&config);
+    let ticks = socnav::sngnn::history::interval_ticks(config.episode.time_step).expect("dt = 1 s");
+    prelude.push_str(&wgsl::sngnn_prelude(&caps, &graphs, ticks));
+    let src = wgsl::assemble(path, &prelude)?;
+    validate_source(&src, &format!("{path} (assembled, SNGNN)"))
 }
 
 #[test]
@@ -159,6 +179,7 @@ fn all_wgsl_shaders_validate() {
 fn stage_shaders_are_stages_with_a_main() {
     let mut names: Vec<&str> = socnav::pipeline::STAGES.iter().map(|s| s.name).collect();
     names.extend(wgsl::PASSES);
+    names.extend(wgsl::SNGNN_PASSES);
     let stage_files = wgsl::FILES
         .iter()
         .filter(|(p, _)| !p.contains('/') && !wgsl::STANDALONE.contains(p));

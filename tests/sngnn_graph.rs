@@ -37,6 +37,7 @@ use socnav::state::{BatchState, Caps};
 use socnav::{AutoresetMode, Config, StepParams};
 
 use common::npz::{self, Array};
+use common::sngnn_rollout::SngnnRollout;
 use golden::{Episode, Step, golden_dir, load_episodes, num};
 
 /// The golden configs with the SNGNN reward.
@@ -559,6 +560,107 @@ fn compare_sizes(check: &mut Check, at: &str, g: &Graph, frames: usize, golden: 
     check.equal(&format!("{at} n_edges"), g.src.len(), size("n_edges"));
 }
 
+/// `graph::capacity` holds every graph of the golden episodes: 0.1.1's sizes as recorded on
+/// every SNGNN step, and socnav's graph of its own frames.
+#[test]
+fn golden_graphs_fit_the_capacity() {
+    let mut checked = 0;
+    for (name, ep, config) in episodes() {
+        let cap = graph::capacity(&config);
+        let mut g = Graph::default();
+        replay(&name, &ep, &config, |step, sim| {
+            let golden = &step.v["sngnn"];
+            if golden.is_null() {
+                return;
+            }
+            let size = |key: &str| golden[key].as_u64().expect(key) as usize;
+            let at = format!("{name} step {}", step.t());
+            assert!(
+                size("n_nodes") <= cap.max_nodes && size("n_edges") <= cap.max_edges,
+                "{at}: 0.1.1's graph of {} nodes and {} edges exceeds {cap:?}",
+                size("n_nodes"),
+                size("n_edges")
+            );
+            sim.graph(&mut g);
+            assert!(
+                g.nodes <= cap.max_nodes && g.src.len() <= cap.max_edges,
+                "{at}: socnav's graph of {} nodes and {} edges exceeds {cap:?}",
+                g.nodes,
+                g.src.len()
+            );
+            checked += 1;
+        });
+    }
+    assert!(checked > 0);
+    println!("{checked} golden graphs fit their config's capacity");
+}
+
+/// `graph::capacity` holds every graph of rolled-out batches of the shipped SNGNN configs
+/// (random actions, resets and social events included; `pack` fails on a graph too large),
+/// at their 1 s time step and at 0.5 s (a history of 7 frames).
+#[test]
+fn rolled_out_graphs_fit_the_capacity() {
+    for name in ["exp1_sngnn", "exp2_sngnn", "exp3_sngnn"] {
+        for dt in [1.0, 0.5] {
+            let mut config = Config::from_name_or_path(name).expect(name);
+            config.episode.time_step = dt;
+            let mut r = SngnnRollout::new(&config, 32, 3);
+            let mut rng = socnav::rng::RngStream::new(5, 0, 0, 0);
+            let mut scored = 0;
+            for _ in 0..80 {
+                let actions = r.random_actions(&mut rng);
+                r.step_to_reward(&actions);
+                scored += r.score();
+                r.finish_step(&actions);
+            }
+            let (nodes, edges, frames) = r.largest;
+            println!(
+                "{name} at dt {dt} s: {scored} graphs, largest {nodes} nodes and {edges} edges \
+                 ({frames} frames) within {:?}",
+                r.graphs
+            );
+            assert!(
+                scored > 0 && frames == 3,
+                "{name}: three-frame graphs were built"
+            );
+        }
+    }
+}
+
+/// llvmpipe ends every loop of an invocation after 65,535 iterations in all (docs/ARCHITECTURE.md):
+/// the device pass `sngnn_graph` must stay below that for every shipped config with the SNGNN
+/// reward. Its loops, bounded from the capacities: zeroing the packed regions (eight words per
+/// iteration, plus the tails); clearing the
+/// ring slot and recording (people, objects, links, the previous poses); per frame of the graph,
+/// the selection, the nodes and room edges, both wall-person loops (people × segments each, and
+/// the walls' loops around them),
+/// the interaction ends' searches (links × (people + objects)) and the self-loops and temporal
+/// edges (2 N).
+#[test]
+fn the_device_pass_stays_within_llvmpipes_loop_budget() {
+    const BUDGET: usize = 65_535;
+    for name in Config::shipped_names() {
+        let mut config = Config::from_name_or_path(name).expect(name);
+        config.reward.kind = RewardKind::Sngnn;
+        let caps = Caps::from_config(&config);
+        let l = graph::capacity(&config);
+        let (people, objects, links) = (caps.frame_people, caps.frame_objects, caps.frame_links);
+        let segments = graph::wall_bounds(&config).segments;
+        let nodes = l.max_nodes / history::MAX_GRAPH_FRAMES;
+        let record = 2 * (people + objects + links) + caps.sngnn_entities;
+        let frame = caps.frames
+            + nodes
+            + caps.walls
+            + 2 * people * (segments + caps.walls)
+            + 2 * links * (people + objects)
+            + 2 * nodes;
+        let zeroing = (l.u32_stride() + l.f32_stride()) / 8 + 14;
+        let total = zeroing + record + history::MAX_GRAPH_FRAMES * frame;
+        println!("{name}: at most {total} loop iterations per environment ({l:?})");
+        assert!(total < BUDGET, "{name}: {total} loop iterations");
+    }
+}
+
 /// A one-environment SNGNN state of `config` with time step `dt` (s) whose history holds
 /// frames at ticks 1..=`ticks` (no entities).
 fn history_of_ticks(dt: f32, ticks: u32) -> (StepParams, BatchState) {
@@ -594,6 +696,41 @@ fn reference_selection(time_step: f64, newest: u32) -> Vec<u32> {
         }
     }
     taken
+}
+
+/// The device's whole-tick spacing rule (`history::interval_ticks`) takes the frames 0.1.1's
+/// f64 timestamps take wherever it claims to be exact (dt ≥ 1 s, dyadic dt), and declines
+/// elsewhere.
+#[test]
+fn interval_ticks_select_as_the_f64_timestamps() {
+    for (time_step, gap) in [
+        (0.1, None),
+        (0.2, None),
+        (0.3, None),
+        (0.25, Some(4)),
+        (0.5, Some(2)),
+        (0.75, Some(2)),
+        (1.0, Some(1)),
+        (1.5, Some(1)),
+        (2.0, Some(1)),
+    ] {
+        let dt = time_step as f32;
+        assert_eq!(history::interval_ticks(dt), gap, "dt {time_step} s");
+        let Some(gap) = gap else { continue };
+        for newest in 1..=300u32 {
+            let mut taken = vec![newest];
+            for tick in (1..newest).rev() {
+                if taken.len() < 3 && taken.last().unwrap().abs_diff(tick) >= gap {
+                    taken.push(tick);
+                }
+            }
+            assert_eq!(
+                taken,
+                reference_selection(time_step, newest),
+                "dt {time_step} s, newest tick {newest}"
+            );
+        }
+    }
 }
 
 #[test]

@@ -128,6 +128,18 @@ pub const FILES: &[(&str, &str)] = &[
         "formation.wgsl",
         include_str!("../../shaders/formation.wgsl"),
     ),
+    (
+        "common/sngnn_frame.wgsl",
+        include_str!("../../shaders/common/sngnn_frame.wgsl"),
+    ),
+    (
+        "common/sngnn_graph.wgsl",
+        include_str!("../../shaders/common/sngnn_graph.wgsl"),
+    ),
+    (
+        "sngnn_graph.wgsl",
+        include_str!("../../shaders/sngnn_graph.wgsl"),
+    ),
 ];
 
 /// Shaders at the top of `shaders/` that are not stages of the step but passes the GPU backend runs
@@ -137,6 +149,16 @@ pub const PASSES: &[&str] = &["reset"];
 /// Shaders with bindings of their own, outside the step (no batch prelude): SNGNN-v2's network
 /// (`crate::sngnn::gpu`). [`assemble_standalone`] builds them.
 pub const STANDALONE: &[&str] = &["sngnn.wgsl"];
+
+/// Passes that need the SNGNN part of the prelude ([`sngnn_prelude`]) and the packed graph
+/// bindings (`GpuStages::with_sngnn_graphs`): `sngnn_graph` (record the frame and build the
+/// graph of every stepping, non-terminal environment).
+pub const SNGNN_PASSES: &[&str] = &["sngnn_graph"];
+
+/// Whether `shaders/<path>` needs [`sngnn_prelude`]: the SNGNN passes and libraries.
+pub fn needs_sngnn(path: &str) -> bool {
+    path.contains("sngnn") && !STANDALONE.contains(&path)
+}
 
 /// Invocations per workgroup of the stage shaders (one environment each).
 pub const WORKGROUP_SIZE: u32 = 64;
@@ -270,6 +292,81 @@ pub fn prelude(
          @group(0) @binding(6) var<storage, read> pool: array<u32>;\n",
     );
     out.push_str(&pool_functions(state, outputs));
+    out
+}
+
+/// The SNGNN part of a prelude, appended to [`prelude`] for the SNGNN passes: the history's
+/// capacities (`SN_FRAMES`, `SN_FRAME_PEOPLE`, `SN_FRAME_OBJECTS`, `SN_FRAME_LINKS`,
+/// `SN_ENTITIES`, `SN_WALLS`), the packed graph layout (`SN_MAX_NODES`, `SN_MAX_EDGES`,
+/// `SN_U32_STRIDE`, `SN_F32_STRIDE`, `SN_WORD_*`), the selection rule (`SN_MAX_GRAPH_FRAMES`,
+/// `SN_INTERVAL_TICKS` from [`crate::sngnn::history::interval_ticks`]), the node feature
+/// indices (`SN_F_*`, `SN_NODE_FEATURES`) and relations (`SN_REL_*`) from their Rust
+/// definitions, and the two packed graph bindings: 7 (`sn_gu`, u32 region) and 8 (`sn_gf`, f32).
+pub fn sngnn_prelude(
+    caps: &crate::state::Caps,
+    graphs: &crate::sngnn::packed::PackedLayout,
+    interval_ticks: u32,
+) -> String {
+    use crate::sngnn::{NODE_FEATURES, feature as f, history, packed::words, rel};
+    let at_least_one = |n: usize| n.max(1);
+    let values: Vec<(&str, usize)> = vec![
+        ("SN_FRAMES", at_least_one(caps.frames)),
+        ("SN_FRAME_PEOPLE", caps.frame_people),
+        ("SN_FRAME_OBJECTS", caps.frame_objects),
+        ("SN_FRAME_LINKS", caps.frame_links),
+        ("SN_ENTITIES", at_least_one(caps.sngnn_entities)),
+        ("SN_WALLS", at_least_one(caps.walls)),
+        ("SN_MAX_NODES", graphs.max_nodes),
+        ("SN_MAX_EDGES", graphs.max_edges),
+        ("SN_U32_STRIDE", graphs.u32_stride()),
+        ("SN_F32_STRIDE", graphs.f32_stride()),
+        ("SN_WORD_NODES", words::NODES),
+        ("SN_WORD_EDGES", words::EDGES),
+        ("SN_WORD_SRC", words::SRC),
+        ("SN_MAX_GRAPH_FRAMES", history::MAX_GRAPH_FRAMES),
+        ("SN_INTERVAL_TICKS", interval_ticks as usize),
+        ("SN_NODE_FEATURES", NODE_FEATURES),
+        ("SN_F_HUMAN", f::HUMAN),
+        ("SN_F_OBJECT", f::OBJECT),
+        ("SN_F_ROOM", f::ROOM),
+        ("SN_F_WALL", f::WALL),
+        ("SN_F_GOAL", f::GOAL),
+        ("SN_F_IS_T", f::IS_T),
+        ("SN_F_PERSON", f::PERSON),
+        ("SN_F_ROBOT", f::ROBOT),
+        ("SN_F_OBJECT_BASE", f::OBJECT_BASE),
+        ("SN_F_ROOM_HUMANS", f::ROOM_HUMANS),
+        ("SN_F_WALL_BASE", f::WALL_BASE),
+        ("SN_F_GOAL_BASE", f::GOAL_BASE),
+    ];
+    let relations = [
+        ("G_R", rel::G_R),
+        ("O_P", rel::O_P),
+        ("O_R", rel::O_R),
+        ("P_O", rel::P_O),
+        ("P_P", rel::P_P),
+        ("P_R", rel::P_R),
+        ("P_W", rel::P_W),
+        ("R_G", rel::R_G),
+        ("R_O", rel::R_O),
+        ("R_P", rel::R_P),
+        ("R_W", rel::R_W),
+        ("SELF", rel::SELF),
+        ("W_P", rel::W_P),
+        ("W_R", rel::W_R),
+        ("TEMPORAL", rel::TEMPORAL),
+    ];
+    let mut out = String::from("// SNGNN-v2 graph building (backend::wgsl::sngnn_prelude).\n");
+    for (name, v) in values {
+        out.push_str(&format!("const {name}: u32 = {v}u;\n"));
+    }
+    for (name, v) in relations {
+        out.push_str(&format!("const SN_REL_{name}: u32 = {v}u;\n"));
+    }
+    out.push_str(
+        "@group(0) @binding(7) var<storage, read_write> sn_gu: array<u32>;\n\
+         @group(0) @binding(8) var<storage, read_write> sn_gf: array<f32>;\n",
+    );
     out
 }
 

@@ -17,11 +17,13 @@
 //! docs/fidelity.md).
 
 use super::frame::{MAX_ADVANCE, MAX_ROTATION, RobotPose, wall_ends};
-use super::history::{self, Frame, History, Person};
+use super::history::{self, Frame, History, MAX_GRAPH_FRAMES, Person};
+use super::packed::PackedLayout;
 use super::{Graph, NODE_FEATURES, feature, rel};
+use crate::config::Config;
 use crate::math;
 use crate::params::StepParams;
-use crate::state::StateChunk;
+use crate::state::{Caps, StateChunk, caps};
 
 /// Positions are divided by this (m) for the node features (0.1.1: /10, walls cm/1000).
 const POSITION_SCALE: f32 = 10.0;
@@ -32,7 +34,78 @@ const WALL_SEGMENT_CM: f32 = 97.0;
 /// A person and a wall segment closer than this (m) are linked.
 const HUMAN_WALL_THRESHOLD: f32 = 1.5;
 /// Walls an environment can have (`Caps::walls` is at most 12).
-const MAX_WALLS: usize = 16;
+pub const MAX_WALLS: usize = 16;
+
+/// The most nodes and edges a graph of config `c` can have: the packed layout every
+/// environment's graph fits (zero without the SNGNN reward).
+///
+/// A frame has N = 1 + people + objects + 1 + segments nodes (room, entities, goal, wall
+/// segments). Its edges: 2 (N − 1) with the room, 2 per ordered person-segment pair closer
+/// than 1.5 m ([`wall_bounds`]), 2 per interaction entry, N self-loops; frames 1 and 2 add
+/// 2 N temporal edges each.
+pub fn capacity(c: &Config) -> PackedLayout {
+    let caps = Caps::from_config(c);
+    if caps.frames == 0 {
+        return PackedLayout {
+            max_nodes: 0,
+            max_edges: 0,
+        };
+    }
+    let walls = wall_bounds(c);
+    let (people, objects) = (caps.frame_people, caps.frame_objects);
+    let nodes = 1 + people + objects + 1 + walls.segments;
+    let near = people * walls.near_per_person.min(walls.segments);
+    let frame_edges = 2 * (nodes - 1) + 2 * near + 2 * caps.frame_links + nodes;
+    let frames = MAX_GRAPH_FRAMES.min(caps.frames);
+    PackedLayout {
+        max_nodes: frames * nodes,
+        max_edges: frames * frame_edges + 2 * nodes * (frames - 1),
+    }
+}
+
+/// Bounds on a config's wall segments (97 cm splits, not the observation's).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WallBounds {
+    /// The most segments of one room.
+    pub segments: usize,
+    /// The most segments whose midpoints lie within 1.5 m of one point.
+    pub near_per_person: usize,
+}
+
+/// [`WallBounds`] over every room the config can build (each size, shape and L location, as
+/// `Caps` enumerates them). A wall of length L splits into n = ⌊L / 0.97 m⌋ + 1 segments whose
+/// midpoints lie L / n apart on a line; a disc of radius 1.5 m covers less than 3 m of that line,
+/// so at most ⌊3 n / L⌋ + 1 of them (and at most n). Each bound takes a relative margin of 1e-5
+/// for the f32 rounding of the robot-frame wall ends. Corridor walls (doors are continuous
+/// draws) add ⌈L / 0.97 m⌉ + 2 segments per corridor line, all counted as near.
+pub fn wall_bounds(c: &Config) -> WallBounds {
+    const MARGIN: f64 = 1.0 + 1e-5;
+    let segment_m = f64::from(WALL_SEGMENT_CM) / 100.0;
+    let reach = 2.0 * f64::from(HUMAN_WALL_THRESHOLD);
+    let mut most = WallBounds {
+        segments: 0,
+        near_per_person: 0,
+    };
+    caps::for_each_room(c, |room, x, y| {
+        let (mut segments, mut near_per_person) = (0, 0);
+        for w in room.walls.as_slice() {
+            let length = f64::from(w.length);
+            let n = (length * MARGIN / segment_m).floor() as usize + 1;
+            let near = (reach * n as f64 * MARGIN / length).floor() as usize + 1;
+            segments += n;
+            near_per_person += near.min(n);
+        }
+        if c.room.corridors {
+            let line = f64::from(x.max(y));
+            let n = 2 * ((line / segment_m).ceil() as usize + 2);
+            segments += n;
+            near_per_person += n;
+        }
+        most.segments = most.segments.max(segments);
+        most.near_per_person = most.near_per_person.max(near_per_person);
+    });
+    most
+}
 
 /// Build the graph of local environment `e` from its history into `out` (cleared first; no
 /// allocation once `out` has grown to the environment's size). Returns the number of frames

@@ -67,6 +67,24 @@ pub fn decimal_time_step(dt: f32) -> f64 {
     x
 }
 
+/// The spacing rule of [`select`] as whole ticks, for devices without f64: frames `a` and `b`
+/// lie at least [`FRAMES_INTERVAL`] apart exactly when |a − b| ≥ the returned gap. Exact for
+/// dt ≥ 1 s (any two distinct ticks, gap 1) and for a dyadic dt below (0.5, 0.25, ...: the
+/// products tick · dt are exact in f64 below 2^29 ticks, gap ⌈1 / dt⌉). `None` for other time
+/// steps (0.1, 0.2 s), whose f64 timestamps round and need [`select`] itself.
+pub fn interval_ticks(dt: f32) -> Option<u32> {
+    let step = decimal_time_step(dt);
+    if step >= FRAMES_INTERVAL {
+        return Some(1);
+    }
+    // Dyadic with at most 24 fractional bits: tick · step is exact for every u32 tick < 2^29.
+    let scaled = step * f64::from(1u32 << 24);
+    if step <= 0.0 || scaled.fract() != 0.0 {
+        return None;
+    }
+    (1u32..=1 << 24).find(|&g| f64::from(g) * step >= FRAMES_INTERVAL)
+}
+
 /// The timestamp (s) of a frame taken at `tick`: tick · dt in f64, as 0.1.1 computes it.
 pub fn timestamp(dt: f32, tick: u32) -> f64 {
     f64::from(tick) * decimal_time_step(dt)

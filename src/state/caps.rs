@@ -52,22 +52,46 @@ const SPLIT_VERTICES_PER_VERTEX: usize = 1;
 /// (every room size, shape and L location is built), bounded for corridor walls (their doors are
 /// continuous draws: each corridor line gives at most ceil(L / s) + 2 segments).
 fn max_wall_segments(c: &Config) -> usize {
+    use crate::scenario::layout;
+    let step = c.objects.wall_segment_size;
+    let mut most = 0u32;
+    for_each_room(c, |room, x, y| {
+        let mut n: u32 = room
+            .walls
+            .as_slice()
+            .iter()
+            .map(|w| layout::segment_count(w.length, step))
+            .sum();
+        if c.room.corridors {
+            let line = x.max(y);
+            n += 2 * ((line / step).ceil() as u32 + 2);
+        }
+        most = most.max(n);
+    });
+    most as usize
+}
+
+/// Call `visit` with the outer walls of every room the config can build (each size, shape and
+/// L location, corridors left out) and its size (m): what capacities that depend on the walls
+/// take their maximum over.
+pub(crate) fn for_each_room(
+    c: &Config,
+    mut visit: impl FnMut(&crate::scenario::layout::RoomLayout, f32, f32),
+) {
     use crate::params::StepParams;
     use crate::scenario::layout::{self, RoomLayout};
     use crate::state::room_shape;
     let mut p = StepParams::new(c, 0, Default::default());
     p.corridors = 0;
-    let step = c.objects.wall_segment_size;
     let shapes: &[u32] = match c.room.shape {
         Shape::Square => &[room_shape::SQUARE],
         Shape::Rectangle => &[room_shape::RECTANGLE],
         Shape::L => &[room_shape::L],
-        Shape::NoWalls => return 0,
+        Shape::NoWalls => return,
         Shape::Random => &[room_shape::RECTANGLE, room_shape::SQUARE, room_shape::L],
     };
     let mut rng = crate::rng::RngStream::new(0, 0, 0, 0);
     let mut room = RoomLayout::default();
-    let mut most = 0u32;
     for &shape in shapes {
         let square = shape != room_shape::RECTANGLE;
         for x in c.room.size_x[0]..=c.room.size_x[1] {
@@ -81,22 +105,11 @@ fn max_wall_segments(c: &Config) -> usize {
                 for loc in locations {
                     let (x, y) = (x as f32, y as f32);
                     layout::build(&p, &mut rng, shape, x, y, loc, &mut room);
-                    let mut n: u32 = room
-                        .walls
-                        .as_slice()
-                        .iter()
-                        .map(|w| layout::segment_count(w.length, step))
-                        .sum();
-                    if c.room.corridors {
-                        let line = x.max(y);
-                        n += 2 * ((line / step).ceil() as u32 + 2);
-                    }
-                    most = most.max(n);
+                    visit(&room, x, y);
                 }
             }
         }
     }
-    most as usize
 }
 
 /// Slots for humans, groups, laptops and laptop users, formations during an episode included.

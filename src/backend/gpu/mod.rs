@@ -8,7 +8,10 @@
 //!   reach the shaders as generated constants, [`crate::backend::wgsl::prelude`]), the step
 //!   parameters and the actions, and one compute pipeline per stage shader, built once. It runs
 //!   single stages, which is what the CPU/GPU parity tests of each stage need
-//!   (`tests/gpu_stages.rs`, `tests/gpu_observation.rs`).
+//!   (`tests/gpu_stages.rs`, `tests/gpu_observation.rs`). [`GpuStages::with_sngnn_graphs`]
+//!   adds every environment's packed SNGNN-v2 graph (bindings 7 and 8) and the pass
+//!   `sngnn_graph`, which records the frame and builds the graph on the device
+//!   (`tests/gpu_sngnn_graph.rs`).
 //!
 //! Still to build before `--backend gpu` can step a batch: the shaders of the other stages, the
 //! whole step in one submit with one readback of the outputs, and resets off the host's critical
@@ -24,6 +27,7 @@ use crate::backend::wgsl;
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
+use crate::sngnn::packed::PackedLayout;
 use crate::state::BatchState;
 
 /// The stages that have a shader so far, in [`crate::pipeline::STAGES`] order.
@@ -71,6 +75,20 @@ pub struct GpuStages {
     episode_offset: usize,
     bind_group: wgpu::BindGroup,
     pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
+    /// The packed SNGNN graphs (u32 and f32 regions), bindings 7 and 8, with their layout; only
+    /// when built by [`GpuStages::with_sngnn_graphs`].
+    sngnn_graphs: Option<(PackedLayout, wgpu::Buffer, wgpu::Buffer)>,
+}
+
+/// Every environment's packed SNGNN graph as read back: the u32 regions, then the f32 regions,
+/// one stride of `sngnn::packed::PackedLayout` per environment.
+pub type PackedGraphs = (Vec<u32>, Vec<f32>);
+
+/// What [`GpuStages::with_sngnn_graphs`] adds: the packed layout and the selection's gap.
+#[derive(Debug, Clone, Copy)]
+struct SngnnBinding {
+    layout: PackedLayout,
+    interval_ticks: u32,
 }
 
 impl std::fmt::Debug for GpuStages {
@@ -159,6 +177,40 @@ pub(crate) fn bind_buffers(
     })
 }
 
+/// The packed SNGNN graph buffers of `n_envs` environments at `layout`'s strides (u32, f32),
+/// or why the adapter cannot bind them.
+fn sngnn_buffers(
+    dev: &GpuDevice,
+    n_envs: usize,
+    layout: PackedLayout,
+) -> Result<(PackedLayout, wgpu::Buffer, wgpu::Buffer), SimError> {
+    // The prelude's 7 bindings and the two graph regions.
+    const BINDINGS: u32 = 9;
+    if dev.limits.max_storage_buffers_per_shader_stage < BINDINGS {
+        return Err(SimError::BackendUnavailable(format!(
+            "{} allows {} storage buffers per shader stage; the SNGNN graph pass needs {BINDINGS}",
+            dev.adapter.name, dev.limits.max_storage_buffers_per_shader_stage
+        )));
+    }
+    let max = dev.limits.max_storage_buffer_binding_size;
+    let u_bytes = bytes_of::<u32>(n_envs * layout.u32_stride());
+    let f_bytes = bytes_of::<f32>(n_envs * layout.f32_stride());
+    if u_bytes.max(f_bytes) > max {
+        return Err(SimError::BackendUnavailable(format!(
+            "{n_envs} environments need {} bytes of packed SNGNN graphs, more than {} allows in \
+             one binding ({max} bytes): use fewer environments",
+            u_bytes.max(f_bytes),
+            dev.adapter.name
+        )));
+    }
+    // Buffers are created zeroed, as the graphs of environments that never built one are.
+    Ok((
+        layout,
+        storage_buffer(dev, "sngnn graphs u32", u_bytes),
+        storage_buffer(dev, "sngnn graphs f32", f_bytes),
+    ))
+}
+
 impl DeviceTable {
     /// Buffers for a table packed into `packed_f32`/`packed_u32`, or why they do not fit.
     fn new(
@@ -204,6 +256,54 @@ impl GpuStages {
         outputs: &Outputs,
         stages: &[&'static str],
     ) -> Result<Self, SimError> {
+        Self::build(dev, params, state, outputs, stages, None)
+    }
+
+    /// [`GpuStages::new`] with the SNGNN graph buffers: every environment's packed graph at
+    /// `graphs`' strides (bindings 7 and 8, zeroed), which makes the SNGNN passes
+    /// ([`wgsl::SNGNN_PASSES`]) available among `stages`. `graphs` is normally
+    /// `sngnn::graph::capacity(config)`.
+    ///
+    /// # Errors
+    /// `SimError::BackendUnavailable` when the state has no SNGNN history, the time step has no
+    /// exact tick rule ([`crate::sngnn::history::interval_ticks`]: dt ≥ 1 s or dyadic), the
+    /// adapter allows fewer than 9 storage buffers per shader stage or the graphs exceed a
+    /// binding, or anything [`GpuStages::new`] reports.
+    pub fn with_sngnn_graphs(
+        dev: GpuDevice,
+        params: &StepParams,
+        state: &BatchState,
+        outputs: &Outputs,
+        stages: &[&'static str],
+        graphs: PackedLayout,
+    ) -> Result<Self, SimError> {
+        if state.strides.frames == 0 {
+            return Err(SimError::BackendUnavailable(
+                "the SNGNN graph passes need a state with the SNGNN frame history (reward.kind = \"sngnn\")".into(),
+            ));
+        }
+        let Some(interval_ticks) = crate::sngnn::history::interval_ticks(params.dt) else {
+            return Err(SimError::BackendUnavailable(format!(
+                "the device's SNGNN frame selection is exact only for a time step of at least 1 s \
+                 or a dyadic one (0.5, 0.25 s, ...), not {} s",
+                params.dt
+            )));
+        };
+        let binding = SngnnBinding {
+            layout: graphs,
+            interval_ticks,
+        };
+        Self::build(dev, params, state, outputs, stages, Some(binding))
+    }
+
+    fn build(
+        dev: GpuDevice,
+        params: &StepParams,
+        state: &BatchState,
+        outputs: &Outputs,
+        stages: &[&'static str],
+        sngnn: Option<SngnnBinding>,
+    ) -> Result<Self, SimError> {
         let n_envs = state.n_envs;
         let (mut f, mut u) = (Vec::new(), Vec::new());
         state.pack(&mut f, &mut u);
@@ -236,15 +336,28 @@ impl GpuStages {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let sngnn_graphs = match sngnn {
+            Some(b) => Some(sngnn_buffers(&dev, n_envs, b.layout)?),
+            None => None,
+        };
+        let graph_words = sngnn.map_or(0, |b| {
+            n_envs * b.layout.u32_stride().max(b.layout.f32_stride())
+        });
         let readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: bytes_of::<u32>(state_table.largest().max(outputs_table.largest())),
+            size: bytes_of::<u32>(
+                state_table
+                    .largest()
+                    .max(outputs_table.largest())
+                    .max(graph_words),
+            ),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         // Bindings of the prelude (`backend::wgsl::prelude`): params, sf, su, actions, outf, outu,
         // pool.
-        let bound = [
+        // With the SNGNN graphs, bindings 7 and 8 (`backend::wgsl::sngnn_prelude`).
+        let mut bound = vec![
             (&params_buf, true),
             (&state_table.f32s, false),
             (&state_table.u32s, false),
@@ -253,6 +366,9 @@ impl GpuStages {
             (&outputs_table.u32s, false),
             (&pool, true),
         ];
+        if let Some((_, gu, gf)) = &sngnn_graphs {
+            bound.extend([(gu, false), (gf, false)]);
+        }
         let read_only: Vec<bool> = bound.iter().map(|&(_, r)| r).collect();
         let layout = storage_layout(&dev, "stage bindings", &read_only);
         let buffers: Vec<&wgpu::Buffer> = bound.iter().map(|&(b, _)| b).collect();
@@ -264,15 +380,30 @@ impl GpuStages {
                 bind_group_layouts: &[Some(&layout)],
                 immediate_size: 0,
             });
-        let prelude = wgsl::prelude(
+        let mut prelude = wgsl::prelude(
             n_envs,
             &state.columns(),
             &outputs.columns(),
             &outputs.strides.layout,
         );
+        if let Some(b) = sngnn {
+            prelude.push_str(&wgsl::sngnn_prelude(
+                &state.strides,
+                &b.layout,
+                b.interval_ticks,
+            ));
+        }
         let mut pipelines = Vec::new();
         for &stage in stages {
-            if !STAGES_WITH_SHADERS.contains(&stage) && !wgsl::PASSES.contains(&stage) {
+            if wgsl::SNGNN_PASSES.contains(&stage) && sngnn.is_none() {
+                return Err(SimError::BackendUnavailable(format!(
+                    "pass {stage:?} needs the SNGNN graph buffers (GpuStages::with_sngnn_graphs)"
+                )));
+            }
+            if !STAGES_WITH_SHADERS.contains(&stage)
+                && !wgsl::PASSES.contains(&stage)
+                && !wgsl::SNGNN_PASSES.contains(&stage)
+            {
                 return Err(SimError::BackendUnavailable(format!(
                     "stage {stage:?} has no shader yet (stages with shaders: {STAGES_WITH_SHADERS:?})"
                 )));
@@ -312,6 +443,7 @@ impl GpuStages {
             episode_offset,
             bind_group,
             pipelines,
+            sngnn_graphs,
         };
         this.write(&this.state);
         this.write(&this.outputs);
@@ -445,6 +577,17 @@ impl GpuStages {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| SimError::BackendUnavailable(format!("GPU wait failed: {e}")))?;
         self.dev.take_errors()
+    }
+
+    /// The packed SNGNN graphs of every environment: the u32 regions and the f32 regions, one
+    /// stride per environment (`sngnn::packed`); `None` without [`GpuStages::with_sngnn_graphs`].
+    pub fn download_sngnn_graphs(&self) -> Result<Option<PackedGraphs>, SimError> {
+        let Some((layout, gu, gf)) = &self.sngnn_graphs else {
+            return Ok(None);
+        };
+        let u = self.read_words(gu, self.n_envs * layout.u32_stride())?;
+        let f = self.read_words(gf, self.n_envs * layout.f32_stride())?;
+        Ok(Some((u, f.into_iter().map(f32::from_bits).collect())))
     }
 
     /// Read the device's state back into `state` (same batch size and capacities).

@@ -1,0 +1,24 @@
+// requires: common/sngnn_graph.wgsl
+//
+// Pass `sngnn_graph` (not a stage of the step): what the reward stage does for SNGNN-v2 before
+// the network scores, on the device. For every stepping environment whose step is not terminal
+// (none of the outcome flags the termination stage raised): record the frame into the history
+// (src/sngnn/frame.rs `record`), then build the graph into the packed regions (`graph::build`
+// then `PackedLayout::pack`). Other environments' packed graphs are left as they were.
+// Needs the SNGNN prelude and bindings (`GpuStages::with_sngnn_graphs`).
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = gid.x;
+    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+        return;
+    }
+    let row = CO_INFO + e * SO_INFO;
+    let terminal = outf[row + INFO_OUT_OF_MAP] != 0.0 || outf[row + INFO_SUCCESS] != 0.0
+        || outf[row + INFO_COLLISION] != 0.0 || outf[row + INFO_TIMEOUT] != 0.0;
+    if (terminal) {
+        return;
+    }
+    sn_record(e);
+    sn_build_graph(e);
+}
