@@ -18,6 +18,8 @@ __all__ = [
     "orca_compute_velocities",
     "orca_compute_velocities_batch",
     "shipped_configs",
+    "sngnn_install_from_wheel",
+    "sngnn_paths",
     "socnavgym_config_toml",
 ]
 
@@ -64,6 +66,8 @@ class Batch:
 
 def shipped_configs() -> list[str]: ...
 def socnavgym_config_toml(yaml_json: str) -> str: ...
+def sngnn_paths() -> tuple[str, str]: ...
+def sngnn_install_from_wheel(wheel: str, dest: str) -> int: ...
 def orca_compute_velocities(
     positions: npt.NDArray[np.float32],
     velocities: npt.NDArray[np.float32],

@@ -329,6 +329,28 @@ fn socnavgym_config_toml(yaml_json: &str) -> PyResult<String> {
     Ok(c.to_toml_string())
 }
 
+/// The SNGNN-v2 weight file socnav would load (`SOCNAV_SNGNN_WEIGHTS`, else the cache; a
+/// config's `reward.sngnn_weights` comes between them) and the cache file an install writes.
+#[pyfunction]
+fn sngnn_paths() -> (String, String) {
+    let resolved = socnav::sngnn::weights_path(None).path;
+    let cached = socnav::sngnn::cached_weights(&socnav::sngnn::cache_dir());
+    (
+        resolved.display().to_string(),
+        cached.display().to_string(),
+    )
+}
+
+/// Copy the SNGNN-v2 weights out of the socnavgym 0.1.1 wheel at `wheel` into `dest`,
+/// atomically and checked; returns the number of parameters.
+#[pyfunction]
+fn sngnn_install_from_wheel(py: Python<'_>, wheel: &str, dest: &str) -> PyResult<usize> {
+    let (wheel, dest) = (std::path::PathBuf::from(wheel), std::path::PathBuf::from(dest));
+    py.detach(|| socnav::sngnn::install_from_wheel(&wheel, &dest))
+        .map(|w| w.parameters())
+        .map_err(py_err)
+}
+
 /// The shipped config names.
 #[pyfunction]
 fn shipped_configs() -> Vec<&'static str> {
@@ -341,6 +363,8 @@ fn _socnav(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Batch>()?;
     m.add_function(wrap_pyfunction!(shipped_configs, m)?)?;
     m.add_function(wrap_pyfunction!(socnavgym_config_toml, m)?)?;
+    m.add_function(wrap_pyfunction!(sngnn_paths, m)?)?;
+    m.add_function(wrap_pyfunction!(sngnn_install_from_wheel, m)?)?;
     m.add(
         "DISCRETE_ACTIONS",
         DISCRETE_ACTIONS.map(|a| a.to_vec()).to_vec(),

@@ -215,3 +215,19 @@ def test_sngnn_reward_scores_steps():
         np.testing.assert_allclose(info["sngnn_reward"][live], s - 1, atol=1e-7)
         scored += int(live.sum())
     assert scored > 0
+
+
+def test_sngnn_weights_path_and_install_errors(tmp_path, monkeypatch):
+    """`socnav.sngnn`: the path follows SOCNAV_SNGNN_WEIGHTS, and a wheel without the weight
+    file is refused with an SngnnError that says what is missing (no network needed)."""
+    monkeypatch.setenv("SOCNAV_SNGNN_WEIGHTS", str(tmp_path / "w.tch"))
+    assert socnav.sngnn.weights_path() == tmp_path / "w.tch"
+    import zipfile
+
+    wheel = tmp_path / "socnavgym-0.1.1-py3-none-any.whl"
+    with zipfile.ZipFile(wheel, "w") as z:
+        z.writestr("socnavgym/__init__.py", "")
+    dest = tmp_path / "cache" / "SOCNAV_V2.tch"
+    with pytest.raises(socnav.SngnnError, match="SOCNAV_V2.tch"):
+        socnav._socnav.sngnn_install_from_wheel(str(wheel), str(dest))
+    assert not dest.exists(), "a failed install leaves no file"
