@@ -335,17 +335,17 @@ fn socnavgym_config_toml(yaml_json: &str) -> PyResult<String> {
 fn sngnn_paths() -> (String, String) {
     let resolved = socnav::sngnn::weights_path(None).path;
     let cached = socnav::sngnn::cached_weights(&socnav::sngnn::cache_dir());
-    (
-        resolved.display().to_string(),
-        cached.display().to_string(),
-    )
+    (resolved.display().to_string(), cached.display().to_string())
 }
 
 /// Copy the SNGNN-v2 weights out of the socnavgym 0.1.1 wheel at `wheel` into `dest`,
 /// atomically and checked; returns the number of parameters.
 #[pyfunction]
 fn sngnn_install_from_wheel(py: Python<'_>, wheel: &str, dest: &str) -> PyResult<usize> {
-    let (wheel, dest) = (std::path::PathBuf::from(wheel), std::path::PathBuf::from(dest));
+    let (wheel, dest) = (
+        std::path::PathBuf::from(wheel),
+        std::path::PathBuf::from(dest),
+    );
     py.detach(|| socnav::sngnn::install_from_wheel(&wheel, &dest))
         .map(|w| w.parameters())
         .map_err(py_err)
