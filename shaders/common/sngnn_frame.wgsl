@@ -223,13 +223,15 @@ fn sn_command(e: u32) -> vec3<f32> {
     return vec3<f32>(advance, lateral, rotation);
 }
 
-// frame::push_people: every human in slot order.
+// frame::push_people: every human in slot order, remembering each pose.
 fn sn_push_people(e: u32, slot: u32, robot: SnRobot, period_steps: f32) {
     let hb = e * S_H_X;
     for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
         let id = su[C_H_ID + i];
         let now = sn_seen(robot, sf[C_H_X + i], sf[C_H_Y + i], sf[C_H_THETA + i]);
-        sn_push_person(e, slot, id, sn_entry(now, sn_previous(e, id), period_steps));
+        let entry = sn_entry(now, sn_previous(e, id), period_steps);
+        sn_remember(e, id, now);
+        sn_push_person(e, slot, id, entry);
     }
 }
 
@@ -240,7 +242,9 @@ fn sn_push_objects(e: u32, slot: u32, robot: SnRobot, period_steps: f32) {
         let id = su[C_L_ID + i];
         let now = sn_seen(robot, sf[C_L_X + i], sf[C_L_Y + i], sf[C_L_THETA + i]);
         let size = vec2<f32>(params.laptop_length, params.laptop_width);
-        sn_push_object(e, slot, id, sn_entry(now, sn_previous(e, id), period_steps), size);
+        let entry = sn_entry(now, sn_previous(e, id), period_steps);
+        sn_remember(e, id, now);
+        sn_push_object(e, slot, id, entry, size);
     }
     let pb = e * S_P_X;
     let diameter = 2.0 * params.plant_radius;
@@ -248,14 +252,18 @@ fn sn_push_objects(e: u32, slot: u32, robot: SnRobot, period_steps: f32) {
         let id = su[C_P_ID + i];
         let now = sn_seen(robot, sf[C_P_X + i], sf[C_P_Y + i], 0.0);
         let size = vec2<f32>(diameter, diameter);
-        sn_push_object(e, slot, id, sn_entry(now, sn_previous(e, id), period_steps), size);
+        let entry = sn_entry(now, sn_previous(e, id), period_steps);
+        sn_remember(e, id, now);
+        sn_push_object(e, slot, id, entry, size);
     }
     let tb = e * S_T_X;
     for (var i = tb; i < tb + su[C_N_TABLES + e]; i++) {
         let id = su[C_T_ID + i];
         let now = sn_seen(robot, sf[C_T_X + i], sf[C_T_Y + i], sf[C_T_THETA + i]);
         let size = vec2<f32>(params.table_length, params.table_width);
-        sn_push_object(e, slot, id, sn_entry(now, sn_previous(e, id), period_steps), size);
+        let entry = sn_entry(now, sn_previous(e, id), period_steps);
+        sn_remember(e, id, now);
+        sn_push_object(e, slot, id, entry, size);
     }
 }
 
@@ -284,28 +292,8 @@ fn sn_push_links(e: u32, slot: u32) {
     }
 }
 
-// frame::remember_poses: every human's and object's robot-frame pose, for the next velocities.
-fn sn_remember_poses(e: u32) {
-    let robot = sn_robot_of(e);
-    let hb = e * S_H_X;
-    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
-        sn_remember(e, su[C_H_ID + i], sn_seen(robot, sf[C_H_X + i], sf[C_H_Y + i], sf[C_H_THETA + i]));
-    }
-    let lb = e * S_L_X;
-    for (var i = lb; i < lb + su[C_N_LAPTOPS + e]; i++) {
-        sn_remember(e, su[C_L_ID + i], sn_seen(robot, sf[C_L_X + i], sf[C_L_Y + i], sf[C_L_THETA + i]));
-    }
-    let pb = e * S_P_X;
-    for (var i = pb; i < pb + su[C_N_PLANTS + e]; i++) {
-        sn_remember(e, su[C_P_ID + i], sn_seen(robot, sf[C_P_X + i], sf[C_P_Y + i], 0.0));
-    }
-    let tb = e * S_T_X;
-    for (var i = tb; i < tb + su[C_N_TABLES + e]; i++) {
-        sn_remember(e, su[C_T_ID + i], sn_seen(robot, sf[C_T_X + i], sf[C_T_Y + i], sf[C_T_THETA + i]));
-    }
-}
-
-// frame::record: push environment e's current frame into its history, then remember the poses.
+// frame::record: push environment e's current frame into its history; each push remembers the
+// entity's pose for the next step's velocities.
 // Call once per non-terminal step, after the motion.
 fn sn_record(e: u32) {
     let robot = sn_robot_of(e);
@@ -315,5 +303,4 @@ fn sn_record(e: u32) {
     sn_push_people(e, slot, robot, period_steps);
     sn_push_objects(e, slot, robot, period_steps);
     sn_push_links(e, slot);
-    sn_remember_poses(e);
 }

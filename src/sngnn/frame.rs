@@ -135,10 +135,10 @@ pub fn record(p: &StepParams, s: &mut StateChunk, e: usize) {
     };
     let slot = history::begin_frame(s, e, &head);
     let period_steps = p.dt / FRAME_PERIOD;
+    // Each push reads an entity's previous pose and then remembers its current one.
     push_people(s, e, slot, &robot, period_steps);
     push_objects(p, s, e, slot, &robot, period_steps);
     push_links(s, e, slot);
-    remember_poses(s, e);
 }
 
 /// A new episode of local environment `e`: an empty history and the reset poses as the
@@ -226,13 +226,15 @@ pub fn remember_poses(s: &mut StateChunk, e: usize) {
     }
 }
 
-/// Every human, in slot order (0.1.1's: lone static, lone walking, group members, laptop users).
+/// Every human, in slot order (0.1.1's: lone static, lone walking, group members, laptop users);
+/// each one's pose is remembered for the next step's velocities.
 fn push_people(s: &mut StateChunk, e: usize, slot: usize, robot: &RobotPose, period_steps: f32) {
     let hb = e * s.strides.humans;
     for i in hb..hb + s.n_humans[e] as usize {
         let id = s.h_id[i];
         let now = robot.seen(s.h_x[i], s.h_y[i], s.h_theta[i]);
         let person = now.entry(id, previous(s, e, id), period_steps);
+        remember(s, e, id, now);
         history::push_person(s, e, slot, &person);
     }
 }
@@ -254,6 +256,7 @@ fn push_objects(
             size_x: size[0],
             size_y: size[1],
         };
+        remember(s, e, id, now);
         history::push_object(s, e, slot, &object);
     };
     let lb = e * c.laptops;

@@ -248,11 +248,7 @@ impl Scene {
         after.sn_prev_theta.copy_from_slice(&before.sn_prev_theta);
         let mut c = after.chunk();
         super::history::clear(&mut c, 0);
-        super::frame::record(p, &mut c, 0);
-        let [q1, _] = scorer.score_with(|graph| {
-            super::graph::build(p, &c, 0, graph);
-        });
-        (q1.clamp(0.0, 1.0), dsrnn)
+        (reward::sngnn_discomfort(p, &mut c, scorer, 0), dsrnn)
     }
 }
 

@@ -93,7 +93,7 @@ const SNGNN_WEIGHT: f32 = 1.0;
 /// SNGNN-v2's discomfort of this step in [0, 1]: the step's frame joins the history, the graph
 /// of the selected frames goes through the network, and the room node's first output is
 /// clipped to [0, 1] (spec 6.3).
-fn sngnn_discomfort(p: &StepParams, s: &mut StateChunk, scorer: &Scorer, e: usize) -> f32 {
+pub fn sngnn_discomfort(p: &StepParams, s: &mut StateChunk, scorer: &Scorer, e: usize) -> f32 {
     sngnn::frame::record(p, s, e);
     let s = &*s;
     let [q1, _] = scorer.score_with(|graph| {
