@@ -1,9 +1,18 @@
 // requires: common/measures.wgsl
 //
-// Twin of src/systems/reward.rs (stage `reward`, spec 6.2): the DSRNN-style reward. Terminal
-// steps get the outcome's constant; other steps the distance, discomfort and alive terms plus the
-// weighted terms beyond 0.1.1 (skipped at weight 0). The reward's info values persist: a terminal
-// step reports those of the previous step. Change both files in the same commit.
+// Twin of src/systems/reward.rs (stage `reward`, spec 6.2 and 6.3): the DSRNN-style reward or
+// SNGNN-v2's. Terminal steps get the outcome's constant; other steps the distance, discomfort and
+// alive terms plus the weighted terms beyond 0.1.1 (skipped at weight 0). The reward's info
+// values persist: a terminal step reports those of the previous step. Change both files in the
+// same commit.
+//
+// SNGNN-v2's score comes from the passes before this one (`sngnn_graph`, then the network,
+// `GpuStages::attach_sngnn_net`): for every environment this stage scores, they leave the room
+// node's first output in `r_discomfort_sngnn`, which is clamped here as the CPU clamps it.
+
+// `StepParams::reward_kind` of the SNGNN-v2 reward, and 0.1.1's weight of its term.
+const REWARD_SNGNN: u32 = 1u;
+const SNGNN_WEIGHT: f32 = 1.0;
 
 // The robot's world-frame velocity (m/s), computed with the motion.
 fn robot_world_velocity(e: u32) -> vec2<f32> {
@@ -96,9 +105,31 @@ fn step_reward(e: u32) -> f32 {
     su[C_R_HAS_PREV + e] = 1u;
     sf[C_R_DISTANCE + e] = r_dist;
     sf[C_R_DISCOMFORT_DSRNN + e] = r_disc;
-    sf[C_R_DISCOMFORT_SNGNN + e] = 0.0;
     sf[C_R_ALIVE + e] = params.reward_alive;
-    return with_extra_terms(e, r_disc + r_dist + params.reward_alive);
+    var r: f32;
+    if (params.reward_kind == REWARD_SNGNN) {
+        let discomfort = clamp_unit(sf[C_R_DISCOMFORT_SNGNN + e]);
+        sf[C_R_DISCOMFORT_SNGNN + e] = discomfort;
+        sf[C_R_SNGNN + e] = discomfort - 1.0;
+        // Spec 6.3: the DSRNN discomfort is computed for the info only.
+        r = (discomfort - 1.0) * SNGNN_WEIGHT + r_dist + params.reward_alive;
+    } else {
+        sf[C_R_DISCOMFORT_SNGNN + e] = 0.0;
+        r = r_disc + r_dist + params.reward_alive;
+    }
+    return with_extra_terms(e, r);
+}
+
+// Rust's `x.clamp(0.0, 1.0)`, comparisons written out: WGSL's clamp may return either zero for
+// -0.0.
+fn clamp_unit(x: f32) -> f32 {
+    if (x < 0.0) {
+        return 0.0;
+    }
+    if (x > 1.0) {
+        return 1.0;
+    }
+    return x;
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)

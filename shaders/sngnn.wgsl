@@ -14,6 +14,9 @@
 //   exactly the CPU's order, then divides by the in-degree, adds the bias and applies the
 //   activation. Layers ping-pong between two node-feature buffers.
 //
+// A graph of no nodes is not scored (STATUS_EMPTY, not an error): the GPU step empties the graphs
+// of the environments its reward does not score, and their outputs are left as they were.
+//
 // The edge network itself does not exist here: an edge whose distance lies outside the tables
 // (beyond `max_dist`, not finite, or non-zero on a relation whose distance is always 0) only
 // sets STATUS_UNSUPPORTED, and the host reports an error. `sngnn::table_range` covers every
@@ -40,6 +43,7 @@ const T_WORDS: u32 = 4u;
 // Status bits of an environment.
 const STATUS_UNSUPPORTED: u32 = 1u;
 const STATUS_BAD_GRAPH: u32 = 2u;
+const STATUS_EMPTY: u32 = 4u;
 
 // One layer's constants (src/sngnn/gpu.rs `LayerParams`, the same order).
 struct NetParams {
@@ -58,6 +62,11 @@ struct NetParams {
     // 1 at the last layer: node 0's values are the output.
     last: u32,
     max_dist: f32,
+    // Where the last layer writes the room node's first `q_outputs` values: environment e's from
+    // q[q_at + e * q_stride] on (a buffer of the net's own, or a state column of the GPU step).
+    q_at: u32,
+    q_stride: u32,
+    q_outputs: u32,
 }
 
 @group(0) @binding(0) var<storage, read> p: NetParams;
@@ -77,11 +86,10 @@ fn csr_base(e: u32) -> u32 {
     return e * (p.max_nodes + 1u + p.max_edges);
 }
 
-// Whether an environment's graph fits its layout, has the room node 0 whose values are the
-// output, and names only its own nodes and relations: the kernels then stay inside the
-// environment's regions.
+// Whether a non-empty graph fits its layout and names only its own nodes and relations: the
+// kernels then stay inside the environment's regions.
 fn graph_is_valid(g: u32, nodes: u32, edges: u32) -> bool {
-    if (nodes == 0u || nodes > p.max_nodes || edges > p.max_edges) {
+    if (nodes > p.max_nodes || edges > p.max_edges) {
         return false;
     }
     var ok = true;
@@ -107,6 +115,10 @@ fn sort(@builtin(global_invocation_id) gid: vec3<u32>) {
     let order = c + p.max_nodes + 1u;
     for (var v = 0u; v <= p.max_nodes; v = v + 1u) {
         csr[c + v] = 0u;
+    }
+    if (nodes == 0u) {
+        atomicStore(&status[e], STATUS_EMPTY);
+        return;
     }
     if (!graph_is_valid(g, nodes, edges)) {
         atomicStore(&status[e], STATUS_BAD_GRAPH);
@@ -243,7 +255,7 @@ fn layer(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let y = activate(sum / f32(end - begin) + tf[p.bias + o]);
     h_out[out_at] = y;
-    if (p.last != 0u && v == 0u && o < 2u) {
-        q[e * 2u + o] = y;
+    if (p.last != 0u && v == 0u && o < p.q_outputs) {
+        q[p.q_at + e * p.q_stride + o] = y;
     }
 }

@@ -4,19 +4,21 @@
 // the network scores, on the device. For every stepping environment whose step is not terminal
 // (none of the outcome flags the termination stage raised): record the frame into the history
 // (src/sngnn/frame.rs `record`), then build the graph into the packed regions (`graph::build`
-// then `PackedLayout::pack`). Other environments' packed graphs are left as they were.
+// then `PackedLayout::pack`). Every other environment's packed graph gets no nodes (the rest of
+// it is left as it was), so that the network of the step (`sngnn_score`) skips it.
 // Needs the SNGNN prelude and bindings (`GpuStages::with_sngnn_graphs`).
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= N_ENVS) {
         return;
     }
     let row = CO_INFO + e * SO_INFO;
     let terminal = outf[row + INFO_OUT_OF_MAP] != 0.0 || outf[row + INFO_SUCCESS] != 0.0
         || outf[row + INFO_COLLISION] != 0.0 || outf[row + INFO_TIMEOUT] != 0.0;
-    if (terminal) {
+    if (su[C_STEPPING + e] == 0u || terminal) {
+        sn_gu[sn_ubase(e) + SN_WORD_NODES] = 0u;
         return;
     }
     sn_record(e);

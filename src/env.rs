@@ -7,7 +7,7 @@ use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::{AutoresetMode, StepParams};
 use crate::pipeline::STAGES;
-use crate::sngnn::Scorer;
+use crate::sngnn::SngnnReward;
 use crate::spec::{DISCRETE_ACTIONS, ObsLayout};
 use crate::state::{BatchState, Caps, document};
 
@@ -92,7 +92,7 @@ impl BatchEnv {
         let state = BatchState::new(options.n_envs, caps);
         let out = Outputs::new(options.n_envs, layout);
         let sngnn = match config.reward.kind {
-            RewardKind::Sngnn => Some(Scorer::for_config(&config)?),
+            RewardKind::Sngnn => Some(SngnnReward::for_config(&config)?),
             RewardKind::Dsrnn => None,
         };
         let backend =

@@ -10,7 +10,8 @@
 //! and every state column and every word of the packed graphs is compared. The histories fill,
 //! wrap and empty at resets; 256 environments, as the other GPU tests, so the prelude matches.
 //! Experiment 2 runs at dt = 0.5 s (a 7-frame history from which the graph skips frames, and a
-//! time step other than 1 s, which would hide a misplaced factor of dt).
+//! time step other than 1 s, which would hide a misplaced factor of dt), and experiment 1 also
+//! at dt = 0.1 s (a 25-frame history, frame gaps of 10 or 11 ticks as f64 rounding decides).
 //!
 //! Needs a GPU adapter (lavapipe will do); without one the tests say why and pass, unless
 //! `REQUIRE_GPU=1`.
@@ -134,4 +135,31 @@ fn exp2_sngnn_at_half_a_second_matches_the_cpu() {
 #[test]
 fn exp3_sngnn_frames_and_graphs_match_the_cpu() {
     check("exp3_sngnn", 1.0, 40, true);
+}
+
+/// At dt = 0.1 s 0.1.1's f64 timestamps decide some frame gaps by rounding: the device's
+/// per-tick gap table (`history::TickGaps`) must pick the CPU's frames from a 25-frame ring.
+#[test]
+fn exp1_sngnn_at_a_tenth_of_a_second_matches_the_cpu() {
+    check("exp1_sngnn", 0.1, 60, false);
+}
+
+/// A gap table the prelude cannot carry (episodes of 2^20 steps at dt = 0.1 s) is refused with
+/// an error that names the episode length and the ways out.
+#[test]
+fn an_episode_too_long_for_the_gap_table_is_refused() {
+    let Some(dev) = device() else {
+        return;
+    };
+    let mut config = Config::from_name_or_path("exp1_sngnn").expect("exp1_sngnn");
+    config.episode.time_step = 0.1;
+    config.episode.length = 1 << 20;
+    let r = SngnnRollout::new(&config, 4, 1);
+    let e = GpuStages::with_sngnn_graphs(dev, &r.p, &r.s, &r.o, &["sngnn_graph"], r.graphs)
+        .expect_err("a table of 2^20 ticks");
+    let message = e.to_string();
+    assert!(
+        message.contains("1048576 steps") && message.contains("CPU backend"),
+        "{message}"
+    );
 }

@@ -133,8 +133,13 @@ fn validate_assembled_sngnn(path: &str) -> Result<naga::Module, String> {
     let outputs = socnav::outputs::Outputs::new(4, layout);
     let mut prelude = wgsl::prelude(4, &state.columns(), &outputs.columns(), &layout);
     let graphs = socnav::sngnn::graph::capacity(&config);
-    let ticks = socnav::sngnn::history::interval_ticks(config.episode.time_step).expect("dt = 1 s");
-    prelude.push_str(&wgsl::sngnn_prelude(&caps, &graphs, ticks));
+    // A time step of 0.1 s, whose gaps need the per-tick table.
+    let gaps = socnav::sngnn::history::TickGaps::new(0.1, config.episode.length).expect("gaps");
+    assert!(
+        !gaps.extra.is_empty(),
+        "dt = 0.1 s has ticks that need one more"
+    );
+    prelude.push_str(&wgsl::sngnn_prelude(&caps, &graphs, &gaps));
     let src = wgsl::assemble(path, &prelude)?;
     validate_source(&src, &format!("{path} (assembled, SNGNN)"))
 }

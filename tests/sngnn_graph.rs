@@ -698,15 +698,18 @@ fn reference_selection(time_step: f64, newest: u32) -> Vec<u32> {
     taken
 }
 
-/// The device's whole-tick spacing rule (`history::interval_ticks`) takes the frames 0.1.1's
-/// f64 timestamps take wherever it claims to be exact (dt ≥ 1 s, dyadic dt), and declines
-/// elsewhere.
+/// The device's whole-tick spacing rule (`history::TickGaps`) takes the frames 0.1.1's f64
+/// timestamps take, at every time step and tick: one constant gap where rounding never decides
+/// (dt ≥ 1 s, dyadic dt, or 1 s / dt far from a whole number), a per-tick table where it does
+/// (0.05, 0.1, 0.2 s).
 #[test]
-fn interval_ticks_select_as_the_f64_timestamps() {
-    for (time_step, gap) in [
+fn tick_gaps_select_as_the_f64_timestamps() {
+    for (time_step, constant) in [
+        (0.05, None),
         (0.1, None),
         (0.2, None),
-        (0.3, None),
+        (0.3, Some(4)),
+        (0.7, Some(2)),
         (0.25, Some(4)),
         (0.5, Some(2)),
         (0.75, Some(2)),
@@ -715,12 +718,23 @@ fn interval_ticks_select_as_the_f64_timestamps() {
         (2.0, Some(1)),
     ] {
         let dt = time_step as f32;
-        assert_eq!(history::interval_ticks(dt), gap, "dt {time_step} s");
-        let Some(gap) = gap else { continue };
+        let gaps = history::TickGaps::new(dt, 300).expect("gaps");
+        match constant {
+            Some(gap) => assert_eq!(
+                gaps,
+                history::TickGaps {
+                    base: gap,
+                    extra: vec![]
+                },
+                "dt {time_step} s"
+            ),
+            None => assert!(gaps.ticks() > 300, "dt {time_step} s: {gaps:?}"),
+        }
         for newest in 1..=300u32 {
             let mut taken = vec![newest];
             for tick in (1..newest).rev() {
-                if taken.len() < 3 && taken.last().unwrap().abs_diff(tick) >= gap {
+                let last = *taken.last().unwrap();
+                if taken.len() < 3 && last - tick >= gaps.gap_after(last) {
                     taken.push(tick);
                 }
             }

@@ -127,8 +127,18 @@ fn sn_tick_gap(a: u32, b: u32) -> u32 {
     return select(b - a, a - b, a >= b);
 }
 
-// The newest frame, then walking back every frame at least one second (SN_INTERVAL_TICKS,
-// `history::interval_ticks`) from the last one taken, up to SN_MAX_GRAPH_FRAMES.
+// Ticks back from a frame at tick `last` to the next frame the selection may take
+// (`history::TickGaps::gap_after`): SN_INTERVAL_TICKS, one more where SN_GAP_EXTRA marks the
+// tick (0.1.1's f64 timestamps at time steps such as 0.1 s).
+fn sn_gap_after(last: u32) -> u32 {
+    if (last >= SN_GAP_TICKS) {
+        return SN_INTERVAL_TICKS;
+    }
+    return SN_INTERVAL_TICKS + ((SN_GAP_EXTRA[last / 32u] >> (last % 32u)) & 1u);
+}
+
+// The newest frame, then walking back every frame at least one second (`sn_gap_after`) from
+// the last one taken, up to SN_MAX_GRAPH_FRAMES.
 fn sn_select(e: u32) -> SnSelection {
     var out: SnSelection;
     out.len = 0u;
@@ -142,7 +152,7 @@ fn sn_select(e: u32) -> SnSelection {
     for (var age = 1u; age < count; age++) {
         let slot = sn_slot_of_age(e, age);
         let t = su[C_SF_TICK + sn_frame_row(e, slot)];
-        if (sn_tick_gap(t, last) < SN_INTERVAL_TICKS) {
+        if (sn_tick_gap(t, last) < sn_gap_after(last)) {
             continue;
         }
         out.slots[out.len] = slot;

@@ -7,12 +7,10 @@ pub mod gpu;
 pub mod reset_pool;
 pub mod wgsl;
 
-use std::sync::Arc;
-
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
-use crate::sngnn::Scorer;
+use crate::sngnn::SngnnReward;
 use crate::state::BatchState;
 
 /// Which backend runs a batch (DESIGN.md section 8).
@@ -47,30 +45,28 @@ impl std::str::FromStr for BackendChoice {
 ///
 /// # Errors
 /// `BackendUnavailable` for `Gpu` without a usable adapter (the message says how to install a
-/// driver) or in a build without the `gpu` feature, for a batch the adapter cannot hold, and
-/// for the SNGNN-v2 reward, which runs on the CPU backend only (`Auto` then takes the CPU).
+/// driver) or in a build without the `gpu` feature, and for a batch the adapter cannot run
+/// (too large, or an SNGNN-v2 time step without an exact frame rule on the device). `Auto`
+/// takes the CPU backend instead, with one line on stderr, in each of these cases.
 pub fn open(
     choice: BackendChoice,
     params: StepParams,
     state: BatchState,
     out: Outputs,
     threads: Option<usize>,
-    sngnn: Option<Arc<Scorer>>,
+    sngnn: Option<SngnnReward>,
 ) -> Result<Box<dyn Backend>, SimError> {
     let on_cpu = |why: &str, state, out| -> Result<Box<dyn Backend>, SimError> {
         if !why.is_empty() {
             eprintln!("socnav: backend auto: using the CPU backend ({why})");
         }
         let cpu = cpu::CpuBackend::new(params, state, out, threads)?;
-        Ok(Box::new(cpu.with_sngnn(sngnn.clone())))
+        Ok(Box::new(
+            cpu.with_sngnn(sngnn.as_ref().map(|r| r.scorer.clone())),
+        ))
     };
-    let sngnn_on_gpu = "the SNGNN-v2 reward runs on the CPU backend only in this version";
     match choice {
         BackendChoice::Cpu => on_cpu("", state, out),
-        BackendChoice::Auto if sngnn.is_some() => on_cpu(sngnn_on_gpu, state, out),
-        BackendChoice::Gpu if sngnn.is_some() => Err(SimError::BackendUnavailable(format!(
-            "{sngnn_on_gpu}: use --backend cpu (or auto)"
-        ))),
         #[cfg(feature = "gpu")]
         BackendChoice::Gpu | BackendChoice::Auto => {
             let policy = if choice == BackendChoice::Gpu {
@@ -78,11 +74,21 @@ pub fn open(
             } else {
                 gpu::AdapterPolicy::Hardware
             };
-            match gpu::GpuDevice::open(policy) {
-                Ok(dev) => Ok(Box::new(gpu::GpuBackend::new(
-                    dev, params, state, out, threads,
-                )?)),
-                Err(e) if choice == BackendChoice::Auto => on_cpu(&e.to_string(), state, out),
+            let dev = match gpu::GpuDevice::open(policy) {
+                Ok(dev) => dev,
+                Err(e) if choice == BackendChoice::Auto => {
+                    return on_cpu(&e.to_string(), state, out);
+                }
+                Err(e) => return Err(e),
+            };
+            // `Auto` falls back to the CPU when the adapter cannot run this batch either.
+            let kept = (choice == BackendChoice::Auto).then(|| (state.clone(), out.clone()));
+            match gpu::GpuBackend::new(dev, params, state, out, threads, sngnn.as_ref()) {
+                Ok(gpu) => Ok(Box::new(gpu)),
+                Err(e @ SimError::BackendUnavailable(_)) => match kept {
+                    Some((state, out)) => on_cpu(&e.to_string(), state, out),
+                    None => Err(e),
+                },
                 Err(e) => Err(e),
             }
         }

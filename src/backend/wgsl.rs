@@ -299,13 +299,14 @@ pub fn prelude(
 /// capacities (`SN_FRAMES`, `SN_FRAME_PEOPLE`, `SN_FRAME_OBJECTS`, `SN_FRAME_LINKS`,
 /// `SN_ENTITIES`, `SN_WALLS`), the packed graph layout (`SN_MAX_NODES`, `SN_MAX_EDGES`,
 /// `SN_U32_STRIDE`, `SN_F32_STRIDE`, `SN_WORD_*`), the selection rule (`SN_MAX_GRAPH_FRAMES`,
-/// `SN_INTERVAL_TICKS` from [`crate::sngnn::history::interval_ticks`]), the node feature
-/// indices (`SN_F_*`, `SN_NODE_FEATURES`) and relations (`SN_REL_*`) from their Rust
-/// definitions, and the two packed graph bindings: 7 (`sn_gu`, u32 region) and 8 (`sn_gf`, f32).
+/// and [`crate::sngnn::history::TickGaps`] as `SN_INTERVAL_TICKS`, `SN_GAP_TICKS` and
+/// `SN_GAP_EXTRA`), the node feature indices (`SN_F_*`, `SN_NODE_FEATURES`) and relations
+/// (`SN_REL_*`) from their Rust definitions, and the two packed graph bindings: 7 (`sn_gu`, u32
+/// region) and 8 (`sn_gf`, f32).
 pub fn sngnn_prelude(
     caps: &crate::state::Caps,
     graphs: &crate::sngnn::packed::PackedLayout,
-    interval_ticks: u32,
+    gaps: &crate::sngnn::history::TickGaps,
 ) -> String {
     use crate::sngnn::{NODE_FEATURES, feature as f, history, packed::words, rel};
     let at_least_one = |n: usize| n.max(1);
@@ -324,7 +325,8 @@ pub fn sngnn_prelude(
         ("SN_WORD_EDGES", words::EDGES),
         ("SN_WORD_SRC", words::SRC),
         ("SN_MAX_GRAPH_FRAMES", history::MAX_GRAPH_FRAMES),
-        ("SN_INTERVAL_TICKS", interval_ticks as usize),
+        ("SN_INTERVAL_TICKS", gaps.base as usize),
+        ("SN_GAP_TICKS", gaps.ticks()),
         ("SN_NODE_FEATURES", NODE_FEATURES),
         ("SN_F_HUMAN", f::HUMAN),
         ("SN_F_OBJECT", f::OBJECT),
@@ -363,6 +365,16 @@ pub fn sngnn_prelude(
     for (name, v) in relations {
         out.push_str(&format!("const SN_REL_{name}: u32 = {v}u;\n"));
     }
+    let extra: Vec<String> = if gaps.extra.is_empty() {
+        vec!["0u".into()]
+    } else {
+        gaps.extra.iter().map(|w| format!("{w:#x}u")).collect()
+    };
+    out.push_str(&format!(
+        "const SN_GAP_EXTRA = array<u32, {}>({});\n",
+        extra.len(),
+        extra.join(", ")
+    ));
     out.push_str(
         "@group(0) @binding(7) var<storage, read_write> sn_gu: array<u32>;\n\
          @group(0) @binding(8) var<storage, read_write> sn_gf: array<f32>;\n",

@@ -7,9 +7,16 @@
 //! computes the CPU's bits. Each layer's tables live in their own buffers (the first layer's
 //! are the largest: 54 of 88 MB for exp1/exp2), so one binding never has to hold all of them.
 //!
-//! The device has no edge network: an edge the tables do not cover makes [`GpuNet::forward`]
-//! fail with `SimError::Sngnn` (the CPU would take the edge network). The tables of
-//! [`super::table_range`] cover every distance of the config's rooms.
+//! An environment whose graph has no nodes is not scored: the GPU backend's step empties the
+//! graphs of the environments its reward does not score this step, and their outputs are left
+//! as they were. The device has no edge network: an edge the tables do not cover makes
+//! [`GpuNet::forward`] (and the step) fail with `SimError::Sngnn` (the CPU would take the edge
+//! network). The tables of [`super::table_range`] cover every distance of the config's rooms.
+//!
+//! A net built by [`GpuNet::new`] owns its graph and output buffers (tests, benchmarks); the GPU
+//! backend's step builds one with `GpuNet::in_step` over its own packed graphs, writing the
+//! room node's first output straight into a state column, and records it in the step's compute
+//! pass (`GpuNet::record`).
 
 use super::model::{MAX_WIDTH, Model, Output};
 use super::packed::PackedLayout;
@@ -25,6 +32,8 @@ const WORKGROUP: u32 = 64;
 /// Status bits of an environment (`shaders/sngnn.wgsl`).
 const STATUS_UNSUPPORTED: u32 = 1;
 const STATUS_BAD_GRAPH: u32 = 2;
+/// Not an error: the graph has no nodes, so the environment is not scored.
+const STATUS_EMPTY: u32 = 4;
 /// Storage bindings of the shader, in order: params, graph u32, graph f32, CSR, table floats,
 /// table index, h in, h out, outputs, status; `true` where read-only.
 const BINDINGS: [bool; 10] = [
@@ -42,12 +51,47 @@ struct LayerParams {
     last: bool,
 }
 
+/// Where the last layer writes the room node's outputs: `outputs` values (1 or 2) of
+/// environment e from float `at + e·stride` of the output buffer on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct ScoreTarget {
+    at: usize,
+    stride: usize,
+    outputs: usize,
+}
+
+/// The buffers a GPU step shares with its net (`GpuNet::in_step`).
+#[derive(Debug)]
+pub(crate) struct StepBuffers {
+    /// The packed graphs: u32 regions, f32 regions.
+    pub buffers: [wgpu::Buffer; 2],
+    /// The buffer the scores go to (the state's f32 columns).
+    pub scores: wgpu::Buffer,
+    /// Float offset of environment 0's score in it.
+    pub score_at: usize,
+}
+
+/// A net's graph inputs and output.
+struct Io {
+    graphs: [wgpu::Buffer; 2],
+    q: wgpu::Buffer,
+    target: ScoreTarget,
+}
+
+/// Both outputs of every environment, back to back, in a buffer of the net's own.
+const OWN_OUTPUTS: ScoreTarget = ScoreTarget {
+    at: 0,
+    stride: 2,
+    outputs: 2,
+};
+
 /// SNGNN-v2 on a device for a batch of `n_envs` graphs of one layout: buffers, pipelines and
 /// bind groups built once.
 pub struct GpuNet {
     dev: GpuDevice,
     layout: PackedLayout,
     n_envs: usize,
+    target: ScoreTarget,
     graph_u32: wgpu::Buffer,
     graph_f32: wgpu::Buffer,
     q: wgpu::Buffer,
@@ -85,6 +129,18 @@ fn check_fits(dev: &GpuDevice, what: &str, bytes: u64) -> Result<(), SimError> {
     Ok(())
 }
 
+/// `BackendUnavailable` unless a batch of `n_envs` fits one dispatch dimension of `dev`.
+fn check_batch(dev: &GpuDevice, n_envs: usize) -> Result<(), SimError> {
+    let max_groups = dev.limits.max_compute_workgroups_per_dimension as usize;
+    if n_envs == 0 || n_envs > max_groups {
+        return Err(SimError::BackendUnavailable(format!(
+            "SNGNN-v2 on {} scores 1 to {max_groups} environments per batch, not {n_envs}",
+            dev.adapter.name
+        )));
+    }
+    Ok(())
+}
+
 /// A storage buffer holding `data`, after checking that it fits.
 fn filled_buffer<T: bytemuck::Pod>(
     dev: &GpuDevice,
@@ -111,7 +167,8 @@ fn word(n: usize) -> u32 {
 }
 
 impl GpuNet {
-    /// The network of `model` with `tables` on `dev`, for `n_envs` graphs packed in `layout`.
+    /// The network of `model` with `tables` on `dev`, for `n_envs` graphs packed in `layout`,
+    /// with graph and output buffers of its own ([`GpuNet::upload`], [`GpuNet::forward`]).
     ///
     /// # Errors
     /// `SimError::BackendUnavailable` when a buffer exceeds the adapter's limits (the tables'
@@ -124,15 +181,61 @@ impl GpuNet {
         layout: PackedLayout,
         n_envs: usize,
     ) -> Result<Self, SimError> {
-        let max_groups = dev.limits.max_compute_workgroups_per_dimension as usize;
-        if n_envs == 0 || n_envs > max_groups {
-            return Err(SimError::BackendUnavailable(format!(
-                "SNGNN-v2 on {} scores 1 to {max_groups} environments per batch, not {n_envs}",
-                dev.adapter.name
-            )));
-        }
-        let graph_u32 = empty_buffer::<u32>(&dev, "packed graphs", n_envs * layout.u32_stride())?;
-        let graph_f32 = empty_buffer::<f32>(&dev, "packed graphs", n_envs * layout.f32_stride())?;
+        check_batch(&dev, n_envs)?;
+        let graphs = [
+            empty_buffer::<u32>(&dev, "packed graphs", n_envs * layout.u32_stride())?,
+            empty_buffer::<f32>(&dev, "packed graphs", n_envs * layout.f32_stride())?,
+        ];
+        let io = Io {
+            graphs,
+            q: empty_buffer::<f32>(&dev, "outputs", 2 * n_envs)?,
+            target: OWN_OUTPUTS,
+        };
+        Self::build(dev, model, tables, layout, n_envs, io)
+    }
+
+    /// The network of a GPU step: it scores the packed graphs of `n_envs` environments in
+    /// `graphs.buffers` (u32 and f32 regions at `layout`'s strides) and writes the room node's
+    /// first output of environment e to float `graphs.score_at + e` of `graphs.scores` (a state
+    /// column); environments whose graph has no nodes are skipped. `GpuNet::record` puts it
+    /// in a compute pass.
+    ///
+    /// # Errors
+    /// As [`GpuNet::new`].
+    pub(crate) fn in_step(
+        dev: GpuDevice,
+        model: &Model,
+        tables: &Tables,
+        layout: PackedLayout,
+        n_envs: usize,
+        graphs: StepBuffers,
+    ) -> Result<Self, SimError> {
+        check_batch(&dev, n_envs)?;
+        let io = Io {
+            graphs: graphs.buffers,
+            q: graphs.scores,
+            target: ScoreTarget {
+                at: graphs.score_at,
+                stride: 1,
+                outputs: 1,
+            },
+        };
+        Self::build(dev, model, tables, layout, n_envs, io)
+    }
+
+    fn build(
+        dev: GpuDevice,
+        model: &Model,
+        tables: &Tables,
+        layout: PackedLayout,
+        n_envs: usize,
+        io: Io,
+    ) -> Result<Self, SimError> {
+        let Io {
+            graphs: [graph_u32, graph_f32],
+            q,
+            target,
+        } = io;
         let csr_words = n_envs * (layout.max_nodes + 1 + layout.max_edges);
         let csr = empty_buffer::<u32>(&dev, "edge order", csr_words)?;
         let h_len = n_envs * layout.max_nodes * MAX_WIDTH;
@@ -140,7 +243,6 @@ impl GpuNet {
             empty_buffer::<f32>(&dev, "node features", h_len)?,
             empty_buffer::<f32>(&dev, "node features", h_len)?,
         ];
-        let q = empty_buffer::<f32>(&dev, "outputs", 2 * n_envs)?;
         let status = empty_buffer::<u32>(&dev, "status", n_envs)?;
         let readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SNGNN readback"),
@@ -172,7 +274,7 @@ impl GpuNet {
             let params = filled_buffer(
                 &dev,
                 "layer constants",
-                &params.words(&layout, n_envs, tables.max_dist()),
+                &params.words(&layout, n_envs, tables.max_dist(), target),
             )?;
             let tf = filled_buffer(&dev, "edge-weight tables", &floats)?;
             let ti = filled_buffer(&dev, "edge-weight table index", &flat.index)?;
@@ -200,6 +302,7 @@ impl GpuNet {
             dev,
             layout,
             n_envs,
+            target,
             graph_u32,
             graph_f32,
             q,
@@ -250,13 +353,13 @@ impl GpuNet {
         Ok(())
     }
 
-    /// Score every environment's graph into `out` (one per environment): one submit, one
-    /// readback, nothing allocated.
+    /// Score every environment's graph into `out` (one per environment; NaN for a graph of no
+    /// nodes): one submit, one readback, nothing allocated.
     ///
     /// # Errors
-    /// `SimError::Shape` when `out` has the wrong length; `SimError::Sngnn` when a graph does
-    /// not fit its layout or has an edge outside the tables; `BackendUnavailable` when the
-    /// device fails.
+    /// `SimError::Shape` when `out` has the wrong length or the net writes into a step's state
+    /// (`GpuNet::in_step`); `SimError::Sngnn` when a graph does not fit its layout or has an
+    /// edge outside the tables; `BackendUnavailable` when the device fails.
     pub fn forward(&mut self, out: &mut [Output]) -> Result<(), SimError> {
         if out.len() != self.n_envs {
             return Err(SimError::Shape(format!(
@@ -264,6 +367,11 @@ impl GpuNet {
                 out.len(),
                 self.n_envs
             )));
+        }
+        if self.target != OWN_OUTPUTS {
+            return Err(SimError::Shape(
+                "this SNGNN net writes into a GPU step's state; it has no outputs to read".into(),
+            ));
         }
         let mut enc = self
             .dev
@@ -280,15 +388,34 @@ impl GpuNet {
         let mut failed = None;
         map_and_read(&self.dev, &self.readback, q_bytes + s_bytes, |words| {
             let (q, status) = words.split_at(2 * self.n_envs);
-            for (o, w) in out.iter_mut().zip(q.chunks_exact(2)) {
-                *o = [f32::from_bits(w[0]), f32::from_bits(w[1])];
+            for ((o, w), &s) in out.iter_mut().zip(q.chunks_exact(2)).zip(status) {
+                *o = if s == STATUS_EMPTY {
+                    [f32::NAN; 2]
+                } else {
+                    [f32::from_bits(w[0]), f32::from_bits(w[1])]
+                };
             }
-            failed = status.iter().position(|&s| s != 0).map(|e| (e, status[e]));
+            failed = failure(status);
         })?;
-        match failed {
-            None => Ok(()),
-            Some((e, s)) => Err(SimError::Sngnn(status_message(e, s))),
+        failed.map_or(Ok(()), Err)
+    }
+
+    /// Record the sort and the layers into `pass` (which then has the net's bind group set).
+    pub(crate) fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
+        let envs = word(self.n_envs);
+        pass.set_pipeline(&self.sort);
+        pass.set_bind_group(0, &self.groups[0].0, &[]);
+        pass.dispatch_workgroups(envs.div_ceil(WORKGROUP), 1, 1);
+        pass.set_pipeline(&self.layer);
+        for (group, x) in &self.groups {
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(*x, envs, 1);
         }
+    }
+
+    /// Each environment's status word after a forward pass ([`failure`] reads them).
+    pub(crate) fn status_buffer(&self) -> &wgpu::Buffer {
+        &self.status
     }
 
     /// Wall time of one [`GpuNet::forward`] (readback included), the mean of `reps` after one
@@ -315,24 +442,25 @@ impl GpuNet {
             label: Some("SNGNN forward"),
             timestamp_writes: None,
         });
-        let envs = word(self.n_envs);
-        pass.set_pipeline(&self.sort);
-        pass.set_bind_group(0, &self.groups[0].0, &[]);
-        pass.dispatch_workgroups(envs.div_ceil(WORKGROUP), 1, 1);
-        pass.set_pipeline(&self.layer);
-        for (group, x) in &self.groups {
-            pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups(*x, envs, 1);
-        }
+        self.record(&mut pass);
     }
+}
+
+/// The error of the first environment whose forward failed, from the status words of a batch
+/// (a graph of no nodes is not a failure).
+pub(crate) fn failure(status: &[u32]) -> Option<SimError> {
+    let e = status
+        .iter()
+        .position(|&s| s & (STATUS_UNSUPPORTED | STATUS_BAD_GRAPH) != 0)?;
+    Some(SimError::Sngnn(status_message(e, status[e])))
 }
 
 /// Why environment `e`'s forward failed, from its status bits.
 fn status_message(e: usize, status: u32) -> String {
     if status & STATUS_BAD_GRAPH != 0 {
         format!(
-            "environment {e}: the SNGNN graph is empty, exceeds its packed layout, or names a \
-             node or relation that does not exist"
+            "environment {e}: the SNGNN graph exceeds its packed layout, or names a node or \
+             relation that does not exist"
         )
     } else {
         debug_assert_eq!(status, STATUS_UNSUPPORTED);
@@ -345,7 +473,13 @@ fn status_message(e: usize, status: u32) -> String {
 
 impl LayerParams {
     /// `NetParams` of the shader.
-    fn words(&self, layout: &PackedLayout, n_envs: usize, max_dist: f32) -> [u32; 12] {
+    fn words(
+        &self,
+        layout: &PackedLayout,
+        n_envs: usize,
+        max_dist: f32,
+        target: ScoreTarget,
+    ) -> [u32; 15] {
         [
             word(n_envs),
             word(layout.max_nodes),
@@ -359,6 +493,9 @@ impl LayerParams {
             word(self.bias),
             u32::from(self.last),
             max_dist.to_bits(),
+            word(target.at),
+            word(target.stride),
+            word(target.outputs),
         ]
     }
 }

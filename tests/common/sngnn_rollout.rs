@@ -128,12 +128,15 @@ impl SngnnRollout {
     }
 
     /// What the SNGNN-v2 reward does before the network, for every environment it scores:
-    /// record the frame, build the graph, pack it. Returns how many environments scored.
+    /// record the frame, build the graph, pack it; every other environment's packed graph gets
+    /// no nodes, as the device's `sngnn_graph` pass does so that its network skips them.
+    /// Returns how many environments scored.
     pub fn score(&mut self) -> usize {
         let (us, fs) = (self.graphs.u32_stride(), self.graphs.f32_stride());
         let mut scored = 0;
         for e in 0..self.s.n_envs {
             if !self.scores(e) {
+                self.packed_u32[e * us + socnav::sngnn::packed::words::NODES] = 0;
                 continue;
             }
             scored += 1;

@@ -5,6 +5,11 @@
 //! outputs and the episode counters into a mapped readback buffer in the same submit, and reads
 //! them into the host outputs it keeps ([`Backend::outputs`]) without allocating.
 //!
+//! With the SNGNN-v2 reward, the reward stage is preceded by the pass `sngnn_graph` (frames and
+//! packed graphs of the environments the reward scores) and by the network's dispatches
+//! ([`super::SNGNN_SCORE`]), still in the same pass and submit; the network's status words are
+//! read back with the outputs.
+//!
 //! Resets copy rows of the reset pool (`src/backend/reset_pool.rs`): an environment whose episode
 //! counter moved on the device has consumed its row, and the host generates its next one (on its
 //! worker threads, for all such environments at once) before the next device work. The state
@@ -21,9 +26,10 @@ use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
 use crate::pipeline::STAGES;
+use crate::sngnn::SngnnReward;
 use crate::state::{BatchState, Caps};
 
-use super::{GpuDevice, GpuStages};
+use super::{GpuDevice, GpuStages, SNGNN_SCORE};
 
 /// `row_episode` of a pool row that holds nothing valid.
 const NO_ROW: u32 = u32::MAX;
@@ -58,6 +64,9 @@ pub struct GpuBackend {
     timing: bool,
     stage_seconds: Vec<f64>,
     actions_mask: Vec<f32>,
+    /// The passes of a step: the stages of [`STAGES`], with the SNGNN-v2 passes before the
+    /// reward when the reward is SNGNN-v2's.
+    step_passes: Vec<&'static str>,
 }
 
 impl std::fmt::Debug for GpuBackend {
@@ -71,21 +80,32 @@ impl std::fmt::Debug for GpuBackend {
 
 impl GpuBackend {
     /// A backend over `state` and `out` on `dev`; `threads` host threads generate the reset rows
-    /// (all cores when `None`).
+    /// (all cores when `None`); `sngnn` scores the steps when the reward is SNGNN-v2's.
     ///
     /// # Errors
     /// `BackendUnavailable` when a stage has no shader, the batch does not fit the adapter's
-    /// limits, or a shader fails to build.
+    /// limits, a shader fails to build, or the SNGNN-v2 reward cannot run on the device (see
+    /// `GpuStages::with_sngnn_graphs`: episodes too long for its frame-gap table).
     pub fn new(
         dev: GpuDevice,
         params: StepParams,
         state: BatchState,
         out: Outputs,
         threads: Option<usize>,
+        sngnn: Option<&SngnnReward>,
     ) -> Result<Self, SimError> {
-        let mut passes: Vec<&'static str> = STAGES.iter().map(|s| s.name).collect();
+        let step_passes = step_passes(sngnn.is_some());
+        let mut passes = step_passes.clone();
         passes.extend(crate::backend::wgsl::PASSES);
-        let gpu = GpuStages::new(dev, &params, &state, &out, &passes)?;
+        let gpu = match sngnn {
+            None => GpuStages::new(dev, &params, &state, &out, &passes)?,
+            Some(r) => {
+                let mut gpu =
+                    GpuStages::with_sngnn_graphs(dev, &params, &state, &out, &passes, r.graphs)?;
+                gpu.attach_sngnn_net(r.scorer.model(), r.scorer.tables())?;
+                gpu
+            }
+        };
         let threads = crate::backend::cpu::resolve_threads(threads);
         // The caller waits while the rows are generated: every thread is a worker.
         let pool = crate::backend::cpu::thread_pool(threads, "socnav-reset")?;
@@ -113,6 +133,7 @@ impl GpuBackend {
             timing: false,
             stage_seconds: vec![0.0; STAGES.len()],
             actions_mask: vec![0.0; 3 * n],
+            step_passes,
         })
     }
 
@@ -176,17 +197,18 @@ impl GpuBackend {
         Ok(())
     }
 
-    /// Run `passes` (one submit, or one per pass and timed), read the outputs and episode
-    /// counters back, and account for the pool rows consumed.
-    fn run(&mut self, passes: &[&str]) -> Result<(), SimError> {
+    /// Run the step's passes, or the reset pass alone (one submit, or one per pass and timed),
+    /// read the outputs and episode counters back, and account for the pool rows consumed.
+    fn run(&mut self, step: bool) -> Result<(), SimError> {
         let _ = self.state.take();
-        // Stage timing covers the step's stages (a reset pass alone is not one of them).
-        if self.timing && passes.len() == STAGES.len() {
-            for (k, pass) in passes.iter().enumerate() {
+        let passes: &[&'static str] = if step { &self.step_passes } else { &["reset"] };
+        // Stage timing covers the step's stages; the SNGNN-v2 passes count as the reward's.
+        if self.timing && step {
+            for pass in passes {
                 let start = Instant::now();
                 self.gpu.run(pass)?;
                 self.gpu.wait()?;
-                self.stage_seconds[k] += start.elapsed().as_secs_f64();
+                self.stage_seconds[stage_of(pass)] += start.elapsed().as_secs_f64();
             }
             self.gpu
                 .run_stages(&[], Some((&mut self.out, &mut self.read_episode)))?;
@@ -202,6 +224,9 @@ impl GpuBackend {
                 }
                 self.episode[e] = self.read_episode[e];
             }
+        }
+        if let Some(e) = self.gpu.sngnn_failure() {
+            error.get_or_insert(e);
         }
         error.map_or(Ok(()), Err)
     }
@@ -219,16 +244,32 @@ impl GpuBackend {
     }
 }
 
-/// The passes of a step: every stage of `STAGES`, in order.
-const STEP_PASSES: [&str; STAGES.len()] = {
-    let mut names = [""; STAGES.len()];
-    let mut k = 0;
-    while k < STAGES.len() {
-        names[k] = STAGES[k].name;
-        k += 1;
+/// The passes of a step: every stage of `STAGES`, in order; with the SNGNN-v2 reward, the
+/// `sngnn_graph` pass and the network ([`SNGNN_SCORE`]) right before the reward stage.
+fn step_passes(sngnn: bool) -> Vec<&'static str> {
+    let mut passes = Vec::with_capacity(STAGES.len() + 2);
+    for stage in &STAGES {
+        if sngnn && stage.name == "reward" {
+            passes.extend(["sngnn_graph", SNGNN_SCORE]);
+        }
+        passes.push(stage.name);
     }
-    names
-};
+    passes
+}
+
+/// The index in `STAGES` whose time a pass of the step counts to (the SNGNN-v2 passes: the
+/// reward's).
+fn stage_of(pass: &str) -> usize {
+    let name = if pass == "sngnn_graph" || pass == SNGNN_SCORE {
+        "reward"
+    } else {
+        pass
+    };
+    STAGES
+        .iter()
+        .position(|s| s.name == name)
+        .expect("every pass of the step is a stage or an SNGNN-v2 pass")
+}
 
 impl Backend for GpuBackend {
     fn reset(&mut self, mask: Option<&[bool]>) -> Result<(), SimError> {
@@ -246,7 +287,7 @@ impl Backend for GpuBackend {
             self.actions_mask[3 * e] = if mask.is_none_or(|m| m[e]) { 1.0 } else { 0.0 };
         }
         self.gpu.upload_actions(&self.actions_mask);
-        self.run(&["reset"])
+        self.run(false)
     }
 
     fn step(&mut self, actions: &[f32]) -> Result<(), SimError> {
@@ -257,7 +298,7 @@ impl Backend for GpuBackend {
         );
         self.prepare()?;
         self.gpu.upload_actions(actions);
-        self.run(&STEP_PASSES)
+        self.run(true)
     }
 
     fn time_device_steps(
@@ -271,7 +312,7 @@ impl Backend for GpuBackend {
         self.gpu.wait()?;
         let start = Instant::now();
         for _ in 0..steps {
-            self.gpu.run_stages(&STEP_PASSES, None)?;
+            self.gpu.run_stages(&self.step_passes, None)?;
         }
         self.gpu.wait()?;
         Ok(Some(start.elapsed().as_secs_f64()))

@@ -1,21 +1,21 @@
-//! The GPU backend (in construction; issue 4): the batch state in device storage buffers and the
-//! stages of [`crate::pipeline::STAGES`] as WGSL compute shaders (`shaders/<stage>.wgsl`).
+//! The GPU backend: the batch state in device storage buffers and the stages of
+//! [`crate::pipeline::STAGES`] as WGSL compute shaders (`shaders/<stage>.wgsl`).
 //!
-//! What exists so far:
 //! - [`device`]: finding and opening an adapter under the policy of DESIGN.md section 8.
 //! - [`GpuStages`]: the state and the outputs each packed into two storage buffers (every f32
 //!   column back to back, every u32 column likewise, in declaration order; offsets and strides
 //!   reach the shaders as generated constants, [`crate::backend::wgsl::prelude`]), the step
-//!   parameters and the actions, and one compute pipeline per stage shader, built once. It runs
-//!   single stages, which is what the CPU/GPU parity tests of each stage need
-//!   (`tests/gpu_stages.rs`, `tests/gpu_observation.rs`). [`GpuStages::with_sngnn_graphs`]
-//!   adds every environment's packed SNGNN-v2 graph (bindings 7 and 8) and the pass
-//!   `sngnn_graph`, which records the frame and builds the graph on the device
-//!   (`tests/gpu_sngnn_graph.rs`).
-//!
-//! Still to build before `--backend gpu` can step a batch: the shaders of the other stages, the
-//! whole step in one submit with one readback of the outputs, and resets off the host's critical
-//! path (the plan is in docs/ARCHITECTURE.md).
+//!   parameters, the actions and the reset pool, and one compute pipeline per stage shader,
+//!   built once. It runs any sequence of passes in one submit, single stages included, which is
+//!   what the CPU/GPU parity tests of each stage need (`tests/gpu_stages.rs`,
+//!   `tests/gpu_observation.rs`). [`GpuStages::with_sngnn_graphs`] adds every environment's
+//!   packed SNGNN-v2 graph (bindings 7 and 8) and the pass `sngnn_graph`, which records the
+//!   frame and builds the graph on the device (`tests/gpu_sngnn_graph.rs`);
+//!   [`GpuStages::attach_sngnn_net`] adds SNGNN-v2's network over those graphs as the pass
+//!   [`SNGNN_SCORE`] (`sngnn::gpu::GpuNet`), which writes each scored environment's raw score
+//!   into its `r_discomfort_sngnn` column for the reward stage.
+//! - [`GpuBackend`]: the whole step in one submit, with one readback of the outputs, and resets
+//!   from a pool of rows the host generates off the step's critical path.
 
 pub mod backend;
 pub mod device;
@@ -27,8 +27,17 @@ use crate::backend::wgsl;
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
+use crate::sngnn::gpu::{GpuNet, StepBuffers};
+use crate::sngnn::history::TickGaps;
+use crate::sngnn::model::Model;
 use crate::sngnn::packed::PackedLayout;
+use crate::sngnn::pieces::Tables;
 use crate::state::BatchState;
+use crate::state::columns::Elem;
+
+/// The pass of SNGNN-v2's network in a step ([`GpuStages::attach_sngnn_net`]): its sort and
+/// layers, recorded between the `sngnn_graph` pass and the reward stage.
+pub const SNGNN_SCORE: &str = "sngnn_score";
 
 /// The stages that have a shader so far, in [`crate::pipeline::STAGES`] order.
 pub const STAGES_WITH_SHADERS: &[&str] = &[
@@ -78,18 +87,32 @@ pub struct GpuStages {
     /// The packed SNGNN graphs (u32 and f32 regions), bindings 7 and 8, with their layout; only
     /// when built by [`GpuStages::with_sngnn_graphs`].
     sngnn_graphs: Option<(PackedLayout, wgpu::Buffer, wgpu::Buffer)>,
+    /// SNGNN-v2's network over those graphs ([`GpuStages::attach_sngnn_net`]).
+    sngnn_net: Option<GpuNet>,
+    /// Word offset of the `r_discomfort_sngnn` column in the state's f32 buffer.
+    sngnn_score_at: usize,
+    /// Each environment's network status, as the last readback after [`SNGNN_SCORE`] ran read
+    /// it (all 0 after a readback with no network run since the one before).
+    sngnn_status: Vec<u32>,
+    /// [`SNGNN_SCORE`] ran since the last readback of the outputs.
+    sngnn_unread: bool,
 }
 
 /// Every environment's packed SNGNN graph as read back: the u32 regions, then the f32 regions,
 /// one stride of `sngnn::packed::PackedLayout` per environment.
 pub type PackedGraphs = (Vec<u32>, Vec<f32>);
 
-/// What [`GpuStages::with_sngnn_graphs`] adds: the packed layout and the selection's gap.
-#[derive(Debug, Clone, Copy)]
+/// What [`GpuStages::with_sngnn_graphs`] adds: the packed layout and the selection's gaps.
+#[derive(Debug, Clone)]
 struct SngnnBinding {
     layout: PackedLayout,
-    interval_ticks: u32,
+    gaps: TickGaps,
 }
+
+/// Most ticks of frame gaps the SNGNN prelude carries (`SN_GAP_EXTRA`, one bit per tick): it
+/// bounds the episode length of SNGNN batches on the device at time steps whose gap is not one
+/// constant (0.1, 0.2 s).
+const MAX_GAP_TICKS: u32 = 1 << 17;
 
 impl std::fmt::Debug for GpuStages {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -100,13 +123,15 @@ impl std::fmt::Debug for GpuStages {
     }
 }
 
-/// Word offset of u32 column `name` in a packed table of `columns` over `n_envs` environments
-/// (every column before it of the same kind, in declaration order).
-fn u32_offset(columns: wgsl::Columns<'_>, n_envs: usize, name: &str) -> usize {
+/// Word offset of column `name`, of kind `elem`, in the packed buffer of that kind of a table of
+/// `columns` over `n_envs` environments (every column before it of the same kind, in declaration
+/// order).
+fn column_offset(columns: wgsl::Columns<'_>, n_envs: usize, name: &str, elem: Elem) -> usize {
+    debug_assert!(columns.iter().any(|c| c.0 == name && c.1 == elem), "{name}");
     n_envs
         * columns
             .iter()
-            .filter(|c| c.1 == crate::state::columns::Elem::U32)
+            .filter(|c| c.1 == elem)
             .take_while(|c| c.0 != name)
             .map(|c| c.2)
             .sum::<usize>()
@@ -265,10 +290,10 @@ impl GpuStages {
     /// `sngnn::graph::capacity(config)`.
     ///
     /// # Errors
-    /// `SimError::BackendUnavailable` when the state has no SNGNN history, the time step has no
-    /// exact tick rule ([`crate::sngnn::history::interval_ticks`]: dt ≥ 1 s or dyadic), the
-    /// adapter allows fewer than 9 storage buffers per shader stage or the graphs exceed a
-    /// binding, or anything [`GpuStages::new`] reports.
+    /// `SimError::BackendUnavailable` when the state has no SNGNN history, the frame gaps of the
+    /// time step ([`TickGaps`]) would need a table of more than 2^17 ticks (episodes that long
+    /// at a time step such as 0.1 s), the adapter allows fewer than 9 storage buffers per shader
+    /// stage or the graphs exceed a binding, or anything [`GpuStages::new`] reports.
     pub fn with_sngnn_graphs(
         dev: GpuDevice,
         params: &StepParams,
@@ -282,16 +307,20 @@ impl GpuStages {
                 "the SNGNN graph passes need a state with the SNGNN frame history (reward.kind = \"sngnn\")".into(),
             ));
         }
-        let Some(interval_ticks) = crate::sngnn::history::interval_ticks(params.dt) else {
-            return Err(SimError::BackendUnavailable(format!(
-                "the device's SNGNN frame selection is exact only for a time step of at least 1 s \
-                 or a dyadic one (0.5, 0.25 s, ...), not {} s",
-                params.dt
-            )));
-        };
+        let gaps = TickGaps::new(params.dt, params.episode_length)
+            .filter(|g| g.ticks() <= MAX_GAP_TICKS as usize)
+            .ok_or_else(|| {
+                SimError::BackendUnavailable(format!(
+                    "the device's SNGNN frame selection at a time step of {} s holds a table of \
+                     at most {MAX_GAP_TICKS} ticks, and episodes of {} steps need more: use the \
+                     CPU backend, shorter episodes, or a time step of 1 s or a dyadic one (0.5, \
+                     0.25 s), whose gap is one constant",
+                    params.dt, params.episode_length
+                ))
+            })?;
         let binding = SngnnBinding {
             layout: graphs,
-            interval_ticks,
+            gaps,
         };
         Self::build(dev, params, state, outputs, stages, Some(binding))
     }
@@ -325,22 +354,26 @@ impl GpuStages {
             )));
         }
         let pool = storage_buffer(&dev, "reset pool", pool_bytes);
-        let episode_offset = u32_offset(&state.columns(), n_envs, "episode");
-        // The outputs (f32 words, then u32 words) and the state's episode counters, read back
-        // after every step.
+        let episode_offset = column_offset(&state.columns(), n_envs, "episode", Elem::U32);
+        // The outputs (f32 words, then u32 words), the state's episode counters and, with the
+        // SNGNN graphs, the network's status words, read back after every step.
+        let status_words = if sngnn.is_some() { n_envs } else { 0 };
         let step_readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("step readback"),
             size: bytes_of::<u32>(
-                outputs_table.packed_f32.len() + outputs_table.packed_u32.len() + n_envs,
+                outputs_table.packed_f32.len()
+                    + outputs_table.packed_u32.len()
+                    + n_envs
+                    + status_words,
             ),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let sngnn_graphs = match sngnn {
+        let sngnn_graphs = match &sngnn {
             Some(b) => Some(sngnn_buffers(&dev, n_envs, b.layout)?),
             None => None,
         };
-        let graph_words = sngnn.map_or(0, |b| {
+        let graph_words = sngnn.as_ref().map_or(0, |b| {
             n_envs * b.layout.u32_stride().max(b.layout.f32_stride())
         });
         let readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
@@ -386,19 +419,19 @@ impl GpuStages {
             &outputs.columns(),
             &outputs.strides.layout,
         );
-        if let Some(b) = sngnn {
-            prelude.push_str(&wgsl::sngnn_prelude(
-                &state.strides,
-                &b.layout,
-                b.interval_ticks,
-            ));
+        if let Some(b) = &sngnn {
+            prelude.push_str(&wgsl::sngnn_prelude(&state.strides, &b.layout, &b.gaps));
         }
-        let mut pipelines = Vec::new();
+        let mut sources = Vec::with_capacity(stages.len());
         for &stage in stages {
             if wgsl::SNGNN_PASSES.contains(&stage) && sngnn.is_none() {
                 return Err(SimError::BackendUnavailable(format!(
                     "pass {stage:?} needs the SNGNN graph buffers (GpuStages::with_sngnn_graphs)"
                 )));
+            }
+            if stage == SNGNN_SCORE {
+                // The network is attached afterwards (`attach_sngnn_net`): no stage shader.
+                continue;
             }
             if !STAGES_WITH_SHADERS.contains(&stage)
                 && !wgsl::PASSES.contains(&stage)
@@ -410,25 +443,9 @@ impl GpuStages {
             }
             let src = wgsl::assemble(&format!("{stage}.wgsl"), &prelude)
                 .map_err(SimError::BackendUnavailable)?;
-            let module = dev
-                .device
-                .create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some(stage),
-                    source: wgpu::ShaderSource::Wgsl(src.into()),
-                });
-            let pipeline = dev
-                .device
-                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(stage),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some("main"),
-                    compilation_options: Default::default(),
-                    cache: None,
-                });
-            dev.take_errors()?;
-            pipelines.push((stage, pipeline));
+            sources.push((stage, src));
         }
+        let pipelines = compile_pipelines(&dev, &pipeline_layout, &sources)?;
         let this = Self {
             dev,
             n_envs,
@@ -444,6 +461,15 @@ impl GpuStages {
             bind_group,
             pipelines,
             sngnn_graphs,
+            sngnn_net: None,
+            sngnn_score_at: column_offset(
+                &state.columns(),
+                n_envs,
+                "r_discomfort_sngnn",
+                Elem::F32,
+            ),
+            sngnn_status: vec![0; status_words],
+            sngnn_unread: false,
         };
         this.write(&this.state);
         this.write(&this.outputs);
@@ -453,6 +479,43 @@ impl GpuStages {
     /// The adapter the stages run on.
     pub fn adapter(&self) -> &AdapterSummary {
         &self.dev.adapter
+    }
+
+    /// Add SNGNN-v2's network (`model` with `tables`) over the packed graphs, as the pass
+    /// [`SNGNN_SCORE`]: each environment with a graph gets the room node's first output written
+    /// into its `r_discomfort_sngnn` state column, where the reward stage clamps it (the
+    /// `sngnn_graph` pass empties the graphs of the environments the reward does not score).
+    ///
+    /// # Errors
+    /// `SimError::BackendUnavailable` without the graph buffers
+    /// ([`GpuStages::with_sngnn_graphs`]) or when the network does not fit the adapter.
+    pub fn attach_sngnn_net(&mut self, model: &Model, tables: &Tables) -> Result<(), SimError> {
+        let Some((layout, gu, gf)) = &self.sngnn_graphs else {
+            return Err(SimError::BackendUnavailable(
+                "SNGNN-v2's network needs the SNGNN graph buffers (GpuStages::with_sngnn_graphs)"
+                    .into(),
+            ));
+        };
+        let score_at = self.sngnn_score_at;
+        self.sngnn_net = Some(GpuNet::in_step(
+            self.dev.clone(),
+            model,
+            tables,
+            *layout,
+            self.n_envs,
+            StepBuffers {
+                buffers: [gu.clone(), gf.clone()],
+                scores: self.state.f32s.clone(),
+                score_at,
+            },
+        )?);
+        Ok(())
+    }
+
+    /// The error of the last step's SNGNN-v2 network, if an environment's graph could not be
+    /// scored (an edge outside the tables, a graph beyond its layout).
+    pub fn sngnn_failure(&self) -> Option<SimError> {
+        crate::sngnn::gpu::failure(&self.sngnn_status)
     }
 
     fn write(&self, t: &DeviceTable) {
@@ -539,6 +602,18 @@ impl GpuStages {
             });
             pass.set_bind_group(0, &self.bind_group, &[]);
             for &stage in stages {
+                if stage == SNGNN_SCORE {
+                    let Some(net) = &self.sngnn_net else {
+                        return Err(SimError::BackendUnavailable(format!(
+                            "pass {SNGNN_SCORE:?} needs SNGNN-v2's network \
+                             (GpuStages::attach_sngnn_net)"
+                        )));
+                    };
+                    net.record(&mut pass);
+                    pass.set_bind_group(0, &self.bind_group, &[]);
+                    self.sngnn_unread = true;
+                    continue;
+                }
                 let Some((_, pipeline)) = self.pipelines.iter().find(|(s, _)| *s == stage) else {
                     return Err(SimError::BackendUnavailable(format!(
                         "stage {stage:?} was not built for this batch"
@@ -560,13 +635,26 @@ impl GpuStages {
         enc.copy_buffer_to_buffer(&self.outputs.u32s, 0, rb, f_bytes, u_bytes);
         let episode_at = (self.episode_offset * 4) as u64;
         enc.copy_buffer_to_buffer(&self.state.u32s, episode_at, rb, f_bytes + u_bytes, e_bytes);
+        let mut total = f_bytes + u_bytes + e_bytes;
+        // Stage timing runs the passes one submit each and reads back after the last.
+        let scored = std::mem::take(&mut self.sngnn_unread);
+        if let (true, Some(net)) = (scored, &self.sngnn_net) {
+            enc.copy_buffer_to_buffer(net.status_buffer(), 0, rb, total, e_bytes);
+            total += e_bytes;
+        }
         self.dev.queue.submit([enc.finish()]);
-        let total = f_bytes + u_bytes + e_bytes;
-        self.map_and_read(rb, total, |words| {
+        let status = &mut self.sngnn_status;
+        map_and_read(&self.dev, rb, total, |words| {
             let (f, rest) = words.split_at((f_bytes / 4) as usize);
-            let (u, ep) = rest.split_at((u_bytes / 4) as usize);
+            let (u, rest) = rest.split_at((u_bytes / 4) as usize);
+            let (ep, st) = rest.split_at(episode.len());
             out.unpack(bytemuck::cast_slice(f), u);
             episode.copy_from_slice(ep);
+            if scored {
+                status.copy_from_slice(st);
+            } else {
+                status.fill(0);
+            }
         })
     }
 
@@ -637,6 +725,38 @@ impl GpuStages {
     ) -> Result<(), SimError> {
         map_and_read(&self.dev, buffer, bytes, read)
     }
+}
+
+/// One compute pipeline (entry point `main`) of `layout` per `(label, WGSL source)`, in order.
+/// (On lavapipe the create calls take well under a second each: llvmpipe compiles a shader to
+/// machine code at its first dispatch, minutes for the stages with the ORCA core.)
+fn compile_pipelines(
+    dev: &GpuDevice,
+    layout: &wgpu::PipelineLayout,
+    sources: &[(&'static str, String)],
+) -> Result<Vec<(&'static str, wgpu::ComputePipeline)>, SimError> {
+    let mut pipelines = Vec::with_capacity(sources.len());
+    for (label, src) in sources {
+        let module = dev
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(src.as_str().into()),
+            });
+        let pipeline = dev
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        dev.take_errors()?;
+        pipelines.push((*label, pipeline));
+    }
+    Ok(pipelines)
 }
 
 /// Map the first `bytes` of `buffer` (after the work submitted so far), hand its words to
