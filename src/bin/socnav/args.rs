@@ -93,7 +93,8 @@ pub enum PolicyChoice {
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// Config: a shipped name (exp1, exp2, exp3, lroom_mixed, corridor_mixed, stress) or a TOML path.
+    /// Config: a shipped name (exp1, exp2, exp3, lroom_mixed, corridor_mixed, stress; with the
+    /// SNGNN-v2 reward exp1_sngnn, exp2_sngnn, exp3_sngnn) or a TOML path.
     #[arg(long, default_value = "exp1")]
     pub config: String,
     /// Number of environments.
