@@ -1,8 +1,9 @@
 //! Criterion benches of the step: exp1, exp2, exp3, observations written and read back, DSRNN
-//! reward (and SNGNN-v2's in `step_sngnn`, when its weights are installed), throughput in
-//! env-steps per second. The CPU backend at 1, 64, 1,024 and 4,096
-//! environments; the GPU backend at 4,096, 16,384 and 65,536 when a hardware GPU adapter exists
-//! (`SOCNAV_BENCH_GPU=any` takes a software one too, for correctness runs only).
+//! reward (and SNGNN-v2's in `step_sngnn` and `step_sngnn_gpu`, when its weights are installed),
+//! throughput in env-steps per second. The CPU backend at 1, 64, 1,024 and 4,096 environments
+//! (SNGNN-v2: 1, 64, 256); the GPU backend at 4,096, 16,384 and 65,536 (SNGNN-v2: 1,024, 4,096,
+//! 16,384) when a hardware GPU adapter exists (`SOCNAV_BENCH_GPU=any` takes a software one too,
+//! for correctness runs only).
 //!
 //! `cargo bench --bench step`; record figures in `benches/RESULTS.md` with the machine, batch size,
 //! backend and commit.
@@ -17,8 +18,16 @@ fn step(c: &mut Criterion) {
     bench_backend(c, "step", BackendChoice::Cpu, &[1, 64, 1024, 4096]);
 }
 
-#[cfg(feature = "gpu")]
 fn step_gpu(c: &mut Criterion) {
+    if gpu_adapter("step_gpu") {
+        bench_backend(c, "step_gpu", BackendChoice::Gpu, &[4096, 16384, 65536]);
+    }
+}
+
+/// Whether the GPU benches run: a hardware adapter exists (or any adapter, with
+/// `SOCNAV_BENCH_GPU=any`); says why not otherwise.
+#[cfg(feature = "gpu")]
+fn gpu_adapter(label: &str) -> bool {
     use socnav::backend::gpu::{AdapterPolicy, GpuDevice};
     let any = std::env::var("SOCNAV_BENCH_GPU").is_ok_and(|v| v == "any");
     let policy = if any {
@@ -26,30 +35,61 @@ fn step_gpu(c: &mut Criterion) {
     } else {
         AdapterPolicy::Hardware
     };
-    if let Err(e) = GpuDevice::open(policy) {
-        eprintln!("step_gpu: SKIPPED ({e}); SOCNAV_BENCH_GPU=any runs it on a software adapter");
-        return;
+    match GpuDevice::open(policy) {
+        Ok(_) => true,
+        Err(e) => {
+            eprintln!("{label}: SKIPPED ({e}); SOCNAV_BENCH_GPU=any runs it on a software adapter");
+            false
+        }
     }
-    bench_backend(c, "step_gpu", BackendChoice::Gpu, &[4096, 16384, 65536]);
 }
 
 #[cfg(not(feature = "gpu"))]
-fn step_gpu(_: &mut Criterion) {
-    eprintln!("step_gpu: SKIPPED (built without the `gpu` feature)");
+fn gpu_adapter(label: &str) -> bool {
+    eprintln!("{label}: SKIPPED (built without the `gpu` feature)");
+    false
+}
+
+const SNGNN_CONFIGS: [&str; 3] = ["exp1_sngnn", "exp2_sngnn", "exp3_sngnn"];
+
+/// Whether the SNGNN-v2 weights are installed; says why not otherwise.
+fn sngnn_weights(label: &str) -> bool {
+    let weights = socnav::sngnn::weights_path(None).path;
+    if !weights.is_file() {
+        eprintln!(
+            "{label}: SKIPPED (no SNGNN-v2 weights at {}; `socnav sngnn install`)",
+            weights.display()
+        );
+    }
+    weights.is_file()
 }
 
 /// The SNGNN-v2 reward on the CPU backend (needs the weights: `socnav sngnn install`).
 fn step_sngnn(c: &mut Criterion) {
-    let weights = socnav::sngnn::weights_path(None).path;
-    if !weights.is_file() {
-        eprintln!(
-            "step_sngnn: SKIPPED (no SNGNN-v2 weights at {}; `socnav sngnn install`)",
-            weights.display()
+    if sngnn_weights("step_sngnn") {
+        bench_configs(
+            c,
+            "step_sngnn",
+            BackendChoice::Cpu,
+            &SNGNN_CONFIGS,
+            &[1, 64, 256],
         );
-        return;
     }
-    let configs = ["exp1_sngnn", "exp2_sngnn", "exp3_sngnn"];
-    bench_configs(c, "step_sngnn", BackendChoice::Cpu, &configs, &[1, 64, 256]);
+}
+
+/// The SNGNN-v2 reward on the GPU backend (issue 6's target: >= 20,000 env-steps/s for exp2 on
+/// one H100).
+fn step_sngnn_gpu(c: &mut Criterion) {
+    if sngnn_weights("step_sngnn_gpu") && gpu_adapter("step_sngnn_gpu") {
+        let sizes = [1024, 4096, 16384];
+        bench_configs(
+            c,
+            "step_sngnn_gpu",
+            BackendChoice::Gpu,
+            &SNGNN_CONFIGS,
+            &sizes,
+        );
+    }
 }
 
 fn bench_backend(c: &mut Criterion, label: &str, backend: BackendChoice, sizes: &[usize]) {
@@ -93,5 +133,5 @@ fn bench_configs(
     }
 }
 
-criterion_group!(benches, step, step_gpu, step_sngnn);
+criterion_group!(benches, step, step_gpu, step_sngnn, step_sngnn_gpu);
 criterion_main!(benches);
