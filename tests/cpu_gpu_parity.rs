@@ -25,6 +25,7 @@ mod common;
 use common::gpu::{device, diverged_envs, first_differences, uniform};
 use socnav::backend::BackendChoice;
 use socnav::backend::gpu::AdapterSummary;
+use socnav::config::RewardKind;
 use socnav::rng::RngStream;
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions};
 
@@ -119,21 +120,40 @@ fn parity_mode(adapter: &AdapterSummary) -> Parity {
     }
 }
 
+/// What a comparison went through: episodes ended, and environment-steps whose SNGNN-v2
+/// discomfort was positive (0 with the DSRNN reward).
+#[derive(Debug, Default)]
+struct Tally {
+    ended: usize,
+    sngnn_scored: usize,
+}
+
+impl Tally {
+    /// Count the step `env` (the CPU batch) just took.
+    fn add(&mut self, env: &BatchEnv) {
+        let done = &env.outputs().episode_done;
+        self.ended += done.iter().filter(|&&d| d != 0).count();
+        let discomfort = &env.state().r_discomfort_sngnn;
+        self.sngnn_scored += discomfort.iter().filter(|&&d| d > 0.0).count();
+    }
+}
+
 /// Step `name` in lockstep (see the module docs) and check the share of diverged
-/// environment-steps. Returns the episodes that ended.
+/// environment-steps.
 fn lockstep(
     name: &str,
     config: Config,
     n_envs: usize,
     steps: usize,
     mode: AutoresetMode,
-) -> Option<usize> {
+) -> Option<Tally> {
     device()?;
     let mut cpu = batch(config.clone(), n_envs, mode, BackendChoice::Cpu);
     let mut gpu = batch(config, n_envs, mode, BackendChoice::Gpu);
     let mut rng = RngStream::new(77, 0, 0, 0);
     let mut a = vec![0.0f32; 3 * n_envs];
-    let (mut ended, mut diverged, mut worst, mut worst_column) = (0, 0usize, 0.0f32, "");
+    let mut tally = Tally::default();
+    let (mut diverged, mut worst, mut worst_column) = (0usize, 0.0f32, "");
     for _ in 0..steps {
         actions(&cpu, &mut rng, &mut a);
         gpu.copy_state_from(&cpu).expect("same shape");
@@ -165,8 +185,8 @@ fn lockstep(
                 (worst, worst_column) = (w, c);
             }
         }
+        tally.add(&cpu);
         let done: Vec<bool> = cpu.outputs().episode_done.iter().map(|&d| d != 0).collect();
-        ended += done.iter().filter(|&&d| d).count();
         if mode == AutoresetMode::Disabled && done.iter().any(|&d| d) {
             cpu.reset_envs(&done).expect("CPU masked reset");
         }
@@ -179,10 +199,12 @@ fn lockstep(
     };
     println!(
         "{name} ({mode:?}) in lockstep on {}: {diverged} of {} environment-steps diverged ({:.3} %), \
-         {agreement}; {ended} episodes ended",
+         {agreement}; {} episodes ended, SNGNN-v2 discomfort positive in {} environment-steps",
         gpu.device(),
         steps * n_envs,
         100.0 * share,
+        tally.ended,
+        tally.sngnn_scored,
     );
     assert!(
         share <= MAX_DIVERGED,
@@ -191,19 +213,19 @@ fn lockstep(
         steps * n_envs,
         100.0 * MAX_DIVERGED
     );
-    Some(ended)
+    Some(tally)
 }
 
 /// Step `name` for `steps` steps on both backends and compare after the reset and every step.
 /// Under DISABLED the finished environments are reset with a mask after each step, as a caller
-/// would. Returns the episodes that ended.
+/// would.
 fn parity(
     name: &str,
     config: Config,
     n_envs: usize,
     steps: usize,
     mode: AutoresetMode,
-) -> Option<usize> {
+) -> Option<Tally> {
     device()?;
     let mut cpu = batch(config.clone(), n_envs, mode, BackendChoice::Cpu);
     let mut gpu = batch(config, n_envs, mode, BackendChoice::Gpu);
@@ -211,14 +233,14 @@ fn parity(
     assert_same(name, 0, &cpu, &gpu);
     let mut rng = RngStream::new(77, 0, 0, 0);
     let mut a = vec![0.0f32; 3 * n_envs];
-    let mut ended = 0;
+    let mut tally = Tally::default();
     for step in 1..=steps {
         actions(&cpu, &mut rng, &mut a);
         cpu.step(Actions::Continuous(&a)).expect("CPU step");
         gpu.step(Actions::Continuous(&a)).expect("GPU step");
         assert_same(name, step, &cpu, &gpu);
+        tally.add(&cpu);
         let done: Vec<bool> = cpu.outputs().episode_done.iter().map(|&d| d != 0).collect();
-        ended += done.iter().filter(|&&d| d).count();
         if mode == AutoresetMode::Disabled && done.iter().any(|&d| d) {
             cpu.reset_envs(&done).expect("CPU masked reset");
             gpu.reset_envs(&done).expect("GPU masked reset");
@@ -226,9 +248,11 @@ fn parity(
         }
     }
     println!(
-        "{name} ({mode:?}): {steps} steps of {n_envs} environments bit-identical, {ended} episodes ended"
+        "{name} ({mode:?}): {steps} steps of {n_envs} environments bit-identical, {} episodes \
+         ended, SNGNN-v2 discomfort positive in {} environment-steps",
+        tally.ended, tally.sngnn_scored
     );
-    Some(ended)
+    Some(tally)
 }
 
 fn check(name: &str, n_envs: usize, steps: usize, mode: AutoresetMode) {
@@ -252,10 +276,18 @@ fn check_config(name: &str, config: Config, n_envs: usize, steps: usize, mode: A
         Parity::Exact => parity,
         Parity::Lockstep => lockstep,
     };
-    if let Some(ended) = run(name, config, n_envs, steps, mode) {
+    let sngnn = config.reward.kind == RewardKind::Sngnn;
+    if let Some(tally) = run(name, config, n_envs, steps, mode) {
         assert!(
-            ended >= n_envs,
-            "{name}: only {ended} episodes ended in {steps} steps: autoresets barely tested"
+            tally.ended >= n_envs,
+            "{name}: only {} episodes ended in {steps} steps: autoresets barely tested",
+            tally.ended
+        );
+        assert!(
+            !sngnn || tally.sngnn_scored >= n_envs,
+            "{name}: SNGNN-v2's discomfort was positive in only {} environment-steps: the \
+             comparison barely tested the network",
+            tally.sngnn_scored
         );
     }
 }
