@@ -152,7 +152,8 @@ pub const STANDALONE: &[&str] = &["sngnn.wgsl"];
 
 /// Passes that need the SNGNN part of the prelude ([`sngnn_prelude`]) and the packed graph
 /// bindings (`GpuStages::with_sngnn_graphs`): `sngnn_graph` (record the frame and build the
-/// graph of every stepping, non-terminal environment).
+/// graph of every stepping, non-terminal environment; every other environment's graph gets 0
+/// nodes, so that the network of the step skips it).
 pub const SNGNN_PASSES: &[&str] = &["sngnn_graph"];
 
 /// Whether `shaders/<path>` needs [`sngnn_prelude`]: the SNGNN passes and libraries.
