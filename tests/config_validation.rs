@@ -9,7 +9,7 @@
 //! - `Config::from_socnavgym` turns a SocNavGym 0.1.1 config dict into exactly the shipped TOML
 //!   of the same stem (checked on the golden episode headers), and reports missing 0.1.1 keys.
 //!
-//! Environment: `SOCNAV_GOLDEN_DIR` (default `../shared/golden/socnavgym`); without that
+//! Environment: `SOCNAV_GOLDEN_DIR` (default `tests/data/golden/socnavgym`); without that
 //! directory the golden part is skipped with a printed reason.
 
 use std::io::Read;
@@ -25,7 +25,7 @@ fn configs_dir() -> PathBuf {
 fn golden_dir() -> PathBuf {
     match std::env::var_os("SOCNAV_GOLDEN_DIR") {
         Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/golden/socnavgym"),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/golden/socnavgym"),
     }
 }
 

@@ -5,7 +5,7 @@
 //! reward, terminated/truncated, every info key) and the state it leaves (robot, shadow robot,
 //! humans, groups, metric accumulators, reward memory) with the recording.
 //!
-//! Environment: `SOCNAV_GOLDEN_DIR` (default `../shared/golden/socnavgym`), `SOCNAV_GOLDEN_FILTER`
+//! Environment: `SOCNAV_GOLDEN_DIR` (default `tests/data/golden/socnavgym`), `SOCNAV_GOLDEN_FILTER`
 //! (file-name prefix). Unfiltered, every episode whose config this build replays is run and the
 //! others are skipped with the reason printed.
 //!

@@ -8,7 +8,7 @@
 //! ways: through the library's building blocks reading storage (as a stage shader will), and
 //! through `orca_compute_new_velocity` over function-scope copies. Scenes: RVO2's reference data
 //! (the one-step cases, the edge-split scenes, crossing4, corridor and every sampled Circle250
-//! state; `SOCNAV_REF_DIR` or `../shared/ref/orca_sfm`, as in tests/orca_reference.rs) and
+//! state; `SOCNAV_REF_DIR` or `tests/data/ref/orca_sfm`, as in tests/orca_reference.rs) and
 //! thousands of seeded random scenes with agents and polygon obstacles, crowded ones included so
 //! that LP3 runs often.
 //!

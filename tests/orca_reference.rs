@@ -5,7 +5,7 @@
 //! line, new velocities and positions, on every data set here. RVO2 values are float32 printed
 //! with `%.9g`, so parsing them as `f32` gives the exact value the library held.
 //!
-//! Data directory: `SOCNAV_REF_DIR`, or `../shared/ref/orca_sfm` next to the crate root.
+//! Data directory: `SOCNAV_REF_DIR`, or `tests/data/ref/orca_sfm` in the repository.
 
 use std::collections::BTreeMap;
 

@@ -3,8 +3,8 @@ compatible environment, which must return 0.1.1's observation dict (same keys in
 same vector lengths, same values within the f32 tolerances of docs/fidelity.md) and its info dict
 (same keys, same Python types, ``None`` where 0.1.1 has ``None``, the same interaction pairs).
 
-The golden set lives beside the repository (``../shared/golden/socnavgym``, or
-``SOCNAV_GOLDEN_DIR``); without it these tests skip and say so."""
+The published golden set is in the repository (``tests/data/golden/socnavgym``);
+``SOCNAV_GOLDEN_DIR`` points elsewhere, and without the directory these tests skip and say so."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ import pytest
 
 from socnav.socnavgym import DiscreteActions, SocNavGymEnv, load_socnavgym_yaml
 
-GOLDEN = Path(os.environ.get("SOCNAV_GOLDEN_DIR", Path(__file__).resolve().parents[2] / "../shared/golden/socnavgym"))
+GOLDEN = Path(os.environ.get("SOCNAV_GOLDEN_DIR", Path(__file__).resolve().parents[2] / "tests/data/golden/socnavgym"))
 needs_golden = pytest.mark.skipif(not GOLDEN.is_dir(), reason=f"no golden episodes at {GOLDEN}")
 
 # docs/fidelity.md: observations within 3e-5, rewards within 1.2e-5 (f32 against 0.1.1's f64).

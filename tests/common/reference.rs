@@ -5,10 +5,10 @@ use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::PathBuf;
 
-/// The RVO2 reference data: `SOCNAV_REF_DIR`, or `../shared/ref/orca_sfm` next to the crate root.
+/// The RVO2 reference data: `SOCNAV_REF_DIR`, or `tests/data/ref/orca_sfm` in the repository.
 pub fn ref_dir() -> PathBuf {
     std::env::var_os("SOCNAV_REF_DIR").map_or_else(
-        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/ref/orca_sfm"),
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/ref/orca_sfm"),
         PathBuf::from,
     )
 }

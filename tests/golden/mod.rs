@@ -18,11 +18,11 @@ use socnav::Config;
 
 pub use compare::Report;
 
-/// The golden directory: `SOCNAV_GOLDEN_DIR`, else `../shared/golden/socnavgym` beside the crate.
+/// The golden directory: `SOCNAV_GOLDEN_DIR`, else `tests/data/golden/socnavgym` in the repository.
 pub fn golden_dir() -> PathBuf {
     match std::env::var_os("SOCNAV_GOLDEN_DIR") {
         Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/golden/socnavgym"),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/golden/socnavgym"),
     }
 }
 
