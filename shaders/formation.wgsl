@@ -72,6 +72,8 @@ fn new_group(e: u32, kind: u32) -> u32 {
     su[C_G_SEQ + g] = regroup_next_seq(e);
     sf[C_G_VX + g] = 0.0;
     sf[C_G_VY + g] = 0.0;
+    // The members are the walkers that formed the crowd, with their human goal radius.
+    sf[C_G_MEMBER_GOAL_RADIUS + g] = params.human_goal_radius;
     let hb = e * S_H_X;
     let sb = e * S_CF_HUMAN;
     var member_role = ROLE_STANDING_GROUP;

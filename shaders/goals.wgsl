@@ -3,7 +3,8 @@
 //
 // Twin of src/systems/goals.rs (stage `goals`, spec 4.1 step 8): a lone walker within reach of
 // its goal (human radius + goal radius) gets a new goal; a moving group whose members are all
-// within reach of the group goal gets a new group goal (and so do its members). New goals are
+// within reach of the group goal (human radius + the members' own goal radius,
+// `g_member_goal_radius`) gets a new group goal (and so do its members). New goals are
 // rejection-sampled in the margin box by `goals_sample_goal` (common/goals.wgsl, shared with the
 // social events and formation), free of every entity where it is now and of every current goal;
 // after PLACE_MAX_TRIES tries the goal stays unchanged. Draws come from the step's STREAM_GOALS stream, in the Rust order.
@@ -47,7 +48,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (su[C_G_KIND + g] != GROUP_MOVING) {
             continue;
         }
-        let reach = params.human_radius + params.group_goal_radius;
+        // Each member within reach of the group goal by its own goal radius.
+        let reach = params.human_radius + sf[C_G_MEMBER_GOAL_RADIUS + g];
         let m0 = hb + su[C_G_FIRST + g];
         let m1 = hb + su[C_G_FIRST + g] + su[C_G_COUNT + g];
         var arrived = true;

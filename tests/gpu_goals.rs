@@ -27,6 +27,8 @@ struct Reached {
     forming: usize,
     /// Moving groups whose members are all within reach of the group goal (re-sampled).
     groups: usize,
+    /// Of those, groups whose members test arrival with the human goal radius (formed crowds).
+    formed_groups: usize,
 }
 
 thread_local! {
@@ -62,12 +64,13 @@ fn count(s: &BatchState, p: &StepParams) {
             if s.g_kind[g] != group_kind::MOVING {
                 continue;
             }
-            let reach = p.human_radius + p.group_goal_radius;
+            let reach = p.human_radius + s.g_member_goal_radius[g];
             let m = hb + s.g_first[g] as usize..hb + (s.g_first[g] + s.g_count[g]) as usize;
             if m.into_iter()
                 .all(|i| distance(s.h_x[i], s.h_y[i], s.g_goal_x[g], s.g_goal_y[g]) < reach)
             {
                 r.groups += 1;
+                r.formed_groups += usize::from(s.g_member_goal_radius[g] == p.human_goal_radius);
             }
         }
     }
@@ -76,7 +79,8 @@ fn count(s: &BatchState, p: &StepParams) {
 
 /// About a third of the walkers get their goal moved to within reach (a tenth of them marked as
 /// heading to a forming crowd, the others as ordinary walkers), and about half of the moving groups get their goal moved next
-/// to their centre (all members within reach); the ticks are varied so the goal streams differ.
+/// to their centre (all members within reach of the group goal radius, some of the human goal
+/// radius, which half of the groups test with, as crowds formed during the episode do); the ticks are varied so the goal streams differ.
 fn onto_goals(s: &mut BatchState, _: &mut Outputs, p: &StepParams, rng: &mut RngStream) {
     for e in 0..s.n_envs {
         s.tick[e] = rng.next_u32() % p.episode_length;
@@ -97,6 +101,11 @@ fn onto_goals(s: &mut BatchState, _: &mut Outputs, p: &StepParams, rng: &mut Rng
         let gb = e * s.strides.groups;
         for g in gb..gb + s.n_groups[e] as usize {
             if s.g_kind[g] == group_kind::MOVING && rng.next_f32() < 0.5 {
+                s.g_member_goal_radius[g] = if rng.next_f32() < 0.5 {
+                    p.human_goal_radius
+                } else {
+                    p.group_goal_radius
+                };
                 s.g_goal_x[g] = s.g_x[g] + uniform(rng, -0.3, 0.3);
                 s.g_goal_y[g] = s.g_y[g] + uniform(rng, -0.3, 0.3);
             }
@@ -136,6 +145,6 @@ fn experiments() {
         let Some(r) = check(name, config(name)) else {
             return;
         };
-        assert!(r.groups > 100, "{name}: {r:?}");
+        assert!(r.groups > 100 && r.formed_groups > 0, "{name}: {r:?}");
     }
 }

@@ -568,6 +568,7 @@ impl Gen<'_, '_> {
                 .ok_or("a group goal")?;
             s.g_goal_x[gi] = g.x;
             s.g_goal_y[gi] = g.y;
+            s.g_member_goal_radius[gi] = p.group_goal_radius;
             self.spawn.add_goal(g);
             for i in hb + s.g_first[gi] as usize..hb + (s.g_first[gi] + s.g_count[gi]) as usize {
                 s.h_goal_x[i] = g.x;
@@ -578,6 +579,7 @@ impl Gen<'_, '_> {
         for gi in gb + moving..gb + s.n_groups[self.e] as usize {
             s.g_goal_x[gi] = s.g_x[gi];
             s.g_goal_y[gi] = s.g_y[gi];
+            s.g_member_goal_radius[gi] = p.group_goal_radius;
             for i in hb + s.g_first[gi] as usize..hb + (s.g_first[gi] + s.g_count[gi]) as usize {
                 s.h_goal_x[i] = s.h_x[i];
                 s.h_goal_y[i] = s.h_y[i];

@@ -110,7 +110,9 @@ fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
             // Every human has a goal: spawned laptop users and standing-group members their own
             // position, formed ones the seat or slot they walked to (0.1.1 keeps it).
             let goal = json!([num(s.h_goal_x[i]), num(s.h_goal_y[i])]);
-            let goal_radius = if group_goal {
+            // The goal registry holds a moving group's goal disc with the group goal radius;
+            // a member's own arrival test uses its group's member goal radius.
+            let registry_radius = if group_goal {
                 p.group_goal_radius
             } else {
                 p.human_goal_radius
@@ -118,13 +120,20 @@ fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
             if r != role::LAPTOP_USER && r != role::STANDING_GROUP {
                 goals.insert(
                     s.h_id[i].to_string(),
-                    json!([goal[0], goal[1], num(goal_radius)]),
+                    json!([goal[0], goal[1], num(registry_radius)]),
                 );
             }
+            let goal_radius = match r {
+                role::LAPTOP_USER => Value::Null,
+                _ if s.h_group[i] != NONE => {
+                    num(s.g_member_goal_radius[e * c.groups + s.h_group[i] as usize])
+                }
+                _ => num(p.human_goal_radius),
+            };
             let mut h = json!({
                 "id": s.h_id[i], "x": num(s.h_x[i]), "y": num(s.h_y[i]), "theta": num(s.h_theta[i]),
                 "speed": num(s.h_speed[i]), "radius": num(p.human_radius), "goal": goal,
-                "goal_radius": if r == role::LAPTOP_USER { Value::Null } else { num(goal_radius) },
+                "goal_radius": goal_radius,
                 "policy": if s.h_policy[i] == policy::ORCA { "orca" } else { "sfm" },
                 "role": ROLE_NAMES[r as usize],
             });

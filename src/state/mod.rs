@@ -344,6 +344,11 @@ soa! {
         group.g_goal_x: f32,
         /// Goal y (m) of a moving group.
         group.g_goal_y: f32,
+        /// Goal radius (m) of each member's own arrival test: 0.1.1 re-draws a moving group's goal
+        /// when every member is within human radius + *its own* goal radius of it, which is the
+        /// interaction goal radius for groups spawned at reset and the human goal radius for
+        /// crowds formed during the episode (their members are the walkers that formed them).
+        group.g_member_goal_radius: f32,
         /// This step's ORCA velocity x of a moving group (m/s, before the division by members).
         group.g_vx: f32,
         /// This step's ORCA velocity y (m/s).

@@ -115,7 +115,7 @@ fn walkers_centroid(s: &StateChunk, e: usize) -> (f32, f32) {
 }
 
 /// A new group slot `g` with the forming walkers as members, in formation order.
-fn new_group(s: &mut StateChunk, e: usize, kind: u32) -> usize {
+fn new_group(p: &StepParams, s: &mut StateChunk, e: usize, kind: u32) -> usize {
     let g = e * s.strides.groups + s.n_groups[e] as usize;
     assert!(
         s.n_groups[e] < s.strides.groups as u32,
@@ -128,6 +128,9 @@ fn new_group(s: &mut StateChunk, e: usize, kind: u32) -> usize {
     s.g_seq[g] = regroup::next_seq(s, e);
     s.g_vx[g] = 0.0;
     s.g_vy[g] = 0.0;
+    // The members are the walkers that formed the crowd, with their human goal radius (0.1.1
+    // swaps them into the placeholder group); a moving one's arrival is tested with it.
+    s.g_member_goal_radius[g] = p.human_goal_radius;
     let hb = e * s.strides.humans;
     let sb = e * s.strides.group_size;
     let member_role = if kind == group_kind::MOVING {
@@ -153,6 +156,7 @@ fn form_crowd(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngStream)
     place::group_layout(p, rng, s.cf_x[e], s.cf_y[e], n, true, &mut poses);
     let moving = rng.chance(0.5);
     let g = new_group(
+        p,
         s,
         e,
         if moving {
@@ -201,7 +205,7 @@ fn form_approximate_crowd(
     let n = s.cf_count[e] as usize;
     let mut poses: [Pose; MAX_GROUP] = [(0.0, 0.0, 0.0); MAX_GROUP];
     place::group_layout(p, rng, cx, cy, n, true, &mut poses);
-    let g = new_group(s, e, group_kind::STANDING);
+    let g = new_group(p, s, e, group_kind::STANDING);
     let (mut px, mut py) = (0.0f32, 0.0f32);
     for &(x, y, _) in poses.iter().take(n) {
         px += x;

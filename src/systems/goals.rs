@@ -1,6 +1,7 @@
 //! Stage `goals` (spec 4.1 step 8): a lone walker within reach of its goal (human radius + goal
 //! radius) gets a new goal; a moving group whose members are all within reach of the group goal
-//! gets a new group goal. New goals are sampled in the margin box, free of every entity where it
+//! (human radius + the members' own goal radius: the interaction goal radius for groups spawned at
+//! reset, the human goal radius for crowds formed during the episode) gets a new group goal. New goals are sampled in the margin box, free of every entity where it
 //! is now and of every current goal; after a bounded number of tries the goal stays unchanged
 //! (0.1.1: a 30 s wall-clock timeout).
 
@@ -39,7 +40,9 @@ pub fn goals(p: &StepParams, b: &mut Batch<'_>, e: usize) {
         if s.g_kind[g] != group_kind::MOVING {
             continue;
         }
-        let reach = p.human_radius + p.group_goal_radius;
+        // Each member within reach of the group goal by its own goal radius (0.1.1 asks every
+        // member `has_reached_goal`), the same radius for all members of a group.
+        let reach = p.human_radius + s.g_member_goal_radius[g];
         let members = hb + s.g_first[g] as usize..hb + (s.g_first[g] + s.g_count[g]) as usize;
         let arrived = members
             .clone()

@@ -261,7 +261,7 @@ pub(super) fn snapshot(
     shadow(&st.at("shadow_robot")?, s, e)?;
     let ids = humans(p, st, s, e)?;
     let laptop_ids = objects(p, st, s, e)?;
-    groups(st, s, e, &ids)?;
+    groups(st, p, s, e, &ids)?;
     laptop_users(st, s, e, &ids, &laptop_ids)?;
     forming(st, s, e, &ids, &laptop_ids)?;
     group_noise(st, s, e, &ids)?;
@@ -452,7 +452,13 @@ fn slot_of(ids: &[u32], id: u32, path: &str) -> Result<usize, SimError> {
         .ok_or_else(|| err(path, format!("names id {id}, which is not in the list")))
 }
 
-fn groups(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32]) -> Result<(), SimError> {
+fn groups(
+    st: &Reader<'_>,
+    p: &StepParams,
+    s: &mut BatchState,
+    e: usize,
+    ids: &[u32],
+) -> Result<(), SimError> {
     let list = st.list("groups")?;
     capacity(
         "groups",
@@ -508,9 +514,49 @@ fn groups(st: &Reader<'_>, s: &mut BatchState, e: usize, ids: &[u32]) -> Result<
         };
         s.g_vx[gb + k] = 0.0;
         s.g_vy[gb + k] = 0.0;
+        s.g_member_goal_radius[gb + k] =
+            member_goal_radius(st, p, &g.child_path("members"), first, items.len())?;
     }
     s.n_groups[e] = list.len() as u32;
     Ok(())
+}
+
+/// The goal radius (m) a group's members test their arrival with: their `goal_radius` in the
+/// document (0.1.1 records each human's own), which must be the same for every member (every
+/// group 0.1.1 makes has one value); the group goal radius when the members do not say.
+fn member_goal_radius(
+    st: &Reader<'_>,
+    p: &StepParams,
+    members_path: &str,
+    first: usize,
+    n: usize,
+) -> Result<f32, SimError> {
+    let humans = st.list("humans")?;
+    let mut radius = None;
+    for h in humans.iter().skip(first).take(n) {
+        let Some(r) = h.opt("goal_radius") else {
+            continue;
+        };
+        let value = r.as_f32()?;
+        if !(value.is_finite() && value > 0.0) {
+            return Err(err(
+                &r.path,
+                format!("must be a positive distance (m), got {value}"),
+            ));
+        }
+        match radius {
+            Some(first_value) if first_value != value => {
+                return Err(err(
+                    members_path,
+                    format!(
+                        "name humans with different goal radii ({first_value} and {value}); a group's members share one"
+                    ),
+                ));
+            }
+            _ => radius = Some(value),
+        }
+    }
+    Ok(radius.unwrap_or(p.group_goal_radius))
 }
 
 fn laptop_users(
