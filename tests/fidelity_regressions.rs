@@ -6,7 +6,7 @@
 mod common;
 mod golden;
 
-use golden::{Episode, config_for, golden_dir, num};
+use golden::{Episode, config_for, num, published_dir};
 use serde_json::Value;
 use socnav::{Actions, BatchEnv, EnvOptions};
 
@@ -97,13 +97,9 @@ fn group_goal_after_step(
     (pair(&before), pair(&after))
 }
 
-fn load(name: &str) -> Option<Episode> {
-    let path = golden_dir().join(name);
-    if !path.is_file() {
-        println!("SKIP: no golden episode {}", path.display());
-        return None;
-    }
-    Some(Episode::load(&path))
+/// A published episode (always in the repository).
+fn load(name: &str) -> Episode {
+    Episode::load(&published_dir().join(name))
 }
 
 /// Class 1 of the unseen episodes (a moving group's goal in the corridor config): 0.1.1 tests a
@@ -113,9 +109,7 @@ fn load(name: &str) -> Option<Episode> {
 /// (0.9 < 0.36 + 0.8) would re-draw it.
 #[test]
 fn formed_moving_crowd_keeps_its_goal_until_members_are_within_the_human_goal_radius() {
-    let Some(ep) = load(FORMED_MOVING_CROWD) else {
-        return;
-    };
+    let ep = load(FORMED_MOVING_CROWD);
     let (mut doc, action) = before_step(&ep, 141);
     members_around_goal(&mut doc, 0, 0.9);
     let (before, after) = group_goal_after_step(&ep, &doc, &action, 0);
@@ -126,9 +120,7 @@ fn formed_moving_crowd_keeps_its_goal_until_members_are_within_the_human_goal_ra
 /// goal radius, 0.8 m): every member is within 0.36 + 0.8 m of the goal, so it is re-drawn.
 #[test]
 fn spawned_moving_group_redraws_its_goal_within_the_interaction_goal_radius() {
-    let Some(ep) = load(FORMED_MOVING_CROWD) else {
-        return;
-    };
+    let ep = load(FORMED_MOVING_CROWD);
     let (mut doc, action) = before_step(&ep, 141);
     members_around_goal(&mut doc, 0, 0.9);
     member_goal_radius(&mut doc, 0, 0.8);
@@ -140,9 +132,7 @@ fn spawned_moving_group_redraws_its_goal_within_the_interaction_goal_radius() {
 /// group (every group 0.1.1 makes has one radius for all members).
 #[test]
 fn group_members_with_different_goal_radii_are_refused() {
-    let Some(ep) = load(FORMED_MOVING_CROWD) else {
-        return;
-    };
+    let ep = load(FORMED_MOVING_CROWD);
     let (mut doc, _) = before_step(&ep, 141);
     let first = doc["state"]["groups"][0]["members"][0].clone();
     for h in doc["state"]["humans"].as_array_mut().expect("humans") {

@@ -718,6 +718,9 @@ fn circle250(pos: [f32; 2], vel: [f32; 2], pref_vel: [f32; 2]) -> OrcaAgent {
 /// agent: velocity, LP3 path, neighbour lists in order and every ORCA line.
 #[test]
 fn reference_scenes_bit_identical() {
+    if !common::reference::present("reference_scenes_bit_identical") {
+        return;
+    }
     let Some(dev) = device() else { return };
     let kernel = Kernel::new(dev);
 

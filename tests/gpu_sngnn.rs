@@ -121,7 +121,7 @@ fn golden_graphs_on_the_device() {
         tables.floats() * 4 / 1_000_000,
         largest * 4 / 1_000_000
     );
-    let dir = golden::golden_dir();
+    let dir = golden::published_dir();
     let goldens: Vec<_> = GOLDEN
         .iter()
         .flat_map(|&(config, seed)| common::sngnn::golden_graphs(&dir, config, seed))

