@@ -58,7 +58,7 @@ pub fn open(
 ) -> Result<Box<dyn Backend>, SimError> {
     let on_cpu = |why: &str, state, out| -> Result<Box<dyn Backend>, SimError> {
         if !why.is_empty() {
-            eprintln!("socnav: backend auto: using the CPU backend ({why})");
+            eprintln!("socnav: {why}; using the CPU backend");
         }
         let cpu = cpu::CpuBackend::new(params, state, out, threads)?;
         Ok(Box::new(
@@ -76,8 +76,8 @@ pub fn open(
             };
             let dev = match gpu::GpuDevice::open(policy) {
                 Ok(dev) => dev,
-                Err(e) if choice == BackendChoice::Auto => {
-                    return on_cpu(&e.to_string(), state, out);
+                Err(SimError::BackendUnavailable(why)) if choice == BackendChoice::Auto => {
+                    return on_cpu(&why, state, out);
                 }
                 Err(e) => return Err(e),
             };
@@ -85,9 +85,9 @@ pub fn open(
             let kept = (choice == BackendChoice::Auto).then(|| (state.clone(), out.clone()));
             match gpu::GpuBackend::new(dev, params, state, out, threads, sngnn.as_ref()) {
                 Ok(gpu) => Ok(Box::new(gpu)),
-                Err(e @ SimError::BackendUnavailable(_)) => match kept {
-                    Some((state, out)) => on_cpu(&e.to_string(), state, out),
-                    None => Err(e),
+                Err(SimError::BackendUnavailable(why)) => match kept {
+                    Some((state, out)) => on_cpu(&why, state, out),
+                    None => Err(SimError::BackendUnavailable(why)),
                 },
                 Err(e) => Err(e),
             }

@@ -90,16 +90,24 @@ fn rank(t: wgpu::DeviceType) -> u8 {
     }
 }
 
-fn instance() -> (wgpu::Instance, bool) {
+/// The wgpu instance and the backends socnav looks at: every backend but OpenGL, unless
+/// `WGPU_BACKEND` asks for it. socnav never computes on OpenGL unless asked, and probing it
+/// makes Mesa's EGL print `XDG_RUNTIME_DIR is invalid` lines as errors on machines without a
+/// desktop session.
+fn instance() -> (wgpu::Instance, wgpu::Backends) {
     let gl_requested = wgpu::Backends::from_env().is_some_and(|b| b.contains(wgpu::Backends::GL));
-    let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-    (wgpu::Instance::new(desc), gl_requested)
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    if !gl_requested {
+        desc.backends.remove(wgpu::Backends::GL);
+    }
+    let backends = desc.backends;
+    (wgpu::Instance::new(desc), backends)
 }
 
-/// Every adapter wgpu finds (honouring `WGPU_BACKEND`), for `socnav devices`.
+/// Every adapter socnav can use (honouring `WGPU_BACKEND`), for `socnav devices`.
 pub fn list_adapters() -> Vec<AdapterSummary> {
-    let (instance, _) = instance();
-    pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
+    let (instance, backends) = instance();
+    pollster::block_on(instance.enumerate_adapters(backends))
         .iter()
         .map(|a| AdapterSummary::of(&a.get_info()))
         .collect()
@@ -130,12 +138,12 @@ impl std::fmt::Debug for GpuDevice {
 impl GpuDevice {
     /// Open the best adapter the policy allows (see the module docs).
     pub fn open(policy: AdapterPolicy) -> Result<Self, SimError> {
-        let (instance, gl_requested) = instance();
-        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        let (instance, backends) = instance();
+        let adapters = pollster::block_on(instance.enumerate_adapters(backends));
         let name_filter = std::env::var("WGPU_ADAPTER_NAME")
             .ok()
             .filter(|s| !s.is_empty());
-        let chosen = choose(&adapters, policy, name_filter.as_deref(), gl_requested)?;
+        let chosen = choose(&adapters, policy, name_filter.as_deref())?;
         let adapter = &adapters[chosen];
         let info = adapter.get_info();
         // The adapter's own limits: large batches need storage bindings beyond WebGPU's defaults.
@@ -187,7 +195,6 @@ fn choose(
     adapters: &[wgpu::Adapter],
     policy: AdapterPolicy,
     name_filter: Option<&str>,
-    gl_requested: bool,
 ) -> Result<usize, SimError> {
     let infos: Vec<wgpu::AdapterInfo> = adapters.iter().map(wgpu::Adapter::get_info).collect();
     let listing = || {
@@ -201,12 +208,11 @@ fn choose(
                 .join("; ")
         }
     };
-    let usable = |i: &wgpu::AdapterInfo| gl_requested || i.backend != wgpu::Backend::Gl;
     let candidates: Vec<usize> = match name_filter {
         Some(name) => {
             let needle = name.to_lowercase();
             let found: Vec<usize> = (0..infos.len())
-                .filter(|&k| usable(&infos[k]) && infos[k].name.to_lowercase().contains(&needle))
+                .filter(|&k| infos[k].name.to_lowercase().contains(&needle))
                 .collect();
             if found.is_empty() {
                 return Err(SimError::BackendUnavailable(format!(
@@ -217,23 +223,19 @@ fn choose(
             found
         }
         None => (0..infos.len())
-            .filter(|&k| {
-                usable(&infos[k])
-                    && (policy == AdapterPolicy::Any || is_hardware(infos[k].device_type))
-            })
+            .filter(|&k| policy == AdapterPolicy::Any || is_hardware(infos[k].device_type))
             .collect(),
     };
     candidates
         .into_iter()
         .min_by_key(|&k| rank(infos[k].device_type))
         .ok_or_else(|| {
-            let wanted = match policy {
-                AdapterPolicy::Hardware => "no hardware GPU adapter",
-                AdapterPolicy::Any => "no GPU adapter",
-            };
-            SimError::BackendUnavailable(format!(
-                "{wanted} found (adapters: {}); {INSTALL_HINT}",
-                listing()
-            ))
+            // A machine with only a software adapter (Mesa's lavapipe) has its driver: it just
+            // has no hardware GPU, which `--backend auto` needs.
+            SimError::BackendUnavailable(match policy {
+                AdapterPolicy::Hardware if !infos.is_empty() => "no hardware GPU found".to_owned(),
+                AdapterPolicy::Hardware => format!("no GPU found; {INSTALL_HINT}"),
+                AdapterPolicy::Any => format!("no GPU adapter found; {INSTALL_HINT}"),
+            })
         })
 }

@@ -19,6 +19,7 @@ use std::process::ExitCode;
 use clap::Parser;
 
 fn main() -> ExitCode {
+    quiet_wayland_probe();
     let cli = args::Cli::parse();
     let result = match cli.command {
         args::Command::Run(a) => run::run(&a),
@@ -36,5 +37,22 @@ fn main() -> ExitCode {
             eprintln!("error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Mesa's Vulkan drivers probe Wayland while wgpu enumerates adapters, and libwayland prints
+/// `error: XDG_RUNTIME_DIR is invalid or not set in the environment.` (twice per probe) on a
+/// machine without a desktop session, where socnav mostly runs. socnav draws nothing on screen:
+/// with the variable pointing at the temporary directory the probe finds no display and says
+/// nothing. A variable the user set is left alone.
+#[expect(
+    unsafe_code,
+    reason = "std::env::set_var is unsafe in edition 2024; sound here, see below"
+)]
+fn quiet_wayland_probe() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // SAFETY: called first thing in `main`, before any thread exists that could read the
+        // environment concurrently.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
 }

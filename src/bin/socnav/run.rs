@@ -136,7 +136,6 @@ impl Summary<'_> {
 
     fn print(&self) {
         let a = self.a;
-        let pct = |k: &str| 100.0 * self.agg.mean(k);
         println!(
             "socnav run: {} | {} envs x {} steps | seed {} | {} backend on {} | {} policy",
             a.config,
@@ -147,13 +146,31 @@ impl Summary<'_> {
             self.env.device(),
             format!("{:?}", a.policy).to_lowercase()
         );
+        if self.agg.episodes() == 0 {
+            println!("episodes finished: none yet (run more steps for outcomes and metrics)");
+        } else {
+            self.print_outcomes();
+        }
+        println!(
+            "throughput: {:.0} env-steps/s ({} env-steps in {:.2} s of stepping)",
+            self.rate,
+            a.envs * a.steps,
+            self.seconds
+        );
+    }
+
+    /// Outcome rates, social events and the metric table of the finished episodes.
+    fn print_outcomes(&self) {
+        let pct = |k: &str| 100.0 * self.agg.mean(k);
         println!(
             "episodes finished: {} (mean length {:.1} steps)",
             self.agg.episodes(),
             self.agg.mean("length")
         );
         println!(
-            "outcomes: success {:.1} %, collision {:.1} % (human {:.1} %, object {:.1} %, wall {:.1} %), timeout {:.1} %, out of map {:.1} %",
+            // As in 0.1.1, a wall collision is an object collision: the wall share is part of
+            // the object share, not a third part.
+            "outcomes: success {:.1} %, collision {:.1} % (human {:.1} %, object {:.1} %, of which walls {:.1} %), timeout {:.1} %, out of map {:.1} %",
             pct("success"),
             pct("collision"),
             pct("collision_human"),
@@ -179,11 +196,5 @@ impl Summary<'_> {
                 .collect();
             println!("{}", cells.join(""));
         }
-        println!(
-            "throughput: {:.0} env-steps/s ({} env-steps in {:.2} s of stepping)",
-            self.rate,
-            a.envs * a.steps,
-            self.seconds
-        );
     }
 }
