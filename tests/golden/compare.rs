@@ -11,8 +11,12 @@ use socnav::BatchEnv;
 use socnav::config::RewardKind;
 use socnav::spec::{ENTITY_KEYS, INFO_KEYS, RECORD, info};
 
+use super::conditioning::{Kinematics, Widen, extent, goal_distance_change_error, widening};
 use super::contact::{CONTACT_FLIP_FRACTION, near_contact, shadow_collided};
-use super::corrected::{dsrnn_discomfort, time_to_collision, wrapped_angular_speed};
+use super::corrected::{
+    Outcome, Perturbation, dsrnn_discomfort, time_to_collision, time_to_collision_outcomes,
+    time_to_collision_possible, wrapped_angular_speed,
+};
 use super::{Episode, Step, num};
 
 /// Absolute tolerance on positions and distances (m): a few f32 ulp at 16 m is 1e-5.
@@ -31,8 +35,14 @@ const REWARD: f64 = 1.2e-5;
 /// Absolute tolerance on SNGNN-v2's terms (issue 6): the network's output within 1e-4 of the
 /// original's, which ran it in float32 with PyTorch's summation order.
 const SNGNN: f64 = 1e-4;
-/// Max-error bucket of the values whose tolerance was widened for ill-conditioning.
+/// Max-error bucket of the values that needed their tolerance widened for ill-conditioning.
 const CONDITIONED: usize = 4;
+/// Max-error bucket of headings (rad) and the observation's heading terms of humans (sin, cos,
+/// angular speed) within the common tolerance.
+const HEADING: usize = 5;
+/// Max-error bucket of TIME_TO_COLLISION values (steps) that only ill-conditioned decisions
+/// explain.
+const TTC: usize = 6;
 /// Failures listed in full before the rest are only counted (`SOCNAV_GOLDEN_SHOW` overrides).
 fn shown() -> usize {
     std::env::var("SOCNAV_GOLDEN_SHOW")
@@ -49,10 +59,15 @@ pub struct Report {
     failures: Vec<String>,
     failure_count: u64,
     flips: u64,
+    /// Values that differ by more than their common tolerance but within their derived
+    /// conditioning (tests/golden/conditioning.rs), and time-to-collision values that only an
+    /// ill-conditioned decision explains.
+    ill_conditioned: u64,
     steps: u64,
-    /// Largest error seen per kind: positions, velocities, observations, rewards, and values
-    /// whose tolerance was widened for ill-conditioning (slow headings, slow approaches).
-    max_err: [(f64, String); 5],
+    /// Largest error seen per kind: positions, velocities, observations, rewards, values that
+    /// needed their tolerance widened for ill-conditioning (slow headings and walkers near
+    /// their goal), headings, and time-to-collision steps of ill-conditioned decisions.
+    max_err: [(f64, String); 7],
 }
 
 impl Report {
@@ -65,13 +80,16 @@ impl Report {
 
     pub fn summary(&self) -> String {
         format!(
-            "{} steps, {} values compared, {} mismatches, {} near-threshold flips; max |err| pos {:.2e} ({}), vel {:.2e} ({}), obs {:.2e} ({}), reward {:.2e} ({}), ill-conditioned {:.2e} ({})",
+            "{} steps, {} values compared, {} mismatches, {} near-threshold flips, {} ill-conditioned values; max |err| pos {:.2e} ({}), heading {:.2e} ({}), vel {:.2e} ({}), obs {:.2e} ({}), reward {:.2e} ({}), ill-conditioned {:.2e} ({}), time to collision {:.3e} steps ({})",
             self.steps,
             self.compared,
             self.failure_count,
             self.flips,
+            self.ill_conditioned,
             self.max_err[0].0,
             self.max_err[0].1,
+            self.max_err[HEADING].0,
+            self.max_err[HEADING].1,
             self.max_err[1].0,
             self.max_err[1].1,
             self.max_err[2].0,
@@ -79,7 +97,9 @@ impl Report {
             self.max_err[3].0,
             self.max_err[3].1,
             self.max_err[4].0,
-            self.max_err[4].1
+            self.max_err[4].1,
+            self.max_err[TTC].0,
+            self.max_err[TTC].1
         )
     }
 
@@ -87,6 +107,7 @@ impl Report {
         self.compared += other.compared;
         self.failure_count += other.failure_count;
         self.flips += other.flips;
+        self.ill_conditioned += other.ill_conditioned;
         self.steps += other.steps;
         for (a, b) in self.max_err.iter_mut().zip(&other.max_err) {
             if b.0 > a.0 {
@@ -117,6 +138,26 @@ impl Report {
         );
     }
 
+    /// Mismatches found (all of them, also those not listed).
+    pub fn failure_count(&self) -> u64 {
+        self.failure_count
+    }
+
+    /// The mismatches listed (the first `SOCNAV_GOLDEN_SHOW`, default 40).
+    pub fn failures(&self) -> &[String] {
+        &self.failures
+    }
+
+    /// Decisions counted as near-threshold flips.
+    pub fn flips(&self) -> u64 {
+        self.flips
+    }
+
+    /// Values accepted only within their derived conditioning.
+    pub fn ill_conditioned(&self) -> u64 {
+        self.ill_conditioned
+    }
+
     fn fail(&mut self, msg: String) {
         self.failure_count += 1;
         if self.failures.len() < shown() {
@@ -140,11 +181,33 @@ impl Report {
         }
     }
 
+    /// [`Self::close`] within `abs`, or within `abs` + `extra`, `extra` being a derived
+    /// widening for ill-conditioning: a value that needs it is counted and goes to the
+    /// ill-conditioned max-error bucket.
+    fn widened(
+        &mut self,
+        what: &str,
+        ours: f64,
+        theirs: f64,
+        (abs, extra): (f64, f64),
+        kind: usize,
+    ) {
+        let err = (ours - theirs).abs();
+        if extra == 0.0 || err.is_nan() || err <= abs {
+            self.close(what, ours, theirs, abs, kind);
+            return;
+        }
+        let failures = self.failure_count;
+        self.close(what, ours, theirs, abs + extra, CONDITIONED);
+        if self.failure_count == failures {
+            self.ill_conditioned += 1;
+        }
+    }
+
     /// Headings (rad), compared modulo 2π; `extra` widens the tolerance for ill-conditioning.
     fn angle(&mut self, what: &str, ours: f64, theirs: f64, extra: f64) {
         let d = (ours - theirs).sin().atan2((ours - theirs).cos());
-        let kind = if extra > 0.0 { CONDITIONED } else { 0 };
-        self.close(what, theirs + d, theirs, POS + extra, kind);
+        self.widened(what, theirs + d, theirs, (POS, extra), HEADING);
     }
 
     fn equal(&mut self, what: &str, ours: &Value, theirs: &Value) {
@@ -155,13 +218,13 @@ impl Report {
     }
 
     /// The observation of environment 0 against a golden observation dict.
-    /// `heading` widens the tolerance of each human's heading terms (`Step::heading_tolerances`);
-    /// humans marked in `flipped` are not compared.
+    /// `humans` widens the tolerance of each human's velocity-derived terms
+    /// (`conditioning::widening`); humans marked in `flipped` are not compared.
     pub fn compare_obs(
         &mut self,
         env: &BatchEnv,
         golden: &Value,
-        heading: &[f64],
+        humans: &[Widen],
         flipped: &[bool],
         at: &str,
     ) {
@@ -205,20 +268,27 @@ impl Report {
                     g = wrapped_angular_speed(g, dt);
                     g = *o as f64 + wrapped_angular_speed(g - *o as f64, dt);
                 }
-                // Heading terms: sin, cos (rad-sized errors) and the angular speed (rad/s).
+                // Velocity-derived terms: position (moved by speed·dt), heading sin and cos
+                // (rad-sized errors), relative speed and angular speed (rad/s).
+                let w = humans.get(i / RECORD).copied().unwrap_or_default();
+                let dt = env.params().dt as f64;
                 let extra = match (t, i % RECORD) {
-                    (0, 8 | 9) => heading.get(i / RECORD).copied().unwrap_or(0.0),
-                    (0, 12) => {
-                        heading.get(i / RECORD).copied().unwrap_or(0.0) / env.params().dt as f64
-                    }
+                    (0, 6 | 7) => w.velocity * dt,
+                    (0, 8 | 9) => w.heading,
+                    (0, 11) => w.velocity,
+                    (0, 12) => w.heading / dt,
                     _ => 0.0,
                 };
-                self.close(
+                let kind = match (t, i % RECORD) {
+                    (0, 8 | 9 | 12) => HEADING,
+                    _ => 2,
+                };
+                self.widened(
                     &format!("{at} obs.{key}[{}][{}]", i / RECORD, i % RECORD),
                     *o as f64,
                     g,
-                    OBS + extra,
-                    if extra > 0.0 { CONDITIONED } else { 2 },
+                    (OBS, extra),
+                    kind,
                 );
             }
         }
@@ -251,11 +321,60 @@ impl Report {
         }
         let ours = env.get_state(0).expect("get_state");
         let flipped = self.contact_flips(env, ep, &step, &ours["state"], &at);
-        let heading = step.heading_tolerances();
-        self.compare_obs(env, &step.v["obs"], &heading, &flipped, &at);
-        self.compare_info(env, step.v, post, &at);
+        let p = env.params();
+        let kinematics = Kinematics {
+            dt: p.dt as f64,
+            human_radius: p.human_radius as f64,
+            human_max_speed: p.human_max_speed as f64,
+            robot_max_speed: p.robot_max_speed as f64,
+        };
+        let (shadow_widen, humans) = widening(ep.header(), prev, &step, &kinematics);
+        self.compare_obs(env, &step.v["obs"], &humans, &flipped, &at);
+        let ftp = self.failure_to_progress(prev, post, &ours["state"], &at);
+        let ctx = Context {
+            header: ep.header(),
+            ours: &ours["state"],
+            ftp,
+            dt: kinematics.dt,
+            at: &at,
+        };
+        self.compare_info(env, step.v, post, &ctx);
         let shadow = self.shadow_collided(env, ep, (prev, post, &ours["state"]), &at);
-        self.compare_state(&ours["state"], post, &step, &flipped, shadow, &at);
+        let widen = StateWidening {
+            shadow: shadow_widen,
+            humans: &humans,
+            flipped: &flipped,
+            shadow_collided: shadow,
+        };
+        self.compare_state(&ours["state"], post, &step, &widen, &ctx);
+    }
+
+    /// The FAILURE_TO_PROGRESS count socnav must report. 0.1.1 counts d_t > d_{t−1} in f64,
+    /// socnav in f32: where the recorded change is within the bound on socnav's f32 change
+    /// (`conditioning::goal_distance_change_error`) the decision is ill-conditioned, and socnav
+    /// may count the other way (one more where 0.1.1 did not count, one less where it did): a
+    /// near-threshold flip. A robot that did not move has exactly equal distances on both sides
+    /// (socnav recomputes the previous one from the same f32 pose).
+    fn failure_to_progress(&mut self, prev: &Value, post: &Value, ours: &Value, at: &str) -> f64 {
+        let recorded = num(&post["metrics"]["failure_to_progress"]);
+        let counted = recorded - num(&prev["metrics"]["failure_to_progress"]);
+        let theirs = num(&ours["metrics"]["failure_to_progress"]);
+        let pose = |s: &Value| (num(&s["robot"]["x"]), num(&s["robot"]["y"]));
+        let (before, after) = (pose(prev), pose(post));
+        let goal = &post["robot"]["goal"];
+        let goal = (num(&goal[0]), num(&goal[1]));
+        let distance = |(x, y): (f64, f64)| (goal.0 - x).hypot(goal.1 - y);
+        let change = distance(after) - distance(before);
+        let bound = goal_distance_change_error(before, after, goal);
+        let other = recorded + 1.0 - 2.0 * counted;
+        if before != after && change.abs() <= bound && theirs == other {
+            self.flips += 1;
+            println!(
+                "  flip at {at}: FAILURE_TO_PROGRESS {theirs} vs reference {recorded} (goal distance change {change:.2e} m within f32 rounding {bound:.2e} m)"
+            );
+            return other;
+        }
+        recorded
     }
 
     /// The shadow robot's `collided` flag socnav must report: 0.1.1 tests groups and laptop
@@ -344,7 +463,8 @@ impl Report {
         })
     }
 
-    fn compare_info(&mut self, env: &BatchEnv, step: &Value, post: &Value, at: &str) {
+    fn compare_info(&mut self, env: &BatchEnv, step: &Value, post: &Value, ctx: &Context<'_>) {
+        let at = ctx.at;
         let out = env.outputs();
         let p = env.params();
         let golden = &step["info"];
@@ -389,26 +509,36 @@ impl Report {
             if sngnn { REWARD + SNGNN } else { REWARD },
             3,
         );
-        // TIME_TO_COLLISION: the same check against 0.1.1's formula; socnav counts laptop users.
-        // t = distance / approach speed: f32 velocities (~2e-7 m/s each) make a slow approach
-        // ill-conditioned, by about 2e-7·t/s = 2e-7·ttc²·dt/distance steps, the distance being at
-        // least MINIMUM_DISTANCE_TO_HUMAN.
+        // TIME_TO_COLLISION: the recording against 0.1.1's formula evaluated with every
+        // decision that f32 rounding can flip (0.1.1 computes it in float32), socnav's value
+        // (laptop users counted) against the corrected formula with every decision that
+        // rounding and socnav's state differences can flip.
         let ttc = time_to_collision(post, dt, rr, hr, false);
-        let closest = num(&golden["MINIMUM_DISTANCE_TO_HUMAN"]).max(rr + hr);
-        let ttc_tol = |t: f64| 2e-7 * t * t * dt / closest;
-        let recorded = num(&golden["TIME_TO_COLLISION"]);
-        self.close(
+        let x = extent(ctx.header, &[post, ctx.ours], hr);
+        let rounding = |_| Perturbation::default();
+        let buggy = time_to_collision_outcomes(post, dt, (rr, hr), true, x, &rounding);
+        self.time_to_collision(
             &format!("{at} reconstruction of 0.1.1's TIME_TO_COLLISION"),
+            num(&golden["TIME_TO_COLLISION"]),
             time_to_collision(post, dt, rr, hr, true),
-            recorded,
-            ttc_tol(recorded),
-            CONDITIONED,
+            &buggy,
+        );
+        let differences = |k| state_differences(ctx.ours, post, k);
+        let fixed = time_to_collision_outcomes(post, dt, (rr, hr), false, x, &differences);
+        self.time_to_collision(
+            &format!("{at} info.TIME_TO_COLLISION"),
+            out.info[info::TIME_TO_COLLISION] as f64,
+            ttc,
+            &fixed,
         );
         for (k, key) in INFO_KEYS.iter().enumerate() {
+            if k == info::TIME_TO_COLLISION {
+                continue;
+            }
             let ours = out.info[k] as f64;
             let theirs = match k {
                 info::DISCOMFORT_DSRNN => discomfort,
-                info::TIME_TO_COLLISION => ttc,
+                info::FAILURE_TO_PROGRESS => ctx.ftp,
                 _ => num(&golden[*key]),
             };
             let tol = match k {
@@ -419,15 +549,38 @@ impl Report {
                 info::DISTANCE_REWARD => REWARD,
                 info::DISCOMFORT_DSRNN => 2e-6,
                 info::DISCOMFORT_SNGNN | info::SNGNN_REWARD => SNGNN,
-                info::TIME_TO_COLLISION => ttc_tol(ttc),
                 _ => VEL,
             };
-            let kind = if k == info::TIME_TO_COLLISION {
-                CONDITIONED
-            } else {
-                1
-            };
-            self.close(&format!("{at} info.{key}"), ours, theirs, tol, kind);
+            self.close(&format!("{at} info.{key}"), ours, theirs, tol, 1);
+        }
+    }
+
+    /// A TIME_TO_COLLISION `value` against the set of values its decisions allow
+    /// (`corrected::time_to_collision_outcomes`); `nominal` is the formula's value on the
+    /// snapshot. A value other than the nominal one is ill-conditioned.
+    fn time_to_collision(
+        &mut self,
+        what: &str,
+        value: f64,
+        nominal: f64,
+        outcomes: &[Vec<Outcome>],
+    ) {
+        self.compared += 1;
+        if !time_to_collision_possible(outcomes, nominal) {
+            self.fail(format!(
+                "{what}: the nominal value {nominal} is outside its own conditioning {outcomes:?}"
+            ));
+        } else if !time_to_collision_possible(outcomes, value) {
+            self.fail(format!(
+                "{what}: {value} vs {nominal}, not a value its decisions allow {outcomes:?}"
+            ));
+        } else if value != nominal {
+            self.ill_conditioned += 1;
+            // A predicted collision against none (−1) has no size; it is only counted.
+            let err = (value - nominal).abs();
+            if value >= 0.0 && nominal >= 0.0 && err > self.max_err[TTC].0 {
+                self.max_err[TTC] = (err, what.to_string());
+            }
         }
     }
 
@@ -436,44 +589,49 @@ impl Report {
         ours: &Value,
         theirs: &Value,
         step: &Step<'_>,
-        flipped: &[bool],
-        shadow_collided: bool,
-        at: &str,
+        widen: &StateWidening<'_>,
+        ctx: &Context<'_>,
     ) {
+        let at = ctx.at;
         let (resampled_humans, resampled_groups) = step.resampled();
-        let heading = step.heading_tolerances();
-        // The shadow robot turns towards its ORCA velocity: a velocity of magnitude |v| whose
-        // components carry ~1e-7 m/s of f32 rounding (RVO2's inputs are rounded from the f64
-        // recording) points in a direction known to ~1e-7/|v| rad only; the turn rate inherits it.
-        let shadow_v = &step.v["diag"]["shadow_orca_vel"];
-        let heading_tol = if shadow_v.is_array() {
-            let (vx, vy) = (num(&shadow_v[0]), num(&shadow_v[1]));
-            2e-7 / (vx * vx + vy * vy).sqrt().max(1e-3)
-        } else {
-            0.0
-        };
-        for (key, extra) in [("robot", 0.0), ("shadow_robot", heading_tol)] {
+        // The shadow robot drives at its RVO2 velocity (diff-drive: at its speed, vel[0];
+        // holonomic: its robot-frame components, vel[0] and vel[1]) and turns towards it, by the
+        // unwrapped heading error per step: the command and the position carry the velocity's
+        // conditioning, the heading and the turn rate (vel[2], the heading change over dt) the
+        // direction's (`conditioning::widening`).
+        for (key, w) in [("robot", Widen::default()), ("shadow_robot", widen.shadow)] {
             let (o, t) = (&ours[key], &theirs[key]);
-            self.close(&format!("{at} {key}.x"), num(&o["x"]), num(&t["x"]), POS, 0);
-            self.close(&format!("{at} {key}.y"), num(&o["y"]), num(&t["y"]), POS, 0);
+            let moved = (POS, w.velocity * ctx.dt);
+            self.widened(
+                &format!("{at} {key}.x"),
+                num(&o["x"]),
+                num(&t["x"]),
+                moved,
+                0,
+            );
+            self.widened(
+                &format!("{at} {key}.y"),
+                num(&o["y"]),
+                num(&t["y"]),
+                moved,
+                0,
+            );
             self.angle(
                 &format!("{at} {key}.theta"),
                 num(&o["theta"]),
                 num(&t["theta"]),
-                extra,
+                w.heading,
             );
-            for k in 0..3 {
-                let (tol, kind) = if k == 2 && extra > 0.0 {
-                    (VEL + extra, CONDITIONED)
-                } else {
-                    (VEL, 1)
-                };
-                self.close(
+            for (k, extra) in [w.velocity, w.velocity, w.heading / ctx.dt]
+                .into_iter()
+                .enumerate()
+            {
+                self.widened(
                     &format!("{at} {key}.vel[{k}]"),
                     num(&o["vel"][k]),
                     num(&t["vel"][k]),
-                    tol,
-                    kind,
+                    (VEL, extra),
+                    1,
                 );
             }
         }
@@ -481,7 +639,7 @@ impl Report {
         self.equal(
             &format!("{at} shadow_robot.collided"),
             &os["collided"],
-            &Value::Bool(shadow_collided),
+            &Value::Bool(widen.shadow_collided),
         );
         for key in ["reached", "reach_tick"] {
             self.equal(&format!("{at} shadow_robot.{key}"), &os[key], &ts[key]);
@@ -501,19 +659,21 @@ impl Report {
             return;
         }
         for (k, (o, t)) in oh.iter().zip(th).enumerate() {
-            if flipped.get(k).copied().unwrap_or(false) {
+            if widen.flipped.get(k).copied().unwrap_or(false) {
                 continue;
             }
             let who = format!("{at} humans[{k}] (id {})", t["id"]);
+            let w = widen.humans.get(k).copied().unwrap_or_default();
             self.equal(&format!("{who}.id"), &o["id"], &t["id"]);
             self.equal(&format!("{who}.role"), &o["role"], &t["role"]);
-            self.close(&format!("{who}.x"), num(&o["x"]), num(&t["x"]), POS, 0);
-            self.close(&format!("{who}.y"), num(&o["y"]), num(&t["y"]), POS, 0);
-            self.close(
+            let moved = (POS, w.velocity * ctx.dt);
+            self.widened(&format!("{who}.x"), num(&o["x"]), num(&t["x"]), moved, 0);
+            self.widened(&format!("{who}.y"), num(&o["y"]), num(&t["y"]), moved, 0);
+            self.widened(
                 &format!("{who}.speed"),
                 num(&o["speed"]),
                 num(&t["speed"]),
-                VEL,
+                (VEL, w.velocity),
                 1,
             );
             if num(&t["speed"]) > 0.0 || t["role"] != "dynamic" {
@@ -521,7 +681,7 @@ impl Report {
                     &format!("{who}.theta"),
                     num(&o["theta"]),
                     num(&t["theta"]),
-                    heading.get(k).copied().unwrap_or(0.0),
+                    w.heading,
                 );
             }
             let id = t["id"].as_u64().expect("id");
@@ -564,6 +724,16 @@ impl Report {
         }
         let (om, tm) = (&ours["metrics"], &theirs["metrics"]);
         for key in tm.as_object().expect("metrics").keys() {
+            if key == "failure_to_progress" {
+                self.close(
+                    &format!("{at} metrics.{key}"),
+                    num(&om[key]),
+                    ctx.ftp,
+                    0.0,
+                    1,
+                );
+                continue;
+            }
             if let Some(list) = tm[key].as_array() {
                 for (c, v) in list.iter().enumerate() {
                     self.close(
@@ -611,5 +781,60 @@ impl Report {
                 3,
             );
         }
+    }
+}
+
+/// What the comparison of one step's outputs and state needs besides the two states.
+struct Context<'a> {
+    /// The episode's header (walls, human parameters).
+    header: &'a Value,
+    /// socnav's state after the step.
+    ours: &'a Value,
+    /// The FAILURE_TO_PROGRESS count socnav must report (`Report::failure_to_progress`).
+    ftp: f64,
+    /// The time step (s).
+    dt: f64,
+    /// The step, for messages.
+    at: &'a str,
+}
+
+/// How the state comparison of one step is widened or restricted.
+struct StateWidening<'a> {
+    /// The shadow robot's velocity conditioning.
+    shadow: Widen,
+    /// Each human's velocity conditioning (observation order).
+    humans: &'a [Widen],
+    /// Humans left out (contact decided differently within the 64-gon margin).
+    flipped: &'a [bool],
+    /// The shadow robot's `collided` flag socnav must report.
+    shadow_collided: bool,
+}
+
+/// How far socnav's inputs to human `k`'s time-to-collision test are from the recorded ones:
+/// the measured differences of the robot's and the human's positions (m) and velocities (m/s;
+/// a velocity speed·(cos θ, sin θ) moves by |Δspeed| + speed·|Δθ|). The state comparison
+/// bounds these separately.
+fn state_differences(ours: &Value, theirs: &Value, k: usize) -> Perturbation {
+    let angle = |a: f64, b: f64| (a - b).sin().atan2((a - b).cos()).abs();
+    let position =
+        |o: &Value, t: &Value| (num(&o["x"]) - num(&t["x"])).hypot(num(&o["y"]) - num(&t["y"]));
+    let (or, tr) = (&ours["robot"], &theirs["robot"]);
+    let command = num(&tr["vel"][0]).hypot(num(&tr["vel"][1]));
+    let robot_velocity = (num(&or["vel"][0]) - num(&tr["vel"][0]))
+        .hypot(num(&or["vel"][1]) - num(&tr["vel"][1]))
+        + command * angle(num(&or["theta"]), num(&tr["theta"]));
+    let (oh, th) = (&ours["humans"][k], &theirs["humans"][k]);
+    if !oh.is_object() || !th.is_object() {
+        return Perturbation {
+            position: f64::INFINITY,
+            velocity: f64::INFINITY,
+        };
+    }
+    let speed = num(&th["speed"]);
+    Perturbation {
+        position: position(or, tr) + position(oh, th),
+        velocity: robot_velocity
+            + (num(&oh["speed"]) - speed).abs()
+            + speed * angle(num(&oh["theta"]), num(&th["theta"])),
     }
 }

@@ -68,7 +68,7 @@ fn object_distances<'a>(
 
 /// Distance (m) from (x, y) to the rectangle `r` (centre `x`, `y`, heading `theta`, `length`
 /// along its heading and `across` perpendicular to it); 0 inside.
-fn rectangle_distance(r: &Value, across: &str, x: f64, y: f64) -> f64 {
+pub(super) fn rectangle_distance(r: &Value, across: &str, x: f64, y: f64) -> f64 {
     let (dx, dy) = (x - num(&r["x"]), y - num(&r["y"]));
     let (s, c) = num(&r["theta"]).sin_cos();
     let (u, v) = (dx * c + dy * s, -dx * s + dy * c);

@@ -7,6 +7,7 @@
 )]
 
 mod compare;
+mod conditioning;
 mod contact;
 mod corrected;
 
@@ -17,6 +18,11 @@ use serde_json::{Value, json};
 use socnav::Config;
 
 pub use compare::Report;
+pub use conditioning::direction_error;
+pub use corrected::{
+    Outcome, Perturbation, time_to_collision, time_to_collision_outcomes,
+    time_to_collision_possible,
+};
 
 /// The published golden episodes, in the repository (`tests/data/golden/socnavgym`): tests that
 /// check specific published files (SNGNN graph dumps, hand-built scenes) read these.
@@ -96,6 +102,16 @@ impl Episode {
             .to_string()
     }
 
+    /// The recorded step whose tick is `t`, to edit (synthetic golden steps).
+    pub fn step_mut(&mut self, t: u64) -> &mut Value {
+        self.root["steps"]
+            .as_array_mut()
+            .expect("steps")
+            .iter_mut()
+            .find(|s| s["t"] == t)
+            .unwrap_or_else(|| panic!("no step {t}"))
+    }
+
     pub fn initial_state(&self) -> &Value {
         &self.root["initial"]["state"]
     }
@@ -171,47 +187,6 @@ impl<'a> Step<'a> {
 
     pub fn t(&self) -> u64 {
         self.v["t"].as_u64().expect("t")
-    }
-
-    /// How closely the step determines the heading (rad) of each human of the post-motion state,
-    /// in observation order, beyond the common tolerance. A walker heads along its velocity (a
-    /// lone walker its ORCA or SFM velocity, a moving-group member its group's RVO2 velocity).
-    /// Both sides compute those in float32 (RVO2 from inputs rounded from the f64 recording,
-    /// socnav throughout), so each side's components carry ~1e-7 m/s and the direction of a slow
-    /// velocity is known to ~2e-7/|v| rad only. Standing humans: 0.
-    pub fn heading_tolerances(&self) -> Vec<f64> {
-        let post = self.state_after_motion();
-        let groups = post["groups"].as_array().map_or(&[][..], |g| &g[..]);
-        let diag = &self.v["diag"];
-        let conditioning = |v: &Value| {
-            if v.is_array() {
-                2e-7 / num(&v[0]).hypot(num(&v[1])).max(1e-9)
-            } else {
-                0.0
-            }
-        };
-        post["humans"]
-            .as_array()
-            .into_iter()
-            .flatten()
-            .map(|h| {
-                if h["role"] == "dynamic" {
-                    let v = &diag["human_vel"][h["id"].to_string()];
-                    return conditioning(&json!([v[1], v[2]]));
-                }
-                if h["role"] != "moving_group" {
-                    return 0.0;
-                }
-                let Some(g) = h["group"].as_u64().map(|g| g as usize) else {
-                    return 0.0;
-                };
-                let moving_index = groups[..g.min(groups.len())]
-                    .iter()
-                    .filter(|x| x["kind"] == "moving")
-                    .count();
-                conditioning(&diag["group_orca_vel"][moving_index])
-            })
-            .collect()
     }
 
     /// Ids of humans (and group indices) whose goals were re-sampled during the step.

@@ -1,0 +1,377 @@
+//! How closely a golden step determines the values that 0.1.1 and socnav both compute in float32
+//! from slightly different inputs (docs/fidelity.md, "Approximations and representation").
+//!
+//! One fact runs through every bound here: rounding a value x to f32 moves it by at most half
+//! an ulp of x ([`ulp`]), and an f32 operation on values of magnitude x adds at most another
+//! half ulp. 0.1.1 rounds its f64 state to f32 where it enters RVO2 or its float32 helpers;
+//! socnav rounds the recorded state once when it loads it and computes in f32 from there. The
+//! bounds below propagate those roundings, to first order, to the quantities the replay
+//! compares; each function states its derivation.
+
+use std::f64::consts::{PI, SQRT_2};
+
+use serde_json::Value;
+
+use super::contact::rectangle_distance;
+use super::{Step, num};
+
+/// Unit roundoff of f32 (2⁻²⁴): an f32 operation has a relative error of at most this.
+pub const U: f64 = 5.960_464_477_539_063e-8;
+
+/// The spacing of the f32 values at magnitude |x| (one ulp): rounding x to f32, or an f32
+/// operation whose result has magnitude ≤ |x|, moves it by at most half of this.
+pub fn ulp(x: f64) -> f64 {
+    let f = (x.abs() as f32).max(f32::MIN_POSITIVE);
+    f64::from(f32::from_bits(f.to_bits() + 1) - f)
+}
+
+/// The largest coordinate magnitude (m) of anything RVO2 or the social forces see in a step:
+/// the robot and the shadow robot, humans (with the 2·diameter laptop-user squares around
+/// them), group centres (with their obstacle squares), plants, tables and laptops (with their
+/// ORCA squares or circumradius) and the walls' corners. Every position such a simulation holds
+/// in f32 is rounded at this magnitude or below.
+pub fn extent(header: &Value, states: &[&Value], human_radius: f64) -> f64 {
+    let list = |v: &Value| v.as_array().cloned().unwrap_or_default();
+    let mut x: f64 = 0.0;
+    let at = |v: &Value| (num(&v["x"]), num(&v["y"]));
+    for w in list(&header["walls"]) {
+        let (s, c) = num(&w["theta"]).sin_cos();
+        let (l, t) = (num(&w["length"]) / 2.0, num(&w["thickness"]) / 2.0);
+        let (cx, cy) = at(&w);
+        x = x
+            .max(cx.abs() + (l * c).abs() + (t * s).abs())
+            .max(cy.abs() + (l * s).abs() + (t * c).abs());
+    }
+    let mut reach = |c: (f64, f64), r: f64| x = x.max(c.0.abs() + r).max(c.1.abs() + r);
+    for state in states {
+        reach(at(&state["robot"]), 0.0);
+        reach(at(&state["shadow_robot"]), 0.0);
+        for h in list(&state["humans"]) {
+            reach(at(&h), SQRT_2 * 4.0 * human_radius);
+        }
+        for g in list(&state["groups"]) {
+            let c = (num(&g["centre"][0]), num(&g["centre"][1]));
+            reach(c, SQRT_2 * (num(&g["radius"]) + 2.0 * human_radius));
+        }
+        for key in ["tables", "laptops"] {
+            for o in list(&state[key]) {
+                reach(at(&o), num(&o["length"]).hypot(num(&o["width"])) / 2.0);
+            }
+        }
+        for p in list(&state["plants"]) {
+            reach(at(&p), SQRT_2 * num(&p["radius"]));
+        }
+    }
+    x
+}
+
+/// The shortest time scale (s) by which RVO2 divides relative positions: its agent and obstacle
+/// lines are offset by (relative position)/τ and /τ_obst, and by (relative position)/dt in the
+/// collision branch (agents overlapping). socnav clamps the horizons to ≥ 0.1 s, as RVO2 would
+/// otherwise divide by zero.
+pub fn rvo2_time_scale(header: &Value, dt: f64) -> f64 {
+    let hp = &header["human_params"];
+    let horizon = num(&hp["orca_timeHorizon"]).max(0.1);
+    let obstacles = num(&hp["orca_timeHorizonObst"]).max(0.1);
+    dt.min(horizon).min(obstacles)
+}
+
+/// Bound (m/s) on the difference, as a vector, between 0.1.1's and socnav's preferred velocity
+/// `speed`·unit(goal − position) of an agent `distance` metres from its goal.
+///
+/// 0.1.1 subtracts in f64 and rounds the difference (half an ulp of `distance` per component);
+/// socnav subtracts the rounded goal and position (half an ulp of `extent` each) and rounds the
+/// difference again: the two difference vectors differ by ≤ √2·(ulp(extent) + ulp(distance)),
+/// so their directions by that over `distance` (rad), and the unit vectors scaled by `speed` by
+/// `speed` times that angle, at most 2·`speed` (opposite directions). The normalisation and the
+/// scaling round each component by half an ulp of `speed` on each side: 4 ulp in all. Near its
+/// goal (a walker arriving at its slot of a forming crowd) the direction is ill-conditioned.
+pub fn preferred_velocity_error(extent: f64, speed: f64, distance: f64) -> f64 {
+    if speed == 0.0 {
+        return 0.0;
+    }
+    let angle = SQRT_2 * (ulp(extent) + ulp(distance)) / distance;
+    speed * angle.min(2.0) + 4.0 * ulp(speed)
+}
+
+/// Bound (m/s) on the difference, as a vector, between 0.1.1's and socnav's RVO2 velocity of one
+/// agent (a lone ORCA walker, a moving group, the shadow robot).
+///
+/// socnav's ORCA is bit-exact with RVO2 on equal f32 inputs (`tests/orca_reference.rs`), so the
+/// two velocities differ only through their inputs:
+/// * relative positions: every position or obstacle vertex is within half an ulp of `extent`
+///   of its exact value on 0.1.1's side (rounded from f64) and within 1.5 ulp on socnav's (its
+///   own rounding, plus the f32 motion of a walker moved earlier in the step, or the f32
+///   arithmetic of a vertex); a relative position therefore differs by ≤ 2 ulp per component,
+///   2√2·ulp(`extent`) as a vector. Every ORCA line (agents start at zero velocity, so the
+///   line is v·p̂ ≤ (|p| − R)/(2τ), or its collision and obstacle analogues) moves by at most
+///   that over `time_scale` ([`rvo2_time_scale`]);
+/// * the preferred velocity ([`preferred_velocity_error`]).
+///
+/// The new velocity is the point of the feasible region (half-planes and the speed disc)
+/// nearest the preferred velocity, a projection, which moves by at most as much as the
+/// preferred velocity and a single binding line together. (Two binding lines meeting at a
+/// small angle φ amplify a line's shift by 1/sin φ; the published replay shows errors 10 times
+/// below this bound.)
+pub fn rvo2_velocity_error(extent: f64, time_scale: f64, pref_speed: f64, goal: f64) -> f64 {
+    2.0 * SQRT_2 * ulp(extent) / time_scale + preferred_velocity_error(extent, pref_speed, goal)
+}
+
+/// Bound (rad) on the difference of the directions of two velocities whose vector difference is
+/// at most `error`, one of them of magnitude `speed`: asin(error/speed), or any direction (π)
+/// once the error reaches the speed (a body at rest has no direction).
+pub fn direction_error(speed: f64, error: f64) -> f64 {
+    if error >= speed {
+        PI
+    } else {
+        (error / speed).asin()
+    }
+}
+
+/// Social-force parameters of an episode (golden header `human_params`).
+struct Sfm {
+    r0: f64,
+    gamma: f64,
+    n: f64,
+    n_prime: f64,
+    lambda: f64,
+}
+
+/// Constants of a step that the velocity bounds need.
+pub struct Kinematics {
+    pub dt: f64,
+    pub human_radius: f64,
+    pub human_max_speed: f64,
+    pub robot_max_speed: f64,
+}
+
+/// Bound (m/s) on the difference, as a vector, between 0.1.1's and socnav's social-force
+/// velocity of lone walker `h` (its pre-step record), spec 4.3:
+/// v = dt·w·(f_d + Σ f_o + Σ f_ij), w = 1/√3, scaled down to the maximum speed if longer (a
+/// projection onto a disc, which does not increase differences). Relative positions differ by
+/// δ = 2√2·ulp(extent) (as in [`rvo2_velocity_error`]). Per term:
+/// * desired force: [`preferred_velocity_error`];
+/// * obstacle force exp(−g/r0)·unit(p − q), g the surface gap, ρ = |p − q|: the factor moves by
+///   F·δ/r0 (and by F·|g|/r0·u for r0 rounded to f32), the unit vector by 2δ/ρ;
+/// * pedestrian force −m·(k₁t + k₂n), m = exp(−d/B), B = γ|D|, D = λ·v_ij + e,
+///   kᵢ = exp(−(aᵢθ)²), a = n′B or nB, θ = acos(e·t): with |v_ij| ≤ 2·v_max, |D| ≥ 1 − 2λv_max
+///   and θ ≤ asin(2λv_max). d is taken from the pre-step state ± v_max·dt (earlier walkers
+///   move first). e moves by 2δ/d, D by that (plus the f32 rounding of the velocities, 4 ulp
+///   of v_max times λ), t by 2ΔD/|D|, B by γΔD, m by m·(δ/B + d·ΔB/B²); c = e·t by
+///   Δe + Δt + 4u (socnav's f32 dot product). kᵢ as a function of c has slope
+///   2a²·θ/sin θ ≤ 2a²·θmax/sin θmax — bounded although acos is not Lipschitz at 1, which is why
+///   θ ≈ 0 (f32 acos of a rounded cosine near 1 is off by ~√(8u)) costs nothing — and as a
+///   function of a the slope 2aθ² ≤ 2a·θmax², with Δa = nΔB. Whence
+///   |Δf_ij| ≤ 2Δm + m·(Δk₁ + Δk₂ + Δt + Δn).
+/// * 0.1.1 accumulates the force in float32: half an ulp of the running sum per term.
+///
+/// Velocities of earlier walkers differ between the sides by the bounds computed here
+/// (≲ 1e-6 m/s), which moves D by λ times that; it is of the order of the terms kept and left
+/// out.
+pub fn sfm_velocity_error(
+    header: &Value,
+    prev: &Value,
+    h: &Value,
+    k: &Kinematics,
+    extent: f64,
+) -> f64 {
+    let hp = &header["human_params"];
+    let sfm = Sfm {
+        r0: num(&hp["sfm_r0"]),
+        gamma: num(&hp["sfm_gamma"]),
+        n: num(&hp["sfm_n"]),
+        n_prime: num(&hp["sfm_n_prime"]),
+        lambda: num(&hp["sfm_lambda"]),
+    };
+    let delta = 2.0 * SQRT_2 * ulp(extent);
+    let (x, y) = (num(&h["x"]), num(&h["y"]));
+    let r = k.human_radius;
+    let v_max = k.human_max_speed;
+    let goal = (num(&h["goal"][0]) - x).hypot(num(&h["goal"][1]) - y);
+    let mut error = preferred_velocity_error(extent, v_max, goal);
+    let mut magnitude = v_max;
+    let mut terms = 1.0;
+    let mut obstacle = |rho: f64, gap: f64| {
+        let f = (-gap / sfm.r0).exp();
+        error += f * (delta / sfm.r0 + 2.0 * delta / rho + U * gap.abs() / sfm.r0);
+        magnitude += f;
+        terms += 1.0;
+    };
+    let list = |v: &Value| v.as_array().cloned().unwrap_or_default();
+    for p in list(&prev["plants"]) {
+        let rho = (num(&p["x"]) - x).hypot(num(&p["y"]) - y);
+        obstacle(rho, rho - num(&p["radius"]) - r);
+    }
+    for w in list(&header["walls"]) {
+        let rho = rectangle_distance(&w, "thickness", x, y);
+        obstacle(rho, rho - r);
+    }
+    let free_laptops = list(&prev["laptops"])
+        .into_iter()
+        .filter(|l| l["hl"].is_null());
+    for o in list(&prev["tables"]).into_iter().chain(free_laptops) {
+        let rho = rectangle_distance(&o, "width", x, y);
+        obstacle(rho, rho - r);
+    }
+    for g in list(&prev["groups"]) {
+        if g["kind"] == "standing" {
+            let rho = (num(&g["centre"][0]) - x).hypot(num(&g["centre"][1]) - y);
+            obstacle(rho, rho - num(&g["radius"]) - r);
+        }
+    }
+    let spread = 2.0 * sfm.lambda * v_max;
+    assert!(
+        spread < 1.0,
+        "SFM bound: λ·|v_ij| must stay below 1 (|D| > 0)"
+    );
+    let (b_lo, b_hi) = (sfm.gamma * (1.0 - spread), sfm.gamma * (1.0 + spread));
+    let theta_max = spread.asin();
+    let slope = theta_max / theta_max.sin();
+    let n_max = sfm.n.max(sfm.n_prime);
+    let a_max = n_max * b_hi;
+    for o in list(&prev["humans"]) {
+        if o["id"] == h["id"] || o["role"] == "standing_group" {
+            continue;
+        }
+        let d = (num(&o["x"]) - x).hypot(num(&o["y"]) - y);
+        let (d_lo, d_hi) = ((d - v_max * k.dt).max(r), d + v_max * k.dt);
+        let m = (-d_lo / b_hi).exp();
+        let de = 2.0 * delta / d_lo;
+        let d_d = de + sfm.lambda * 4.0 * ulp(v_max);
+        let d_b = sfm.gamma * d_d;
+        let dm = m * (delta / b_lo + d_hi * d_b / (b_lo * b_lo));
+        let dt_dir = 2.0 * d_d / (1.0 - spread);
+        let dc = de + dt_dir + 4.0 * U;
+        let dk = 2.0 * a_max * a_max * slope * dc + 2.0 * a_max * theta_max.powi(2) * n_max * d_b;
+        error += 2.0 * dm + m * (2.0 * dk + dt_dir + de);
+        magnitude += 2.0 * m;
+        terms += 1.0;
+    }
+    error += terms * ulp(magnitude) / 2.0;
+    k.dt * error / 3f64.sqrt()
+}
+
+/// How far the replay may widen the comparison of one body's velocity-derived values.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Widen {
+    /// Bound (m/s) on the vector difference of its velocity: on its speed, and, times dt, on
+    /// its position.
+    pub velocity: f64,
+    /// Bound (rad) on the difference of its heading, where the heading follows the velocity.
+    pub heading: f64,
+}
+
+impl Widen {
+    fn of(speed: f64, velocity: f64) -> Self {
+        Self {
+            velocity,
+            heading: direction_error(speed, velocity),
+        }
+    }
+}
+
+/// The widening of the shadow robot and of every human of `step`'s post-motion state
+/// (observation order), from its velocity's conditioning: lone walkers by their ORCA
+/// ([`rvo2_velocity_error`]) or social-force ([`sfm_velocity_error`]) velocity as recorded in
+/// `diag.human_vel`, moving-group members by their group's RVO2 velocity divided by the member
+/// count (member velocity v_group/n + noise), the shadow robot by its RVO2 velocity. Humans
+/// pushed out of an object this step (`diag.contacts`) take speed and heading from the contact
+/// force instead, and standing humans do not move: none.
+pub fn widening(
+    header: &Value,
+    prev: &Value,
+    step: &Step<'_>,
+    k: &Kinematics,
+) -> (Widen, Vec<Widen>) {
+    let post = step.state_after_motion();
+    let diag = &step.v["diag"];
+    let x = extent(header, &[prev, post], k.human_radius);
+    let tau = rvo2_time_scale(header, k.dt);
+    let distance = |p: &Value, g: &Value| (num(&g[0]) - num(&p[0])).hypot(num(&g[1]) - num(&p[1]));
+    let pose = |v: &Value| serde_json::json!([v["x"], v["y"]]);
+    let shadow_v = &diag["shadow_orca_vel"];
+    let shadow = if shadow_v.is_array() {
+        let goal = distance(&pose(&prev["shadow_robot"]), &prev["robot"]["goal"]);
+        let e = rvo2_velocity_error(x, tau, k.robot_max_speed, goal);
+        Widen::of(num(&shadow_v[0]).hypot(num(&shadow_v[1])), e)
+    } else {
+        Widen::default()
+    };
+    let pushed: Vec<&Value> = diag["contacts"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|c| &c[0])
+        .collect();
+    let before = |id: &Value| {
+        prev["humans"]
+            .as_array()
+            .and_then(|hs| hs.iter().find(|h| h["id"] == *id))
+    };
+    let groups = prev["groups"].as_array().map_or(&[][..], |g| &g[..]);
+    let humans = post["humans"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|h| {
+            if pushed.contains(&&h["id"]) {
+                return Widen::default();
+            }
+            if h["role"] == "dynamic" {
+                let v = &diag["human_vel"][h["id"].to_string()];
+                let Some(b) = before(&h["id"]).filter(|_| v.is_array()) else {
+                    return Widen::default();
+                };
+                let e = if v[0] == "sfm" {
+                    sfm_velocity_error(header, prev, b, k, x)
+                } else {
+                    let goal = distance(&pose(b), &b["goal"]);
+                    rvo2_velocity_error(x, tau, k.human_max_speed, goal)
+                };
+                return Widen::of(num(&v[1]).hypot(num(&v[2])), e);
+            }
+            if h["role"] != "moving_group" {
+                return Widen::default();
+            }
+            let Some(g) = h["group"].as_u64().and_then(|g| groups.get(g as usize)) else {
+                return Widen::default();
+            };
+            let e = rvo2_velocity_error(
+                x,
+                tau,
+                k.human_max_speed,
+                distance(&g["centre"], &g["goal"]),
+            );
+            let n = g["members"].as_array().map_or(1, Vec::len) as f64;
+            Widen::of(num(&h["speed"]), e / n)
+        })
+        .collect();
+    (shadow, humans)
+}
+
+/// Bound (m) on the error of socnav's f32 change of the robot's goal distance,
+/// d_t − d_{t−1}, against 0.1.1's f64 one (FAILURE_TO_PROGRESS counts d_t > d_{t−1}).
+///
+/// socnav evaluates d = √(dx² + dy²), dx = goal − robot, for the loaded pose (its previous
+/// distance, recomputed on load) and for the moved one. Per evaluation: the robot's and the
+/// goal's coordinates are rounded to f32 (half an ulp each, and |∂d/∂coordinate| ≤ 1); dx, dy
+/// are rounded (half an ulp each); the squares, the sum and the root add a relative 2u,
+/// < 2 ulp(d). The move adds the rounding of the new coordinates (half an ulp each) and the
+/// f32 error of v·cos θ·dt: 4u of the displacement, plus the displacement times the f32
+/// rounding of θ (≤ ulp(π)). A previous distance taken from the document unchanged carries its
+/// own rounding (half an ulp). None of this is assumed to cancel between the two evaluations.
+pub fn goal_distance_change_error(before: (f64, f64), after: (f64, f64), goal: (f64, f64)) -> f64 {
+    let evaluation = |(x, y): (f64, f64)| {
+        let (dx, dy) = (goal.0 - x, goal.1 - y);
+        (ulp(x) + ulp(goal.0) + ulp(y) + ulp(goal.1)) / 2.0
+            + (ulp(dx) + ulp(dy)) / 2.0
+            + 2.0 * ulp(dx.hypot(dy))
+    };
+    let displacement = (after.0 - before.0).hypot(after.1 - before.1);
+    let d_before = (goal.0 - before.0).hypot(goal.1 - before.1);
+    evaluation(before)
+        + evaluation(after)
+        + (ulp(after.0) + ulp(after.1)) / 2.0
+        + displacement * (4.0 * U + ulp(PI))
+        + ulp(d_before) / 2.0
+}
