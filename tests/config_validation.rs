@@ -155,15 +155,15 @@ fn bad_option_values_are_listed_with_the_other_problems() {
         plant_radius = -0.4                  # negative size
 
         [model]
-        orca_neighbour_velocity = "present"  # not a velocity model
+        contact_shape = "polygon32"          # not a contact shape
         laptop_user_obstacle = 3             # not a string
-        group_velocity_divided = true
+        orca_neighbour_velocity = "actual"
     "#;
     let problems = config_problems(Config::from_toml_str(text));
     let all = problems.join("\n");
     println!("reported problems:\n{all}");
     for needles in [
-        &["model.orca_neighbour_velocity", "present", "zero", "actual"][..],
+        &["model.contact_shape", "polygon32", "exact", "polygon64"][..],
         &["model.laptop_user_obstacle", "3"],
         &["objects.plant_radius", "-0.4"],
     ] {
@@ -178,13 +178,13 @@ fn bad_option_values_are_listed_with_the_other_problems() {
     // The same through overrides.
     let base = Config::from_name_or_path("exp1").unwrap();
     let problems = config_problems(base.with_overrides(&json!({
-        "model": {"laptop_user_obstacle": "narrow"},
+        "model": {"contact_shape": "disc"},
         "episode": {"length": 100, "lenght": 3},
     })));
     assert!(
         problems
             .iter()
-            .any(|p| p.contains("laptop_user_obstacle") && p.contains("narrow")),
+            .any(|p| p.contains("contact_shape") && p.contains("disc")),
         "{problems:?}"
     );
     assert!(

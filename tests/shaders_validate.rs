@@ -366,6 +366,7 @@ fn step_params_offsets() -> Vec<(&'static str, usize)> {
         seed_lo,
         seed_hi,
         replay,
+        contact_shape,
         _pad,
     )
 }

@@ -624,6 +624,18 @@ pub enum LaptopUserObstacle {
     Radius,
 }
 
+/// Which shapes the step's contact decisions use (the human push-out, the robot's and the shadow
+/// robot's collisions); spawning and goal sampling always use exact discs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactShape {
+    /// Exact discs and rectangles.
+    Exact,
+    /// Discs as 0.1.1's shapely 64-gons (`Point.buffer(r)`, vertices at k·π/32), rectangles
+    /// exact: contacts decided as 0.1.1 decides them.
+    Polygon64,
+}
+
 /// Modelling choices of 0.1.1 that socnav keeps by default under a named option
 /// (DESIGN.md section 5; every row is in `docs/fidelity.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -637,6 +649,9 @@ pub struct Model {
     pub laptop_user_obstacle: LaptopUserObstacle,
     /// DSRNN discomfort also counts every group and laptop use as a pseudo-human at its centre.
     pub dsrnn_pseudo_humans: bool,
+    /// Shapes of the step's contact decisions (an approximation of 0.1.1, not a modelling
+    /// choice: exact by default).
+    pub contact_shape: ContactShape,
 }
 
 impl Default for Model {
@@ -646,6 +661,7 @@ impl Default for Model {
             group_velocity_divided: true,
             laptop_user_obstacle: LaptopUserObstacle::Wide,
             dsrnn_pseudo_humans: true,
+            contact_shape: ContactShape::Exact,
         }
     }
 }
