@@ -2,7 +2,8 @@
 //
 // Twin of src/systems/contacts.rs (stage `contacts`, spec 4.6): after all motion, a human that
 // touches a plant, wall, table or free laptop is pushed out by an MPE-style soft contact force: it
-// turns to the force direction, takes speed min(|F|·dt, max speed) and moves once more. Change
+// turns to the force direction, takes speed min(|F|·dt, max speed) and moves once more. Whether a
+// human touches an object is decided with discs shaped as `params.contact_shape` says. Change
 // both files in the same commit.
 
 // Softness of the contact (m), MPE's `contact_margin`: the f32 of 1e-3.
@@ -35,7 +36,7 @@ fn push(i: u32, dx: f32, dy: f32, reach: f32) {
 }
 
 fn push_from_rect(i: u32, rect: Rect) {
-    if (geo_disc_rect(human_disc(i), rect)) {
+    if (geo_disc_rect_as(params.contact_shape, human_disc(i), rect)) {
         let dx = sf[C_H_X + i] - rect.x;
         let dy = sf[C_H_Y + i] - rect.y;
         push(i, dx, dy, params.human_radius + geo_rect_circumradius(rect));
@@ -58,13 +59,13 @@ fn push_out(e: u32, i: u32) {
     let pb = e * S_P_X;
     for (var k = pb; k < pb + su[C_N_PLANTS + e]; k++) {
         let plant = Disc(sf[C_P_X + k], sf[C_P_Y + k], params.plant_radius);
-        if (geo_disc_disc(human_disc(i), plant)) {
+        if (geo_disc_disc_as(params.contact_shape, human_disc(i), plant)) {
             push(i, sf[C_H_X + i] - plant.x, sf[C_H_Y + i] - plant.y, r + plant.r);
         }
     }
     for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
         let wall = world_wall_rect(e, w);
-        if (geo_disc_rect(human_disc(i), wall)) {
+        if (geo_disc_rect_as(params.contact_shape, human_disc(i), wall)) {
             let d = mirror_delta(wall, sf[C_H_X + i], sf[C_H_Y + i]);
             push(i, d.x, d.y, 2.0 * r);
         }

@@ -3,7 +3,8 @@
 // Twin of src/systems/termination.rs (stage `termination`, spec 8.1): the episode's outcome in
 // 0.1.1's priority order (out of map, goal reached, collision, timeout), exactly one outcome flag,
 // COLLISION_WALL whenever the robot touches a wall; then the shadow robot's outcome (twin of
-// `shadow_robot::shadow_outcome`). Change both files in the same commit.
+// `shadow_robot::shadow_outcome`); touching as `params.contact_shape` says (common/world.wgsl).
+// Change both files in the same commit.
 
 // Did the ORCA shadow robot collide or arrive at this step (it keeps its first outcome)?
 fn shadow_outcome(e: u32) {

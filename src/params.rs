@@ -5,9 +5,10 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::config::{
-    Config, HumanPolicy, Kinematics, LaptopUserObstacle, ObsFrame, OrcaNeighbourVelocity,
-    RewardKind, Shape,
+    Config, ContactShape, HumanPolicy, Kinematics, LaptopUserObstacle, ObsFrame,
+    OrcaNeighbourVelocity, RewardKind, Shape,
 };
+use crate::geometry::contact_shape;
 
 /// How finished environments are reset (DESIGN.md section 3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -191,8 +192,11 @@ pub struct StepParams {
     /// 1 in replay mode: the random social events are not drawn (the golden replay applies the
     /// recorded ones by re-synchronising).
     pub replay: u32,
-    /// Padding to a multiple of 16 bytes.
-    pub _pad: [u32; 1],
+    /// How the contact decisions model discs: a [`crate::geometry::contact_shape`] code
+    /// (`[model] contact_shape`).
+    pub contact_shape: u32,
+    /// Padding to a multiple of 16 bytes; always 0 (the shaders use `pad[0]` as an opaque zero).
+    pub _pad: [u32; 4],
 }
 
 const _: () = assert!(std::mem::size_of::<StepParams>().is_multiple_of(16));
@@ -289,7 +293,11 @@ impl StepParams {
             seed_lo: seed as u32,
             seed_hi: (seed >> 32) as u32,
             replay: 0,
-            _pad: [0; 1],
+            contact_shape: match c.model.contact_shape {
+                ContactShape::Exact => contact_shape::EXACT,
+                ContactShape::Polygon64 => contact_shape::POLYGON64,
+            },
+            _pad: [0; 4],
         }
     }
 

@@ -4,7 +4,8 @@
 //! - every shipped `configs/*.toml` parses and validates, and `Config::default()` is exactly
 //!   `configs/exp1.toml` (the defaults reproduce the paper's experiment 1);
 //! - a config with many mistakes is rejected with *every* problem listed at once, each message
-//!   naming the key and the offending value;
+//!   naming the key and the offending value, values that do not deserialise (an unknown
+//!   variant, a wrong type) included;
 //! - a partial TOML file takes the defaults for every key it does not set;
 //! - `Config::from_socnavgym` turns a SocNavGym 0.1.1 config dict into exactly the shipped TOML
 //!   of the same stem (checked on the golden episode headers), and reports missing 0.1.1 keys.
@@ -142,6 +143,53 @@ fn every_problem_is_listed_at_once() {
         "{} messages for {} problems",
         problems.len(),
         expected.len()
+    );
+}
+
+/// Contract: a value that does not deserialise (an unknown variant of a named option, a wrong
+/// type) is reported with its key and value, together with every other problem of the file.
+#[test]
+fn bad_option_values_are_listed_with_the_other_problems() {
+    let text = r#"
+        [objects]
+        plant_radius = -0.4                  # negative size
+
+        [model]
+        contact_shape = "polygon32"          # not a contact shape
+        laptop_user_obstacle = 3             # not a string
+        orca_neighbour_velocity = "actual"
+    "#;
+    let problems = config_problems(Config::from_toml_str(text));
+    let all = problems.join("\n");
+    println!("reported problems:\n{all}");
+    for needles in [
+        &["model.contact_shape", "polygon32", "exact", "polygon64"][..],
+        &["model.laptop_user_obstacle", "3"],
+        &["objects.plant_radius", "-0.4"],
+    ] {
+        assert!(
+            problems
+                .iter()
+                .any(|p| needles.iter().all(|n| p.contains(n))),
+            "no message containing all of {needles:?}; got:\n{all}"
+        );
+    }
+    assert_eq!(problems.len(), 3, "{all}");
+    // The same through overrides.
+    let base = Config::from_name_or_path("exp1").unwrap();
+    let problems = config_problems(base.with_overrides(&json!({
+        "model": {"contact_shape": "disc"},
+        "episode": {"length": 100, "lenght": 3},
+    })));
+    assert!(
+        problems
+            .iter()
+            .any(|p| p.contains("contact_shape") && p.contains("disc")),
+        "{problems:?}"
+    );
+    assert!(
+        problems.iter().any(|p| p.contains("lenght")),
+        "{problems:?}"
     );
 }
 

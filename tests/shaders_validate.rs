@@ -366,6 +366,7 @@ fn step_params_offsets() -> Vec<(&'static str, usize)> {
         seed_lo,
         seed_hi,
         replay,
+        contact_shape,
         _pad,
     )
 }
@@ -457,6 +458,53 @@ fn wgsl_twins_use_the_same_hex_constants() {
             "{rust} vs {wgsl}: only in Rust {only_rust:?}, only in WGSL {only_wgsl:?}"
         );
     }
+}
+
+/// The 64-gon constants that the shaders' head gets from src/geometry.rs
+/// (`wgsl::geometry_constants`) denote the Rust bits, table entries in order.
+#[test]
+fn generated_geometry_constants_denote_the_rust_bits() {
+    use socnav::geometry::{POLY64_COS, POLY64_INNER, POLY64_OUTER};
+    let head = wgsl::geometry_constants();
+    let bits = |literal: &str| -> u32 {
+        let set = hex_literals(literal.trim());
+        match set.len() {
+            0 if ["0.0f", "-0.0f"].contains(&literal.trim()) => {
+                if literal.trim().starts_with('-') {
+                    0x8000_0000
+                } else {
+                    0
+                }
+            }
+            1 => *set.first().expect("one"),
+            _ => panic!("not one literal: {literal}"),
+        }
+    };
+    let value_of = |name: &str| -> &str {
+        let start = head.find(&format!("const {name}")).expect(name);
+        let line = head[start..].lines().next().expect("a line");
+        line.split('=')
+            .nth(1)
+            .expect("a value")
+            .trim_end_matches(';')
+    };
+    assert_eq!(
+        bits(value_of("GEO_POLY64_OUTER: f32")),
+        POLY64_OUTER.to_bits()
+    );
+    assert_eq!(
+        bits(value_of("GEO_POLY64_INNER: f32")),
+        POLY64_INNER.to_bits()
+    );
+    let table = value_of("GEO_POLY64_COS");
+    let inner = table
+        .trim()
+        .strip_prefix("array<f32, 64>(")
+        .and_then(|t| t.strip_suffix(')'))
+        .expect("array<f32, 64>(...)");
+    let got: Vec<u32> = inner.split(',').map(bits).collect();
+    let want: Vec<u32> = POLY64_COS.iter().map(|v| v.to_bits()).collect();
+    assert_eq!(got, want);
 }
 
 /// Names of `pub fn` and `pub const` items in a Rust source (top level and impl blocks).

@@ -1,9 +1,14 @@
 // requires: common/math.wgsl
 //
-// Twin of src/geometry.rs: exact 2-D geometry of discs and rotated rectangles (touching counts).
-// Every function mirrors its Rust twin operation for operation (`Rect::distance_sq` is
-// `geo_rect_distance_sq`, `disc_rect` is `geo_disc_rect`, ...); change both files in the same
-// commit. Lengths in metres.
+// Twin of src/geometry.rs: 2-D geometry of discs and rotated rectangles (touching counts), exact
+// or with discs as 0.1.1's 64-gons. Every function mirrors its Rust twin operation for operation
+// (`Rect::distance_sq` is `geo_rect_distance_sq`, `disc_rect` is `geo_disc_rect`, ...); change
+// both files in the same commit. Lengths in metres.
+//
+// The 64-gon's constants come from the Rust definitions through the generated head of every
+// shader (src/backend/wgsl.rs, `geometry_constants`): GEO_POLY64_COS (`POLY64_COS`),
+// GEO_POLY64_OUTER, GEO_POLY64_INNER, and the contact-shape codes GEO_CONTACT_EXACT and
+// GEO_CONTACT_POLYGON64.
 
 struct Disc {
     x: f32,
@@ -70,6 +75,105 @@ fn geo_disc_disc(a: Disc, b: Disc) -> bool {
 
 fn geo_disc_rect(d: Disc, r: Rect) -> bool {
     return geo_rect_distance_sq(r, d.x, d.y) <= d.r * d.r;
+}
+
+// Direction m·π/64 (m < 64) as (cos, sin); sin(mπ/64) = cos(|32 − m|·π/64).
+fn geo_poly64_dir(m: u32) -> vec2<f32> {
+    let j = select(32u - m, m - 32u, m >= 32u);
+    return vec2<f32>(GEO_POLY64_COS[m], GEO_POLY64_COS[j]);
+}
+
+// Is (dx, dy) in the regular 64-gon of circumradius r centred at the origin (touching counts)?
+fn geo_poly64_contains(dx: f32, dy: f32, r: f32) -> bool {
+    let apothem = r * GEO_POLY64_COS[1];
+    for (var k = 0u; k < 32u; k++) {
+        let n = geo_poly64_dir(2u * k + 1u);
+        if (!(abs(dx * n.x + dy * n.y) <= apothem)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Do two discs, each as 0.1.1's 64-gon, intersect (touching counts)?
+fn geo_poly64_disc_disc(a: Disc, b: Disc) -> bool {
+    let dx = a.x - b.x;
+    let dy = a.y - b.y;
+    let r = a.r + b.r;
+    let dist_sq = dx * dx + dy * dy;
+    let outer = r * GEO_POLY64_OUTER;
+    if (dist_sq > outer * outer) {
+        return false;
+    }
+    let inner = r * GEO_POLY64_INNER;
+    if (dist_sq <= inner * inner) {
+        return true;
+    }
+    return geo_poly64_contains(dx, dy, r);
+}
+
+// Half-widths of the unit 64-gon along (c, s) and (−s, c): max over its vertices of |v·u|.
+fn geo_poly64_half_widths(c: f32, s: f32) -> vec2<f32> {
+    var ha = 0.0;
+    var hb = 0.0;
+    for (var k = 0u; k < 32u; k++) {
+        let v = geo_poly64_dir(2u * k);
+        ha = max(ha, abs(v.x * c + v.y * s));
+        hb = max(hb, abs(v.y * c - v.x * s));
+    }
+    return vec2<f32>(ha, hb);
+}
+
+// The separating-axis test of a disc's 64-gon and a rectangle: the rectangle's 2 normals, then
+// the 64-gon's 32 edge normals.
+fn geo_poly64_rect_overlap(d: Disc, r: Rect) -> bool {
+    let l = geo_rect_to_local(r, d.x, d.y);
+    let h = geo_poly64_half_widths(r.c, r.s);
+    if (abs(l.x) > r.hl + d.r * h.x || abs(l.y) > r.hw + d.r * h.y) {
+        return false;
+    }
+    let dx = d.x - r.x;
+    let dy = d.y - r.y;
+    let apothem = d.r * GEO_POLY64_COS[1];
+    for (var k = 0u; k < 32u; k++) {
+        let n = geo_poly64_dir(2u * k + 1u);
+        // The rectangle's half-width along the normal n.
+        let half = r.hl * abs(r.c * n.x + r.s * n.y) + r.hw * abs(r.c * n.y - r.s * n.x);
+        if (!(abs(dx * n.x + dy * n.y) <= geo_add_sum(apothem, half))) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Does a disc as 0.1.1's 64-gon intersect a rectangle (touching counts)?
+fn geo_poly64_disc_rect(d: Disc, r: Rect) -> bool {
+    let dist_sq = geo_rect_distance_sq(r, d.x, d.y);
+    let outer = d.r * GEO_POLY64_OUTER;
+    if (dist_sq > outer * outer) {
+        return false;
+    }
+    let inner = d.r * GEO_POLY64_INNER;
+    if (dist_sq <= inner * inner) {
+        return true;
+    }
+    return geo_poly64_rect_overlap(d, r);
+}
+
+// Do two discs intersect as contact shape `shape` (GEO_CONTACT_*) models them?
+fn geo_disc_disc_as(shape: u32, a: Disc, b: Disc) -> bool {
+    if (shape == GEO_CONTACT_POLYGON64) {
+        return geo_poly64_disc_disc(a, b);
+    }
+    return geo_disc_disc(a, b);
+}
+
+// Do a disc and a rectangle intersect as contact shape `shape` (GEO_CONTACT_*) models the disc?
+fn geo_disc_rect_as(shape: u32, d: Disc, r: Rect) -> bool {
+    if (shape == GEO_CONTACT_POLYGON64) {
+        return geo_poly64_disc_rect(d, r);
+    }
+    return geo_disc_rect(d, r);
 }
 
 // Distance from the origin to the segment from a to a + e (m), the segment given by its

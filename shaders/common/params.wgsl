@@ -74,5 +74,6 @@ struct StepParams {
     seed_lo: u32,
     seed_hi: u32,
     replay: u32,
-    pad: array<u32, 1>,
+    contact_shape: u32,
+    pad: array<u32, 4>,
 }

@@ -34,18 +34,20 @@ fn world_laptop_rect(e: u32, l: u32) -> Rect {
     );
 }
 
-// Which humans and objects the disc touches (exact geometry, touching counts).
+// Which humans and objects the disc touches (touching counts), with discs shaped as
+// `params.contact_shape` says.
 fn world_touches(e: u32, d: Disc) -> Touches {
+    let shape = params.contact_shape;
     var t = Touches(false, false, false);
     let hb = e * S_H_X;
     for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
-        if (geo_disc_disc(d, Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius))) {
+        if (geo_disc_disc_as(shape, d, Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius))) {
             t.human = true;
             break;
         }
     }
     for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
-        if (geo_disc_rect(d, world_wall_rect(e, w))) {
+        if (geo_disc_rect_as(shape, d, world_wall_rect(e, w))) {
             t.wall = true;
             break;
         }
@@ -53,21 +55,21 @@ fn world_touches(e: u32, d: Disc) -> Touches {
     var plant = false;
     let pb = e * S_P_X;
     for (var i = pb; i < pb + su[C_N_PLANTS + e]; i++) {
-        if (geo_disc_disc(d, Disc(sf[C_P_X + i], sf[C_P_Y + i], params.plant_radius))) {
+        if (geo_disc_disc_as(shape, d, Disc(sf[C_P_X + i], sf[C_P_Y + i], params.plant_radius))) {
             plant = true;
             break;
         }
     }
     var table = false;
     for (var k = 0u; k < su[C_N_TABLES + e]; k++) {
-        if (geo_disc_rect(d, world_table_rect(e, k))) {
+        if (geo_disc_rect_as(shape, d, world_table_rect(e, k))) {
             table = true;
             break;
         }
     }
     var laptop = false;
     for (var k = 0u; k < su[C_N_LAPTOPS + e]; k++) {
-        if (geo_disc_rect(d, world_laptop_rect(e, k))) {
+        if (geo_disc_rect_as(shape, d, world_laptop_rect(e, k))) {
             laptop = true;
             break;
         }

@@ -3,9 +3,10 @@
 //!
 //! Defaults live in one place: the `Default` impls below, which reproduce the paper's
 //! experiment 1 (`configs/exp1.toml`). A TOML file only needs the keys it changes. Loading
-//! reports every problem at once: unknown keys and the value checks of [`validate`]. Unknown keys
-//! are collected with `serde_ignored` rather than refused by serde's `deny_unknown_fields`, which
-//! would stop at the first one and hide every other problem.
+//! reports every problem at once: unknown keys, values that do not deserialise (an unknown
+//! variant, a wrong type: each is reported and its line left out of a new parse) and the value
+//! checks of [`validate`]. Unknown keys are collected with `serde_ignored` rather than refused by
+//! serde's `deny_unknown_fields`, which would stop at the first one and hide every other problem.
 //! `configs/README.md` documents every key with its unit, default and valid range.
 
 mod socnavgym;
@@ -623,6 +624,18 @@ pub enum LaptopUserObstacle {
     Radius,
 }
 
+/// Which shapes the step's contact decisions use (the human push-out, the robot's and the shadow
+/// robot's collisions); spawning and goal sampling always use exact discs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactShape {
+    /// Exact discs and rectangles.
+    Exact,
+    /// Discs as 0.1.1's shapely 64-gons (`Point.buffer(r)`, vertices at k·π/32), rectangles
+    /// exact: contacts decided as 0.1.1 decides them.
+    Polygon64,
+}
+
 /// Modelling choices of 0.1.1 that socnav keeps by default under a named option
 /// (DESIGN.md section 5; every row is in `docs/fidelity.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -636,6 +649,9 @@ pub struct Model {
     pub laptop_user_obstacle: LaptopUserObstacle,
     /// DSRNN discomfort also counts every group and laptop use as a pseudo-human at its centre.
     pub dsrnn_pseudo_humans: bool,
+    /// Shapes of the step's contact decisions (an approximation of 0.1.1, not a modelling
+    /// choice: exact by default).
+    pub contact_shape: ContactShape,
 }
 
 impl Default for Model {
@@ -645,6 +661,7 @@ impl Default for Model {
             group_velocity_divided: true,
             laptop_user_obstacle: LaptopUserObstacle::Wide,
             dsrnn_pseudo_humans: true,
+            contact_shape: ContactShape::Exact,
         }
     }
 }
@@ -671,15 +688,31 @@ impl Default for Render {
 impl Config {
     /// Parse a TOML document, then validate it; every problem is reported at once.
     pub fn from_toml_str(text: &str) -> Result<Self, SimError> {
-        let mut unknown = Vec::new();
-        let de =
-            toml::Deserializer::parse(text).map_err(|e| SimError::Config(vec![e.to_string()]))?;
-        let config: Config = serde_ignored::deserialize(de, |path| unknown.push(path.to_string()))
-            .map_err(|e| SimError::Config(vec![e.to_string()]))?;
-        let mut problems: Vec<String> = unknown
-            .into_iter()
-            .map(|k| format!("unknown key `{k}`"))
-            .collect();
+        let mut text = text.to_owned();
+        let mut problems = Vec::new();
+        let config = loop {
+            let mut unknown = Vec::new();
+            let de = toml::Deserializer::parse(&text)
+                .map_err(|e| SimError::Config(vec![e.to_string()]))?;
+            match serde_ignored::deserialize(de, |path| unknown.push(path.to_string())) {
+                Ok(config) => {
+                    problems.extend(unknown.into_iter().map(|k| format!("unknown key `{k}`")));
+                    break config;
+                }
+                // A value that does not deserialise (an unknown variant, a wrong type) is
+                // reported and its line left out, so that the next parse finds the others.
+                Err(e) => match without_bad_value(&text, &e) {
+                    Some((rest, problem)) => {
+                        problems.push(problem);
+                        text = rest;
+                    }
+                    None => {
+                        problems.push(e.to_string());
+                        return Err(SimError::Config(problems));
+                    }
+                },
+            }
+        };
         problems.extend(validate(&config));
         if problems.is_empty() {
             Ok(config)
@@ -756,6 +789,38 @@ impl Config {
             Err(SimError::Config(problems))
         }
     }
+}
+
+/// `text` without the `key = value` line of the value that `error` points at, and the problem
+/// naming its dotted key and the value; `None` when the error is not about a single-line value.
+fn without_bad_value(text: &str, error: &toml::de::Error) -> Option<(String, String)> {
+    let span = error.span()?;
+    let start = text[..span.start].rfind('\n').map_or(0, |i| i + 1);
+    let end = text[span.end..]
+        .find('\n')
+        .map_or(text.len(), |i| span.end + i);
+    let line = &text[start..end];
+    let key = line.split_once('=')?.0.trim();
+    let bare = |k: &str| {
+        !k.is_empty()
+            && k.chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    };
+    if !bare(key) || span.start < start + line.find('=')? {
+        return None;
+    }
+    // The section: the last `[header]` line before the value (nested tables are dotted).
+    let section = text[..start]
+        .lines()
+        .map(str::trim)
+        .rfind(|l| l.starts_with('[') && !l.starts_with("[["))
+        .and_then(|l| l.get(1..l.find(']')?))
+        .map(str::trim);
+    let path = section.map_or(key.to_owned(), |s| format!("{s}.{key}"));
+    let problem = format!("`{path}` = {}: {}", &text[span], error.message());
+    let mut rest = text[..start].to_owned();
+    rest.push_str(&text[end..]);
+    Some((rest, problem))
 }
 
 /// Merge the JSON object `from` into the TOML table `into`, key by key (tables recursively);

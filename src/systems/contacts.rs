@@ -2,9 +2,11 @@
 //! free laptop is pushed out by an MPE-style soft contact force: it turns to the force direction,
 //! takes speed min(|F|·dt, max speed) and moves once more. Non-wall objects count as discs (tables
 //! and laptops by their circumradius); against a wall the obstacle is the human's mirror image
-//! across the wall face. Lone static humans are never moved; the robot is never pushed.
+//! across the wall face. Lone static humans are never moved; the robot is never pushed. Whether a
+//! human touches an object is decided with discs shaped as `[model] contact_shape` says (0.1.1:
+//! 64-gons); the force formula stays the one of exact discs.
 
-use crate::geometry::{Disc, Rect, disc_disc, disc_rect};
+use crate::geometry::{Disc, Rect, disc_disc_as, disc_rect_as};
 use crate::math;
 use crate::params::StepParams;
 use crate::pipeline::Batch;
@@ -38,14 +40,14 @@ fn push_out(p: &StepParams, s: &mut StateChunk, e: usize, i: usize) {
             y: s.p_y[k],
             r: p.plant_radius,
         };
-        if disc_disc(&human(p, s, i), &plant) {
+        if disc_disc_as(p.contact_shape, &human(p, s, i), &plant) {
             let (dx, dy) = (s.h_x[i] - plant.x, s.h_y[i] - plant.y);
             push(p, s, i, dx, dy, r + plant.r);
         }
     }
     for w in 0..s.n_walls[e] as usize {
         let wall = super::world::wall_rect(p, s, e, w);
-        if disc_rect(&human(p, s, i), &wall) {
+        if disc_rect_as(p.contact_shape, &human(p, s, i), &wall) {
             let (dx, dy) = mirror_delta(&wall, s.h_x[i], s.h_y[i]);
             push(p, s, i, dx, dy, 2.0 * r);
         }
@@ -73,7 +75,7 @@ fn human(p: &StepParams, s: &StateChunk, i: usize) -> Disc {
 }
 
 fn push_from_rect(p: &StepParams, s: &mut StateChunk, i: usize, rect: &Rect) {
-    if disc_rect(&human(p, s, i), rect) {
+    if disc_rect_as(p.contact_shape, &human(p, s, i), rect) {
         let (dx, dy) = (s.h_x[i] - rect.x, s.h_y[i] - rect.y);
         push(p, s, i, dx, dy, p.human_radius + rect.circumradius());
     }

@@ -1,7 +1,8 @@
 //! Stage `termination` (spec 8.1): decide the episode's outcome in 0.1.1's
 //! priority order: out of map, goal reached, collision (with a human or an object), timeout.
 //! Exactly one outcome flag is raised; `COLLISION_WALL` is reported whenever the robot touches a
-//! wall. Every later stage reads the outcome from the info row.
+//! wall. Every later stage reads the outcome from the info row. Touching is decided with discs
+//! shaped as `[model] contact_shape` says ([`super::world::touches`]), for the shadow robot too.
 
 use crate::geometry::Disc;
 use crate::params::StepParams;

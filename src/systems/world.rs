@@ -2,7 +2,7 @@
 //! shapes of the static objects. Shared by termination, the shadow robot, goal re-sampling and
 //! contact handling, so every stage sees the same geometry.
 
-use crate::geometry::{Disc, Rect, Shape, disc_disc, disc_rect};
+use crate::geometry::{Disc, Rect, Shape, disc_disc_as, disc_rect_as};
 use crate::params::StepParams;
 use crate::state::StateChunk;
 
@@ -72,12 +72,16 @@ pub fn blocker_rect(s: &StateChunk, e: usize, b: usize) -> Rect {
     )
 }
 
-/// Which humans and objects the disc touches (exact geometry, touching counts).
+/// Which humans and objects the disc touches (touching counts), with discs shaped as
+/// `[model] contact_shape` says ([`StepParams::contact_shape`]): the collision test of the
+/// robot and of the shadow robot.
 pub fn touches(p: &StepParams, s: &StateChunk, e: usize, d: &Disc) -> Touches {
+    let shape = p.contact_shape;
     let mut t = Touches::default();
     let hb = e * s.strides.humans;
     t.human = (hb..hb + s.n_humans[e] as usize).any(|i| {
-        disc_disc(
+        disc_disc_as(
+            shape,
             d,
             &Disc {
                 x: s.h_x[i],
@@ -86,10 +90,11 @@ pub fn touches(p: &StepParams, s: &StateChunk, e: usize, d: &Disc) -> Touches {
             },
         )
     });
-    t.wall = (0..s.n_walls[e] as usize).any(|w| disc_rect(d, &wall_rect(p, s, e, w)));
+    t.wall = (0..s.n_walls[e] as usize).any(|w| disc_rect_as(shape, d, &wall_rect(p, s, e, w)));
     let pb = e * s.strides.plants;
     let plant = (pb..pb + s.n_plants[e] as usize).any(|i| {
-        disc_disc(
+        disc_disc_as(
+            shape,
             d,
             &Disc {
                 x: s.p_x[i],
@@ -98,8 +103,10 @@ pub fn touches(p: &StepParams, s: &StateChunk, e: usize, d: &Disc) -> Touches {
             },
         )
     });
-    let table = (0..s.n_tables[e] as usize).any(|k| disc_rect(d, &table_rect(p, s, e, k)));
-    let laptop = (0..s.n_laptops[e] as usize).any(|k| disc_rect(d, &laptop_rect(p, s, e, k)));
+    let table =
+        (0..s.n_tables[e] as usize).any(|k| disc_rect_as(shape, d, &table_rect(p, s, e, k)));
+    let laptop =
+        (0..s.n_laptops[e] as usize).any(|k| disc_rect_as(shape, d, &laptop_rect(p, s, e, k)));
     t.object = t.wall || plant || table || laptop;
     t
 }
