@@ -19,7 +19,7 @@ mod common;
 mod golden;
 
 use golden::{Episode, Report, config_for, golden_dir_or_skip, load_episodes};
-use socnav::config::RewardKind;
+use socnav::config::{ContactShape, RewardKind};
 use socnav::{Actions, BatchEnv, EnvOptions};
 
 /// Configs this build replays; the SNGNN-v2 ones need the weight file (skipped loudly without
@@ -46,33 +46,53 @@ fn golden_replay() {
         "no golden episodes in {} (filter {filter:?})",
         dir.display()
     );
-    let mut total = Report::default();
-    let mut replayed = 0;
-    for (name, ep) in &episodes {
-        let config_name = ep.config_name();
-        if !REPLAYABLE.contains(&config_name.as_str()) {
-            println!("SKIP {name}: config `{config_name}` is not one this build replays");
-            continue;
+    // Every episode twice: with socnav's default exact discs (contacts within the 64-gon's inset
+    // counted apart, docs/fidelity.md) and with 0.1.1's 64-gons (`contact_shape = "polygon64"`),
+    // where those contacts must be decided as 0.1.1 decided them.
+    let mut totals = Vec::new();
+    for shape in [ContactShape::Exact, ContactShape::Polygon64] {
+        let mut total = Report::default();
+        let mut replayed = 0;
+        for (name, ep) in &episodes {
+            let config_name = ep.config_name();
+            if !REPLAYABLE.contains(&config_name.as_str()) {
+                println!("SKIP {name}: config `{config_name}` is not one this build replays");
+                continue;
+            }
+            if config_name.ends_with("_with_sngnn") && common::sngnn::real_weights().is_none() {
+                continue;
+            }
+            let report = replay(name, ep, shape);
+            println!("{name} ({shape:?} contacts): {}", report.summary());
+            total.merge(&report);
+            replayed += 1;
         }
-        if config_name.ends_with("_with_sngnn") && common::sngnn::real_weights().is_none() {
-            continue;
-        }
-        let report = replay(name, ep);
-        println!("{name}: {}", report.summary());
-        total.merge(&report);
-        replayed += 1;
+        println!(
+            "TOTAL over {replayed} episodes ({shape:?} contacts): {}",
+            total.summary()
+        );
+        assert!(
+            replayed > 0,
+            "no replayable episode matched the filter {filter:?}"
+        );
+        totals.push(total);
     }
-    println!("TOTAL over {replayed} episodes: {}", total.summary());
-    assert!(
-        replayed > 0,
-        "no replayable episode matched the filter {filter:?}"
+    for total in &totals {
+        total.assert_ok();
+    }
+    // The 64-gons explain the exact discs' contacts within the inset only if they decide
+    // contacts as 0.1.1 did: a polygon64 replay counts no contact in the inset apart.
+    assert_eq!(
+        totals[1].shape_flips(),
+        0,
+        "polygon64 contacts counted as shape flips"
     );
-    total.assert_ok();
 }
 
 /// Replay one episode step by step.
-fn replay(name: &str, ep: &Episode) -> Report {
-    let config = config_for(ep).unwrap_or_else(|e| panic!("{name}: {e}"));
+fn replay(name: &str, ep: &Episode, shape: ContactShape) -> Report {
+    let mut config = config_for(ep).unwrap_or_else(|e| panic!("{name}: {e}"));
+    config.model.contact_shape = shape;
     let mut env = BatchEnv::new(
         config,
         EnvOptions {
@@ -83,7 +103,7 @@ fn replay(name: &str, ep: &Episode) -> Report {
     )
     .unwrap_or_else(|e| panic!("{name}: {e}"));
     env.set_replay(true);
-    let mut report = Report::new(name);
+    let mut report = Report::new(name).with_contact_shape(shape, env.params().human_radius as f64);
     env.set_state(0, &ep.document(ep.initial_state()))
         .unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
     report.compare_obs(&env, ep.initial_obs(), &[], &[], "initial");

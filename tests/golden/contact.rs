@@ -1,22 +1,131 @@
-//! Which humans a step may push out of an object differently in socnav and in 0.1.1 (spec 4.6).
+//! How the replay decides contacts (spec 4.6, 8.1, 8.2), and which decisions may differ from
+//! 0.1.1's within their conditioning.
 //!
-//! 0.1.1 tests human–object contact on shapely polygons, a human's disc being a 64-gon that sits
-//! up to 0.12 % of the radius inside the circle, while socnav tests the exact disc in f32. A human
-//! that ends its motion touching an object to within that margin may be pushed by one and not by
-//! the other: its position, heading and speed then differ for the rest of the step (the next step
-//! starts again from the recorded state).
+//! 0.1.1 tests every contact on shapely polygons: a disc (robot, human, plant) is a 64-gon that
+//! sits up to 1 − cos(π/64) = 0.12 % of its radius inside the circle. socnav decides contacts
+//! as `[model] contact_shape` says: with `"exact"` discs, a contact within that inset may be
+//! decided differently (a human pushed out by one side only, a collision seen by one side only);
+//! with `"polygon64"`, socnav tests the same 64-gons, and only a contact within the f32 rounding
+//! of positions of the polygon's boundary may differ. The replay runs with both shapes.
 
 use serde_json::Value;
+use socnav::config::ContactShape;
+use socnav::geometry::{Disc, Rect, contact_shape, disc_disc_as, disc_rect_as};
 
 use super::{Step, num};
 
-/// Fraction of the human radius within which the contact decision may differ: the 64-gon's
-/// inset 1 − cos(π/64) = 0.12 %, and the f32 rounding of metre-scale positions well inside it.
+/// Fraction of the radii within which an exact-disc decision may differ from 0.1.1's: the
+/// 64-gon's inset 1 − cos(π/64) = 0.12 %, and the f32 rounding of metre-scale positions well
+/// inside it.
 pub const CONTACT_FLIP_FRACTION: f64 = 0.0013;
 
-/// For each human of the step's post-motion state (observation order): whether it ended its
-/// motion within the flip margin of touching a plant, wall, table or free laptop.
-pub fn near_contact(header: &Value, step: &Step<'_>, dt: f64, human_radius: f64) -> Vec<bool> {
+/// Distance (m) from the polygon's boundary within which a 64-gon decision may differ from
+/// 0.1.1's: socnav tests the same polygons in f32, from positions that agree with 0.1.1's within
+/// the replay's position tolerance (`compare::POS`, 2e-5 m; the largest difference measured on
+/// the published episodes is 2.4e-6 m). The polygon test itself rounds at ~1e-6 m
+/// (`tests/contact_shape.rs` against shapely), inside that.
+pub const POLYGON64_FLIP_DISTANCE: f64 = super::compare::POS;
+
+/// How the replay decides a contact: the shape socnav was configured with, and how far (a
+/// fraction of every disc's radius) the decision's threshold may lie from 0.1.1's.
+#[derive(Debug, Clone, Copy)]
+pub struct ContactRule {
+    /// The shape socnav decides contacts with.
+    pub shape: ContactShape,
+    /// Radii scale by 1 ± this fraction to bracket the threshold.
+    pub fraction: f64,
+}
+
+impl ContactRule {
+    /// The rule of a replay with `shape`, for humans of `human_radius` (m), the smallest disc
+    /// whose contacts are decided.
+    pub fn new(shape: ContactShape, human_radius: f64) -> Self {
+        let fraction = match shape {
+            ContactShape::Exact => CONTACT_FLIP_FRACTION,
+            ContactShape::Polygon64 => POLYGON64_FLIP_DISTANCE / human_radius,
+        };
+        Self { shape, fraction }
+    }
+
+    fn code(&self) -> u32 {
+        match self.shape {
+            ContactShape::Exact => contact_shape::EXACT,
+            ContactShape::Polygon64 => contact_shape::POLYGON64,
+        }
+    }
+
+    /// Does a decision `decide(scale)` of contacts between discs whose radii are multiplied by
+    /// `scale` change within the rule's bracket around scale 1?
+    pub fn ambiguous(&self, decide: impl Fn(f64) -> bool) -> bool {
+        decide(1.0 - self.fraction) != decide(1.0 + self.fraction)
+    }
+
+    /// Do two discs (x, y, r), radii multiplied by `scale`, touch as socnav decides with this
+    /// shape (in f32, as the step does)?
+    pub fn discs_touch(&self, a: (f64, f64, f64), b: (f64, f64, f64), scale: f64) -> bool {
+        disc_disc_as(self.code(), &disc(a, scale), &disc(b, scale))
+    }
+
+    /// Does the disc (x, y, r), radius multiplied by `scale`, touch the rectangle `r` of the
+    /// recording (`across` names its width key)?
+    pub fn touches_rect(&self, d: (f64, f64, f64), r: &Value, across: &str, scale: f64) -> bool {
+        disc_rect_as(self.code(), &disc(d, scale), &rect(r, across))
+    }
+
+    /// Does the disc (x, y, r), radii multiplied by `scale`, touch a plant, wall, table or free
+    /// laptop of the post-motion state `post`?
+    pub fn touches_object(
+        &self,
+        header: &Value,
+        post: &Value,
+        d: (f64, f64, f64),
+        scale: f64,
+    ) -> bool {
+        let list = |v: &Value| v.as_array().cloned().unwrap_or_default();
+        list(&header["walls"])
+            .iter()
+            .any(|w| self.touches_rect(d, w, "thickness", scale))
+            || list(&post["tables"])
+                .iter()
+                .any(|t| self.touches_rect(d, t, "width", scale))
+            || list(&post["laptops"])
+                .iter()
+                .filter(|l| l["hl"].is_null())
+                .any(|l| self.touches_rect(d, l, "width", scale))
+            || list(&post["plants"]).iter().any(|p| {
+                self.discs_touch(d, (num(&p["x"]), num(&p["y"]), num(&p["radius"])), scale)
+            })
+    }
+}
+
+fn disc((x, y, r): (f64, f64, f64), scale: f64) -> Disc {
+    Disc {
+        x: x as f32,
+        y: y as f32,
+        r: (r * scale) as f32,
+    }
+}
+
+fn rect(r: &Value, across: &str) -> Rect {
+    Rect::new(
+        num(&r["x"]) as f32,
+        num(&r["y"]) as f32,
+        num(&r["theta"]) as f32,
+        num(&r["length"]) as f32,
+        num(&r[across]) as f32,
+    )
+}
+
+/// For each human of the step's post-motion state (observation order): whether its contact
+/// with a plant, wall, table or free laptop at the end of its motion is decided within the
+/// rule's bracket (and may be decided differently by socnav and 0.1.1).
+pub fn near_contact(
+    header: &Value,
+    step: &Step<'_>,
+    dt: f64,
+    human_radius: f64,
+    rule: &ContactRule,
+) -> Vec<bool> {
     let post = step.state_after_motion();
     let pushed: Vec<u64> = step.v["diag"]["contacts"]
         .as_array()
@@ -24,7 +133,6 @@ pub fn near_contact(header: &Value, step: &Step<'_>, dt: f64, human_radius: f64)
         .flatten()
         .filter_map(|c| c[0].as_u64())
         .collect();
-    let margin = CONTACT_FLIP_FRACTION * human_radius;
     post["humans"]
         .as_array()
         .into_iter()
@@ -37,33 +145,9 @@ pub fn near_contact(header: &Value, step: &Step<'_>, dt: f64, human_radius: f64)
                 x -= speed * dt * theta.cos();
                 y -= speed * dt * theta.sin();
             }
-            object_distances(header, post, x, y).any(|d| (d - human_radius).abs() <= margin)
+            rule.ambiguous(|scale| rule.touches_object(header, post, (x, y, human_radius), scale))
         })
         .collect()
-}
-
-/// Distances (m) from (x, y) to every object a human can be pushed out of.
-fn object_distances<'a>(
-    header: &'a Value,
-    post: &'a Value,
-    x: f64,
-    y: f64,
-) -> impl Iterator<Item = f64> + 'a {
-    let list = |v: &'a Value| v.as_array().map_or(&[][..], |a| &a[..]);
-    let walls = list(&header["walls"])
-        .iter()
-        .map(move |w| rectangle_distance(w, "thickness", x, y));
-    let tables = list(&post["tables"])
-        .iter()
-        .map(move |t| rectangle_distance(t, "width", x, y));
-    let laptops = list(&post["laptops"])
-        .iter()
-        .filter(|l| l["hl"].is_null())
-        .map(move |l| rectangle_distance(l, "width", x, y));
-    let plants = list(&post["plants"])
-        .iter()
-        .map(move |p| (num(&p["x"]) - x).hypot(num(&p["y"]) - y) - num(&p["radius"]));
-    walls.chain(tables).chain(laptops).chain(plants)
 }
 
 /// Distance (m) from (x, y) to the rectangle `r` (centre `x`, `y`, heading `theta`, `length`
@@ -80,18 +164,18 @@ pub(super) fn rectangle_distance(r: &Value, across: &str, x: f64, y: f64) -> f64
 /// Whether the ORCA shadow robot has collided by the end of a step that started from `prev` and
 /// whose post-motion snapshot is `post` (spec 8.2): it touches a lone human, plant, wall, table
 /// or free laptop, or a group member, laptop user or used laptop. `bug` tests the last three
-/// against the real robot, as 0.1.1 does; socnav tests them against the shadow robot. `margin`
-/// widens (> 0) or narrows (< 0) every contact distance by that fraction, to tell decisions
-/// within the 64-gon margin ([`CONTACT_FLIP_FRACTION`]) from real differences.
+/// against the real robot, as 0.1.1 does; socnav tests them against the shadow robot. Contacts
+/// are decided by `rule` with every disc's radius multiplied by `scale` (see
+/// [`ContactRule::ambiguous`]).
 pub fn shadow_collided(
     header: &Value,
-    prev: &Value,
-    post: &Value,
+    (prev, post): (&Value, &Value),
     radii: (f64, f64),
     bug: bool,
-    margin: f64,
+    rule: &ContactRule,
+    scale: f64,
 ) -> bool {
-    let (robot_radius, human_radius) = (radii.0 * (1.0 + margin), radii.1 * (1.0 + margin));
+    let (robot_radius, human_radius) = radii;
     let before = &prev["shadow_robot"];
     if before["collided"] == true {
         return true;
@@ -99,11 +183,11 @@ pub fn shadow_collided(
     if before["reached"] == true {
         return false;
     }
-    let at = |r: &Value| (num(&r["x"]), num(&r["y"]));
+    let at = |r: &Value| (num(&r["x"]), num(&r["y"]), robot_radius);
     let shadow = at(&post["shadow_robot"]);
     let social = if bug { at(&post["robot"]) } else { shadow };
-    let touches = |(x, y): (f64, f64), h: &Value| {
-        (num(&h["x"]) - x).hypot(num(&h["y"]) - y) <= robot_radius + human_radius
+    let touches = |robot: (f64, f64, f64), h: &Value| {
+        rule.discs_touch(robot, (num(&h["x"]), num(&h["y"]), human_radius), scale)
     };
     let humans = post["humans"].as_array().map_or(&[][..], |a| &a[..]);
     let lone = |h: &&Value| h["role"] == "static" || h["role"] == "dynamic";
@@ -112,14 +196,12 @@ pub fn shadow_collided(
         .iter()
         .filter(|h| !lone(h))
         .any(|h| touches(social, h));
-    let object = |(x, y): (f64, f64), used: bool| {
-        post["laptops"]
-            .as_array()
-            .into_iter()
-            .flatten()
-            .filter(|l| l["hl"].is_null() != used)
-            .any(|l| rectangle_distance(l, "width", x, y) <= robot_radius)
-    };
-    let fixed = object_distances(header, post, shadow.0, shadow.1).any(|d| d <= robot_radius);
-    lone_human || social_human || fixed || object(social, true)
+    let used_laptop = post["laptops"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter(|l| !l["hl"].is_null())
+        .any(|l| rule.touches_rect(social, l, "width", scale));
+    let fixed = rule.touches_object(header, post, shadow, scale);
+    lone_human || social_human || fixed || used_laptop
 }
