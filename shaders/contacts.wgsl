@@ -3,16 +3,20 @@
 // Twin of src/systems/contacts.rs (stage `contacts`, spec 4.6): after all motion, a human that
 // touches a plant, wall, table or free laptop is pushed out by an MPE-style soft contact force: it
 // turns to the force direction, takes speed min(|F|·dt, max speed) and moves once more. Whether a
-// human touches an object is decided with discs shaped as `params.contact_shape` says. Change
-// both files in the same commit.
+// human touches an object is decided with discs shaped as `params.contact_shape` says, an
+// overlap of at most CONTACT_SLOP not counting. Change both files in the same commit.
 
 // Softness of the contact (m), MPE's `contact_margin`: the f32 of 1e-3.
 const CONTACT_MARGIN: f32 = 0x1.0624dep-10f;
 // Stiffness of the contact, MPE's `contact_force`.
 const CONTACT_STIFFNESS: f32 = 100.0;
+// Overlap (m) that does not count as a contact, the f32 of 1e-6: the f32 rounding of a position
+// update, which leaves walkers that ORCA holds at an obstacle's surface slightly inside it.
+const CONTACT_SLOP: f32 = 0x1.0c6f7ap-20f;
 
+// The human's disc for the contact decision: its radius less CONTACT_SLOP.
 fn human_disc(i: u32) -> Disc {
-    return Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius);
+    return Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius - CONTACT_SLOP);
 }
 
 // Apply the contact force for separation vector (dx, dy) and contact distance `reach` (m).

@@ -149,3 +149,59 @@ fn group_members_with_different_goal_radii_are_refused() {
         "{text}"
     );
 }
+
+/// A standing pair of humans (they do not walk, so only the contact stage moves them), member 1
+/// overlapping the plant at the origin by `overlap` (m) along +x, for both contact shapes. The
+/// returned speeds: member 1's after one step, for exact discs and for 64-gons.
+fn push_speed_at_overlap(overlap: f64) -> [f32; 2] {
+    use common::scene::{load, push, scene};
+    use socnav::config::ContactShape;
+    [ContactShape::Exact, ContactShape::Polygon64].map(|shape| {
+        let mut c = common::load_config("exp1");
+        c.counts.plants = [0, 1];
+        c.counts.standing_groups = [0, 1];
+        c.counts.group_size = [2, 2];
+        c.model.contact_shape = shape;
+        let reach = f64::from(c.human.diameter) / 2.0 + f64::from(c.objects.plant_radius);
+        let mut doc = scene(false, [-3.0, -3.0, 0.0], [3.0, -3.0]);
+        push(&mut doc, "plants", serde_json::json!({"id": 4, "x": 0.0, "y": 0.0}));
+        for (id, x) in [(1, reach - overlap), (2, reach + 1.5)] {
+            push(
+                &mut doc,
+                "humans",
+                serde_json::json!({"id": id, "x": x, "y": 0.0, "theta": 1.0, "speed": 0.0,
+                                   "policy": "orca", "role": "standing_group", "group": 0}),
+            );
+        }
+        push(
+            &mut doc,
+            "groups",
+            serde_json::json!({"kind": "standing", "dispersable": false, "members": [1, 2],
+                               "centre": [reach + 0.75, 0.0]}),
+        );
+        let mut env = load(c, &[doc]);
+        env.step(Actions::Continuous(&[0.0; 3])).expect("step");
+        env.state().h_speed[0]
+    })
+}
+
+/// Class 6 of the unseen episodes (long human-object contacts): ORCA holds a walker exactly at
+/// an obstacle's surface, 0.1.1 moves it there in f64 (outside by ~1e-8 m) and lets it slide,
+/// while socnav's f32 position update leaves it up to a few 1e-7 m inside. An overlap within
+/// `CONTACT_SLOP` (1e-6 m) is therefore no contact, with either shape; a real one, 1e-5 m and
+/// more, still pushes (speed 100·k·ln(1 + e^(overlap/k))·dt ≥ 0.069 m/s).
+#[test]
+fn a_human_held_at_an_objects_surface_within_f32_rounding_is_not_pushed() {
+    for overlap in [0.0, 2e-7, 8e-7] {
+        assert_eq!(
+            push_speed_at_overlap(overlap),
+            [0.0; 2],
+            "overlap {overlap} m was pushed"
+        );
+    }
+    for overlap in [1e-5, 1e-3] {
+        for speed in push_speed_at_overlap(overlap) {
+            assert!(speed > 0.069, "overlap {overlap} m: push speed {speed}");
+        }
+    }
+}

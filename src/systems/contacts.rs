@@ -4,7 +4,8 @@
 //! and laptops by their circumradius); against a wall the obstacle is the human's mirror image
 //! across the wall face. Lone static humans are never moved; the robot is never pushed. Whether a
 //! human touches an object is decided with discs shaped as `[model] contact_shape` says (0.1.1:
-//! 64-gons); the force formula stays the one of exact discs.
+//! 64-gons), an overlap of at most [`CONTACT_SLOP`] not counting; the force formula stays the one
+//! of exact discs.
 
 use crate::geometry::{Disc, Rect, disc_disc_as, disc_rect_as};
 use crate::math;
@@ -16,6 +17,14 @@ use crate::state::{NONE, StateChunk, role};
 const MARGIN: f32 = 1e-3;
 /// Stiffness of the contact, MPE's `contact_force`.
 const STIFFNESS: f32 = 100.0;
+/// Overlap (m) that does not count as a contact: the f32 rounding of a position update. ORCA
+/// stops a walker exactly at an obstacle's surface (RVO2's obstacle constraint), and may hold it
+/// there for many steps; 0.1.1 moves it in f64 and leaves it outside by ~1e-8 m, socnav's f32
+/// update (half an ulp: up to 9.5e-7 m at 16 m from the origin) leaves it as often a few 1e-7 m
+/// inside, and would push it out every step where 0.1.1 lets it slide (seen on episodes recorded
+/// from 0.1.1 beyond the published ones). Real contacts, a walker or a group member walking into
+/// an object, overlap by millimetres.
+pub const CONTACT_SLOP: f32 = 1e-6;
 
 /// Resolve the contacts of every human of environment `e`.
 pub fn contacts(p: &StepParams, b: &mut Batch<'_>, e: usize) {
@@ -65,12 +74,13 @@ fn push_out(p: &StepParams, s: &mut StateChunk, e: usize, i: usize) {
     }
 }
 
+/// The human's disc for the contact decision: its radius less [`CONTACT_SLOP`].
 #[inline]
 fn human(p: &StepParams, s: &StateChunk, i: usize) -> Disc {
     Disc {
         x: s.h_x[i],
         y: s.h_y[i],
-        r: p.human_radius,
+        r: p.human_radius - CONTACT_SLOP,
     }
 }
 

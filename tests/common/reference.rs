@@ -7,10 +7,12 @@ use std::path::PathBuf;
 
 /// The RVO2 reference data: `SOCNAV_REF_DIR`, or `tests/data/ref/orca_sfm` in the repository.
 pub fn ref_dir() -> PathBuf {
-    std::env::var_os("SOCNAV_REF_DIR").map_or_else(
-        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/ref/orca_sfm"),
-        PathBuf::from,
-    )
+    std::env::var_os("SOCNAV_REF_DIR")
+        .filter(|d| !d.is_empty())
+        .map_or_else(
+            || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/ref/orca_sfm"),
+            PathBuf::from,
+        )
 }
 
 /// Whether the reference data is there; when it is not (`SOCNAV_REF_DIR` names a folder that

@@ -33,7 +33,9 @@ pub fn published_dir() -> PathBuf {
 /// The golden directory the replay and the tests over every episode read: `SOCNAV_GOLDEN_DIR`,
 /// else [`published_dir`].
 pub fn golden_dir() -> PathBuf {
-    std::env::var_os("SOCNAV_GOLDEN_DIR").map_or_else(published_dir, PathBuf::from)
+    std::env::var_os("SOCNAV_GOLDEN_DIR")
+        .filter(|d| !d.is_empty())
+        .map_or_else(published_dir, PathBuf::from)
 }
 
 /// [`golden_dir`] when it exists; otherwise `None`, after a `SKIP` line naming `test` and the
