@@ -164,7 +164,11 @@ fn push_speed_at_overlap(overlap: f64) -> [f32; 2] {
         c.model.contact_shape = shape;
         let reach = f64::from(c.human.diameter) / 2.0 + f64::from(c.objects.plant_radius);
         let mut doc = scene(false, [-3.0, -3.0, 0.0], [3.0, -3.0]);
-        push(&mut doc, "plants", serde_json::json!({"id": 4, "x": 0.0, "y": 0.0}));
+        push(
+            &mut doc,
+            "plants",
+            serde_json::json!({"id": 4, "x": 0.0, "y": 0.0}),
+        );
         for (id, x) in [(1, reach - overlap), (2, reach + 1.5)] {
             push(
                 &mut doc,
