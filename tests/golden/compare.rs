@@ -119,8 +119,10 @@ impl Report {
 
     /// Count a near-threshold flip (`shape`: a shape flip, outside the budget) of the situation
     /// `key` (the decision's kind and the body it concerns): it starts a streak unless the same
-    /// situation flipped at the previous step.
+    /// situation flipped at the previous step in the same category (a flip inside the budget
+    /// that continues only a shape-flip streak starts a streak of its own).
     fn flip(&mut self, key: String, shape: bool) {
+        let key = format!("{}{key}", if shape { "shape " } else { "" });
         let new = !self.previous_flips.contains(&key);
         if shape {
             self.shape_flips += 1;

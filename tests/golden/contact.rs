@@ -180,11 +180,11 @@ pub fn near_contact(
             let touches = |scale: f64| {
                 rule.touches_object(header, post, (x, y, human_radius), scale.max(0.0))
             };
-            if rule.ambiguous(&touches) {
+            if rule.ambiguous(touches) {
                 return Near::Bracket;
             }
             let earlier = (pushes.saturating_sub(1)) as f64 * human_max_speed * dt / human_radius;
-            if earlier > 0.0 && rule.ambiguous_by(earlier, &touches) {
+            if earlier > 0.0 && rule.ambiguous_by(earlier, touches) {
                 return Near::Repeated;
             }
             Near::No
