@@ -13,6 +13,7 @@ use std::f64::consts::PI;
 
 use golden::{Episode, Outcome, Report, config_for, golden_dir, time_to_collision_possible};
 use serde_json::{Value, json};
+use socnav::config::ContactShape;
 use socnav::{Actions, BatchEnv, EnvOptions};
 
 fn episode(name: &str) -> Episode {
@@ -31,7 +32,13 @@ fn post_mut(ep: &mut Episode, t: u64) -> &mut Value {
 
 /// Replay step `t` of `ep` alone, from the recorded state before it, as `golden_replay` does.
 fn replay_step(ep: &Episode, t: u64) -> Report {
-    let config = config_for(ep).expect("config");
+    replay_step_as(ep, t, ContactShape::Exact)
+}
+
+/// [`replay_step`] with contacts decided as `shape` says.
+fn replay_step_as(ep: &Episode, t: u64, shape: ContactShape) -> Report {
+    let mut config = config_for(ep).expect("config");
+    config.model.contact_shape = shape;
     let mut env = BatchEnv::new(
         config,
         EnvOptions {
@@ -50,7 +57,7 @@ fn replay_step(ep: &Episode, t: u64) -> Report {
     env.set_state(0, &ep.step_document(prev, &step))
         .expect("set_state");
     env.step(Actions::Continuous(&step.action())).expect("step");
-    let mut report = Report::new(&format!("t={t}"));
+    let mut report = Report::new(&format!("t={t}")).with_contact_shape(shape, 0.36);
     report.compare_step(&env, ep, step, prev);
     println!("{}", report.summary());
     report
@@ -303,4 +310,185 @@ fn speed_of_a_walker_arriving_at_its_crowd_slot() {
     assert!(fails_on(&report, "(id 4).speed"), "{:?}", report.failures());
     // The angle bound itself: a body at rest has no direction.
     assert_eq!(PI, golden::direction_error(1e-7, 2e-7));
+}
+
+/// The corridor walker (id 3, observation index 3) that wall 18 pushes out at t=104 of
+/// corridor_mixed_seed7, and a lone ORCA walker (id 1, index 1) of the same step.
+const PUSHED: (&str, u64, usize, usize) = ("corridor_mixed_seed7", 104, 3, 1);
+
+/// `PUSHED`'s step with its walker 0.1 mm deeper against the wall before the step, so that
+/// socnav pushes it out too (0.1.1's recorded push is at a gap of −1e-8 m, which socnav's discs
+/// and polygons both decide the other way): the walker's recorded post-step state and
+/// observation record are socnav's own, rounded as the recording is.
+fn pushed_walker_episode() -> Episode {
+    let (name, t, pushed, _) = PUSHED;
+    let mut ep = episode(name);
+    let h = &mut ep.step_mut(t - 1)["state"]["humans"][pushed];
+    assert_eq!(h["id"], 3);
+    add(&mut h["y"], -1e-4);
+    let config = config_for(&ep).expect("config");
+    let mut env = BatchEnv::new(
+        config,
+        EnvOptions {
+            n_envs: 1,
+            ..Default::default()
+        },
+    )
+    .expect("env");
+    env.set_replay(true);
+    let prev = ep.steps().find(|s| s.t() + 1 == t).unwrap().state();
+    let step = ep.steps().find(|s| s.t() == t).unwrap();
+    env.set_state(0, &ep.step_document(prev, &step))
+        .expect("set_state");
+    env.step(Actions::Continuous(&step.action())).expect("step");
+    let ours = env.get_state(0).expect("get_state")["state"]["humans"][pushed].clone();
+    let offset = env.layout().offset[0] + pushed * 14;
+    let record: Vec<f64> = env.outputs().obs[offset..offset + 14]
+        .iter()
+        .map(|&v| f64::from(v))
+        .collect();
+    let post = post_mut(&mut ep, t);
+    for key in ["x", "y", "theta", "speed"] {
+        post["humans"][pushed][key] = ours[key].clone();
+    }
+    let obs = &mut ep.step_mut(t)["obs"]["humans"];
+    for (k, v) in record.into_iter().enumerate() {
+        obs[pushed * 14 + k] = json!(v);
+    }
+    ep
+}
+
+/// F6: a contact push amplifies position errors a hundredfold (d speed/d dist = 100·dt·σ): the
+/// pushed walker's speed 5e-5 m/s off is within its conditioning; the same error on a walker
+/// that only walked is a mismatch.
+#[test]
+fn speed_of_a_contact_pushed_walker() {
+    let (_, t, pushed, walker) = PUSHED;
+    let faster = |index: usize| {
+        let mut ep = pushed_walker_episode();
+        add(&mut post_mut(&mut ep, t)["humans"][index]["speed"], 5e-5);
+        ep
+    };
+    let ep = pushed_walker_episode();
+    let speed = ep
+        .steps()
+        .find(|s| s.t() == t)
+        .unwrap()
+        .state_after_motion()["humans"][pushed]["speed"]
+        .as_f64()
+        .unwrap();
+    assert!(speed > 0.069 && speed < 0.14, "pushed, not capped: {speed}");
+    let clean = replay_step(&ep, t);
+    assert_clean(&clean);
+    let report = replay_step(&faster(pushed), t);
+    assert_clean(&report);
+    assert_eq!(report.ill_conditioned(), clean.ill_conditioned() + 1);
+    let report = replay_step(&faster(walker), t);
+    assert!(fails_on(&report, "(id 1).speed"), "{:?}", report.failures());
+}
+
+/// F4: a walker pushed twice in one step (wedged in a corner): the earlier push moved it by up
+/// to max speed·dt, so its first contact is bracketed that much wider and a position 5 cm off
+/// (0.1.1 pushed once more than socnav) is a near-threshold flip. With a single recorded push
+/// the same 5 cm is a mismatch.
+#[test]
+fn walker_pushed_twice_in_one_step() {
+    let (name, t, pushed, _) = PUSHED;
+    let shifted = |contacts: usize| {
+        let mut ep = episode(name);
+        let post = post_mut(&mut ep, t);
+        let h = &mut post["humans"][pushed];
+        let theta = h["theta"].as_f64().unwrap();
+        add(&mut h["x"], 0.05 * theta.cos());
+        add(&mut h["y"], 0.05 * theta.sin());
+        let contact = json!([3, 18, "wall"]);
+        ep.step_mut(t)["diag"]["contacts"] = json!(vec![contact; contacts]);
+        ep
+    };
+    let report = replay_step(&shifted(2), t);
+    assert_eq!(report.failure_count(), 0, "{:?}", report.failures());
+    assert!(report.flips() >= 1);
+    let report = replay_step(&shifted(1), t);
+    assert!(fails_on(&report, "(id 3).y"), "{:?}", report.failures());
+}
+
+/// F2: with a contact flip, the info values are compared with 0.1.1's formula on socnav's
+/// position of the flipped human: moving the nearest human moves MINIMUM_DISTANCE_TO_HUMAN by
+/// that much only if it is marked flipped; and a recorded value off by a push (7 cm) on a step
+/// without a flip is a mismatch.
+#[test]
+fn knock_on_of_a_contact_flip() {
+    let (name, t, _, _) = PUSHED;
+    let ep = episode(name);
+    let step = ep.steps().find(|s| s.t() == t).unwrap();
+    let post = step.state_after_motion();
+    let recorded = step.v["info"]["MINIMUM_DISTANCE_TO_HUMAN"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(golden::minimum_distance_to_human(post), recorded);
+    // The nearest human (static, index 0, 1.24 m away) 7 cm towards the robot in socnav.
+    let mut ours = post.clone();
+    let (rx, ry) = (
+        post["robot"]["x"].as_f64().unwrap(),
+        post["robot"]["y"].as_f64().unwrap(),
+    );
+    let h = &mut ours["humans"][0];
+    let (hx, hy) = (h["x"].as_f64().unwrap(), h["y"].as_f64().unwrap());
+    let d = (rx - hx).hypot(ry - hy);
+    h["x"] = json!(hx + 0.07 * (rx - hx) / d);
+    h["y"] = json!(hy + 0.07 * (ry - hy) / d);
+    let n = post["humans"].as_array().unwrap().len();
+    let mut flipped = vec![false; n];
+    let unflipped = golden::with_flipped_from(post, &ours, &flipped);
+    assert_eq!(golden::minimum_distance_to_human(&unflipped), recorded);
+    flipped[0] = true;
+    let knock_on = golden::with_flipped_from(post, &ours, &flipped);
+    let moved = golden::minimum_distance_to_human(&knock_on);
+    assert!((moved - (recorded - 0.07)).abs() < 1e-9, "{moved}");
+    let mut ep = episode(name);
+    add(
+        &mut ep.step_mut(t)["info"]["MINIMUM_DISTANCE_TO_HUMAN"],
+        -0.07,
+    );
+    let report = replay_step(&ep, t);
+    assert!(
+        fails_on(&report, "MINIMUM_DISTANCE_TO_HUMAN"),
+        "{:?}",
+        report.failures()
+    );
+}
+
+/// F3: a lone ORCA walker that has almost stopped (exp3, 1e-5 m/s and slowing) has a heading
+/// its f32 velocity does not determine, so whether the robot is within its gaze is not
+/// determined either: a recorded gaze bit flipped is accepted as ill-conditioned. The same
+/// flip on a walker whose heading is well determined is a mismatch.
+#[test]
+fn gaze_of_a_walker_with_an_undetermined_heading() {
+    let (name, t, stopped) = ("exp3_no_sngnn_seed17", 199, 1);
+    let flip = |index: usize| {
+        let mut ep = episode(name);
+        let g = &mut ep.step_mut(t)["obs"]["humans"][index * 14 + 13];
+        *g = json!(1.0 - g.as_f64().unwrap());
+        ep
+    };
+    let ep = episode(name);
+    let clean = replay_step(&ep, t);
+    assert_clean(&clean);
+    let report = replay_step(&flip(stopped), t);
+    assert_clean(&report);
+    assert_eq!(report.ill_conditioned(), clean.ill_conditioned() + 1);
+    let step = ep.steps().find(|s| s.t() == t).unwrap();
+    let post = step.state_after_motion();
+    let walking = post["humans"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|h| h["role"] == "dynamic" && h["speed"].as_f64().unwrap() > 0.03)
+        .expect("a walking human");
+    let report = replay_step(&flip(walking), t);
+    assert!(
+        fails_on(&report, &format!("obs.humans[{walking}][13]")),
+        "{:?}",
+        report.failures()
+    );
 }

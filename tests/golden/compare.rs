@@ -6,13 +6,15 @@
 //! metre-scale values differs from f64 by a few 1e-7; the observation went through float32 3x3
 //! matrix inverses in the reference, a few ulp of values up to ~15 m.
 
+use std::f64::consts::PI;
+
 use serde_json::Value;
 use socnav::BatchEnv;
-use socnav::config::{ContactShape, RewardKind};
+use socnav::config::{ContactShape, ObsFrame, RewardKind};
 use socnav::spec::{ENTITY_KEYS, INFO_KEYS, RECORD, info};
 
 use super::conditioning::{Kinematics, Widen, extent, goal_distance_change_error, widening};
-use super::contact::{ContactRule, near_contact, shadow_collided};
+use super::contact::{ContactRule, Near, near_contact, shadow_collided};
 use super::corrected::{
     Outcome, Perturbation, dsrnn_discomfort, time_to_collision, time_to_collision_outcomes,
     time_to_collision_possible, wrapped_angular_speed,
@@ -62,6 +64,15 @@ pub struct Report {
     /// inset: explained by the shape (the replay with `contact_shape = "polygon64"` decides them
     /// as 0.1.1 does), so outside the budget.
     shape_flips: u64,
+    /// Flips that start a situation: a flip of a kind and a body that did not flip at the
+    /// previous step. A walker that ORCA holds at an object's surface for N steps flips every
+    /// step for one reason, one coincidence and not N; the budget applies to these.
+    flip_streaks: u64,
+    /// Shape flips that start a situation (as `flip_streaks`).
+    shape_flip_streaks: u64,
+    /// The situations that flipped at the previous step and at this one (`kind body` keys).
+    previous_flips: Vec<String>,
+    current_flips: Vec<String>,
     /// How socnav decides contacts in this replay (exact discs unless set).
     rule: Option<ContactRule>,
     /// Values that differ by more than their common tolerance but within their derived
@@ -101,22 +112,38 @@ impl Report {
     }
 
     /// Count a contact decided differently within its bracket: a shape flip with exact discs,
-    /// a flip otherwise.
-    fn contact_flip(&mut self, rule: &ContactRule) {
-        match rule.shape {
-            ContactShape::Exact => self.shape_flips += 1,
-            ContactShape::Polygon64 => self.flips += 1,
+    /// a flip otherwise. `key` names the situation (see [`Self::flip`]).
+    fn contact_flip(&mut self, rule: &ContactRule, key: String) {
+        self.flip(key, rule.shape == ContactShape::Exact);
+    }
+
+    /// Count a near-threshold flip (`shape`: a shape flip, outside the budget) of the situation
+    /// `key` (the decision's kind and the body it concerns): it starts a streak unless the same
+    /// situation flipped at the previous step in the same category (a flip inside the budget
+    /// that continues only a shape-flip streak starts a streak of its own).
+    fn flip(&mut self, key: String, shape: bool) {
+        let key = format!("{}{key}", if shape { "shape " } else { "" });
+        let new = !self.previous_flips.contains(&key);
+        if shape {
+            self.shape_flips += 1;
+            self.shape_flip_streaks += u64::from(new);
+        } else {
+            self.flips += 1;
+            self.flip_streaks += u64::from(new);
         }
+        self.current_flips.push(key);
     }
 
     pub fn summary(&self) -> String {
         format!(
-            "{} steps, {} values compared, {} mismatches, {} near-threshold flips, {} contacts within the 64-gon's inset, {} ill-conditioned values; max |err| pos {:.2e} ({}), heading {:.2e} ({}), vel {:.2e} ({}), obs {:.2e} ({}), reward {:.2e} ({}), ill-conditioned {:.2e} ({}), time to collision {:.3e} steps ({})",
+            "{} steps, {} values compared, {} mismatches, {} near-threshold flips ({} streaks), {} contacts within the 64-gon's inset ({} streaks), {} ill-conditioned values; max |err| pos {:.2e} ({}), heading {:.2e} ({}), vel {:.2e} ({}), obs {:.2e} ({}), reward {:.2e} ({}), ill-conditioned {:.2e} ({}), time to collision {:.3e} steps ({})",
             self.steps,
             self.compared,
             self.failure_count,
             self.flips,
+            self.flip_streaks,
             self.shape_flips,
+            self.shape_flip_streaks,
             self.ill_conditioned,
             self.max_err[0].0,
             self.max_err[0].1,
@@ -140,6 +167,8 @@ impl Report {
         self.failure_count += other.failure_count;
         self.flips += other.flips;
         self.shape_flips += other.shape_flips;
+        self.flip_streaks += other.flip_streaks;
+        self.shape_flip_streaks += other.shape_flip_streaks;
         self.ill_conditioned += other.ill_conditioned;
         self.steps += other.steps;
         for (a, b) in self.max_err.iter_mut().zip(&other.max_err) {
@@ -154,9 +183,12 @@ impl Report {
         }
     }
 
-    /// No mismatch, and at most one near-threshold flip per 500 steps: flips are rare threshold
-    /// coincidences of f32 against 0.1.1's f64, more mean a real difference. Contacts within the
-    /// 64-gon's inset under exact discs are outside the budget (the polygon64 replay decides them).
+    /// No mismatch, and at most one near-threshold flip streak per 500 steps: flips are rare
+    /// threshold coincidences of f32 against 0.1.1's f64, more mean a real difference. A flip
+    /// that continues the same situation's flip at the previous step (a walker held at an
+    /// object's surface by ORCA) is part of one coincidence, so the budget counts streaks.
+    /// Contacts within the 64-gon's inset under exact discs are outside the budget (the
+    /// polygon64 replay decides them).
     pub fn assert_ok(&self) {
         assert!(self.compared > 0, "nothing was compared");
         assert!(
@@ -168,8 +200,9 @@ impl Report {
             self.failures.join("\n")
         );
         assert!(
-            self.flips * 500 <= self.steps.max(500),
-            "{} near-threshold flips in {} steps",
+            self.flip_streaks * 500 <= self.steps.max(500),
+            "{} near-threshold flip streaks ({} flips) in {} steps",
+            self.flip_streaks,
             self.flips,
             self.steps
         );
@@ -193,6 +226,11 @@ impl Report {
     /// Contacts exact discs decided differently within the 64-gon's inset.
     pub fn shape_flips(&self) -> u64 {
         self.shape_flips
+    }
+
+    /// Near-threshold flips that start a streak (what the budget counts).
+    pub fn flip_streaks(&self) -> u64 {
+        self.flip_streaks
     }
 
     /// Values accepted only within their derived conditioning.
@@ -302,6 +340,15 @@ impl Report {
                     continue;
                 }
                 let mut g = num(g);
+                if t == 0 && i % RECORD == 13 && *o as f64 != g {
+                    let record = &theirs[i - 13..i + 1];
+                    let w = humans.get(i / RECORD).copied().unwrap_or_default();
+                    if self.gaze_ill_conditioned(env, robot, record, w) {
+                        self.compared += 1;
+                        self.ill_conditioned += 1;
+                        continue;
+                    }
+                }
                 if t == 0 && i % RECORD == 12 {
                     // Relative angular speed: socnav wraps the heading difference (0.1.1 does not).
                     // A difference of ±π sits on the seam of the wrap, where rounding picks either
@@ -336,9 +383,53 @@ impl Report {
         }
     }
 
+    /// F3: whether a human's gaze bit (robot centre within ±gaze_angle/2 of its heading) is
+    /// decided within the conditioning of its record (`record`, the recorded 14 values; `robot`,
+    /// the recorded robot record; `w`, the human's widening).
+    ///
+    /// The bearing β = angle(robot − human) − heading is compared with gaze_angle/2. socnav's
+    /// heading may differ from 0.1.1's by the heading tolerance POS + `w.heading` (π for a
+    /// walker whose velocity is exactly 0 in RVO2 and ~1e-7 m/s in socnav's ORCA: any heading);
+    /// the direction to the robot moves by at most the positions' tolerances over the distance
+    /// d, (POS (robot) + POS + `w.velocity`·dt (human))/d; the recorded record is float32 (OBS
+    /// on its positions, so OBS/d twice, and on its sin and cos, OBS); socnav holds
+    /// gaze_angle/2 in f32 (≤ ulp(π) off). Within that sum of the boundary, either bit is
+    /// accepted and counted as ill-conditioned. No other discrete entry of a human record
+    /// depends on a heading (the one-hot and the visibility, which depends on the robot's
+    /// heading, which is compared within POS).
+    fn gaze_ill_conditioned(
+        &self,
+        env: &BatchEnv,
+        robot: &[Value],
+        record: &[Value],
+        w: Widen,
+    ) -> bool {
+        let (x, y, s, c) = (
+            num(&record[6]),
+            num(&record[7]),
+            num(&record[8]),
+            num(&record[9]),
+        );
+        let (dx, dy) = match env.config().observation.frame {
+            ObsFrame::Robot => (-x, -y),
+            ObsFrame::World => (num(&robot[8]) - x, num(&robot[9]) - y),
+        };
+        let bearing = (c * dy - s * dx).atan2(c * dx + s * dy);
+        let half = 0.5 * f64::from(env.params().gaze_angle);
+        let distance = dx.hypot(dy);
+        let dt = env.params().dt as f64;
+        let tolerance = POS
+            + w.heading
+            + OBS
+            + (2.0 * POS + w.velocity * dt + 2.0 * OBS) / distance
+            + super::conditioning::ulp(PI);
+        (bearing.abs() - half).abs() <= tolerance
+    }
+
     /// Outputs and state of one step.
     pub fn compare_step(&mut self, env: &BatchEnv, ep: &Episode, step: Step<'_>, prev: &Value) {
         self.steps += 1;
+        self.previous_flips = std::mem::take(&mut self.current_flips);
         let at = format!("t={}", step.t());
         let out = env.outputs();
         let post = step.state_after_motion();
@@ -348,7 +439,7 @@ impl Report {
         if (term, trunc) != (g_term, g_trunc) {
             let rule = self.rule(env);
             if self.near_threshold(env, ep.header(), post, &rule) {
-                self.contact_flip(&rule);
+                self.contact_flip(&rule, "termination robot".to_string());
                 println!(
                     "  flip at {at}: terminated ours {term} vs reference {g_term} (a robot contact within {:.1e} of the radii, {:?} shape)",
                     rule.fraction, rule.shape
@@ -375,12 +466,27 @@ impl Report {
         let (shadow_widen, humans) = widening(ep.header(), prev, &step, &kinematics);
         self.compare_obs(env, &step.v["obs"], &humans, &flipped, &at);
         let ftp = self.failure_to_progress(prev, post, &ours["state"], &at);
+        let knock_on = flipped
+            .iter()
+            .any(|&f| f)
+            .then(|| with_flipped_from(post, &ours["state"], &flipped));
+        let robot_radius = p.robot_radius as f64;
+        let compliant = |s: &Value| {
+            f64::from(u8::from(
+                minimum_distance_to_human(s) - robot_radius >= PERSONAL_SPACE,
+            ))
+        };
         let ctx = Context {
             header: ep.header(),
             ours: &ours["state"],
             ftp,
             dt: kinematics.dt,
             at: &at,
+            knock_on: knock_on.as_ref(),
+            compliant_change: knock_on
+                .as_ref()
+                .map_or(0.0, |k| compliant(k) - compliant(post)),
+            tick: step.t() as f64,
         };
         self.compare_info(env, step.v, post, &ctx);
         let shadow = self.shadow_collided(env, ep, (prev, post, &ours["state"]), &at);
@@ -412,7 +518,7 @@ impl Report {
         let bound = goal_distance_change_error(before, after, goal);
         let other = recorded + 1.0 - 2.0 * counted;
         if before != after && change.abs() <= bound && theirs == other {
-            self.flips += 1;
+            self.flip("failure_to_progress robot".to_string(), false);
             println!(
                 "  flip at {at}: FAILURE_TO_PROGRESS {theirs} vs reference {recorded} (goal distance change {change:.2e} m within f32 rounding {bound:.2e} m)"
             );
@@ -443,7 +549,7 @@ impl Report {
         let theirs = ContactRule::new(ContactShape::Polygon64, radii.1);
         let (buggy, flip) = decide(true, &theirs, recorded);
         if flip {
-            self.flips += 1;
+            self.flip("0.1.1_shadow_collided shadow_robot".to_string(), false);
             println!(
                 "  flip at {at}: 0.1.1's shadow-robot contact is within f32 rounding of its 64-gons"
             );
@@ -458,7 +564,7 @@ impl Report {
         let rule = self.rule(env);
         let (fixed, flip) = decide(false, &rule, ours);
         if flip {
-            self.contact_flip(&rule);
+            self.contact_flip(&rule, "shadow_collided shadow_robot".to_string());
             println!(
                 "  flip at {at}: socnav's shadow-robot contact is within {:.1e} of the radii ({:?} shape)",
                 rule.fraction, rule.shape
@@ -481,7 +587,9 @@ impl Report {
     ) -> Vec<bool> {
         let p = env.params();
         let rule = self.rule(env);
-        let near = near_contact(ep.header(), step, p.dt as f64, p.human_radius as f64, &rule);
+        let (dt, radius, max_speed) =
+            (p.dt as f64, p.human_radius as f64, p.human_max_speed as f64);
+        let near = near_contact(ep.header(), step, (dt, radius, max_speed), &rule);
         let theirs = step.state_after_motion()["humans"]
             .as_array()
             .cloned()
@@ -491,12 +599,20 @@ impl Report {
             .zip(theirs.iter().zip(&ours))
             .map(|(&near, (t, o))| {
                 let moved = (num(&o["x"]) - num(&t["x"])).hypot(num(&o["y"]) - num(&t["y"])) > POS;
-                let flip = near && moved && o["id"] == t["id"];
+                let flip = near != Near::No && moved && o["id"] == t["id"];
                 if flip {
-                    self.contact_flip(&rule);
+                    let key = format!("contact human {}", t["id"]);
+                    if near == Near::Repeated {
+                        self.flip(key, false);
+                    } else {
+                        self.contact_flip(&rule, key);
+                    }
                     println!(
-                        "  flip at {at}: human {} touches an object within {:.1e} of its radius ({:?} shape) and was pushed by one side only",
-                        t["id"], rule.fraction, rule.shape
+                        "  flip at {at}: human {} touches an object within {:.1e} of its radius ({:?} shape{}) and was pushed by one side only",
+                        t["id"],
+                        rule.fraction,
+                        rule.shape,
+                        if near == Near::Repeated { ", bracket widened for its earlier pushes" } else { "" }
                     );
                 }
                 flip
@@ -564,7 +680,9 @@ impl Report {
                     3,
                 );
             }
-            let fixed = dsrnn_discomfort(post, dt, rr, hr, false);
+            // F2: with a contact flip, the discomfort (and the reward through it) of socnav's
+            // positions of the flipped humans (`with_flipped_from`).
+            let fixed = dsrnn_discomfort(ctx.knock_on.unwrap_or(post), dt, rr, hr, false);
             if !sngnn {
                 reward += fixed - discomfort;
             }
@@ -603,6 +721,21 @@ impl Report {
             ttc,
             &fixed,
         );
+        // MINIMUM_DISTANCE_TO_HUMAN: 0.1.1's formula reproduces the recording (checked where it is
+        // used) (f64, the same
+        // operations: 1e-12 covers libm's last-ulp sqrt differences); with a contact flip,
+        // socnav's value is the formula on socnav's positions of the flipped humans (F2), and
+        // the personal-space compliance decision that follows from it may change by one count.
+        let recorded_distance = num(&golden["MINIMUM_DISTANCE_TO_HUMAN"]);
+        if ctx.knock_on.is_some() {
+            self.close(
+                &format!("{at} reconstruction of 0.1.1's MINIMUM_DISTANCE_TO_HUMAN"),
+                minimum_distance_to_human(post),
+                recorded_distance,
+                1e-12,
+                0,
+            );
+        }
         for (k, key) in INFO_KEYS.iter().enumerate() {
             if k == info::TIME_TO_COLLISION {
                 continue;
@@ -611,6 +744,12 @@ impl Report {
             let theirs = match k {
                 info::DISCOMFORT_DSRNN => discomfort,
                 info::FAILURE_TO_PROGRESS => ctx.ftp,
+                info::MINIMUM_DISTANCE_TO_HUMAN => ctx
+                    .knock_on
+                    .map_or(recorded_distance, minimum_distance_to_human),
+                info::PERSONAL_SPACE_COMPLIANCE => {
+                    num(&golden[*key]) + ctx.compliant_change / ctx.tick
+                }
                 _ => num(&golden[*key]),
             };
             let tol = match k {
@@ -806,6 +945,17 @@ impl Report {
                 );
                 continue;
             }
+            if key == "compliant_count" {
+                // F2: one more or one less where a contact flip changed the decision.
+                self.close(
+                    &format!("{at} metrics.{key}"),
+                    num(&om[key]),
+                    num(&tm[key]) + ctx.compliant_change,
+                    0.0,
+                    1,
+                );
+                continue;
+            }
             if let Some(list) = tm[key].as_array() {
                 for (c, v) in list.iter().enumerate() {
                     self.close(
@@ -868,6 +1018,63 @@ struct Context<'a> {
     dt: f64,
     /// The step, for messages.
     at: &'a str,
+    /// The recorded post-motion state with the contact-flipped humans where socnav put them
+    /// ([`with_flipped_from`]); `None` without a contact flip.
+    knock_on: Option<&'a Value>,
+    /// What the contact flips change in the personal-space compliance count (−1, 0 or 1).
+    compliant_change: f64,
+    /// The step's tick (0.1.1's `ticks`, the compliance denominator).
+    tick: f64,
+}
+
+/// Personal-space threshold (m) between the robot's surface and a human's centre: 0.1.1's
+/// `(closest_human_dist - ROBOT_RADIUS) >= 0.45` ("same value used in SEAN 2.0").
+const PERSONAL_SPACE: f64 = 0.45;
+
+/// 0.1.1's MINIMUM_DISTANCE_TO_HUMAN of a post-motion state: the smallest centre distance from
+/// the robot to any human (lone, group member or laptop user), √(dx² + dy²) in f64 as it
+/// evaluates it; +∞ without humans.
+pub fn minimum_distance_to_human(state: &Value) -> f64 {
+    let (rx, ry) = (num(&state["robot"]["x"]), num(&state["robot"]["y"]));
+    state["humans"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|h| ((rx - num(&h["x"])).powi(2) + (ry - num(&h["y"])).powi(2)).sqrt())
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// F2, the knock-on of a contact flip: a human whose push-out socnav decided the other way
+/// within its bracket ended the step up to one push (≤ max speed·dt) away from where 0.1.1 put
+/// it, and every info value computed from it differs by the push, not by rounding. Those values
+/// are compared with the recorded formula evaluated on this state: the recorded post-motion
+/// state `post` with each flipped human at socnav's position, heading and speed (`ours`), and
+/// the centre of a moving group it belongs to at socnav's centre. The reconstructions
+/// (`dsrnn_discomfort`, [`minimum_distance_to_human`], the compliance decision,
+/// TIME_TO_COLLISION's `state_differences`) are checked against the recording on `post` itself.
+pub fn with_flipped_from(post: &Value, ours: &Value, flipped: &[bool]) -> Value {
+    let mut state = post.clone();
+    let mut moved_groups = Vec::new();
+    if let Some(humans) = state["humans"].as_array_mut() {
+        for (k, h) in humans.iter_mut().enumerate() {
+            if !flipped.get(k).copied().unwrap_or(false) {
+                continue;
+            }
+            let o = &ours["humans"][k];
+            for key in ["x", "y", "theta", "speed"] {
+                h[key] = o[key].clone();
+            }
+            if let Some(g) = h["group"].as_u64() {
+                moved_groups.push(g as usize);
+            }
+        }
+    }
+    for g in moved_groups {
+        if let Some(centre) = ours["groups"].get(g).map(|o| o["centre"].clone()) {
+            state["groups"][g]["centre"] = centre;
+        }
+    }
+    state
 }
 
 /// How the state comparison of one step is widened or restricted.

@@ -276,7 +276,7 @@ impl Widen {
 /// `diag.human_vel`, moving-group members by their group's RVO2 velocity divided by the member
 /// count (member velocity v_group/n + noise), the shadow robot by its RVO2 velocity. Humans
 /// pushed out of an object this step (`diag.contacts`) take speed and heading from the contact
-/// force instead, and standing humans do not move: none.
+/// force instead ([`contact_push_error`]), and standing humans do not move: none.
 pub fn widening(
     header: &Value,
     prev: &Value,
@@ -309,44 +309,96 @@ pub fn widening(
             .and_then(|hs| hs.iter().find(|h| h["id"] == *id))
     };
     let groups = prev["groups"].as_array().map_or(&[][..], |g| &g[..]);
+    // The widening of a human's own motion (before any contact push).
+    let motion = |h: &Value| {
+        if h["role"] == "dynamic" {
+            let v = &diag["human_vel"][h["id"].to_string()];
+            let Some(b) = before(&h["id"]).filter(|_| v.is_array()) else {
+                return Widen::default();
+            };
+            let e = if v[0] == "sfm" {
+                sfm_velocity_error(header, prev, b, k, x)
+            } else {
+                let goal = distance(&pose(b), &b["goal"]);
+                rvo2_velocity_error(x, tau, k.human_max_speed, goal)
+            };
+            return Widen::of(num(&v[1]).hypot(num(&v[2])), e);
+        }
+        if h["role"] != "moving_group" {
+            return Widen::default();
+        }
+        let Some(g) = h["group"].as_u64().and_then(|g| groups.get(g as usize)) else {
+            return Widen::default();
+        };
+        let e = rvo2_velocity_error(
+            x,
+            tau,
+            k.human_max_speed,
+            distance(&g["centre"], &g["goal"]),
+        );
+        let n = g["members"].as_array().map_or(1, Vec::len) as f64;
+        Widen::of(num(&h["speed"]), e / n)
+    };
     let humans = post["humans"]
         .as_array()
         .into_iter()
         .flatten()
         .map(|h| {
-            if pushed.contains(&&h["id"]) {
-                return Widen::default();
+            let motion = motion(h);
+            let pushes = pushed.iter().filter(|&&id| *id == h["id"]).count();
+            if pushes == 0 {
+                return motion;
             }
-            if h["role"] == "dynamic" {
-                let v = &diag["human_vel"][h["id"].to_string()];
-                let Some(b) = before(&h["id"]).filter(|_| v.is_array()) else {
-                    return Widen::default();
-                };
-                let e = if v[0] == "sfm" {
-                    sfm_velocity_error(header, prev, b, k, x)
-                } else {
-                    let goal = distance(&pose(b), &b["goal"]);
-                    rvo2_velocity_error(x, tau, k.human_max_speed, goal)
-                };
-                return Widen::of(num(&v[1]).hypot(num(&v[2])), e);
-            }
-            if h["role"] != "moving_group" {
-                return Widen::default();
-            }
-            let Some(g) = h["group"].as_u64().and_then(|g| groups.get(g as usize)) else {
-                return Widen::default();
-            };
-            let e = rvo2_velocity_error(
-                x,
-                tau,
-                k.human_max_speed,
-                distance(&g["centre"], &g["goal"]),
-            );
-            let n = g["members"].as_array().map_or(1, Vec::len) as f64;
-            Widen::of(num(&h["speed"]), e / n)
+            // The position error at the push: the relative position to the object as in
+            // `rvo2_velocity_error` (2√2 ulp of the extent) plus the motion's own error.
+            let at_push = 2.0 * SQRT_2 * ulp(x) + motion.velocity * k.dt;
+            contact_push_error(num(&h["speed"]), pushes, at_push, k)
         })
         .collect();
     (shadow, humans)
+}
+
+/// Contact push-out (spec 4.6, MPE's soft contact): stiffness and margin (m).
+const CONTACT_STIFFNESS: f64 = 100.0;
+const CONTACT_MARGIN: f64 = 1e-3;
+
+/// The widening of a human pushed `pushes` times out of objects this step, ending at `speed`
+/// (m/s), whose position before the first push is known to `at_push` (m).
+///
+/// One push: speed = min(K·k·softplus(−(dist − R)/k)·dt, max speed), K = 100, k = 1e-3, dist the
+/// distance to the object's centre (or, for a wall, to the human's mirror image: twice the gap,
+/// so dist moves by up to twice the position), heading the direction of the separation, and the
+/// human moves by speed·dt along it. d speed/d dist = K·dt·σ(−(dist − R)/k), up to K·dt
+/// = 100 m/s per metre: the push amplifies the position error δp a hundredfold, to
+/// δs = K·dt·σ·2δp, unless the speed is capped (then the derivative is 0; it is kept at its
+/// bound where the recorded speed is the cap, socnav's may be just below it). The recorded
+/// (last) push gives σ itself: softplus(x) = speed/(K·k·dt), σ(x) = 1 − exp(−softplus(x));
+/// earlier pushes (not recorded) take σ ≤ 1 and speed ≤ max speed. The heading moves by the
+/// separation's direction error, ≤ 2δp/dist with dist ≥ the human radius for a contact within
+/// the margin (centre-to-centre distance of a touching disc or rectangle, or twice the gap
+/// across a wall, whose direction is the wall's normal and does not move at all). After the
+/// push the position error is δp + (δs + speed·δθ)·dt; the next push starts from there.
+/// Returned: velocity = the final position error over dt (it covers the speed's δs and, times
+/// dt, the position), heading = the last push's δθ.
+pub fn contact_push_error(speed: f64, pushes: usize, at_push: f64, k: &Kinematics) -> Widen {
+    let unit = CONTACT_STIFFNESS * CONTACT_MARGIN * k.dt;
+    let mut position = at_push;
+    let mut heading = 0.0;
+    for push in 1..=pushes {
+        let last = push == pushes;
+        let (sigma, v) = if last && speed < k.human_max_speed {
+            (1.0 - (-speed / unit).exp(), speed)
+        } else {
+            (1.0, k.human_max_speed)
+        };
+        let ds = CONTACT_STIFFNESS * k.dt * sigma * 2.0 * position;
+        heading = direction_error(k.human_radius, 2.0 * position);
+        position += (ds + v * heading) * k.dt;
+    }
+    Widen {
+        velocity: position / k.dt,
+        heading,
+    }
 }
 
 /// Bound (m) on the error of socnav's f32 change of the robot's goal distance,

@@ -57,7 +57,14 @@ impl ContactRule {
     /// Does a decision `decide(scale)` of contacts between discs whose radii are multiplied by
     /// `scale` change within the rule's bracket around scale 1?
     pub fn ambiguous(&self, decide: impl Fn(f64) -> bool) -> bool {
-        decide(1.0 - self.fraction) != decide(1.0 + self.fraction)
+        self.ambiguous_by(0.0, decide)
+    }
+
+    /// [`Self::ambiguous`] with the bracket widened by `extra` (a fraction of the radii, for a
+    /// position known only within `extra`·radius).
+    pub fn ambiguous_by(&self, extra: f64, decide: impl Fn(f64) -> bool) -> bool {
+        let f = self.fraction + extra;
+        decide(1.0 - f) != decide(1.0 + f)
     }
 
     /// Do two discs (x, y, r), radii multiplied by `scale`, touch as socnav decides with this
@@ -116,16 +123,38 @@ fn rect(r: &Value, across: &str) -> Rect {
     )
 }
 
+/// How a human's contact with an object at the end of its motion is determined
+/// ([`near_contact`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Near {
+    /// Decided the same way everywhere within the bracket.
+    No,
+    /// Within the rule's bracket: a contact within the 64-gon's inset with exact discs, within
+    /// the position tolerance with 64-gons.
+    Bracket,
+    /// Only within the bracket widened for the earlier pushes of a human pushed several times
+    /// in the step (F4): always a near-threshold flip, inside the budget, whatever the shape.
+    Repeated,
+}
+
 /// For each human of the step's post-motion state (observation order): whether its contact
 /// with a plant, wall, table or free laptop at the end of its motion is decided within the
 /// rule's bracket (and may be decided differently by socnav and 0.1.1).
+///
+/// A pushed human (listed in `diag.contacts`) moved once more per push, by that push's speed
+/// times dt along its heading: the last push is undone exactly (the recorded speed and heading
+/// are the last push's). A human pushed n ≥ 2 times (wedged in a wall–table corner) was moved by
+/// the n − 1 earlier pushes too, whose speeds are not recorded; each push's speed is at most the
+/// human's maximum speed (spec 4.6: min(|F|·dt, max speed)), so the position where its first
+/// contact was decided lies within (n − 1)·`human_max_speed`·dt of the once-undone position.
+/// Every disc within that distance is covered by widening the bracket's radii by it: the
+/// decision is [`Near::Repeated`] if it changes within the widened bracket only.
 pub fn near_contact(
     header: &Value,
     step: &Step<'_>,
-    dt: f64,
-    human_radius: f64,
+    (dt, human_radius, human_max_speed): (f64, f64, f64),
     rule: &ContactRule,
-) -> Vec<bool> {
+) -> Vec<Near> {
     let post = step.state_after_motion();
     let pushed: Vec<u64> = step.v["diag"]["contacts"]
         .as_array()
@@ -139,13 +168,26 @@ pub fn near_contact(
         .flatten()
         .map(|h| {
             let (mut x, mut y) = (num(&h["x"]), num(&h["y"]));
+            let pushes = h["id"]
+                .as_u64()
+                .map_or(0, |id| pushed.iter().filter(|&&p| p == id).count());
             // A pushed human moved once more, by speed·dt along its new heading: undo it.
-            if h["id"].as_u64().is_some_and(|id| pushed.contains(&id)) {
+            if pushes > 0 {
                 let (speed, theta) = (num(&h["speed"]), num(&h["theta"]));
                 x -= speed * dt * theta.cos();
                 y -= speed * dt * theta.sin();
             }
-            rule.ambiguous(|scale| rule.touches_object(header, post, (x, y, human_radius), scale))
+            let touches = |scale: f64| {
+                rule.touches_object(header, post, (x, y, human_radius), scale.max(0.0))
+            };
+            if rule.ambiguous(touches) {
+                return Near::Bracket;
+            }
+            let earlier = (pushes.saturating_sub(1)) as f64 * human_max_speed * dt / human_radius;
+            if earlier > 0.0 && rule.ambiguous_by(earlier, touches) {
+                return Near::Repeated;
+            }
+            Near::No
         })
         .collect()
 }

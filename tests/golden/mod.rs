@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use serde_json::{Value, json};
 use socnav::Config;
 
-pub use compare::Report;
+pub use compare::{Report, minimum_distance_to_human, with_flipped_from};
 pub use conditioning::direction_error;
 pub use corrected::{
     Outcome, Perturbation, time_to_collision, time_to_collision_outcomes,
