@@ -490,7 +490,8 @@ mod tests {
     #[test]
     fn poly64_table_is_the_rounded_cosines_and_symmetric() {
         for (m, &c) in POLY64_COS.iter().enumerate() {
-            let exact = (m as f64 * std::f64::consts::PI / 64.0).cos();
+            // Reference values in f64, in the test only (the step's own are src/math.rs's).
+            let exact = f64::cos(m as f64 * std::f64::consts::PI / 64.0);
             // cos(π/2) in f64 is 6e-17, not the exact 0 the table holds.
             let expected = if m == 32 { 0.0 } else { exact as f32 };
             assert_eq!(c, expected, "cos({m}π/64)");
@@ -500,15 +501,15 @@ mod tests {
             let (_, s) = poly64_dir(m);
             assert_eq!(
                 s,
-                (m as f64 * std::f64::consts::PI / 64.0).sin() as f32,
+                f64::sin(m as f64 * std::f64::consts::PI / 64.0) as f32,
                 "sin({m}π/64)"
             );
         }
     }
 
-    /// A unit vector at angle `a` (rad), rounded to f32.
+    /// A unit vector at angle `a` (rad), rounded to f32 (an f64 reference, test only).
     fn dir(a: f64) -> (f32, f32) {
-        (a.cos() as f32, a.sin() as f32)
+        (f64::cos(a) as f32, f64::sin(a) as f32)
     }
 
     /// Contract: between two vertices (angles π/64 + k·π/32) the 64-gons of two discs reach only
