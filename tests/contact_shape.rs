@@ -44,6 +44,25 @@ fn the_option_reaches_the_step_params() {
     assert!(c.to_toml_string().contains("contact_shape = \"polygon64\""));
 }
 
+/// Contract: `geometry::POLY64_COS` holds cos(mπ/64), m = 0..63, each the f32 nearest the exact
+/// value, exactly antisymmetric about m = 32, so that sin(mπ/64) = POLY64_COS[|32 − m|] is the
+/// nearest f32 too (the geometry takes its sines there).
+#[test]
+fn the_64gon_table_is_the_rounded_cosines() {
+    use socnav::geometry::POLY64_COS;
+    for (m, &c) in POLY64_COS.iter().enumerate() {
+        let angle = m as f64 * PI / 64.0;
+        // cos(π/2) in f64 is 6e-17, not the exact 0 the table holds.
+        let expected = if m == 32 { 0.0 } else { angle.cos() as f32 };
+        assert_eq!(c, expected, "cos({m}π/64)");
+        if m > 32 {
+            assert_eq!(c, -POLY64_COS[64 - m], "symmetry at {m}");
+        }
+        let sin = POLY64_COS[m.abs_diff(32)];
+        assert_eq!(sin, angle.sin() as f32, "sin({m}π/64)");
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // The three decisions on hand-made scenes
 // ---------------------------------------------------------------------------------------------
