@@ -2,9 +2,10 @@
 //
 // Twin of src/systems/contacts.rs (stage `contacts`, spec 4.6): after all motion, a human that
 // touches a plant, wall, table or free laptop is pushed out by an MPE-style soft contact force: it
-// turns to the force direction, takes speed min(|F|·dt, max speed) and moves once more. Whether a
-// human touches an object is decided with discs shaped as `params.contact_shape` says, an
-// overlap of at most CONTACT_SLOP not counting. Change both files in the same commit.
+// turns to the force direction, takes speed min(|F|·dt, max speed) and moves once more. A lone
+// static human only takes the speed (0.1.1 neither moves nor turns it). Whether a human touches
+// an object is decided with discs shaped as `params.contact_shape` says, an overlap of at most
+// CONTACT_SLOP not counting. Change both files in the same commit.
 
 // Softness of the contact (m), MPE's `contact_margin`: the f32 of 1e-3.
 const CONTACT_MARGIN: f32 = 0x1.0624dep-10f;
@@ -19,7 +20,9 @@ fn human_disc(i: u32) -> Disc {
     return Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius - CONTACT_SLOP);
 }
 
-// Apply the contact force for separation vector (dx, dy) and contact distance `reach` (m).
+// Apply the contact force for separation vector (dx, dy) and contact distance `reach` (m): the
+// human turns to the force, takes its speed and moves, except a lone static human, which only
+// takes the speed (its cached velocity follows along its unchanged heading).
 fn push(i: u32, dx: f32, dy: f32, reach: f32) {
     let dist = sqrt(dx * dx + dy * dy);
     if (dist <= 0.0) {
@@ -28,15 +31,21 @@ fn push(i: u32, dx: f32, dy: f32, reach: f32) {
     let penetration = CONTACT_MARGIN * math_softplus(-(dist - reach) / CONTACT_MARGIN);
     let fx = CONTACT_STIFFNESS * dx / dist * penetration;
     let fy = CONTACT_STIFFNESS * dy / dist * penetration;
-    let theta = math_atan2(fy, fx);
+    let movable = su[C_H_ROLE + i] != ROLE_STATIC;
+    var theta = sf[C_H_THETA + i];
+    if (movable) {
+        theta = math_atan2(fy, fx);
+    }
     let speed = min(sqrt(fx * fx + fy * fy) * params.dt, params.human_max_speed);
     let sc = math_sin_cos(theta);
     sf[C_H_THETA + i] = theta;
     sf[C_H_SPEED + i] = speed;
     sf[C_H_VX + i] = speed * sc.y;
     sf[C_H_VY + i] = speed * sc.x;
-    sf[C_H_X + i] += speed * params.dt * sc.y;
-    sf[C_H_Y + i] += speed * params.dt * sc.x;
+    if (movable) {
+        sf[C_H_X + i] += speed * params.dt * sc.y;
+        sf[C_H_Y + i] += speed * params.dt * sc.x;
+    }
 }
 
 fn push_from_rect(i: u32, rect: Rect) {
@@ -93,8 +102,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let hb = e * S_H_X;
     for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
-        if (su[C_H_ROLE + i] != ROLE_STATIC) {
-            push_out(e, i);
-        }
+        push_out(e, i);
     }
 }

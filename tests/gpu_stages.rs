@@ -175,7 +175,7 @@ fn scatter_humans(s: &mut BatchState, _: &mut Outputs, _: &StepParams, rng: &mut
 }
 
 /// Contract: `contacts`: humans pushed out of plants, walls (mirror images), tables and free
-/// laptops; static humans never moved.
+/// laptops; static humans only take the push's speed.
 #[test]
 fn contacts() {
     for name in ["exp1", "exp2", "exp3", "lroom_mixed", "corridor_mixed"] {

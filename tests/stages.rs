@@ -836,6 +836,39 @@ fn contact_pushes_a_human_out_of_a_plant() {
     );
 }
 
+/// Regression (found by `tests/golden_perturbed.rs`): a lone static human that touches an object
+/// keeps its position and heading but takes the push's speed, as in 0.1.1, whose
+/// `handle_collision` assigns `human.speed` while `Human.update_orientation` and `Human.update`
+/// return early for a static human. socnav used to leave it untouched. The speed shows wherever
+/// a human's velocity does: here the observation's relative speed.
+#[test]
+fn contact_gives_a_static_human_the_push_speed() {
+    let mut doc = scene(false, [-3.0, -3.0, 0.0], [3.0, -3.0]);
+    push(&mut doc, "plants", json!({"id": 2, "x": 0.0, "y": 0.0}));
+    push(&mut doc, "humans", static_human(1, -0.7, 0.0, 0.5));
+    let mut env = load(scene_config(), &[doc]);
+    step(&mut env, &[[0.0; 3]]);
+    let s = env.state();
+    assert_eq!(
+        (s.h_x[0], s.h_y[0], s.h_theta[0]),
+        (-0.7, 0.0, 0.5),
+        "a static human is never moved nor turned"
+    );
+    // Penetration 1e-3·softplus(60) = 0.06 m, force 6 → speed min(6·1, 0.1) = 0.1 m/s, along the
+    // unchanged heading 0.5 rad. 1e-7: f32 products of values below 1.
+    close("speed", s.h_speed[0], 0.1, 1e-7);
+    close("v_x", s.h_vx[0], 0.1 * 0.5f64.cos(), 1e-7);
+    close("v_y", s.h_vy[0], 0.1 * 0.5f64.sin(), 1e-7);
+    // The robot stands still: the relative speed is the human's.
+    let at = env.layout().offset[entity::HUMANS];
+    close(
+        "observed relative speed",
+        env.outputs().obs[at + 11],
+        0.1,
+        1e-7,
+    );
+}
+
 // ---------------------------------------------------------------------------------------------
 // 0.1.1 bugs that socnav fixes (docs/fidelity.md)
 // ---------------------------------------------------------------------------------------------

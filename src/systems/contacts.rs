@@ -2,10 +2,12 @@
 //! free laptop is pushed out by an MPE-style soft contact force: it turns to the force direction,
 //! takes speed min(|F|·dt, max speed) and moves once more. Non-wall objects count as discs (tables
 //! and laptops by their circumradius); against a wall the obstacle is the human's mirror image
-//! across the wall face. Lone static humans are never moved; the robot is never pushed. Whether a
-//! human touches an object is decided with discs shaped as `[model] contact_shape` says (0.1.1:
-//! 64-gons), an overlap of at most [`CONTACT_SLOP`] not counting; the force formula stays the one
-//! of exact discs.
+//! across the wall face. A lone static human is never moved nor turned but takes the push's
+//! speed, as in 0.1.1, whose `Human.update` and `update_orientation` return early for a static
+//! human while the speed assignment does not. The robot is never pushed. Whether a human touches
+//! an object is decided with discs shaped as `[model] contact_shape` says (0.1.1: 64-gons), an
+//! overlap of at most [`CONTACT_SLOP`] not counting; the force formula stays the one of exact
+//! discs.
 
 use crate::geometry::{Disc, Rect, disc_disc_as, disc_rect_as};
 use crate::math;
@@ -34,9 +36,7 @@ pub fn contacts(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     let s = &mut b.s;
     let hb = e * s.strides.humans;
     for i in hb..hb + s.n_humans[e] as usize {
-        if s.h_role[i] != role::STATIC {
-            push_out(p, s, e, i);
-        }
+        push_out(p, s, e, i);
     }
 }
 
@@ -99,7 +99,9 @@ fn mirror_delta(wall: &Rect, x: f32, y: f32) -> (f32, f32) {
     (-wall.s * across, wall.c * across)
 }
 
-/// Apply the contact force for separation vector (dx, dy) and contact distance `reach` (m).
+/// Apply the contact force for separation vector (dx, dy) and contact distance `reach` (m): the
+/// human turns to the force, takes its speed and moves, except a lone static human, which only
+/// takes the speed (its cached velocity follows along its unchanged heading).
 fn push(p: &StepParams, s: &mut StateChunk, i: usize, dx: f32, dy: f32, reach: f32) {
     let dist = (dx * dx + dy * dy).sqrt();
     if dist <= 0.0 {
@@ -108,13 +110,20 @@ fn push(p: &StepParams, s: &mut StateChunk, i: usize, dx: f32, dy: f32, reach: f
     let penetration = MARGIN * math::softplus(-(dist - reach) / MARGIN);
     let fx = STIFFNESS * dx / dist * penetration;
     let fy = STIFFNESS * dy / dist * penetration;
-    let theta = math::atan2(fy, fx);
+    let movable = s.h_role[i] != role::STATIC;
+    let theta = if movable {
+        math::atan2(fy, fx)
+    } else {
+        s.h_theta[i]
+    };
     let speed = ((fx * fx + fy * fy).sqrt() * p.dt).min(p.human_max_speed);
     let (sn, c) = math::sin_cos(theta);
     s.h_theta[i] = theta;
     s.h_speed[i] = speed;
     s.h_vx[i] = speed * c;
     s.h_vy[i] = speed * sn;
-    s.h_x[i] += speed * p.dt * c;
-    s.h_y[i] += speed * p.dt * sn;
+    if movable {
+        s.h_x[i] += speed * p.dt * c;
+        s.h_y[i] += speed * p.dt * sn;
+    }
 }
