@@ -78,17 +78,7 @@ fn group_goal_after_step(
     action: &[f32],
     g: usize,
 ) -> ([f64; 2], [f64; 2]) {
-    let config = config_for(ep).expect("config");
-    let mut env = BatchEnv::new(
-        config,
-        EnvOptions {
-            n_envs: 1,
-            seed: 7,
-            ..Default::default()
-        },
-    )
-    .expect("batch");
-    env.set_replay(true);
+    let (mut env, _) = golden::replay_env(ep, "scene", socnav::config::ContactShape::Exact);
     env.set_state(0, doc).expect("set_state");
     let before = env.get_state(0).expect("state")["state"]["groups"][g]["goal"].clone();
     env.step(Actions::Continuous(action)).expect("step");

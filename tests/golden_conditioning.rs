@@ -11,7 +11,9 @@ mod golden;
 
 use std::f64::consts::PI;
 
-use golden::{Episode, Outcome, Report, config_for, golden_dir, time_to_collision_possible};
+use golden::{
+    Episode, Outcome, Report, config_for, golden_dir, replay_env, time_to_collision_possible,
+};
 use serde_json::{Value, json};
 use socnav::config::ContactShape;
 use socnav::{Actions, BatchEnv, EnvOptions};
@@ -37,18 +39,7 @@ fn replay_step(ep: &Episode, t: u64) -> Report {
 
 /// [`replay_step`] with contacts decided as `shape` says.
 fn replay_step_as(ep: &Episode, t: u64, shape: ContactShape) -> Report {
-    let mut config = config_for(ep).expect("config");
-    config.model.contact_shape = shape;
-    let mut env = BatchEnv::new(
-        config,
-        EnvOptions {
-            n_envs: 1,
-            seed: 0,
-            ..Default::default()
-        },
-    )
-    .expect("env");
-    env.set_replay(true);
+    let (mut env, mut report) = replay_env(ep, &format!("t={t}"), shape);
     let prev = ep
         .steps()
         .find(|s| s.t() + 1 == t)
@@ -57,7 +48,6 @@ fn replay_step_as(ep: &Episode, t: u64, shape: ContactShape) -> Report {
     env.set_state(0, &ep.step_document(prev, &step))
         .expect("set_state");
     env.step(Actions::Continuous(&step.action())).expect("step");
-    let mut report = Report::new(&format!("t={t}")).with_contact_shape(shape, 0.36);
     report.compare_step(&env, ep, step, prev);
     println!("{}", report.summary());
     report

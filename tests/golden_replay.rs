@@ -18,9 +18,9 @@
 mod common;
 mod golden;
 
-use golden::{Episode, Report, config_for, golden_dir_or_skip, load_episodes};
+use golden::{Episode, Report, golden_dir_or_skip, load_episodes, replay_env};
+use socnav::Actions;
 use socnav::config::{ContactShape, RewardKind};
-use socnav::{Actions, BatchEnv, EnvOptions};
 
 /// Configs this build replays; the SNGNN-v2 ones need the weight file (skipped loudly without
 /// it unless `REQUIRE_SNGNN=1`).
@@ -84,19 +84,7 @@ fn golden_replay() {
 
 /// Replay one episode step by step.
 fn replay(name: &str, ep: &Episode, shape: ContactShape) -> Report {
-    let mut config = config_for(ep).unwrap_or_else(|e| panic!("{name}: {e}"));
-    config.model.contact_shape = shape;
-    let mut env = BatchEnv::new(
-        config,
-        EnvOptions {
-            n_envs: 1,
-            seed: 0,
-            ..Default::default()
-        },
-    )
-    .unwrap_or_else(|e| panic!("{name}: {e}"));
-    env.set_replay(true);
-    let mut report = Report::new(name).with_contact_shape(shape, env.params().human_radius as f64);
+    let (mut env, mut report) = replay_env(ep, name, shape);
     env.set_state(0, &ep.document(ep.initial_state()))
         .unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
     report.compare_obs(&env, ep.initial_obs(), &[], &[], "initial");

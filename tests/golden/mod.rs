@@ -15,7 +15,8 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use serde_json::{Value, json};
-use socnav::Config;
+use socnav::config::ContactShape;
+use socnav::{BatchEnv, Config, EnvOptions};
 
 pub use compare::{Report, minimum_distance_to_human, with_flipped_from};
 pub use conditioning::direction_error;
@@ -224,6 +225,26 @@ pub fn config_for(ep: &Episode) -> Result<Config, String> {
         ));
     }
     Ok(ours)
+}
+
+/// A batch of one environment that replays `ep` (`name` in messages): its config with contacts
+/// decided as `shape` says, in replay mode (socnav's own social events off), and the report its
+/// steps are compared into.
+pub fn replay_env(ep: &Episode, name: &str, shape: ContactShape) -> (BatchEnv, Report) {
+    let mut config = config_for(ep).unwrap_or_else(|e| panic!("{name}: {e}"));
+    config.model.contact_shape = shape;
+    let mut env = BatchEnv::new(
+        config,
+        EnvOptions {
+            n_envs: 1,
+            seed: 0,
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"));
+    env.set_replay(true);
+    let report = Report::new(name).with_contact_shape(shape, env.params().human_radius as f64);
+    (env, report)
 }
 
 /// A golden number: JSON number, "inf"/"-inf"/"nan", null (None → NaN) or bool.
