@@ -2,9 +2,9 @@
 # A virtual environment with SocNavGym 0.1.1 as the golden episodes were recorded with it (the
 # project's spec, section 10.1), for the DSRNN configs: torch and DGL are not installed (record.py
 # stubs them; the DSRNN reward never calls the SNGNN model). Needs Python 3.11, a C++ compiler and
-# network access to the package index. Usage: tools/golden-recorder/setup.sh [VENV_DIR]
+# network access to the package index. Usage: tools/golden-recorder/setup.sh [VENV_DIR] (default .venv-socnavgym)
 set -euo pipefail
-venv=${1:-"$(dirname "$0")/venv"}
+venv=${1:-.venv-socnavgym}
 python3 -m venv "$venv"
 "$venv/bin/pip" install --quiet "numpy<2" gym==0.26.2 opencv-python-headless matplotlib "shapely>=2,<3" \
     Cython pyyaml cmake setuptools wheel threadpoolctl
