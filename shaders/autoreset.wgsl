@@ -8,31 +8,31 @@
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u || su[C_DONE + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u || su[batch.c_done + e] == 0u) {
         return;
     }
     if (params.autoreset == AUTORESET_SAME_STEP) {
-        for (var k = 0u; k < SO_OBS; k++) {
-            outf[CO_FINAL_OBS + e * SO_OBS + k] = outf[CO_OBS + e * SO_OBS + k];
+        for (var k = 0u; k < batch.so_obs; k++) {
+            outf[batch.co_final_obs + e * batch.so_obs + k] = outf[batch.co_obs + e * batch.so_obs + k];
         }
-        for (var k = 0u; k < SO_INFO; k++) {
-            outf[CO_FINAL_INFO + e * SO_INFO + k] = outf[CO_INFO + e * SO_INFO + k];
+        for (var k = 0u; k < batch.so_info; k++) {
+            outf[batch.co_final_info + e * batch.so_info + k] = outf[batch.co_info + e * batch.so_info + k];
         }
-        for (var k = 0u; k < SO_OBS_COUNT; k++) {
-            outu[CO_FINAL_OBS_COUNT + e * SO_OBS_COUNT + k] = outu[CO_OBS_COUNT + e * SO_OBS_COUNT + k];
+        for (var k = 0u; k < batch.so_obs_count; k++) {
+            outu[batch.co_final_obs_count + e * batch.so_obs_count + k] = outu[batch.co_obs_count + e * batch.so_obs_count + k];
         }
-        for (var k = 0u; k < SO_HH_PAIRS; k++) {
-            outu[CO_FINAL_HH_PAIRS + e * SO_HH_PAIRS + k] = outu[CO_HH_PAIRS + e * SO_HH_PAIRS + k];
+        for (var k = 0u; k < batch.so_hh_pairs; k++) {
+            outu[batch.co_final_hh_pairs + e * batch.so_hh_pairs + k] = outu[batch.co_hh_pairs + e * batch.so_hh_pairs + k];
         }
-        for (var k = 0u; k < SO_HL_PAIRS; k++) {
-            outu[CO_FINAL_HL_PAIRS + e * SO_HL_PAIRS + k] = outu[CO_HL_PAIRS + e * SO_HL_PAIRS + k];
+        for (var k = 0u; k < batch.so_hl_pairs; k++) {
+            outu[batch.co_final_hl_pairs + e * batch.so_hl_pairs + k] = outu[batch.co_hl_pairs + e * batch.so_hl_pairs + k];
         }
-        for (var k = 0u; k < SO_PAIR_COUNT; k++) {
-            outu[CO_FINAL_PAIR_COUNT + e * SO_PAIR_COUNT + k] = outu[CO_PAIR_COUNT + e * SO_PAIR_COUNT + k];
+        for (var k = 0u; k < batch.so_pair_count; k++) {
+            outu[batch.co_final_pair_count + e * batch.so_pair_count + k] = outu[batch.co_pair_count + e * batch.so_pair_count + k];
         }
-        outu[CO_HAS_FINAL + e] = 1u;
+        outu[batch.co_has_final + e] = 1u;
         reset_and_observe_keep_step_outputs(e);
     } else if (params.autoreset == AUTORESET_NEXT_STEP) {
-        su[C_PENDING_RESET + e] = 1u;
+        su[batch.c_pending_reset + e] = 1u;
     }
 }

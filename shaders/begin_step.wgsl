@@ -8,20 +8,20 @@
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS) {
+    if (e >= batch.n_envs) {
         return;
     }
-    outu[CO_HAS_FINAL + e] = 0u;
-    outu[CO_EPISODE_DONE + e] = 0u;
-    for (var k = 0u; k < SO_EVENTS; k++) {
-        outu[CO_EVENTS + e * SO_EVENTS + k] = 0u;
+    outu[batch.co_has_final + e] = 0u;
+    outu[batch.co_episode_done + e] = 0u;
+    for (var k = 0u; k < batch.so_events; k++) {
+        outu[batch.co_events + e * batch.so_events + k] = 0u;
     }
-    if (su[C_PENDING_RESET + e] != 0u) {
-        su[C_STEPPING + e] = 0u;
+    if (su[batch.c_pending_reset + e] != 0u) {
+        su[batch.c_stepping + e] = 0u;
         reset_and_observe(e);
     } else {
-        let stepping = select(0u, 1u, su[C_DONE + e] == 0u);
-        su[C_STEPPING + e] = stepping;
-        su[C_TICK + e] += stepping;
+        let stepping = select(0u, 1u, su[batch.c_done + e] == 0u);
+        su[batch.c_stepping + e] = stepping;
+        su[batch.c_tick + e] += stepping;
     }
 }

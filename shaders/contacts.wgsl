@@ -17,7 +17,7 @@ const CONTACT_SLOP: f32 = 0x1.0c6f7ap-20f;
 
 // The human's disc for the contact decision: its radius less CONTACT_SLOP.
 fn human_disc(i: u32) -> Disc {
-    return Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius - CONTACT_SLOP);
+    return Disc(sf[batch.c_h_x + i], sf[batch.c_h_y + i], params.human_radius - CONTACT_SLOP);
 }
 
 // Apply the contact force for separation vector (dx, dy) and contact distance `reach` (m): the
@@ -31,27 +31,27 @@ fn push(i: u32, dx: f32, dy: f32, reach: f32) {
     let penetration = CONTACT_MARGIN * math_softplus(-(dist - reach) / CONTACT_MARGIN);
     let fx = CONTACT_STIFFNESS * dx / dist * penetration;
     let fy = CONTACT_STIFFNESS * dy / dist * penetration;
-    let movable = su[C_H_ROLE + i] != ROLE_STATIC;
-    var theta = sf[C_H_THETA + i];
+    let movable = su[batch.c_h_role + i] != ROLE_STATIC;
+    var theta = sf[batch.c_h_theta + i];
     if (movable) {
         theta = math_atan2(fy, fx);
     }
     let speed = min(sqrt(fx * fx + fy * fy) * params.dt, params.human_max_speed);
     let sc = math_sin_cos(theta);
-    sf[C_H_THETA + i] = theta;
-    sf[C_H_SPEED + i] = speed;
-    sf[C_H_VX + i] = speed * sc.y;
-    sf[C_H_VY + i] = speed * sc.x;
+    sf[batch.c_h_theta + i] = theta;
+    sf[batch.c_h_speed + i] = speed;
+    sf[batch.c_h_vx + i] = speed * sc.y;
+    sf[batch.c_h_vy + i] = speed * sc.x;
     if (movable) {
-        sf[C_H_X + i] += speed * params.dt * sc.y;
-        sf[C_H_Y + i] += speed * params.dt * sc.x;
+        sf[batch.c_h_x + i] += speed * params.dt * sc.y;
+        sf[batch.c_h_y + i] += speed * params.dt * sc.x;
     }
 }
 
 fn push_from_rect(i: u32, rect: Rect) {
     if (geo_disc_rect_as(params.contact_shape, human_disc(i), rect)) {
-        let dx = sf[C_H_X + i] - rect.x;
-        let dy = sf[C_H_Y + i] - rect.y;
+        let dx = sf[batch.c_h_x + i] - rect.x;
+        let dy = sf[batch.c_h_y + i] - rect.y;
         push(i, dx, dy, params.human_radius + geo_rect_circumradius(rect));
     }
 }
@@ -69,26 +69,26 @@ fn mirror_delta(wall: Rect, x: f32, y: f32) -> vec2<f32> {
 
 fn push_out(e: u32, i: u32) {
     let r = params.human_radius;
-    let pb = e * S_P_X;
-    for (var k = pb; k < pb + su[C_N_PLANTS + e]; k++) {
-        let plant = Disc(sf[C_P_X + k], sf[C_P_Y + k], params.plant_radius);
+    let pb = e * batch.s_p_x;
+    for (var k = pb; k < pb + su[batch.c_n_plants + e]; k++) {
+        let plant = Disc(sf[batch.c_p_x + k], sf[batch.c_p_y + k], params.plant_radius);
         if (geo_disc_disc_as(params.contact_shape, human_disc(i), plant)) {
-            push(i, sf[C_H_X + i] - plant.x, sf[C_H_Y + i] - plant.y, r + plant.r);
+            push(i, sf[batch.c_h_x + i] - plant.x, sf[batch.c_h_y + i] - plant.y, r + plant.r);
         }
     }
-    for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
+    for (var w = 0u; w < su[batch.c_n_walls + e]; w++) {
         let wall = world_wall_rect(e, w);
         if (geo_disc_rect_as(params.contact_shape, human_disc(i), wall)) {
-            let d = mirror_delta(wall, sf[C_H_X + i], sf[C_H_Y + i]);
+            let d = mirror_delta(wall, sf[batch.c_h_x + i], sf[batch.c_h_y + i]);
             push(i, d.x, d.y, 2.0 * r);
         }
     }
-    for (var t = 0u; t < su[C_N_TABLES + e]; t++) {
+    for (var t = 0u; t < su[batch.c_n_tables + e]; t++) {
         push_from_rect(i, world_table_rect(e, t));
     }
-    let lb = e * S_L_X;
-    for (var l = 0u; l < su[C_N_LAPTOPS + e]; l++) {
-        if (su[C_L_USER + lb + l] == NONE) {
+    let lb = e * batch.s_l_x;
+    for (var l = 0u; l < su[batch.c_n_laptops + e]; l++) {
+        if (su[batch.c_l_user + lb + l] == NONE) {
             push_from_rect(i, world_laptop_rect(e, l));
         }
     }
@@ -97,11 +97,11 @@ fn push_out(e: u32, i: u32) {
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
-    let hb = e * S_H_X;
-    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
+    let hb = e * batch.s_h_x;
+    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
         push_out(e, i);
     }
 }

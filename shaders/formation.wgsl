@@ -27,93 +27,93 @@ fn distance(ax: f32, ay: f32, bx: f32, by: f32) -> f32 {
 // Rust `set_heading`: heading of human slot i, keeping its speed; the world velocity follows.
 fn set_heading(i: u32, theta: f32) {
     let sc = math_sin_cos(theta);
-    sf[C_H_THETA + i] = theta;
-    sf[C_H_VX + i] = sf[C_H_SPEED + i] * sc.y;
-    sf[C_H_VY + i] = sf[C_H_SPEED + i] * sc.x;
+    sf[batch.c_h_theta + i] = theta;
+    sf[batch.c_h_vx + i] = sf[batch.c_h_speed + i] * sc.y;
+    sf[batch.c_h_vy + i] = sf[batch.c_h_speed + i] * sc.x;
 }
 
 // Rust `walkers_centroid`.
 fn walkers_centroid(e: u32) -> vec2<f32> {
-    let hb = e * S_H_X;
-    let sb = e * S_CF_HUMAN;
-    let n = su[C_CF_COUNT + e];
+    let hb = e * batch.s_h_x;
+    let sb = e * batch.s_cf_human;
+    let n = su[batch.c_cf_count + e];
     var x = 0.0;
     var y = 0.0;
     for (var k = sb; k < sb + n; k++) {
-        let i = hb + su[C_CF_HUMAN + k];
-        x += sf[C_H_X + i];
-        y += sf[C_H_Y + i];
+        let i = hb + su[batch.c_cf_human + k];
+        x += sf[batch.c_h_x + i];
+        y += sf[batch.c_h_y + i];
     }
     return vec2<f32>(x / f32(n), y / f32(n));
 }
 
 // Poison (see the header): the forming walkers' positions become NaN.
 fn poison_crowd(e: u32) {
-    let hb = e * S_H_X;
-    let sb = e * S_CF_HUMAN;
-    for (var k = sb; k < sb + su[C_CF_COUNT + e]; k++) {
-        let i = hb + su[C_CF_HUMAN + k];
-        sf[C_H_X + i] = math_nan();
-        sf[C_H_Y + i] = math_nan();
+    let hb = e * batch.s_h_x;
+    let sb = e * batch.s_cf_human;
+    for (var k = sb; k < sb + su[batch.c_cf_count + e]; k++) {
+        let i = hb + su[batch.c_cf_human + k];
+        sf[batch.c_h_x + i] = math_nan();
+        sf[batch.c_h_y + i] = math_nan();
     }
 }
 
 // Rust `new_group`: a new group slot (global) with the forming walkers as members, in formation
 // order; NONE (and the walkers poisoned) when the group capacity is exhausted.
 fn new_group(e: u32, kind: u32) -> u32 {
-    if (su[C_N_GROUPS + e] >= S_G_KIND) {
+    if (su[batch.c_n_groups + e] >= batch.s_g_kind) {
         poison_crowd(e);
         return NONE;
     }
-    let g = e * S_G_KIND + su[C_N_GROUPS + e];
-    su[C_N_GROUPS + e] += 1u;
-    su[C_G_KIND + g] = kind;
-    su[C_G_DISPERSABLE + g] = 1u;
-    su[C_G_SEQ + g] = regroup_next_seq(e);
-    sf[C_G_VX + g] = 0.0;
-    sf[C_G_VY + g] = 0.0;
+    let g = e * batch.s_g_kind + su[batch.c_n_groups + e];
+    su[batch.c_n_groups + e] += 1u;
+    su[batch.c_g_kind + g] = kind;
+    su[batch.c_g_dispersable + g] = 1u;
+    su[batch.c_g_seq + g] = regroup_next_seq(e);
+    sf[batch.c_g_vx + g] = 0.0;
+    sf[batch.c_g_vy + g] = 0.0;
     // The members are the walkers that formed the crowd, with their human goal radius.
-    sf[C_G_MEMBER_GOAL_RADIUS + g] = params.human_goal_radius;
-    let hb = e * S_H_X;
-    let sb = e * S_CF_HUMAN;
+    sf[batch.c_g_member_goal_radius + g] = params.human_goal_radius;
+    let hb = e * batch.s_h_x;
+    let sb = e * batch.s_cf_human;
     var member_role = ROLE_STANDING_GROUP;
     if (kind == GROUP_MOVING) {
         member_role = ROLE_MOVING_GROUP;
     }
-    for (var k = sb; k < sb + su[C_CF_COUNT + e]; k++) {
-        let i = hb + su[C_CF_HUMAN + k];
-        su[C_H_ROLE + i] = member_role;
-        su[C_H_GROUP + i] = g - e * S_G_KIND;
-        su[C_H_FORMING + i] = FORMING_NONE;
-        su[C_H_SEQ + i] = regroup_next_seq(e);
+    for (var k = sb; k < sb + su[batch.c_cf_count + e]; k++) {
+        let i = hb + su[batch.c_cf_human + k];
+        su[batch.c_h_role + i] = member_role;
+        su[batch.c_h_group + i] = g - e * batch.s_g_kind;
+        su[batch.c_h_forming + i] = FORMING_NONE;
+        su[batch.c_h_seq + i] = regroup_next_seq(e);
     }
     return g;
 }
 
 // Rust `clear_crowd_formation`.
 fn clear_crowd_formation(e: u32) {
-    su[C_CF_ACTIVE + e] = 0u;
-    su[C_CF_COUNT + e] = 0u;
-    su[C_CF_CLOSE_STEPS + e] = 0u;
-    sf[C_CF_X + e] = 0.0;
-    sf[C_CF_Y + e] = 0.0;
-    let sb = e * S_CF_HUMAN;
-    for (var k = sb; k < sb + S_CF_HUMAN; k++) {
-        sf[C_CF_SLOT_X + k] = 0.0;
-        sf[C_CF_SLOT_Y + k] = 0.0;
-        sf[C_CF_SLOT_THETA + k] = 0.0;
-        su[C_CF_HUMAN + k] = 0u;
+    su[batch.c_cf_active + e] = 0u;
+    su[batch.c_cf_count + e] = 0u;
+    su[batch.c_cf_close_steps + e] = 0u;
+    sf[batch.c_cf_x + e] = 0.0;
+    sf[batch.c_cf_y + e] = 0.0;
+    let sb = e * batch.s_cf_human;
+    for (var k = sb; k < sb + batch.s_cf_human; k++) {
+        sf[batch.c_cf_slot_x + k] = 0.0;
+        sf[batch.c_cf_slot_y + k] = 0.0;
+        sf[batch.c_cf_slot_theta + k] = 0.0;
+        su[batch.c_cf_human + k] = 0u;
     }
 }
 
 // Rust `clear_laptop_formation`.
 fn clear_laptop_formation(e: u32) {
-    su[C_LF_ACTIVE + e] = 0u;
-    su[C_LF_HUMAN + e] = 0u;
-    su[C_LF_LAPTOP + e] = 0u;
-    sf[C_LF_SEAT_X + e] = 0.0;
-    sf[C_LF_SEAT_Y + e] = 0.0;
-    sf[C_LF_SEAT_THETA + e] = 0.0;
+    su[batch.c_lf_active + e] = 0u;
+    su[batch.c_lf_human + e] = 0u;
+    su[batch.c_lf_laptop + e] = 0u;
+    sf[batch.c_lf_seat_x + e] = 0.0;
+    sf[batch.c_lf_seat_y + e] = 0.0;
+    sf[batch.c_lf_seat_theta + e] = 0.0;
 }
 
 // Rust `end_crowd_formation`.
@@ -124,9 +124,9 @@ fn end_crowd_formation(e: u32) {
 
 // Rust `form_crowd`: every walker is at its slot.
 fn form_crowd(e: u32, rng: ptr<function, RngStream>) {
-    let n = su[C_CF_COUNT + e];
-    var poses: array<vec3<f32>, PLACE_GROUP_CAP>;
-    place_group_layout(rng, sf[C_CF_X + e], sf[C_CF_Y + e], n, true, &poses);
+    let n = su[batch.c_cf_count + e];
+    var poses: array<vec3<f32>, PLACE_GROUP_ARRAY>;
+    place_group_layout(rng, sf[batch.c_cf_x + e], sf[batch.c_cf_y + e], n, true, &poses);
     let moving = rng_chance(rng, 0.5);
     var kind = GROUP_STANDING;
     if (moving) {
@@ -136,35 +136,35 @@ fn form_crowd(e: u32, rng: ptr<function, RngStream>) {
     if (g == NONE) {
         return;
     }
-    let hb = e * S_H_X;
-    let sb = e * S_CF_HUMAN;
+    let hb = e * batch.s_h_x;
+    let sb = e * batch.s_cf_human;
     var cx = 0.0;
     var cy = 0.0;
-    for (var k = 0u; k < min(n, PLACE_GROUP_CAP); k++) {
+    for (var k = 0u; k < min(n, place_group_cap()); k++) {
         let pose = poses[k];
-        let i = hb + su[C_CF_HUMAN + sb + k];
-        sf[C_H_X + i] = pose.x;
-        sf[C_H_Y + i] = pose.y;
+        let i = hb + su[batch.c_cf_human + sb + k];
+        sf[batch.c_h_x + i] = pose.x;
+        sf[batch.c_h_y + i] = pose.y;
         set_heading(i, pose.z);
         cx += pose.x;
         cy += pose.y;
     }
-    sf[C_G_X + g] = cx / f32(n);
-    sf[C_G_Y + g] = cy / f32(n);
+    sf[batch.c_g_x + g] = cx / f32(n);
+    sf[batch.c_g_y + g] = cy / f32(n);
     if (moving) {
         let goal = goals_sample_goal(e, rng, params.group_goal_radius);
-        var gx = sf[C_G_X + g];
-        var gy = sf[C_G_Y + g];
+        var gx = sf[batch.c_g_x + g];
+        var gy = sf[batch.c_g_y + g];
         if (goal.found) {
             gx = goal.disc.x;
             gy = goal.disc.y;
         }
-        sf[C_G_GOAL_X + g] = gx;
-        sf[C_G_GOAL_Y + g] = gy;
+        sf[batch.c_g_goal_x + g] = gx;
+        sf[batch.c_g_goal_y + g] = gy;
         for (var k = sb; k < sb + n; k++) {
-            let i = hb + su[C_CF_HUMAN + k];
-            sf[C_H_GOAL_X + i] = gx;
-            sf[C_H_GOAL_Y + i] = gy;
+            let i = hb + su[batch.c_cf_human + k];
+            sf[batch.c_h_goal_x + i] = gx;
+            sf[batch.c_h_goal_y + i] = gy;
         }
     }
     end_crowd_formation(e);
@@ -172,8 +172,8 @@ fn form_crowd(e: u32, rng: ptr<function, RngStream>) {
 
 // Rust `form_approximate_crowd`: a standing group where the walkers are, facing (cx, cy).
 fn form_approximate_crowd(e: u32, rng: ptr<function, RngStream>, cx: f32, cy: f32) {
-    let n = su[C_CF_COUNT + e];
-    var poses: array<vec3<f32>, PLACE_GROUP_CAP>;
+    let n = su[batch.c_cf_count + e];
+    var poses: array<vec3<f32>, PLACE_GROUP_ARRAY>;
     place_group_layout(rng, cx, cy, n, true, &poses);
     let g = new_group(e, GROUP_STANDING);
     if (g == NONE) {
@@ -181,31 +181,31 @@ fn form_approximate_crowd(e: u32, rng: ptr<function, RngStream>, cx: f32, cy: f3
     }
     var px = 0.0;
     var py = 0.0;
-    for (var k = 0u; k < min(n, PLACE_GROUP_CAP); k++) {
+    for (var k = 0u; k < min(n, place_group_cap()); k++) {
         px += poses[k].x;
         py += poses[k].y;
     }
-    sf[C_G_X + g] = px / f32(n);
-    sf[C_G_Y + g] = py / f32(n);
-    let hb = e * S_H_X;
-    let sb = e * S_CF_HUMAN;
+    sf[batch.c_g_x + g] = px / f32(n);
+    sf[batch.c_g_y + g] = py / f32(n);
+    let hb = e * batch.s_h_x;
+    let sb = e * batch.s_cf_human;
     for (var k = sb; k < sb + n; k++) {
-        let i = hb + su[C_CF_HUMAN + k];
-        set_heading(i, math_atan2(cy - sf[C_H_Y + i], cx - sf[C_H_X + i]));
+        let i = hb + su[batch.c_cf_human + k];
+        set_heading(i, math_atan2(cy - sf[batch.c_h_y + i], cx - sf[batch.c_h_x + i]));
     }
     end_crowd_formation(e);
 }
 
 // Rust `crowd_progress`: 0 walking, 1 formed, 2 approximate.
 fn crowd_progress(e: u32, rng: ptr<function, RngStream>) -> u32 {
-    let hb = e * S_H_X;
-    let sb = e * S_CF_HUMAN;
-    let n = su[C_CF_COUNT + e];
+    let hb = e * batch.s_h_x;
+    let sb = e * batch.s_cf_human;
+    let n = su[batch.c_cf_count + e];
     var all_arrived = true;
     for (var k = sb; k < sb + n; k++) {
-        let i = hb + su[C_CF_HUMAN + k];
-        if (distance(sf[C_H_X + i], sf[C_H_Y + i], sf[C_CF_SLOT_X + k], sf[C_CF_SLOT_Y + k]) < params.human_goal_radius) {
-            set_heading(i, sf[C_CF_SLOT_THETA + k]);
+        let i = hb + su[batch.c_cf_human + k];
+        if (distance(sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_cf_slot_x + k], sf[batch.c_cf_slot_y + k]) < params.human_goal_radius) {
+            set_heading(i, sf[batch.c_cf_slot_theta + k]);
         } else {
             all_arrived = false;
         }
@@ -218,18 +218,18 @@ fn crowd_progress(e: u32, rng: ptr<function, RngStream>) -> u32 {
     let reach = params.group_radius + params.human_radius;
     var together = true;
     for (var k = sb; k < sb + n; k++) {
-        let i = hb + su[C_CF_HUMAN + k];
-        if (!(distance(sf[C_H_X + i], sf[C_H_Y + i], c.x, c.y) < reach)) {
+        let i = hb + su[batch.c_cf_human + k];
+        if (!(distance(sf[batch.c_h_x + i], sf[batch.c_h_y + i], c.x, c.y) < reach)) {
             together = false;
             break;
         }
     }
     if (together) {
-        su[C_CF_CLOSE_STEPS + e] += 1u;
+        su[batch.c_cf_close_steps + e] += 1u;
     } else {
-        su[C_CF_CLOSE_STEPS + e] = 0u;
+        su[batch.c_cf_close_steps + e] = 0u;
     }
-    if (su[C_CF_CLOSE_STEPS + e] >= FORMATION_APPROXIMATE_AFTER) {
+    if (su[batch.c_cf_close_steps + e] >= FORMATION_APPROXIMATE_AFTER) {
         form_approximate_crowd(e, rng, c.x, c.y);
         return 2u;
     }
@@ -238,36 +238,36 @@ fn crowd_progress(e: u32, rng: ptr<function, RngStream>) -> u32 {
 
 // Rust `seat_reached`.
 fn seat_reached(e: u32) -> bool {
-    let i = e * S_H_X + su[C_LF_HUMAN + e];
-    return distance(sf[C_H_X + i], sf[C_H_Y + i], sf[C_LF_SEAT_X + e], sf[C_LF_SEAT_Y + e]) < params.human_goal_radius;
+    let i = e * batch.s_h_x + su[batch.c_lf_human + e];
+    return distance(sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_lf_seat_x + e], sf[batch.c_lf_seat_y + e]) < params.human_goal_radius;
 }
 
 // Rust `sit_down`: the walker becomes a new (dispersable) laptop user at the seat.
 fn sit_down(e: u32) {
-    let i = e * S_H_X + su[C_LF_HUMAN + e];
-    let l = e * S_L_X + su[C_LF_LAPTOP + e];
-    let u_local = su[C_N_LAPTOP_USERS + e];
-    if (u_local >= S_LU_HUMAN) {
-        sf[C_H_X + i] = math_nan();
-        sf[C_H_Y + i] = math_nan();
+    let i = e * batch.s_h_x + su[batch.c_lf_human + e];
+    let l = e * batch.s_l_x + su[batch.c_lf_laptop + e];
+    let u_local = su[batch.c_n_laptop_users + e];
+    if (u_local >= batch.s_lu_human) {
+        sf[batch.c_h_x + i] = math_nan();
+        sf[batch.c_h_y + i] = math_nan();
         return;
     }
-    let u = e * S_LU_HUMAN + u_local;
-    su[C_N_LAPTOP_USERS + e] += 1u;
-    su[C_LU_HUMAN + u] = su[C_LF_HUMAN + e];
-    su[C_LU_LAPTOP + u] = su[C_LF_LAPTOP + e];
-    su[C_LU_DISPERSABLE + u] = 1u;
-    su[C_LU_SEQ + u] = regroup_next_seq(e);
-    su[C_L_USER + l] = u_local;
-    sf[C_H_X + i] = sf[C_LF_SEAT_X + e];
-    sf[C_H_Y + i] = sf[C_LF_SEAT_Y + e];
-    set_heading(i, sf[C_LF_SEAT_THETA + e]);
-    su[C_H_ROLE + i] = ROLE_LAPTOP_USER;
-    su[C_H_LAPTOP_USER + i] = u_local;
-    su[C_H_GROUP + i] = NONE;
-    su[C_H_FORMING + i] = FORMING_NONE;
-    su[C_H_POLICY + i] = POLICY_ORCA;
-    su[C_H_SEQ + i] = regroup_next_seq(e);
+    let u = e * batch.s_lu_human + u_local;
+    su[batch.c_n_laptop_users + e] += 1u;
+    su[batch.c_lu_human + u] = su[batch.c_lf_human + e];
+    su[batch.c_lu_laptop + u] = su[batch.c_lf_laptop + e];
+    su[batch.c_lu_dispersable + u] = 1u;
+    su[batch.c_lu_seq + u] = regroup_next_seq(e);
+    su[batch.c_l_user + l] = u_local;
+    sf[batch.c_h_x + i] = sf[batch.c_lf_seat_x + e];
+    sf[batch.c_h_y + i] = sf[batch.c_lf_seat_y + e];
+    set_heading(i, sf[batch.c_lf_seat_theta + e]);
+    su[batch.c_h_role + i] = ROLE_LAPTOP_USER;
+    su[batch.c_h_laptop_user + i] = u_local;
+    su[batch.c_h_group + i] = NONE;
+    su[batch.c_h_forming + i] = FORMING_NONE;
+    su[batch.c_h_policy + i] = POLICY_ORCA;
+    su[batch.c_h_seq + i] = regroup_next_seq(e);
     clear_laptop_formation(e);
     // Rust: `regroup::canonicalize`, called by `main` (see the header).
 }
@@ -275,7 +275,7 @@ fn sit_down(e: u32) {
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
     // The crowd, then the laptop seat, each followed by the regrouping when it completed (see
@@ -283,13 +283,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var phase = 0u; phase < 2u; phase++) {
         var completed = false;
         if (phase == 0u) {
-            if (su[C_CF_ACTIVE + e] != 0u) {
+            if (su[batch.c_cf_active + e] != 0u) {
                 var rng = rng_new(
                     params.seed_lo,
                     params.seed_hi,
                     e,
-                    su[C_EPISODE + e],
-                    rng_stream_id(STREAM_FORMATION, su[C_TICK + e]),
+                    su[batch.c_episode + e],
+                    rng_stream_id(STREAM_FORMATION, su[batch.c_tick + e]),
                 );
                 let progress = crowd_progress(e, &rng);
                 if (progress == 1u) {
@@ -300,7 +300,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                     completed = true;
                 }
             }
-        } else if (su[C_LF_ACTIVE + e] != 0u && seat_reached(e)) {
+        } else if (su[batch.c_lf_active + e] != 0u && seat_reached(e)) {
             sit_down(e);
             count_formation_event(e, EV_LAPTOP_FORMATION_COMPLETE);
             completed = true;
@@ -312,5 +312,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 fn count_formation_event(e: u32, ev: u32) {
-    outu[CO_EVENTS + e * SO_EVENTS + ev] += 1u;
+    outu[batch.co_events + e * batch.so_events + ev] += 1u;
 }

@@ -19,7 +19,7 @@ fn goal_distance(ax: f32, ay: f32, bx: f32, by: f32) -> f32 {
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
     // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
@@ -27,34 +27,34 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         params.seed_lo,
         params.seed_hi,
         e,
-        su[C_EPISODE + e],
-        rng_stream_id(STREAM_GOALS, su[C_TICK + e]),
+        su[batch.c_episode + e],
+        rng_stream_id(STREAM_GOALS, su[batch.c_tick + e]),
     );
-    let hb = e * S_H_X;
-    let first = hb + su[C_N_STATIC + e];
-    for (var i = first; i < first + su[C_N_DYNAMIC + e]; i++) {
+    let hb = e * batch.s_h_x;
+    let first = hb + su[batch.c_n_static + e];
+    for (var i = first; i < first + su[batch.c_n_dynamic + e]; i++) {
         let reach = params.human_radius + params.human_goal_radius;
-        if (su[C_H_FORMING + i] == 0u
-            && goal_distance(sf[C_H_X + i], sf[C_H_Y + i], sf[C_H_GOAL_X + i], sf[C_H_GOAL_Y + i]) < reach) {
+        if (su[batch.c_h_forming + i] == 0u
+            && goal_distance(sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_h_goal_x + i], sf[batch.c_h_goal_y + i]) < reach) {
             let g = goals_sample_goal(e, &rng, params.human_goal_radius);
             if (g.found) {
-                sf[C_H_GOAL_X + i] = g.disc.x;
-                sf[C_H_GOAL_Y + i] = g.disc.y;
+                sf[batch.c_h_goal_x + i] = g.disc.x;
+                sf[batch.c_h_goal_y + i] = g.disc.y;
             }
         }
     }
-    let gb = e * S_G_X;
-    for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + g] != GROUP_MOVING) {
+    let gb = e * batch.s_g_x;
+    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+        if (su[batch.c_g_kind + g] != GROUP_MOVING) {
             continue;
         }
         // Each member within reach of the group goal by its own goal radius.
-        let reach = params.human_radius + sf[C_G_MEMBER_GOAL_RADIUS + g];
-        let m0 = hb + su[C_G_FIRST + g];
-        let m1 = hb + su[C_G_FIRST + g] + su[C_G_COUNT + g];
+        let reach = params.human_radius + sf[batch.c_g_member_goal_radius + g];
+        let m0 = hb + su[batch.c_g_first + g];
+        let m1 = hb + su[batch.c_g_first + g] + su[batch.c_g_count + g];
         var arrived = true;
         for (var i = m0; i < m1; i++) {
-            if (goal_distance(sf[C_H_X + i], sf[C_H_Y + i], sf[C_G_GOAL_X + g], sf[C_G_GOAL_Y + g]) < reach) {
+            if (goal_distance(sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_g_goal_x + g], sf[batch.c_g_goal_y + g]) < reach) {
                 continue;
             }
             arrived = false;
@@ -63,11 +63,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (arrived) {
             let goal = goals_sample_goal(e, &rng, params.group_goal_radius);
             if (goal.found) {
-                sf[C_G_GOAL_X + g] = goal.disc.x;
-                sf[C_G_GOAL_Y + g] = goal.disc.y;
+                sf[batch.c_g_goal_x + g] = goal.disc.x;
+                sf[batch.c_g_goal_y + g] = goal.disc.y;
                 for (var i = m0; i < m1; i++) {
-                    sf[C_H_GOAL_X + i] = goal.disc.x;
-                    sf[C_H_GOAL_Y + i] = goal.disc.y;
+                    sf[batch.c_h_goal_x + i] = goal.disc.x;
+                    sf[batch.c_h_goal_y + i] = goal.disc.y;
                 }
             }
         }

@@ -8,7 +8,7 @@
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
     // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
@@ -16,31 +16,31 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         params.seed_lo,
         params.seed_hi,
         e,
-        su[C_EPISODE + e],
-        rng_stream_id(STREAM_GROUP_NOISE, su[C_TICK + e]),
+        su[batch.c_episode + e],
+        rng_stream_id(STREAM_GROUP_NOISE, su[batch.c_tick + e]),
     );
-    let hb = e * S_H_X;
-    let gb = e * S_G_X;
-    for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + g] != GROUP_MOVING) {
+    let hb = e * batch.s_h_x;
+    let gb = e * batch.s_g_x;
+    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+        if (su[batch.c_g_kind + g] != GROUP_MOVING) {
             continue;
         }
-        let n = su[C_G_COUNT + g];
+        let n = su[batch.c_g_count + g];
         var scale = 1.0;
         if (params.group_velocity_divided != 0u) {
             scale = 1.0 / f32(n);
         }
-        let gvx = sf[C_G_VX + g] * scale;
-        let gvy = sf[C_G_VY + g] * scale;
-        let first = hb + su[C_G_FIRST + g];
+        let gvx = sf[batch.c_g_vx + g] * scale;
+        let gvy = sf[batch.c_g_vy + g] * scale;
+        let first = hb + su[batch.c_g_first + g];
         var cx = 0.0;
         var cy = 0.0;
         for (var i = first; i < first + n; i++) {
             var nx = 0.0;
             var ny = 0.0;
             if (params.replay != 0u) {
-                nx = sf[C_H_NOISE_X + i];
-                ny = sf[C_H_NOISE_Y + i];
+                nx = sf[batch.c_h_noise_x + i];
+                ny = sf[batch.c_h_noise_y + i];
             } else if (params.group_noise_std > 0.0) {
                 nx = params.group_noise_std * rng_normal(&rng);
                 ny = params.group_noise_std * rng_normal(&rng);
@@ -50,16 +50,16 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             let speed = sqrt(vx * vx + vy * vy);
             let theta = math_atan2(vy, vx);
             let sc = math_sin_cos(theta);
-            sf[C_H_SPEED + i] = speed;
-            sf[C_H_THETA + i] = theta;
-            sf[C_H_VX + i] = speed * sc.y;
-            sf[C_H_VY + i] = speed * sc.x;
-            sf[C_H_X + i] += speed * params.dt * sc.y;
-            sf[C_H_Y + i] += speed * params.dt * sc.x;
-            cx += sf[C_H_X + i];
-            cy += sf[C_H_Y + i];
+            sf[batch.c_h_speed + i] = speed;
+            sf[batch.c_h_theta + i] = theta;
+            sf[batch.c_h_vx + i] = speed * sc.y;
+            sf[batch.c_h_vy + i] = speed * sc.x;
+            sf[batch.c_h_x + i] += speed * params.dt * sc.y;
+            sf[batch.c_h_y + i] += speed * params.dt * sc.x;
+            cx += sf[batch.c_h_x + i];
+            cy += sf[batch.c_h_y + i];
         }
-        sf[C_G_X + g] = cx / f32(n);
-        sf[C_G_Y + g] = cy / f32(n);
+        sf[batch.c_g_x + g] = cx / f32(n);
+        sf[batch.c_g_y + g] = cy / f32(n);
     }
 }

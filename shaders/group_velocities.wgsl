@@ -14,27 +14,27 @@
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
-    let gb = e * S_G_X;
-    for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + g] != GROUP_MOVING) {
+    let gb = e * batch.s_g_x;
+    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+        if (su[batch.c_g_kind + g] != GROUP_MOVING) {
             continue;
         }
-        let x = sf[C_G_X + g];
-        let y = sf[C_G_Y + g];
-        let pref = orca_world_preferred(x, y, sf[C_G_GOAL_X + g], sf[C_G_GOAL_Y + g], params.human_max_speed);
+        let x = sf[batch.c_g_x + g];
+        let y = sf[batch.c_g_y + g];
+        let pref = orca_world_preferred(x, y, sf[batch.c_g_goal_x + g], sf[batch.c_g_goal_y + g], params.human_max_speed);
         let radius = orca_world_group_agent_radius();
         var vel = vec2<f32>(0.0, 0.0);
         if (params.orca_actual_velocity != 0u) {
-            vel = vec2<f32>(sf[C_G_VX + g], sf[C_G_VY + g]);
+            vel = vec2<f32>(sf[batch.c_g_vx + g], sf[batch.c_g_vy + g]);
         }
         var agent = orca_world_agent(e, vec2<f32>(x, y), vel, pref, radius);
         agent.neighbor_dist = 2.0 * radius;
         let others = OrcaWorldOthers(ORCA_WORLD_NONE, g, false, perception_everything());
         let r = orca_world_velocity(e, agent, others);
-        sf[C_G_VX + g] = r.velocity.x;
-        sf[C_G_VY + g] = r.velocity.y;
+        sf[batch.c_g_vx + g] = r.velocity.x;
+        sf[batch.c_g_vy + g] = r.velocity.y;
     }
 }

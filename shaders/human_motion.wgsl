@@ -19,12 +19,12 @@
 // lone humans, the moving groups and, if it avoids it, the robot, of which it meets what `view`
 // sees.
 fn orca_velocity(e: u32, i: u32, avoid_robot: bool, view: MaybeView) -> vec2<f32> {
-    let x = sf[C_H_X + i];
-    let y = sf[C_H_Y + i];
-    let pref = orca_world_preferred(x, y, sf[C_H_GOAL_X + i], sf[C_H_GOAL_Y + i], params.human_max_speed);
+    let x = sf[batch.c_h_x + i];
+    let y = sf[batch.c_h_y + i];
+    let pref = orca_world_preferred(x, y, sf[batch.c_h_goal_x + i], sf[batch.c_h_goal_y + i], params.human_max_speed);
     var vel = vec2<f32>(0.0, 0.0);
     if (params.orca_actual_velocity != 0u) {
-        vel = vec2<f32>(sf[C_H_VX + i], sf[C_H_VY + i]);
+        vel = vec2<f32>(sf[batch.c_h_vx + i], sf[batch.c_h_vy + i]);
     }
     let agent = orca_world_agent(e, vec2<f32>(x, y), vel, pref, params.human_radius);
     let others = OrcaWorldOthers(i, ORCA_WORLD_NONE, avoid_robot, view);
@@ -35,23 +35,23 @@ fn orca_velocity(e: u32, i: u32, avoid_robot: bool, view: MaybeView) -> vec2<f32
 // velocity, move.
 fn walk(i: u32, vx: f32, vy: f32) {
     var speed = sqrt(vx * vx + vy * vy);
-    if (speed < params.speed_threshold && su[C_H_FORMING + i] != FORMING_CROWD) {
+    if (speed < params.speed_threshold && su[batch.c_h_forming + i] != FORMING_CROWD) {
         speed = 0.0;
     }
     let theta = math_atan2(vy, vx);
     let sc = math_sin_cos(theta);
-    sf[C_H_SPEED + i] = speed;
-    sf[C_H_THETA + i] = theta;
-    sf[C_H_VX + i] = speed * sc.y;
-    sf[C_H_VY + i] = speed * sc.x;
-    sf[C_H_X + i] += speed * params.dt * sc.y;
-    sf[C_H_Y + i] += speed * params.dt * sc.x;
+    sf[batch.c_h_speed + i] = speed;
+    sf[batch.c_h_theta + i] = theta;
+    sf[batch.c_h_vx + i] = speed * sc.y;
+    sf[batch.c_h_vy + i] = speed * sc.x;
+    sf[batch.c_h_x + i] += speed * params.dt * sc.y;
+    sf[batch.c_h_y + i] += speed * params.dt * sc.x;
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
     // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
@@ -59,16 +59,16 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         params.seed_lo,
         params.seed_hi,
         e,
-        su[C_EPISODE + e],
-        rng_stream_id(STREAM_AVOID_ROBOT, su[C_TICK + e]),
+        su[batch.c_episode + e],
+        rng_stream_id(STREAM_AVOID_ROBOT, su[batch.c_tick + e]),
     );
-    let first = e * S_H_X + su[C_N_STATIC + e];
-    for (var i = first; i < first + su[C_N_DYNAMIC + e]; i++) {
+    let first = e * batch.s_h_x + su[batch.c_n_static + e];
+    for (var i = first; i < first + su[batch.c_n_dynamic + e]; i++) {
         // Nothing to draw when no walker avoids the robot (every paper config).
         let avoid_robot = params.prob_avoid_robot > 0.0 && rng_chance(&rng, params.prob_avoid_robot);
         let view = perception_view_of_human(i);
         var v: vec2<f32>;
-        if (su[C_H_POLICY + i] == POLICY_ORCA) {
+        if (su[batch.c_h_policy + i] == POLICY_ORCA) {
             v = orca_velocity(e, i, avoid_robot, view);
         } else {
             v = sfm_velocity(e, i, avoid_robot, view);

@@ -10,32 +10,32 @@ const PERSONAL_SPACE: f32 = 0x1.ccccccp-2f;
 
 // The start of environment e's info row in `outf`.
 fn info_row(e: u32) -> u32 {
-    return CO_INFO + e * SO_INFO;
+    return batch.co_info + e * batch.so_info;
 }
 
 // FAILURE_TO_PROGRESS, STALLED_TIME, TIME_TO_REACH_GOAL, PATH_LENGTH.
 fn progress(e: u32) {
     let row = info_row(e);
-    let dx = sf[C_GOAL_X + e] - sf[C_ROBOT_X + e];
-    let dy = sf[C_GOAL_Y + e] - sf[C_ROBOT_Y + e];
+    let dx = sf[batch.c_goal_x + e] - sf[batch.c_robot_x + e];
+    let dy = sf[batch.c_goal_y + e] - sf[batch.c_robot_y + e];
     let d = sqrt(dx * dx + dy * dy);
-    if (d > sf[C_M_PREV_GOAL_DIST + e]) {
-        su[C_M_FAILURE_TO_PROGRESS + e] += 1u;
+    if (d > sf[batch.c_m_prev_goal_dist + e]) {
+        su[batch.c_m_failure_to_progress + e] += 1u;
     }
-    sf[C_M_PREV_GOAL_DIST + e] = d;
-    let v = speed(sf[C_ROBOT_VX + e], sf[C_ROBOT_VY + e]);
+    sf[batch.c_m_prev_goal_dist + e] = d;
+    let v = speed(sf[batch.c_robot_vx + e], sf[batch.c_robot_vy + e]);
     if (v == 0.0) {
-        sf[C_M_STALLED_TIME + e] += params.dt;
+        sf[batch.c_m_stalled_time + e] += params.dt;
     }
-    sf[C_M_PATH_LENGTH + e] += params.dt * v;
-    outf[row + INFO_FAILURE_TO_PROGRESS] = f32(su[C_M_FAILURE_TO_PROGRESS + e]);
-    outf[row + INFO_STALLED_TIME] = sf[C_M_STALLED_TIME + e];
+    sf[batch.c_m_path_length + e] += params.dt * v;
+    outf[row + INFO_FAILURE_TO_PROGRESS] = f32(su[batch.c_m_failure_to_progress + e]);
+    outf[row + INFO_STALLED_TIME] = sf[batch.c_m_stalled_time + e];
     if (outf[row + INFO_SUCCESS] != 0.0) {
-        outf[row + INFO_TIME_TO_REACH_GOAL] = f32(su[C_TICK + e]) * params.dt;
+        outf[row + INFO_TIME_TO_REACH_GOAL] = f32(su[batch.c_tick + e]) * params.dt;
     } else {
         outf[row + INFO_TIME_TO_REACH_GOAL] = math_nan();
     }
-    outf[row + INFO_PATH_LENGTH] = sf[C_M_PATH_LENGTH + e];
+    outf[row + INFO_PATH_LENGTH] = sf[batch.c_m_path_length + e];
 }
 
 // Running min / mean / max over the episode's `tick` steps of the column triple starting at the
@@ -48,45 +48,45 @@ fn running(min_at: u32, avg_at: u32, max_at: u32, value: f32, tick: f32) {
 
 // V, A and JERK statistics of the robot-frame linear command.
 fn motion_statistics(e: u32, tick: f32) {
-    let vx = sf[C_ROBOT_VX + e];
-    let vy = sf[C_ROBOT_VY + e];
+    let vx = sf[batch.c_robot_vx + e];
+    let vy = sf[batch.c_robot_vy + e];
     let a = command_acceleration(e);
-    let jx = (a.x - sf[C_M_PREV_AX + e]) / params.dt;
-    let jy = (a.y - sf[C_M_PREV_AY + e]) / params.dt;
-    running(C_M_V_MIN + e, C_M_V_AVG + e, C_M_V_MAX + e, speed(vx, vy), tick);
-    running(C_M_A_MIN + e, C_M_A_AVG + e, C_M_A_MAX + e, speed(a.x, a.y), tick);
-    running(C_M_J_MIN + e, C_M_J_AVG + e, C_M_J_MAX + e, speed(jx, jy), tick);
-    sf[C_M_PREV_VX + e] = vx;
-    sf[C_M_PREV_VY + e] = vy;
-    sf[C_M_PREV_AX + e] = a.x;
-    sf[C_M_PREV_AY + e] = a.y;
+    let jx = (a.x - sf[batch.c_m_prev_ax + e]) / params.dt;
+    let jy = (a.y - sf[batch.c_m_prev_ay + e]) / params.dt;
+    running(batch.c_m_v_min + e, batch.c_m_v_avg + e, batch.c_m_v_max + e, speed(vx, vy), tick);
+    running(batch.c_m_a_min + e, batch.c_m_a_avg + e, batch.c_m_a_max + e, speed(a.x, a.y), tick);
+    running(batch.c_m_j_min + e, batch.c_m_j_avg + e, batch.c_m_j_max + e, speed(jx, jy), tick);
+    sf[batch.c_m_prev_vx + e] = vx;
+    sf[batch.c_m_prev_vy + e] = vy;
+    sf[batch.c_m_prev_ax + e] = a.x;
+    sf[batch.c_m_prev_ay + e] = a.y;
     let row = info_row(e);
-    outf[row + INFO_V_MIN] = sf[C_M_V_MIN + e];
-    outf[row + INFO_V_AVG] = sf[C_M_V_AVG + e];
-    outf[row + INFO_V_MAX] = sf[C_M_V_MAX + e];
-    outf[row + INFO_A_MIN] = sf[C_M_A_MIN + e];
-    outf[row + INFO_A_AVG] = sf[C_M_A_AVG + e];
-    outf[row + INFO_A_MAX] = sf[C_M_A_MAX + e];
-    outf[row + INFO_JERK_MIN] = sf[C_M_J_MIN + e];
-    outf[row + INFO_JERK_AVG] = sf[C_M_J_AVG + e];
-    outf[row + INFO_JERK_MAX] = sf[C_M_J_MAX + e];
+    outf[row + INFO_V_MIN] = sf[batch.c_m_v_min + e];
+    outf[row + INFO_V_AVG] = sf[batch.c_m_v_avg + e];
+    outf[row + INFO_V_MAX] = sf[batch.c_m_v_max + e];
+    outf[row + INFO_A_MIN] = sf[batch.c_m_a_min + e];
+    outf[row + INFO_A_AVG] = sf[batch.c_m_a_avg + e];
+    outf[row + INFO_A_MAX] = sf[batch.c_m_a_max + e];
+    outf[row + INFO_JERK_MIN] = sf[batch.c_m_j_min + e];
+    outf[row + INFO_JERK_AVG] = sf[batch.c_m_j_avg + e];
+    outf[row + INFO_JERK_MAX] = sf[batch.c_m_j_max + e];
 }
 
 // Steps until the robot and a human touch at constant velocities, the smallest over the humans;
 // 0 when already touching, -1 when none approaches (spec 8.2).
 fn time_to_collision(e: u32) -> f32 {
-    let vrx = sf[C_ROBOT_WVX + e];
-    let vry = sf[C_ROBOT_WVY + e];
-    let rx = sf[C_ROBOT_X + e];
-    let ry = sf[C_ROBOT_Y + e];
+    let vrx = sf[batch.c_robot_wvx + e];
+    let vry = sf[batch.c_robot_wvy + e];
+    let rx = sf[batch.c_robot_x + e];
+    let ry = sf[batch.c_robot_y + e];
     let reach = params.robot_radius + params.human_radius;
-    let hb = e * S_H_X;
+    let hb = e * batch.s_h_x;
     var best = math_inf();
-    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
-        let vhx = sf[C_H_VX + i];
-        let vhy = sf[C_H_VY + i];
-        let px = rx - sf[C_H_X + i];
-        let py = ry - sf[C_H_Y + i];
+    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+        let vhx = sf[batch.c_h_vx + i];
+        let vhy = sf[batch.c_h_vy + i];
+        let px = rx - sf[batch.c_h_x + i];
+        let py = ry - sf[batch.c_h_y + i];
         let dist = speed(px, py);
         var t = 0.0;
         if (dist > reach) {
@@ -97,8 +97,8 @@ fn time_to_collision(e: u32) -> f32 {
                 continue;
             }
             let tc = dist / approach;
-            let gx = (sf[C_H_X + i] + vhx * tc) - (rx + vrx * tc);
-            let gy = (sf[C_H_Y + i] + vhy * tc) - (ry + vry * tc);
+            let gx = (sf[batch.c_h_x + i] + vhx * tc) - (rx + vrx * tc);
+            let gy = (sf[batch.c_h_y + i] + vhy * tc) - (ry + vry * tc);
             if (speed(gx, gy) > reach) {
                 continue;
             }
@@ -121,12 +121,12 @@ fn shadow_ratios(e: u32) {
     if (outf[row + INFO_SUCCESS] == 0.0) {
         stl = 0.0;
         spl = 0.0;
-    } else if (su[C_SHADOW_COLLIDED + e] != 0u || su[C_SHADOW_REACHED + e] == 0u) {
+    } else if (su[batch.c_shadow_collided + e] != 0u || su[batch.c_shadow_reached + e] == 0u) {
         stl = 1.0;
         spl = 1.0;
     } else {
-        stl = min(f32(su[C_SHADOW_REACH_TICK + e]) / f32(su[C_TICK + e]), 1.0);
-        spl = min(sf[C_SHADOW_PATH_LENGTH + e] / sf[C_M_PATH_LENGTH + e], 1.0);
+        stl = min(f32(su[batch.c_shadow_reach_tick + e]) / f32(su[batch.c_tick + e]), 1.0);
+        spl = min(sf[batch.c_shadow_path_length + e] / sf[batch.c_m_path_length + e], 1.0);
     }
     outf[row + INFO_STL] = stl;
     outf[row + INFO_SPL] = spl;
@@ -135,28 +135,28 @@ fn shadow_ratios(e: u32) {
 // Per-episode sums and minima over the steps (spec 8.3).
 fn accumulate_episode(e: u32, reward: f32) {
     let row = info_row(e);
-    sf[C_EP_RETURN + e] += reward;
-    sf[C_EP_MIN_HUMAN_DIST + e] = min(sf[C_EP_MIN_HUMAN_DIST + e], outf[row + INFO_MINIMUM_DISTANCE_TO_HUMAN]);
-    sf[C_EP_MIN_OBSTACLE_DIST + e] = min(sf[C_EP_MIN_OBSTACLE_DIST + e], outf[row + INFO_MINIMUM_OBSTACLE_DISTANCE]);
+    sf[batch.c_ep_return + e] += reward;
+    sf[batch.c_ep_min_human_dist + e] = min(sf[batch.c_ep_min_human_dist + e], outf[row + INFO_MINIMUM_DISTANCE_TO_HUMAN]);
+    sf[batch.c_ep_min_obstacle_dist + e] = min(sf[batch.c_ep_min_obstacle_dist + e], outf[row + INFO_MINIMUM_OBSTACLE_DISTANCE]);
     let avg = outf[row + INFO_AVERAGE_OBSTACLE_DISTANCE];
     if (!math_is_nan_bits(avg)) {
-        sf[C_EP_SUM_AVG_OBSTACLE_DIST + e] += avg;
+        sf[batch.c_ep_sum_avg_obstacle_dist + e] += avg;
     }
     let ttc = outf[row + INFO_TIME_TO_COLLISION];
     if (ttc < 0.0) {
-        sf[C_EP_SUM_TTC + e] += f32(params.episode_length);
+        sf[batch.c_ep_sum_ttc + e] += f32(params.episode_length);
     } else {
-        sf[C_EP_SUM_TTC + e] += ttc;
+        sf[batch.c_ep_sum_ttc + e] += ttc;
     }
-    sf[C_EP_SUM_DISCOMFORT_DSRNN + e] += outf[row + INFO_DISCOMFORT_DSRNN];
-    sf[C_EP_SUM_SNGNN + e] += outf[row + INFO_SNGNN_REWARD];
+    sf[batch.c_ep_sum_discomfort_dsrnn + e] += outf[row + INFO_DISCOMFORT_DSRNN];
+    sf[batch.c_ep_sum_sngnn + e] += outf[row + INFO_SNGNN_REWARD];
 }
 
 // The statistics of the episode that just ended (order of the Rust EPISODE_KEYS).
 fn write_episode(e: u32) {
     let row = info_row(e);
-    let out = CO_EPISODE + e * SO_EPISODE;
-    let length = f32(su[C_TICK + e]);
+    let out = batch.co_episode + e * batch.so_episode;
+    let length = f32(su[batch.c_tick + e]);
     let success = outf[row + INFO_SUCCESS];
     let collision = outf[row + INFO_COLLISION];
     outf[out + EP_FAILURE_TO_PROGRESS] = outf[row + INFO_FAILURE_TO_PROGRESS];
@@ -174,7 +174,7 @@ fn write_episode(e: u32) {
     outf[out + EP_PERSONAL_SPACE_COMPLIANCE] = outf[row + INFO_PERSONAL_SPACE_COMPLIANCE];
     outf[out + EP_STL] = outf[row + INFO_STL];
     outf[out + EP_SPL] = outf[row + INFO_SPL];
-    outf[out + EP_RETURN] = sf[C_EP_RETURN + e];
+    outf[out + EP_RETURN] = sf[batch.c_ep_return + e];
     outf[out + EP_LENGTH] = length;
     outf[out + EP_SUCCESS] = success;
     outf[out + EP_COLLISION] = collision;
@@ -193,38 +193,38 @@ fn write_episode(e: u32) {
     } else {
         outf[out + EP_TIME_TO_REACH_GOAL] = f32(params.episode_length);
     }
-    outf[out + EP_MINIMUM_DISTANCE_TO_HUMAN] = sf[C_EP_MIN_HUMAN_DIST + e];
-    outf[out + EP_MINIMUM_OBSTACLE_DISTANCE] = sf[C_EP_MIN_OBSTACLE_DIST + e];
-    outf[out + EP_AVERAGE_OBSTACLE_DISTANCE] = sf[C_EP_SUM_AVG_OBSTACLE_DIST + e] / length;
-    outf[out + EP_TIME_TO_COLLISION] = sf[C_EP_SUM_TTC + e] / length;
-    outf[out + EP_DISCOMFORT_DSRNN] = sf[C_EP_SUM_DISCOMFORT_DSRNN + e];
-    outf[out + EP_DISCOMFORT_SNGNN] = sf[C_EP_SUM_SNGNN + e];
+    outf[out + EP_MINIMUM_DISTANCE_TO_HUMAN] = sf[batch.c_ep_min_human_dist + e];
+    outf[out + EP_MINIMUM_OBSTACLE_DISTANCE] = sf[batch.c_ep_min_obstacle_dist + e];
+    outf[out + EP_AVERAGE_OBSTACLE_DISTANCE] = sf[batch.c_ep_sum_avg_obstacle_dist + e] / length;
+    outf[out + EP_TIME_TO_COLLISION] = sf[batch.c_ep_sum_ttc + e] / length;
+    outf[out + EP_DISCOMFORT_DSRNN] = sf[batch.c_ep_sum_discomfort_dsrnn + e];
+    outf[out + EP_DISCOMFORT_SNGNN] = sf[batch.c_ep_sum_sngnn + e];
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
     let row = info_row(e);
-    let tick = f32(su[C_TICK + e]);
+    let tick = f32(su[batch.c_tick + e]);
     progress(e);
     motion_statistics(e, tick);
     let min_human = min_human_distance(e);
     outf[row + INFO_MINIMUM_DISTANCE_TO_HUMAN] = min_human;
     if (min_human - params.robot_radius >= PERSONAL_SPACE) {
-        su[C_M_COMPLIANT + e] += 1u;
+        su[batch.c_m_compliant + e] += 1u;
     }
-    outf[row + INFO_PERSONAL_SPACE_COMPLIANCE] = f32(su[C_M_COMPLIANT + e]) / tick;
+    outf[row + INFO_PERSONAL_SPACE_COMPLIANCE] = f32(su[batch.c_m_compliant + e]) / tick;
     outf[row + INFO_TIME_TO_COLLISION] = time_to_collision(e);
     let obstacles = obstacle_distances(e);
     outf[row + INFO_MINIMUM_OBSTACLE_DISTANCE] = obstacles.x;
     outf[row + INFO_AVERAGE_OBSTACLE_DISTANCE] = obstacles.y;
     shadow_ratios(e);
-    accumulate_episode(e, outf[CO_REWARD + e]);
-    if (su[C_DONE + e] != 0u) {
+    accumulate_episode(e, outf[batch.co_reward + e]);
+    if (su[batch.c_done + e] != 0u) {
         write_episode(e);
-        outu[CO_EPISODE_DONE + e] = 1u;
+        outu[batch.co_episode_done + e] = 1u;
     }
 }

@@ -28,22 +28,22 @@ struct ObsFrame {
 var<private> fr: ObsFrame;
 
 fn obs_frame(e: u32) -> ObsFrame {
-    let theta = sf[C_ROBOT_THETA + e];
+    let theta = sf[batch.c_robot_theta + e];
     let sc = math_sin_cos(theta);
-    let cx = sf[C_ROBOT_VX + e];
-    let cy = sf[C_ROBOT_VY + e];
+    let cx = sf[batch.c_robot_vx + e];
+    let cy = sf[batch.c_robot_vy + e];
     let world = params.obs_world_frame != 0u;
     var ref_theta = theta;
     var object_v = -sqrt(cx * cx + cy * cy);
-    var object_w = -sf[C_ROBOT_W + e];
+    var object_w = -sf[batch.c_robot_w + e];
     if (world) {
         ref_theta = 0.0;
         object_v = 0.0;
         object_w = 0.0;
     }
     return ObsFrame(
-        sf[C_ROBOT_X + e], sf[C_ROBOT_Y + e], theta, sc.x, sc.y,
-        sf[C_ROBOT_WVX + e], sf[C_ROBOT_WVY + e],
+        sf[batch.c_robot_x + e], sf[batch.c_robot_y + e], theta, sc.x, sc.y,
+        sf[batch.c_robot_wvx + e], sf[batch.c_robot_wvy + e],
         ref_theta, object_v, object_w, world, params.obs_partial != 0u,
     );
 }
@@ -99,26 +99,26 @@ fn obs_robot_record(e: u32, row: u32) {
     }
     outf[row + ONE_HOT_ROBOT] = 1.0;
     if (fr.world) {
-        outf[row + 6u] = sf[C_GOAL_X + e];
-        outf[row + 7u] = sf[C_GOAL_Y + e];
+        outf[row + 6u] = sf[batch.c_goal_x + e];
+        outf[row + 7u] = sf[batch.c_goal_y + e];
         outf[row + 8u] = fr.x;
         outf[row + 9u] = fr.y;
         outf[row + 10u] = fr.sin;
         outf[row + 11u] = fr.cos;
-        outf[row + 12u] = sf[C_ROBOT_VX + e];
-        outf[row + 13u] = sf[C_ROBOT_VY + e];
-        outf[row + 14u] = sf[C_ROBOT_W + e];
+        outf[row + 12u] = sf[batch.c_robot_vx + e];
+        outf[row + 13u] = sf[batch.c_robot_vy + e];
+        outf[row + 14u] = sf[batch.c_robot_w + e];
         outf[row + 15u] = params.robot_radius;
         return;
     }
-    let g = obs_local(sf[C_GOAL_X + e], sf[C_GOAL_Y + e]);
+    let g = obs_local(sf[batch.c_goal_x + e], sf[batch.c_goal_y + e]);
     outf[row + 6u] = g.x;
     outf[row + 7u] = g.y;
     outf[row + 8u] = params.robot_radius;
     if (params.obs_robot_velocity != 0u) {
-        outf[row + 9u] = sf[C_ROBOT_VX + e];
-        outf[row + 10u] = sf[C_ROBOT_VY + e];
-        outf[row + 11u] = sf[C_ROBOT_W + e];
+        outf[row + 9u] = sf[batch.c_robot_vx + e];
+        outf[row + 10u] = sf[batch.c_robot_vy + e];
+        outf[row + 11u] = sf[batch.c_robot_w + e];
     }
 }
 
@@ -150,16 +150,16 @@ fn obs_gaze(hx: f32, hy: f32, hc: f32, hs: f32) -> f32 {
 }
 
 fn obs_humans(e: u32, block: u32) -> u32 {
-    let hb = e * S_H_X;
+    let hb = e * batch.s_h_x;
     var k = 0u;
-    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
-        let theta = sf[C_H_THETA + i];
+    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+        let theta = sf[batch.c_h_theta + i];
         let rel = theta - fr.theta;
         let wrapped = math_wrap_angle(rel);
-        let prev = sf[C_H_PREV_REL_THETA + i];
-        sf[C_H_PREV_REL_THETA + i] = wrapped;
-        let x = sf[C_H_X + i];
-        let y = sf[C_H_Y + i];
+        let prev = sf[batch.c_h_prev_rel_theta + i];
+        sf[batch.c_h_prev_rel_theta + i] = wrapped;
+        let x = sf[batch.c_h_x + i];
+        let y = sf[batch.c_h_y + i];
         let l = obs_local(x, y);
         if (!obs_sees(l)) {
             continue;
@@ -178,12 +178,12 @@ fn obs_humans(e: u32, block: u32) -> u32 {
             outf[at + 7u] = y;
             outf[at + 8u] = hsc.x;
             outf[at + 9u] = hsc.y;
-            outf[at + 11u] = sf[C_H_VX + i];
-            outf[at + 12u] = sf[C_H_VY + i];
+            outf[at + 11u] = sf[batch.c_h_vx + i];
+            outf[at + 12u] = sf[batch.c_h_vy + i];
         } else {
             let sc = math_sin_cos(rel);
-            let dvx = sf[C_H_VX + i] - fr.vx;
-            let dvy = sf[C_H_VY + i] - fr.vy;
+            let dvx = sf[batch.c_h_vx + i] - fr.vx;
+            let dvy = sf[batch.c_h_vy + i] - fr.vy;
             outf[at + 6u] = l.x;
             outf[at + 7u] = l.y;
             outf[at + 8u] = sc.x;
@@ -235,22 +235,22 @@ fn obs_rectangles(
 
 fn obs_laptops(e: u32, block: u32) -> u32 {
     let radius = obs_circumradius(params.laptop_length, params.laptop_width);
-    let n = su[C_N_LAPTOPS + e];
-    return obs_rectangles(e, block, C_L_X, C_L_Y, C_L_THETA, S_L_X, n, ONE_HOT_LAPTOP, radius);
+    let n = su[batch.c_n_laptops + e];
+    return obs_rectangles(e, block, batch.c_l_x, batch.c_l_y, batch.c_l_theta, batch.s_l_x, n, ONE_HOT_LAPTOP, radius);
 }
 
 fn obs_tables(e: u32, block: u32) -> u32 {
     let radius = obs_circumradius(params.table_length, params.table_width);
-    let n = su[C_N_TABLES + e];
-    return obs_rectangles(e, block, C_T_X, C_T_Y, C_T_THETA, S_T_X, n, ONE_HOT_TABLE, radius);
+    let n = su[batch.c_n_tables + e];
+    return obs_rectangles(e, block, batch.c_t_x, batch.c_t_y, batch.c_t_theta, batch.s_t_x, n, ONE_HOT_TABLE, radius);
 }
 
 fn obs_plants(e: u32, block: u32) -> u32 {
-    let pb = e * S_P_X;
+    let pb = e * batch.s_p_x;
     var k = 0u;
-    for (var i = pb; i < pb + su[C_N_PLANTS + e]; i++) {
-        let x = sf[C_P_X + i];
-        let y = sf[C_P_Y + i];
+    for (var i = pb; i < pb + su[batch.c_n_plants + e]; i++) {
+        let x = sf[batch.c_p_x + i];
+        let y = sf[batch.c_p_y + i];
         let l = obs_local(x, y);
         if (!obs_sees(l)) {
             continue;
@@ -285,15 +285,15 @@ fn obs_segment(
 }
 
 fn obs_walls(e: u32, block: u32) -> u32 {
-    let wb = e * S_W_X;
+    let wb = e * batch.s_w_x;
     let step = params.wall_segment_size;
     var k = 0u;
-    for (var w = wb; w < wb + su[C_N_WALLS + e]; w++) {
-        let length = sf[C_W_LENGTH + w];
-        let wc = sf[C_W_COS + w];
-        let ws = sf[C_W_SIN + w];
-        let x0 = sf[C_W_X + w] - 0.5 * length * wc;
-        let y0 = sf[C_W_Y + w] - 0.5 * length * ws;
+    for (var w = wb; w < wb + su[batch.c_n_walls + e]; w++) {
+        let length = sf[batch.c_w_length + w];
+        let wc = sf[batch.c_w_cos + w];
+        let ws = sf[batch.c_w_sin + w];
+        let x0 = sf[batch.c_w_x + w] - 0.5 * length * wc;
+        let y0 = sf[batch.c_w_y + w] - 0.5 * length * ws;
         let l = obs_local(x0, y0);
         let dx = fr.cos * wc + fr.sin * ws;
         let dy = fr.cos * ws - fr.sin * wc;
@@ -302,7 +302,7 @@ fn obs_walls(e: u32, block: u32) -> u32 {
         if (fr.world) {
             written = vec4<f32>(x0, y0, wc, ws);
         }
-        let sc = obs_rel_sin_cos(sf[C_W_THETA + w]);
+        let sc = obs_rel_sin_cos(sf[batch.c_w_theta + w]);
         // `scenario::layout::segments`.
         let full_f = floor(length / step);
         let full = u32(full_f);
@@ -326,24 +326,24 @@ fn obs_perturb(row: u32, first: u32, n: u32, base: u32, mean: f32, std_dev: f32)
 }
 
 fn obs_offset(t: u32) -> u32 {
-    var v = OBS_OFFSET_WALLS;
+    var v = batch.obs_offset_walls;
     switch (t) {
-        case 0u: { v = OBS_OFFSET_HUMANS; }
-        case 1u: { v = OBS_OFFSET_LAPTOPS; }
-        case 2u: { v = OBS_OFFSET_TABLES; }
-        case 3u: { v = OBS_OFFSET_PLANTS; }
+        case 0u: { v = batch.obs_offset_humans; }
+        case 1u: { v = batch.obs_offset_laptops; }
+        case 2u: { v = batch.obs_offset_tables; }
+        case 3u: { v = batch.obs_offset_plants; }
         default: {}
     }
     return v;
 }
 
 fn obs_capacity(t: u32) -> u32 {
-    var v = OBS_CAPACITY_WALLS;
+    var v = batch.obs_capacity_walls;
     switch (t) {
-        case 0u: { v = OBS_CAPACITY_HUMANS; }
-        case 1u: { v = OBS_CAPACITY_LAPTOPS; }
-        case 2u: { v = OBS_CAPACITY_TABLES; }
-        case 3u: { v = OBS_CAPACITY_PLANTS; }
+        case 0u: { v = batch.obs_capacity_humans; }
+        case 1u: { v = batch.obs_capacity_laptops; }
+        case 2u: { v = batch.obs_capacity_tables; }
+        case 3u: { v = batch.obs_capacity_plants; }
         default: {}
     }
     return v;
@@ -356,8 +356,8 @@ fn obs_noise(e: u32, row: u32, counts_in: array<u32, 5>) {
         params.seed_lo,
         params.seed_hi,
         e,
-        su[C_EPISODE + e],
-        rng_stream_id(STREAM_OBS_NOISE, su[C_TICK + e]),
+        su[batch.c_episode + e],
+        rng_stream_id(STREAM_OBS_NOISE, su[batch.c_tick + e]),
     );
     let base = stream.base;
     let rmean = params.obs_noise[2u * NOISE_ROBOT];
@@ -386,8 +386,8 @@ fn obs_noise(e: u32, row: u32, counts_in: array<u32, 5>) {
 fn obs_humans_seen(e: u32, lo: u32, hi: u32) -> u32 {
     var n = 0u;
     for (var k = lo; k < hi; k++) {
-        let i = e * S_H_X + k;
-        if (obs_sees_point(sf[C_H_X + i], sf[C_H_Y + i])) {
+        let i = e * batch.s_h_x + k;
+        if (obs_sees_point(sf[batch.c_h_x + i], sf[batch.c_h_y + i])) {
             n += 1u;
         }
     }
@@ -397,8 +397,8 @@ fn obs_humans_seen(e: u32, lo: u32, hi: u32) -> u32 {
 fn obs_laptops_seen(e: u32, to: u32) -> u32 {
     var n = 0u;
     for (var k = 0u; k < to; k++) {
-        let i = e * S_L_X + k;
-        if (obs_sees_point(sf[C_L_X + i], sf[C_L_Y + i])) {
+        let i = e * batch.s_l_x + k;
+        if (obs_sees_point(sf[batch.c_l_x + i], sf[batch.c_l_y + i])) {
             n += 1u;
         }
     }
@@ -406,14 +406,14 @@ fn obs_laptops_seen(e: u32, to: u32) -> u32 {
 }
 
 fn obs_human_human(e: u32) -> u32 {
-    let out = CO_HH_PAIRS + e * SO_HH_PAIRS;
-    let gb = e * S_G_FIRST;
+    let out = batch.co_hh_pairs + e * batch.so_hh_pairs;
+    let gb = e * batch.s_g_first;
     var n = 0u;
     var slot = 0u;
     var seen = 0u;
-    for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        let first = su[C_G_FIRST + g];
-        let end = first + su[C_G_COUNT + g];
+    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+        let first = su[batch.c_g_first + g];
+        let end = first + su[batch.c_g_count + g];
         var start = first;
         var stop = end;
         if (fr.partial) {
@@ -432,24 +432,24 @@ fn obs_human_human(e: u32) -> u32 {
             }
         }
     }
-    for (var k = 2u * n; k < SO_HH_PAIRS; k++) {
+    for (var k = 2u * n; k < batch.so_hh_pairs; k++) {
         outu[out + k] = 0u;
     }
     return n;
 }
 
 fn obs_human_laptop(e: u32) -> u32 {
-    let out = CO_HL_PAIRS + e * SO_HL_PAIRS;
-    let ub = e * S_LU_HUMAN;
+    let out = batch.co_hl_pairs + e * batch.so_hl_pairs;
+    let ub = e * batch.s_lu_human;
     var n = 0u;
-    for (var u = ub; u < ub + su[C_N_LAPTOP_USERS + e]; u++) {
-        var h = su[C_LU_HUMAN + u];
-        var l = su[C_LU_LAPTOP + u];
+    for (var u = ub; u < ub + su[batch.c_n_laptop_users + e]; u++) {
+        var h = su[batch.c_lu_human + u];
+        var l = su[batch.c_lu_laptop + u];
         if (fr.partial) {
-            let hi = e * S_H_X + h;
-            let li = e * S_L_X + l;
-            if (!obs_sees_point(sf[C_H_X + hi], sf[C_H_Y + hi])
-                || !obs_sees_point(sf[C_L_X + li], sf[C_L_Y + li])) {
+            let hi = e * batch.s_h_x + h;
+            let li = e * batch.s_l_x + l;
+            if (!obs_sees_point(sf[batch.c_h_x + hi], sf[batch.c_h_y + hi])
+                || !obs_sees_point(sf[batch.c_l_x + li], sf[batch.c_l_y + li])) {
                 continue;
             }
             h = obs_humans_seen(e, 0u, h);
@@ -459,7 +459,7 @@ fn obs_human_laptop(e: u32) -> u32 {
         outu[out + 2u * n + 1u] = l;
         n += 1u;
     }
-    for (var k = 2u * n; k < SO_HL_PAIRS; k++) {
+    for (var k = 2u * n; k < batch.so_hl_pairs; k++) {
         outu[out + k] = 0u;
     }
     return n;
@@ -468,19 +468,19 @@ fn obs_human_laptop(e: u32) -> u32 {
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
     fr = obs_frame(e);
-    let row = CO_OBS + e * SO_OBS;
+    let row = batch.co_obs + e * batch.so_obs;
     obs_robot_record(e, row);
     var counts = array<u32, 5>(0u, 0u, 0u, 0u, 0u);
-    counts[0] = obs_humans(e, row + OBS_OFFSET_HUMANS);
-    counts[1] = obs_laptops(e, row + OBS_OFFSET_LAPTOPS);
-    counts[2] = obs_tables(e, row + OBS_OFFSET_TABLES);
-    counts[3] = obs_plants(e, row + OBS_OFFSET_PLANTS);
-    if (OBS_CAPACITY_WALLS > 0u) {
-        counts[4] = obs_walls(e, row + OBS_OFFSET_WALLS);
+    counts[0] = obs_humans(e, row + batch.obs_offset_humans);
+    counts[1] = obs_laptops(e, row + batch.obs_offset_laptops);
+    counts[2] = obs_tables(e, row + batch.obs_offset_tables);
+    counts[3] = obs_plants(e, row + batch.obs_offset_plants);
+    if (batch.obs_capacity_walls > 0u) {
+        counts[4] = obs_walls(e, row + batch.obs_offset_walls);
     }
     for (var t = 0u; t < 5u; t++) {
         let first = obs_offset(t) + counts[t] * OBS_RECORD;
@@ -493,9 +493,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         obs_noise(e, row, counts);
     }
     for (var t = 0u; t < 5u; t++) {
-        outu[CO_OBS_COUNT + e * SO_OBS_COUNT + t] = counts[t];
+        outu[batch.co_obs_count + e * batch.so_obs_count + t] = counts[t];
     }
-    let pc = CO_PAIR_COUNT + e * SO_PAIR_COUNT;
+    let pc = batch.co_pair_count + e * batch.so_pair_count;
     outu[pc] = obs_human_human(e);
     outu[pc + 1u] = obs_human_laptop(e);
 }

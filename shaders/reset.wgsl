@@ -8,11 +8,11 @@
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || actions[3u * e] == 0.0) {
+    if (e >= batch.n_envs || actions[3u * e] == 0.0) {
         return;
     }
-    su[C_PENDING_RESET + e] = 0u;
-    outu[CO_HAS_FINAL + e] = 0u;
-    outu[CO_EPISODE_DONE + e] = 0u;
+    su[batch.c_pending_reset + e] = 0u;
+    outu[batch.co_has_final + e] = 0u;
+    outu[batch.co_episode_done + e] = 0u;
     reset_and_observe(e);
 }

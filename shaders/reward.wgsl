@@ -16,14 +16,14 @@ const SNGNN_WEIGHT: f32 = 1.0;
 
 // The robot's world-frame velocity (m/s), computed with the motion.
 fn robot_world_velocity(e: u32) -> vec2<f32> {
-    return vec2<f32>(sf[C_ROBOT_WVX + e], sf[C_ROBOT_WVY + e]);
+    return vec2<f32>(sf[batch.c_robot_wvx + e], sf[batch.c_robot_wvy + e]);
 }
 
 // Clearance (m) over the next dt between the robot and a human at (x, y) moving at (hvx, hvy).
 fn clearance(e: u32, x: f32, y: f32, hvx: f32, hvy: f32) -> f32 {
     let vr = robot_world_velocity(e);
-    let px = x - sf[C_ROBOT_X + e];
-    let py = y - sf[C_ROBOT_Y + e];
+    let px = x - sf[batch.c_robot_x + e];
+    let py = y - sf[batch.c_robot_y + e];
     let vx = hvx - vr.x;
     let vy = hvy - vr.y;
     return geo_origin_segment_distance(px, py, vx * params.dt, vy * params.dt)
@@ -33,31 +33,31 @@ fn clearance(e: u32, x: f32, y: f32, hvx: f32, hvy: f32) -> f32 {
 
 // The smallest predicted clearance (m) between the robot and any human; +inf without humans.
 fn min_predicted_clearance(e: u32) -> f32 {
-    let hb = e * S_H_X;
+    let hb = e * batch.s_h_x;
     var d_min = math_inf();
-    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
-        d_min = min(d_min, clearance(e, sf[C_H_X + i], sf[C_H_Y + i], sf[C_H_VX + i], sf[C_H_VY + i]));
+    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+        d_min = min(d_min, clearance(e, sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_h_vx + i], sf[batch.c_h_vy + i]));
     }
     if (params.dsrnn_pseudo_humans != 0u) {
-        let gb = e * S_G_X;
-        for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-            let first = hb + su[C_G_FIRST + g];
-            let n = su[C_G_COUNT + g];
+        let gb = e * batch.s_g_x;
+        for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+            let first = hb + su[batch.c_g_first + g];
+            let n = su[batch.c_g_count + g];
             var total = 0.0;
             for (var k = first; k < first + n; k++) {
-                total += sf[C_H_SPEED + k];
+                total += sf[batch.c_h_speed + k];
             }
             let mean_speed = total / f32(n);
-            let sc = math_sin_cos(sf[C_H_THETA + first]);
-            d_min = min(d_min, clearance(e, sf[C_G_X + g], sf[C_G_Y + g], mean_speed * sc.y, mean_speed * sc.x));
+            let sc = math_sin_cos(sf[batch.c_h_theta + first]);
+            d_min = min(d_min, clearance(e, sf[batch.c_g_x + g], sf[batch.c_g_y + g], mean_speed * sc.y, mean_speed * sc.x));
         }
-        let ub = e * S_LU_HUMAN;
-        let lb = e * S_L_X;
-        for (var u = ub; u < ub + su[C_N_LAPTOP_USERS + e]; u++) {
-            let h = hb + su[C_LU_HUMAN + u];
-            let l = lb + su[C_LU_LAPTOP + u];
-            let cx = 0.5 * (sf[C_H_X + h] + sf[C_L_X + l]);
-            let cy = 0.5 * (sf[C_H_Y + h] + sf[C_L_Y + l]);
+        let ub = e * batch.s_lu_human;
+        let lb = e * batch.s_l_x;
+        for (var u = ub; u < ub + su[batch.c_n_laptop_users + e]; u++) {
+            let h = hb + su[batch.c_lu_human + u];
+            let l = lb + su[batch.c_lu_laptop + u];
+            let cx = 0.5 * (sf[batch.c_h_x + h] + sf[batch.c_l_x + l]);
+            let cy = 0.5 * (sf[batch.c_h_y + h] + sf[batch.c_l_y + l]);
             d_min = min(d_min, clearance(e, cx, cy, 0.0, 0.0));
         }
     }
@@ -77,7 +77,7 @@ fn with_extra_terms(e: u32, r0: f32) -> f32 {
         let intrusion = max(params.reward_obstacle_distance - c, 0.0);
         r += params.reward_obstacle_weight * intrusion;
     }
-    if (params.reward_stalled_weight != 0.0 && speed(sf[C_ROBOT_VX + e], sf[C_ROBOT_VY + e]) == 0.0) {
+    if (params.reward_stalled_weight != 0.0 && speed(sf[batch.c_robot_vx + e], sf[batch.c_robot_vy + e]) == 0.0) {
         r += params.reward_stalled_weight;
     }
     if (params.reward_acceleration_weight != 0.0) {
@@ -89,32 +89,32 @@ fn with_extra_terms(e: u32, r0: f32) -> f32 {
 
 // The reward of a non-terminal step; updates the reward memory.
 fn step_reward(e: u32) -> f32 {
-    let dx = sf[C_GOAL_X + e] - sf[C_ROBOT_X + e];
-    let dy = sf[C_GOAL_Y + e] - sf[C_ROBOT_Y + e];
+    let dx = sf[batch.c_goal_x + e] - sf[batch.c_robot_x + e];
+    let dy = sf[batch.c_goal_y + e] - sf[batch.c_robot_y + e];
     let d = sqrt(dx * dx + dy * dy);
     var r_dist = 0.0;
-    if (su[C_R_HAS_PREV + e] != 0u) {
-        r_dist = -(params.reward_distance_scale * (d - sf[C_R_PREV_DIST + e]));
+    if (su[batch.c_r_has_prev + e] != 0u) {
+        r_dist = -(params.reward_distance_scale * (d - sf[batch.c_r_prev_dist + e]));
     }
     let d_min = min_predicted_clearance(e);
     var r_disc = 0.0;
     if (d_min < params.reward_discomfort_distance) {
         r_disc = (d_min - params.reward_discomfort_distance) * params.reward_discomfort_factor * params.dt;
     }
-    sf[C_R_PREV_DIST + e] = d;
-    su[C_R_HAS_PREV + e] = 1u;
-    sf[C_R_DISTANCE + e] = r_dist;
-    sf[C_R_DISCOMFORT_DSRNN + e] = r_disc;
-    sf[C_R_ALIVE + e] = params.reward_alive;
+    sf[batch.c_r_prev_dist + e] = d;
+    su[batch.c_r_has_prev + e] = 1u;
+    sf[batch.c_r_distance + e] = r_dist;
+    sf[batch.c_r_discomfort_dsrnn + e] = r_disc;
+    sf[batch.c_r_alive + e] = params.reward_alive;
     var r: f32;
     if (params.reward_kind == REWARD_SNGNN) {
-        let discomfort = clamp_unit(sf[C_R_DISCOMFORT_SNGNN + e]);
-        sf[C_R_DISCOMFORT_SNGNN + e] = discomfort;
-        sf[C_R_SNGNN + e] = discomfort - 1.0;
+        let discomfort = clamp_unit(sf[batch.c_r_discomfort_sngnn + e]);
+        sf[batch.c_r_discomfort_sngnn + e] = discomfort;
+        sf[batch.c_r_sngnn + e] = discomfort - 1.0;
         // Spec 6.3: the DSRNN discomfort is computed for the info only.
         r = (discomfort - 1.0) * SNGNN_WEIGHT + r_dist + params.reward_alive;
     } else {
-        sf[C_R_DISCOMFORT_SNGNN + e] = 0.0;
+        sf[batch.c_r_discomfort_sngnn + e] = 0.0;
         r = r_disc + r_dist + params.reward_alive;
     }
     return with_extra_terms(e, r);
@@ -135,10 +135,10 @@ fn clamp_unit(x: f32) -> f32 {
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
-    let row = CO_INFO + e * SO_INFO;
+    let row = batch.co_info + e * batch.so_info;
     var r: f32;
     if (outf[row + INFO_OUT_OF_MAP] != 0.0) {
         r = params.reward_out_of_map;
@@ -151,10 +151,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     } else {
         r = step_reward(e);
     }
-    outf[CO_REWARD + e] = r;
-    outf[row + INFO_DISCOMFORT_SNGNN] = sf[C_R_DISCOMFORT_SNGNN + e];
-    outf[row + INFO_DISCOMFORT_DSRNN] = sf[C_R_DISCOMFORT_DSRNN + e];
-    outf[row + INFO_DISTANCE_REWARD] = sf[C_R_DISTANCE + e];
-    outf[row + INFO_ALIVE_REWARD] = sf[C_R_ALIVE + e];
-    outf[row + INFO_SNGNN_REWARD] = sf[C_R_SNGNN + e];
+    outf[batch.co_reward + e] = r;
+    outf[row + INFO_DISCOMFORT_SNGNN] = sf[batch.c_r_discomfort_sngnn + e];
+    outf[row + INFO_DISCOMFORT_DSRNN] = sf[batch.c_r_discomfort_dsrnn + e];
+    outf[row + INFO_DISTANCE_REWARD] = sf[batch.c_r_distance + e];
+    outf[row + INFO_ALIVE_REWARD] = sf[batch.c_r_alive + e];
+    outf[row + INFO_SNGNN_REWARD] = sf[batch.c_r_sngnn + e];
 }

@@ -21,25 +21,25 @@ fn command(e: u32) -> vec3<f32> {
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
     let cmd = command(e);
-    sf[C_ROBOT_VX + e] = cmd.x;
-    sf[C_ROBOT_VY + e] = cmd.y;
-    sf[C_ROBOT_W + e] = cmd.z;
+    sf[batch.c_robot_vx + e] = cmd.x;
+    sf[batch.c_robot_vy + e] = cmd.y;
+    sf[batch.c_robot_w + e] = cmd.z;
     let m = integrate(
         params.dt,
-        sf[C_ROBOT_X + e],
-        sf[C_ROBOT_Y + e],
-        sf[C_ROBOT_THETA + e],
+        sf[batch.c_robot_x + e],
+        sf[batch.c_robot_y + e],
+        sf[batch.c_robot_theta + e],
         cmd.x,
         cmd.y,
         cmd.z,
     );
-    sf[C_ROBOT_X + e] = m.x;
-    sf[C_ROBOT_Y + e] = m.y;
-    sf[C_ROBOT_THETA + e] = m.theta;
-    sf[C_ROBOT_WVX + e] = m.vx;
-    sf[C_ROBOT_WVY + e] = m.vy;
+    sf[batch.c_robot_x + e] = m.x;
+    sf[batch.c_robot_y + e] = m.y;
+    sf[batch.c_robot_theta + e] = m.theta;
+    sf[batch.c_robot_wvx + e] = m.vx;
+    sf[batch.c_robot_wvy + e] = m.vy;
 }

@@ -32,16 +32,16 @@ fn command_from_velocity(theta: f32, vx: f32, vy: f32) -> vec3<f32> {
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
-    if (su[C_SHADOW_COLLIDED + e] != 0u || su[C_SHADOW_REACHED + e] != 0u) {
+    if (su[batch.c_shadow_collided + e] != 0u || su[batch.c_shadow_reached + e] != 0u) {
         return;
     }
-    let x = sf[C_SHADOW_X + e];
-    let y = sf[C_SHADOW_Y + e];
-    let theta = sf[C_SHADOW_THETA + e];
-    let pref = orca_world_preferred(x, y, sf[C_GOAL_X + e], sf[C_GOAL_Y + e], params.robot_max_speed);
+    let x = sf[batch.c_shadow_x + e];
+    let y = sf[batch.c_shadow_y + e];
+    let theta = sf[batch.c_shadow_theta + e];
+    let pref = orca_world_preferred(x, y, sf[batch.c_goal_x + e], sf[batch.c_goal_y + e], params.robot_max_speed);
     let agent = orca_world_agent(e, vec2<f32>(x, y), vec2<f32>(0.0, 0.0), pref, params.human_radius);
     // The shadow robot sees everything (0.1.1 adds every entity to its simulator).
     let others = OrcaWorldOthers(ORCA_WORLD_NONE, ORCA_WORLD_NONE, false, perception_everything());
@@ -49,13 +49,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (r.overflow != 0u) {
         // Not the CPU's result: make it loud.
         let nan = math_nan();
-        sf[C_SHADOW_X + e] = nan;
-        sf[C_SHADOW_Y + e] = nan;
-        sf[C_SHADOW_THETA + e] = nan;
-        sf[C_SHADOW_VX + e] = nan;
-        sf[C_SHADOW_VY + e] = nan;
-        sf[C_SHADOW_W + e] = nan;
-        sf[C_SHADOW_PATH_LENGTH + e] = nan;
+        sf[batch.c_shadow_x + e] = nan;
+        sf[batch.c_shadow_y + e] = nan;
+        sf[batch.c_shadow_theta + e] = nan;
+        sf[batch.c_shadow_vx + e] = nan;
+        sf[batch.c_shadow_vy + e] = nan;
+        sf[batch.c_shadow_w + e] = nan;
+        sf[batch.c_shadow_path_length + e] = nan;
         return;
     }
     let cmd = command_from_velocity(theta, r.velocity.x, r.velocity.y);
@@ -63,11 +63,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let vy = cmd.y;
     let w = cmd.z;
     let m = integrate(params.dt, x, y, theta, vx, vy, w);
-    sf[C_SHADOW_X + e] = m.x;
-    sf[C_SHADOW_Y + e] = m.y;
-    sf[C_SHADOW_THETA + e] = m.theta;
-    sf[C_SHADOW_VX + e] = vx;
-    sf[C_SHADOW_VY + e] = vy;
-    sf[C_SHADOW_W + e] = w;
-    sf[C_SHADOW_PATH_LENGTH + e] += sqrt(vx * vx + vy * vy) * params.dt;
+    sf[batch.c_shadow_x + e] = m.x;
+    sf[batch.c_shadow_y + e] = m.y;
+    sf[batch.c_shadow_theta + e] = m.theta;
+    sf[batch.c_shadow_vx + e] = vx;
+    sf[batch.c_shadow_vy + e] = vy;
+    sf[batch.c_shadow_w + e] = w;
+    sf[batch.c_shadow_path_length + e] += sqrt(vx * vx + vy * vy) * params.dt;
 }

@@ -5,7 +5,7 @@
 // src/sngnn/model.rs): graphs packed per environment (src/sngnn/packed.rs), edge weights W(e)
 // from the flat piecewise-linear tables (`Tables::flat_layer`), one layer per dispatch.
 //
-// Not a batch stage: it has its own bindings (src/sngnn/gpu.rs builds them) and no prelude.
+// Not a batch stage: it has its own bindings (src/backend/gpu/sngnn_net.rs builds them) and no prelude.
 // Entry points:
 // - `sort`: one invocation per environment groups its edges by destination with a stable
 //   counting sort (CSR), so that each node can sum its messages alone, in build order.

@@ -11,13 +11,13 @@
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS) {
+    if (e >= batch.n_envs) {
         return;
     }
-    let row = CO_INFO + e * SO_INFO;
+    let row = batch.co_info + e * batch.so_info;
     let terminal = outf[row + INFO_OUT_OF_MAP] != 0.0 || outf[row + INFO_SUCCESS] != 0.0
         || outf[row + INFO_COLLISION] != 0.0 || outf[row + INFO_TIMEOUT] != 0.0;
-    if (su[C_STEPPING + e] == 0u || terminal) {
+    if (su[batch.c_stepping + e] == 0u || terminal) {
         sn_gu[sn_ubase(e) + SN_WORD_NODES] = 0u;
         return;
     }

@@ -6,7 +6,7 @@
 // replay mode. Same operations and draws in the same order as the Rust file; change both in the
 // same commit. Local slot lists (`free_walkers`, the dispersable groups and users, the free
 // laptops) are PERMUTE_CAP long (the largest of those capacities); a group's members and poses
-// PLACE_GROUP_CAP (common/place.wgsl). A dispersal regroups the environment
+// place_group_cap() (common/place.wgsl). A dispersal regroups the environment
 // (`regroup_canonicalize`) at the end of the Rust `disperse_group` and `end_laptop_use`; here
 // `main` calls it right after them, from one place (Mesa inlines every call, and each copy of
 // the regrouping and obstacle rebuild costs llvmpipe compile time).
@@ -22,15 +22,15 @@ struct SlotList {
 }
 
 fn count_event(e: u32, ev: u32) {
-    outu[CO_EVENTS + e * SO_EVENTS + ev] += 1u;
+    outu[batch.co_events + e * batch.so_events + ev] += 1u;
 }
 
 // Rust `dispersable_groups`: local indices of the dispersable groups of `kind`, in group order.
 fn dispersable_groups(e: u32, kind: u32, out: ptr<function, SlotList>) {
-    let gb = e * S_G_KIND;
+    let gb = e * batch.s_g_kind;
     (*out).len = 0u;
-    for (var g = 0u; g < su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + gb + g] == kind && su[C_G_DISPERSABLE + gb + g] != 0u) {
+    for (var g = 0u; g < su[batch.c_n_groups + e]; g++) {
+        if (su[batch.c_g_kind + gb + g] == kind && su[batch.c_g_dispersable + gb + g] != 0u) {
             (*out).v[(*out).len] = g;
             (*out).len += 1u;
         }
@@ -41,13 +41,13 @@ fn dispersable_groups(e: u32, kind: u32, out: ptr<function, SlotList>) {
 fn disperse_group(
     e: u32,
     g: u32,
-    stays: ptr<function, array<bool, PLACE_GROUP_CAP>>,
+    stays: ptr<function, array<bool, PLACE_GROUP_ARRAY>>,
     n: u32,
     became_standing: bool,
     rng: ptr<function, RngStream>,
 ) {
-    let gg = e * S_G_KIND + g;
-    let first = e * S_H_X + su[C_G_FIRST + gg];
+    let gg = e * batch.s_g_kind + g;
+    let first = e * batch.s_h_x + su[batch.c_g_first + gg];
     var stayers = 0u;
     for (var k = 0u; k < n; k++) {
         stayers += u32((*stays)[k]);
@@ -59,18 +59,18 @@ fn disperse_group(
             regroup_to_lone_walker(e, i, rng);
         } else if (dissolve) {
             regroup_to_lone_static(e, i);
-        } else if (su[C_G_KIND + gg] == GROUP_MOVING) {
+        } else if (su[batch.c_g_kind + gg] == GROUP_MOVING) {
             regroup_stop(i);
         }
     }
     if (dissolve) {
-        su[C_G_KIND + gg] = GROUP_DISSOLVED;
-    } else if (su[C_G_KIND + gg] == GROUP_MOVING && became_standing) {
-        su[C_G_KIND + gg] = GROUP_STANDING;
-        su[C_G_SEQ + gg] = regroup_next_seq(e);
+        su[batch.c_g_kind + gg] = GROUP_DISSOLVED;
+    } else if (su[batch.c_g_kind + gg] == GROUP_MOVING && became_standing) {
+        su[batch.c_g_kind + gg] = GROUP_STANDING;
+        su[batch.c_g_seq + gg] = regroup_next_seq(e);
         for (var k = 0u; k < n; k++) {
             if ((*stays)[k]) {
-                su[C_H_ROLE + first + k] = ROLE_STANDING_GROUP;
+                su[batch.c_h_role + first + k] = ROLE_STANDING_GROUP;
             }
         }
     }
@@ -89,8 +89,8 @@ fn crowd_dispersal(e: u32, rng: ptr<function, RngStream>) -> bool {
         return false;
     }
     let g = groups.v[rng_below(rng, groups.len)];
-    let n = min(su[C_G_COUNT + e * S_G_COUNT + g], PLACE_GROUP_CAP);
-    var stays: array<bool, PLACE_GROUP_CAP>;
+    let n = min(su[batch.c_g_count + e * batch.s_g_count + g], place_group_cap());
+    var stays: array<bool, PLACE_GROUP_ARRAY>;
     for (var k = 0u; k < n; k++) {
         stays[k] = rng_chance(rng, 0.5);
     }
@@ -101,22 +101,22 @@ fn crowd_dispersal(e: u32, rng: ptr<function, RngStream>) -> bool {
 
 // Rust `end_laptop_use` for local user u.
 fn end_laptop_use(e: u32, u: u32, rng: ptr<function, RngStream>) {
-    let uu = e * S_LU_HUMAN + u;
-    let i = e * S_H_X + su[C_LU_HUMAN + uu];
-    let l = e * S_L_X + su[C_LU_LAPTOP + uu];
+    let uu = e * batch.s_lu_human + u;
+    let i = e * batch.s_h_x + su[batch.c_lu_human + uu];
+    let l = e * batch.s_l_x + su[batch.c_lu_laptop + uu];
     regroup_to_lone_walker(e, i, rng);
-    su[C_L_USER + l] = NONE;
-    su[C_L_SEQ + l] = regroup_next_seq(e);
-    su[C_LU_HUMAN + uu] = NONE;
+    su[batch.c_l_user + l] = NONE;
+    su[batch.c_l_seq + l] = regroup_next_seq(e);
+    su[batch.c_lu_human + uu] = NONE;
     // Rust: `regroup::canonicalize`, called by `main` (see the header).
 }
 
 // Rust `laptop_dispersal`.
 fn laptop_dispersal(e: u32, rng: ptr<function, RngStream>) -> bool {
-    let ub = e * S_LU_DISPERSABLE;
+    let ub = e * batch.s_lu_dispersable;
     var users: SlotList;
-    for (var u = 0u; u < su[C_N_LAPTOP_USERS + e]; u++) {
-        if (su[C_LU_DISPERSABLE + ub + u] != 0u) {
+    for (var u = 0u; u < su[batch.c_n_laptop_users + e]; u++) {
+        if (su[batch.c_lu_dispersable + ub + u] != 0u) {
             users.v[users.len] = u;
             users.len += 1u;
         }
@@ -131,10 +131,10 @@ fn laptop_dispersal(e: u32, rng: ptr<function, RngStream>) -> bool {
 
 // Rust `free_walkers`: lone walkers not heading anywhere special, in slot order (local slots).
 fn free_walkers(e: u32, out: ptr<function, SlotList>) {
-    let hb = e * S_H_ROLE;
+    let hb = e * batch.s_h_role;
     (*out).len = 0u;
-    for (var k = 0u; k < su[C_N_HUMANS + e]; k++) {
-        if (su[C_H_ROLE + hb + k] == ROLE_DYNAMIC && su[C_H_FORMING + hb + k] == FORMING_NONE) {
+    for (var k = 0u; k < su[batch.c_n_humans + e]; k++) {
+        if (su[batch.c_h_role + hb + k] == ROLE_DYNAMIC && su[batch.c_h_forming + hb + k] == FORMING_NONE) {
             (*out).v[(*out).len] = k;
             (*out).len += 1u;
         }
@@ -150,34 +150,34 @@ fn spot_free(e: u32, x: f32, y: f32) -> bool {
 // Rust `start_crowd_formation`: the walkers chosen[0..n] (local slots) head for poses[0..n].
 fn start_crowd_formation(
     e: u32,
-    chosen: ptr<function, array<u32, PLACE_GROUP_CAP>>,
-    poses: ptr<function, array<vec3<f32>, PLACE_GROUP_CAP>>,
+    chosen: ptr<function, array<u32, PLACE_GROUP_ARRAY>>,
+    poses: ptr<function, array<vec3<f32>, PLACE_GROUP_ARRAY>>,
     n: u32,
 ) {
-    let hb = e * S_H_X;
-    let sb = e * S_CF_HUMAN;
+    let hb = e * batch.s_h_x;
+    let sb = e * batch.s_cf_human;
     var cx = 0.0;
     var cy = 0.0;
     for (var k = 0u; k < n; k++) {
         let h = (*chosen)[k];
         let pose = (*poses)[k];
         let i = hb + h;
-        su[C_CF_HUMAN + sb + k] = h;
-        sf[C_CF_SLOT_X + sb + k] = pose.x;
-        sf[C_CF_SLOT_Y + sb + k] = pose.y;
-        sf[C_CF_SLOT_THETA + sb + k] = pose.z;
-        sf[C_H_GOAL_X + i] = pose.x;
-        sf[C_H_GOAL_Y + i] = pose.y;
-        su[C_H_FORMING + i] = FORMING_CROWD;
-        su[C_H_POLICY + i] = POLICY_ORCA;
+        su[batch.c_cf_human + sb + k] = h;
+        sf[batch.c_cf_slot_x + sb + k] = pose.x;
+        sf[batch.c_cf_slot_y + sb + k] = pose.y;
+        sf[batch.c_cf_slot_theta + sb + k] = pose.z;
+        sf[batch.c_h_goal_x + i] = pose.x;
+        sf[batch.c_h_goal_y + i] = pose.y;
+        su[batch.c_h_forming + i] = FORMING_CROWD;
+        su[batch.c_h_policy + i] = POLICY_ORCA;
         cx += pose.x;
         cy += pose.y;
     }
-    sf[C_CF_X + e] = cx / f32(n);
-    sf[C_CF_Y + e] = cy / f32(n);
-    su[C_CF_COUNT + e] = n;
-    su[C_CF_CLOSE_STEPS + e] = 0u;
-    su[C_CF_ACTIVE + e] = 1u;
+    sf[batch.c_cf_x + e] = cx / f32(n);
+    sf[batch.c_cf_y + e] = cy / f32(n);
+    su[batch.c_cf_count + e] = n;
+    su[batch.c_cf_close_steps + e] = 0u;
+    su[batch.c_cf_active + e] = 1u;
 }
 
 // Rust `crowd_formation`.
@@ -188,11 +188,11 @@ fn crowd_formation(e: u32, rng: ptr<function, RngStream>) -> u32 {
     var walkers: SlotList;
     free_walkers(e, &walkers);
     // Rust casts a negative size to a huge usize, which no walker list reaches.
-    if (n_signed < 2 || u32(n_signed) > walkers.len || u32(n_signed) > PLACE_GROUP_CAP) {
+    if (n_signed < 2 || u32(n_signed) > walkers.len || u32(n_signed) > place_group_cap()) {
         return START_IMPOSSIBLE;
     }
     let n = u32(n_signed);
-    var chosen: array<u32, PLACE_GROUP_CAP>;
+    var chosen: array<u32, PLACE_GROUP_ARRAY>;
     for (var c = 0u; c < n; c++) {
         let k = rng_below(rng, walkers.len);
         chosen[c] = walkers.v[k];
@@ -202,8 +202,8 @@ fn crowd_formation(e: u32, rng: ptr<function, RngStream>) -> u32 {
         }
         walkers.len -= 1u;
     }
-    let area = place_sampling_box(sf[C_MAP_X + e], sf[C_MAP_Y + e]);
-    var poses: array<vec3<f32>, PLACE_GROUP_CAP>;
+    let area = place_sampling_box(sf[batch.c_map_x + e], sf[batch.c_map_y + e]);
+    var poses: array<vec3<f32>, PLACE_GROUP_ARRAY>;
     var found = false;
     for (var t = 0u; t < PLACE_MAX_TRIES; t++) {
         let c = place_box_point(area, rng);
@@ -229,25 +229,25 @@ fn crowd_formation(e: u32, rng: ptr<function, RngStream>) -> u32 {
 
 // Rust `start_laptop_formation`: walker h (local slot) heads for the seat of laptop l.
 fn start_laptop_formation(e: u32, h: u32, l: u32, seat: vec3<f32>) {
-    let i = e * S_H_X + h;
-    sf[C_H_GOAL_X + i] = seat.x;
-    sf[C_H_GOAL_Y + i] = seat.y;
-    su[C_H_FORMING + i] = FORMING_LAPTOP;
-    su[C_H_POLICY + i] = POLICY_ORCA;
-    su[C_LF_HUMAN + e] = h;
-    su[C_LF_LAPTOP + e] = l;
-    sf[C_LF_SEAT_X + e] = seat.x;
-    sf[C_LF_SEAT_Y + e] = seat.y;
-    sf[C_LF_SEAT_THETA + e] = seat.z;
-    su[C_LF_ACTIVE + e] = 1u;
+    let i = e * batch.s_h_x + h;
+    sf[batch.c_h_goal_x + i] = seat.x;
+    sf[batch.c_h_goal_y + i] = seat.y;
+    su[batch.c_h_forming + i] = FORMING_LAPTOP;
+    su[batch.c_h_policy + i] = POLICY_ORCA;
+    su[batch.c_lf_human + e] = h;
+    su[batch.c_lf_laptop + e] = l;
+    sf[batch.c_lf_seat_x + e] = seat.x;
+    sf[batch.c_lf_seat_y + e] = seat.y;
+    sf[batch.c_lf_seat_theta + e] = seat.z;
+    su[batch.c_lf_active + e] = 1u;
 }
 
 // Rust `send_to_laptop`.
 fn send_to_laptop(e: u32, h: u32, l: u32) -> bool {
-    let i = e * S_H_X + h;
-    su[C_H_POLICY + i] = POLICY_ORCA;
-    let ll = e * S_L_X + l;
-    let seat = place_seat(sf[C_L_X + ll], sf[C_L_Y + ll], sf[C_L_THETA + ll]);
+    let i = e * batch.s_h_x + h;
+    su[batch.c_h_policy + i] = POLICY_ORCA;
+    let ll = e * batch.s_l_x + l;
+    let seat = place_seat(sf[batch.c_l_x + ll], sf[batch.c_l_y + ll], sf[batch.c_l_theta + ll]);
     if (!spot_free(e, seat.x, seat.y)) {
         return false;
     }
@@ -257,10 +257,10 @@ fn send_to_laptop(e: u32, h: u32, l: u32) -> bool {
 
 // Rust `laptop_formation`.
 fn laptop_formation(e: u32, rng: ptr<function, RngStream>) -> u32 {
-    let lb = e * S_L_USER;
+    let lb = e * batch.s_l_user;
     var laptops: SlotList;
-    for (var l = 0u; l < su[C_N_LAPTOPS + e]; l++) {
-        if (su[C_L_USER + lb + l] == NONE) {
+    for (var l = 0u; l < su[batch.c_n_laptops + e]; l++) {
+        if (su[batch.c_l_user + lb + l] == NONE) {
             laptops.v[laptops.len] = l;
             laptops.len += 1u;
         }
@@ -281,7 +281,7 @@ fn laptop_formation(e: u32, rng: ptr<function, RngStream>) -> u32 {
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u || su[C_DONE + e] != 0u || params.replay != 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u || su[batch.c_done + e] != 0u || params.replay != 0u) {
         return;
     }
     // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
@@ -289,8 +289,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         params.seed_lo,
         params.seed_hi,
         e,
-        su[C_EPISODE + e],
-        rng_stream_id(STREAM_SOCIAL, su[C_TICK + e]),
+        su[batch.c_episode + e],
+        rng_stream_id(STREAM_SOCIAL, su[batch.c_tick + e]),
     );
     // The two dispersals, each followed by the regrouping when it happened (see the header).
     for (var phase = 0u; phase < 2u; phase++) {
@@ -310,7 +310,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             regroup_canonicalize(e);
         }
     }
-    var idle = su[C_CF_ACTIVE + e] == 0u && su[C_LF_ACTIVE + e] == 0u;
+    var idle = su[batch.c_cf_active + e] == 0u && su[batch.c_lf_active + e] == 0u;
     if (idle && params.p_crowd_formation > 0.0 && rng_chance(&rng, params.p_crowd_formation)) {
         let start = crowd_formation(e, &rng);
         if (start == START_STARTED) {
@@ -319,7 +319,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             count_event(e, EV_CROWD_FORMATION_GAVE_UP);
         }
     }
-    idle = su[C_CF_ACTIVE + e] == 0u && su[C_LF_ACTIVE + e] == 0u;
+    idle = su[batch.c_cf_active + e] == 0u && su[batch.c_lf_active + e] == 0u;
     if (idle && params.p_laptop_formation > 0.0 && rng_chance(&rng, params.p_laptop_formation)) {
         let start = laptop_formation(e, &rng);
         if (start == START_STARTED) {

@@ -8,37 +8,37 @@
 
 // Did the ORCA shadow robot collide or arrive at this step (it keeps its first outcome)?
 fn shadow_outcome(e: u32) {
-    if (su[C_SHADOW_COLLIDED + e] != 0u || su[C_SHADOW_REACHED + e] != 0u) {
+    if (su[batch.c_shadow_collided + e] != 0u || su[batch.c_shadow_reached + e] != 0u) {
         return;
     }
-    let x = sf[C_SHADOW_X + e];
-    let y = sf[C_SHADOW_Y + e];
+    let x = sf[batch.c_shadow_x + e];
+    let y = sf[batch.c_shadow_y + e];
     let touch = world_touches(e, Disc(x, y, params.robot_radius));
     if (touch.human || touch.object) {
-        su[C_SHADOW_COLLIDED + e] = 1u;
+        su[batch.c_shadow_collided + e] = 1u;
     }
-    let dx = sf[C_GOAL_X + e] - x;
-    let dy = sf[C_GOAL_Y + e] - y;
+    let dx = sf[batch.c_goal_x + e] - x;
+    let dy = sf[batch.c_goal_y + e] - y;
     if (sqrt(dx * dx + dy * dy) < params.robot_radius + params.goal_radius) {
-        su[C_SHADOW_REACHED + e] = 1u;
-        su[C_SHADOW_REACH_TICK + e] = su[C_TICK + e];
+        su[batch.c_shadow_reached + e] = 1u;
+        su[batch.c_shadow_reach_tick + e] = su[batch.c_tick + e];
     }
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= N_ENVS || su[C_STEPPING + e] == 0u) {
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
-    let x = sf[C_ROBOT_X + e];
-    let y = sf[C_ROBOT_Y + e];
-    let out_of_map = abs(x) > 0.5 * sf[C_MAP_X + e] || abs(y) > 0.5 * sf[C_MAP_Y + e];
-    let dx = sf[C_GOAL_X + e] - x;
-    let dy = sf[C_GOAL_Y + e] - y;
+    let x = sf[batch.c_robot_x + e];
+    let y = sf[batch.c_robot_y + e];
+    let out_of_map = abs(x) > 0.5 * sf[batch.c_map_x + e] || abs(y) > 0.5 * sf[batch.c_map_y + e];
+    let dx = sf[batch.c_goal_x + e] - x;
+    let dy = sf[batch.c_goal_y + e] - y;
     let success = sqrt(dx * dx + dy * dy) < params.robot_radius + params.goal_radius;
     let t = world_touches(e, Disc(x, y, params.robot_radius));
-    let timeout = su[C_TICK + e] > params.episode_length;
+    let timeout = su[batch.c_tick + e] > params.episode_length;
     var flags = array<bool, 7>(false, false, false, false, false, false, false);
     if (out_of_map) {
         flags[INFO_OUT_OF_MAP] = true;
@@ -52,14 +52,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         flags[INFO_TIMEOUT] = true;
     }
     flags[INFO_COLLISION_WALL] = t.wall;
-    let row = CO_INFO + e * SO_INFO;
+    let row = batch.co_info + e * batch.so_info;
     for (var k = 0u; k < 7u; k++) {
         outf[row + k] = select(0.0, 1.0, flags[k]);
     }
     let terminated = out_of_map || success || t.human || t.object;
     let truncated = !terminated && timeout;
-    outu[CO_TERMINATED + e] = select(0u, 1u, terminated);
-    outu[CO_TRUNCATED + e] = select(0u, 1u, truncated);
-    su[C_DONE + e] = select(0u, 1u, terminated || truncated);
+    outu[batch.co_terminated + e] = select(0u, 1u, terminated);
+    outu[batch.co_truncated + e] = select(0u, 1u, truncated);
+    su[batch.c_done + e] = select(0u, 1u, terminated || truncated);
     shadow_outcome(e);
 }

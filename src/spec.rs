@@ -78,7 +78,7 @@ pub mod one_hot {
 }
 
 /// Where each part of an environment's observation lives.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct ObsLayout {
     /// Floats in the robot record: [`ROBOT_RECORD`] (9), 12 with the robot velocity, or
     /// [`WORLD_ROBOT_RECORD`] (16) in the world frame.

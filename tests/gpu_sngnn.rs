@@ -1,4 +1,4 @@
-//! SNGNN-v2 on the device (`sngnn::gpu::GpuNet`, `shaders/sngnn.wgsl`) against the CPU's
+//! SNGNN-v2 on the device (`backend::gpu::GpuNet`, `shaders/sngnn.wgsl`) against the CPU's
 //! tables pass (`Tables::forward`): the recorded graphs of the golden SNGNN episodes with the
 //! real weights (also within 1e-4 of 0.1.1's recorded outputs), and random graphs with random
 //! weights of the real shapes. On lavapipe the device sums in the CPU's order with the same
@@ -14,7 +14,7 @@ mod golden;
 use common::sngnn::{GOLDEN, GOLDEN_TOLERANCE, Rand, random_graph, random_weights};
 use socnav::Config;
 use socnav::backend::gpu::GpuDevice;
-use socnav::sngnn::gpu::GpuNet;
+use socnav::backend::gpu::GpuNet;
 use socnav::sngnn::model::{Model, Output, Scratch};
 use socnav::sngnn::packed::PackedLayout;
 use socnav::sngnn::pieces::Tables;

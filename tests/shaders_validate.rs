@@ -112,11 +112,11 @@ fn validate_assembled(path: &str) -> Result<naga::Module, String> {
         socnav::EnvOptions::default(),
     )
     .expect("batch");
+    let columns = env.state().columns();
     let prelude = wgsl::prelude(
-        4,
-        &env.state().columns(),
+        &columns,
         &env.outputs().columns(),
-        env.layout(),
+        &wgsl::SizeClasses::of(&columns),
     );
     let src = wgsl::assemble(path, &prelude)?;
     validate_source(&src, &format!("{path} (assembled)"))
@@ -124,22 +124,20 @@ fn validate_assembled(path: &str) -> Result<naga::Module, String> {
 
 /// An SNGNN shader as `GpuStages::with_sngnn_graphs` assembles it for experiment 2 with the
 /// SNGNN-v2 reward: the prelude of a state with the frame history (built without `BatchEnv`,
-/// which would need the weights), then the SNGNN part for the config's graph capacity.
+/// which would need the weights), then the SNGNN part.
 fn validate_assembled_sngnn(path: &str) -> Result<naga::Module, String> {
     let config = socnav::Config::from_name_or_path("exp2_sngnn").expect("exp2_sngnn");
     let caps = socnav::state::Caps::from_config(&config);
     let state = socnav::state::BatchState::new(4, caps);
     let layout = socnav::spec::ObsLayout::new(&caps, &config.observation);
     let outputs = socnav::outputs::Outputs::new(4, layout);
-    let mut prelude = wgsl::prelude(4, &state.columns(), &outputs.columns(), &layout);
-    let graphs = socnav::sngnn::graph::capacity(&config);
-    // A time step of 0.1 s, whose gaps need the per-tick table.
-    let gaps = socnav::sngnn::history::TickGaps::new(0.1, config.episode.length).expect("gaps");
-    assert!(
-        !gaps.extra.is_empty(),
-        "dt = 0.1 s has ticks that need one more"
+    let columns = state.columns();
+    let mut prelude = wgsl::prelude(
+        &columns,
+        &outputs.columns(),
+        &wgsl::SizeClasses::of(&columns),
     );
-    prelude.push_str(&wgsl::sngnn_prelude(&caps, &graphs, &gaps));
+    prelude.push_str(&wgsl::sngnn_prelude());
     let src = wgsl::assemble(path, &prelude)?;
     validate_source(&src, &format!("{path} (assembled, SNGNN)"))
 }
@@ -548,4 +546,27 @@ fn wgsl_twins_define_every_public_item() {
             "rng.wgsl lacks rng_{twin} (twin of {f})"
         );
     }
+}
+
+/// The preludes are the only config-dependent shader text, and the size classes put every
+/// shipped config but `stress` into one prelude, so that a process (or CI) that runs them all
+/// compiles each stage shader twice, not once per config (or batch size).
+#[test]
+fn shipped_configs_share_preludes() {
+    let mut preludes = std::collections::BTreeMap::<String, Vec<String>>::new();
+    for name in socnav::Config::shipped_names() {
+        let config = socnav::Config::from_name_or_path(name).expect("a shipped config");
+        let caps = socnav::state::Caps::from_config(&config);
+        let state = socnav::state::BatchState::new(1, caps);
+        let layout = socnav::spec::ObsLayout::new(&caps, &config.observation);
+        let outputs = socnav::outputs::Outputs::new(1, layout);
+        let columns = state.columns();
+        let classes = wgsl::SizeClasses::of(&columns);
+        let prelude = wgsl::prelude(&columns, &outputs.columns(), &classes);
+        preludes.entry(prelude).or_default().push(name.to_owned());
+    }
+    let mut groups: Vec<Vec<String>> = preludes.into_values().collect();
+    groups.sort_by_key(Vec::len);
+    assert_eq!(groups.len(), 2, "configs by prelude: {groups:?}");
+    assert_eq!(groups[0], ["stress"], "configs by prelude: {groups:?}");
 }

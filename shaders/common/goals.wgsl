@@ -15,8 +15,8 @@ struct GoalSample {
 
 // Rust `world::blocker_rect`: spawn blocker b (local) of environment e.
 fn world_blocker_rect(e: u32, b: u32) -> Rect {
-    let i = e * S_B_X + b;
-    return geo_rect_new(sf[C_B_X + i], sf[C_B_Y + i], sf[C_B_THETA + i], sf[C_B_LENGTH + i], sf[C_B_WIDTH + i]);
+    let i = e * batch.s_b_x + b;
+    return geo_rect_new(sf[batch.c_b_x + i], sf[batch.c_b_y + i], sf[batch.c_b_theta + i], sf[batch.c_b_length + i], sf[batch.c_b_width + i]);
 }
 
 // Rust `world::blocks_goal` for `shape = Shape::Disc(d)`: does d intersect the robot, a human, a
@@ -24,25 +24,25 @@ fn world_blocker_rect(e: u32, b: u32) -> Rect {
 // below: these run inside the samplers' loops, and Mesa 22.3's lowering of early returns from
 // inlined functions nested in loops cut the callers' loops short on lavapipe.)
 fn world_blocks_goal(e: u32, d: Disc) -> bool {
-    var hit = geo_disc_disc(Disc(sf[C_ROBOT_X + e], sf[C_ROBOT_Y + e], params.robot_radius), d);
-    let hb = e * S_H_X;
-    for (var i = hb; i < hb + su[C_N_HUMANS + e] && !hit; i++) {
-        hit = geo_disc_disc(Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius), d);
+    var hit = geo_disc_disc(Disc(sf[batch.c_robot_x + e], sf[batch.c_robot_y + e], params.robot_radius), d);
+    let hb = e * batch.s_h_x;
+    for (var i = hb; i < hb + su[batch.c_n_humans + e] && !hit; i++) {
+        hit = geo_disc_disc(Disc(sf[batch.c_h_x + i], sf[batch.c_h_y + i], params.human_radius), d);
     }
-    let pb = e * S_P_X;
-    for (var i = pb; i < pb + su[C_N_PLANTS + e] && !hit; i++) {
-        hit = geo_disc_disc(Disc(sf[C_P_X + i], sf[C_P_Y + i], params.plant_radius), d);
+    let pb = e * batch.s_p_x;
+    for (var i = pb; i < pb + su[batch.c_n_plants + e] && !hit; i++) {
+        hit = geo_disc_disc(Disc(sf[batch.c_p_x + i], sf[batch.c_p_y + i], params.plant_radius), d);
     }
-    for (var w = 0u; w < su[C_N_WALLS + e] && !hit; w++) {
+    for (var w = 0u; w < su[batch.c_n_walls + e] && !hit; w++) {
         hit = geo_disc_rect(d, world_wall_rect(e, w));
     }
-    for (var k = 0u; k < su[C_N_TABLES + e] && !hit; k++) {
+    for (var k = 0u; k < su[batch.c_n_tables + e] && !hit; k++) {
         hit = geo_disc_rect(d, world_table_rect(e, k));
     }
-    for (var k = 0u; k < su[C_N_LAPTOPS + e] && !hit; k++) {
+    for (var k = 0u; k < su[batch.c_n_laptops + e] && !hit; k++) {
         hit = geo_disc_rect(d, world_laptop_rect(e, k));
     }
-    for (var b = 0u; b < su[C_N_BLOCKERS + e] && !hit; b++) {
+    for (var b = 0u; b < su[batch.c_n_blockers + e] && !hit; b++) {
         hit = geo_disc_rect(d, world_blocker_rect(e, b));
     }
     return hit;
@@ -51,16 +51,16 @@ fn world_blocks_goal(e: u32, d: Disc) -> bool {
 // Rust `touches_goal`: does d touch a current goal (the robot's, a lone human's, a moving
 // group's)?
 fn goals_touches_goal(e: u32, d: Disc) -> bool {
-    var hit = geo_disc_disc(d, Disc(sf[C_GOAL_X + e], sf[C_GOAL_Y + e], params.goal_radius));
-    let hb = e * S_H_X;
-    let n_lone = su[C_N_STATIC + e] + su[C_N_DYNAMIC + e];
+    var hit = geo_disc_disc(d, Disc(sf[batch.c_goal_x + e], sf[batch.c_goal_y + e], params.goal_radius));
+    let hb = e * batch.s_h_x;
+    let n_lone = su[batch.c_n_static + e] + su[batch.c_n_dynamic + e];
     for (var i = hb; i < hb + n_lone && !hit; i++) {
-        hit = geo_disc_disc(d, Disc(sf[C_H_GOAL_X + i], sf[C_H_GOAL_Y + i], params.human_goal_radius));
+        hit = geo_disc_disc(d, Disc(sf[batch.c_h_goal_x + i], sf[batch.c_h_goal_y + i], params.human_goal_radius));
     }
-    let gb = e * S_G_X;
-    for (var g = gb; g < gb + su[C_N_GROUPS + e] && !hit; g++) {
-        hit = su[C_G_KIND + g] == GROUP_MOVING
-            && geo_disc_disc(d, Disc(sf[C_G_GOAL_X + g], sf[C_G_GOAL_Y + g], params.group_goal_radius));
+    let gb = e * batch.s_g_x;
+    for (var g = gb; g < gb + su[batch.c_n_groups + e] && !hit; g++) {
+        hit = su[batch.c_g_kind + g] == GROUP_MOVING
+            && geo_disc_disc(d, Disc(sf[batch.c_g_goal_x + g], sf[batch.c_g_goal_y + g], params.group_goal_radius));
     }
     return hit;
 }
@@ -68,7 +68,7 @@ fn goals_touches_goal(e: u32, d: Disc) -> bool {
 // Rust `sample_goal`: a goal disc of radius r free of every entity and every current goal, or
 // none after PLACE_MAX_TRIES tries.
 fn goals_sample_goal(e: u32, rng: ptr<function, RngStream>, r: f32) -> GoalSample {
-    let area = place_sampling_box(sf[C_MAP_X + e], sf[C_MAP_Y + e]);
+    let area = place_sampling_box(sf[batch.c_map_x + e], sf[batch.c_map_y + e]);
     var out = GoalSample(false, Disc(0.0, 0.0, r));
     for (var t = 0u; t < PLACE_MAX_TRIES && !out.found; t++) {
         let p = place_box_point(area, rng);

@@ -13,17 +13,17 @@ fn speed(x: f32, y: f32) -> f32 {
 // the command as the previous one.
 fn command_acceleration(e: u32) -> vec2<f32> {
     return vec2<f32>(
-        (sf[C_ROBOT_VX + e] - sf[C_M_PREV_VX + e]) / params.dt,
-        (sf[C_ROBOT_VY + e] - sf[C_M_PREV_VY + e]) / params.dt,
+        (sf[batch.c_robot_vx + e] - sf[batch.c_m_prev_vx + e]) / params.dt,
+        (sf[batch.c_robot_vy + e] - sf[batch.c_m_prev_vy + e]) / params.dt,
     );
 }
 
 // Smallest robot-human centre distance (m); +inf without humans.
 fn min_human_distance(e: u32) -> f32 {
-    let hb = e * S_H_X;
+    let hb = e * batch.s_h_x;
     var best = math_inf();
-    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
-        best = min(best, speed(sf[C_H_X + i] - sf[C_ROBOT_X + e], sf[C_H_Y + i] - sf[C_ROBOT_Y + e]));
+    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+        best = min(best, speed(sf[batch.c_h_x + i] - sf[batch.c_robot_x + e], sf[batch.c_h_y + i] - sf[batch.c_robot_y + e]));
     }
     return best;
 }
@@ -31,25 +31,25 @@ fn min_human_distance(e: u32) -> f32 {
 // Minimum and mean distance (m) from the robot centre to plants (surface), tables and walls
 // (nearest point); laptops excluded, robot radius not subtracted. (+inf, NaN) without obstacles.
 fn obstacle_distances(e: u32) -> vec2<f32> {
-    let rx = sf[C_ROBOT_X + e];
-    let ry = sf[C_ROBOT_Y + e];
+    let rx = sf[batch.c_robot_x + e];
+    let ry = sf[batch.c_robot_y + e];
     var lo = math_inf();
     var sum = 0.0;
     var n = 0u;
-    let pb = e * S_P_X;
-    for (var i = pb; i < pb + su[C_N_PLANTS + e]; i++) {
-        let d = speed(sf[C_P_X + i] - rx, sf[C_P_Y + i] - ry) - params.plant_radius;
+    let pb = e * batch.s_p_x;
+    for (var i = pb; i < pb + su[batch.c_n_plants + e]; i++) {
+        let d = speed(sf[batch.c_p_x + i] - rx, sf[batch.c_p_y + i] - ry) - params.plant_radius;
         lo = min(lo, d);
         sum += d;
         n += 1u;
     }
-    for (var t = 0u; t < su[C_N_TABLES + e]; t++) {
+    for (var t = 0u; t < su[batch.c_n_tables + e]; t++) {
         let d = sqrt(geo_rect_distance_sq(world_table_rect(e, t), rx, ry));
         lo = min(lo, d);
         sum += d;
         n += 1u;
     }
-    for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
+    for (var w = 0u; w < su[batch.c_n_walls + e]; w++) {
         let d = sqrt(geo_rect_distance_sq(world_wall_rect(e, w), rx, ry));
         lo = min(lo, d);
         sum += d;

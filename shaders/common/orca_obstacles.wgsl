@@ -35,9 +35,9 @@
 // * `orca_obstacles_box_distance_sq(pos: vec2<f32>, v: array<vec2<f32>, 4>) -> f32`: Rust
 //   `box_distance_sq` (squared distance to the polygon's bounding box, 0 inside).
 //
-// Capacities and overflow. The processed obs holds ORCA_OBSTACLES_CAP = S_OV_X vertices, the
+// Capacities and overflow. The processed obs holds orca_obstacles_cap() = batch.s_ov_x vertices, the
 // per-environment capacity of the `ov_*` columns (Rust `store` asserts the same bound); a list
-// holds S_OV_X / 8 polygons (`Caps` gives every polygon room for 8 processed vertices: its 4
+// holds batch.s_ov_x / 8 polygons (`Caps` gives every polygon room for 8 processed vertices: its 4
 // and as many split vertices, so an environment never has more). Large private arrays make
 // llvmpipe's compile time grow quickly: keep one call site of `orca_obstacles_process` per
 // shader where possible (Mesa inlines every call). The tree
@@ -45,14 +45,14 @@
 // and right lists, and those are pushed (right first), so the left subtree is built completely
 // before the right one, as in the recursive Rust. The lists on the stack hold distinct vertex
 // ids (each edge goes to one side; a split edge's two pieces have two ids), so the stack never
-// holds more than `len` <= S_OV_X ids or lists: its arrays of S_OV_X cannot overflow unless the
-// vertex obs does. Where Rust panics (a processed obs larger than S_OV_X; a degenerate or
+// holds more than `len` <= batch.s_ov_x ids or lists: its arrays of batch.s_ov_x cannot overflow unless the
+// vertex obs does. Where Rust panics (a processed obs larger than batch.s_ov_x; a degenerate or
 // non-finite polygon, which `validate_polygons` rejects), the obs gets a non-zero `overflow`
 // (ORCA_OVERFLOW_OBSTACLE_VERTICES, ORCA_OBSTACLES_INVALID) and processing stops; a caller of
 // `orca_obstacles_process` must treat it as an error (an ORCA result that ORs it in is NaN by
 // common/orca.wgsl's convention). `orca_obstacles_rebuild_if_dirty` then poisons the columns:
-// every one of the S_OV_X vertices gets NaN coordinates and directions (`n_obstacle_vertices` =
-// S_OV_X), and `obstacles_dirty` is left at ORCA_OBSTACLES_FAILED (2) instead of 0, so the host
+// every one of the batch.s_ov_x vertices gets NaN coordinates and directions (`n_obstacle_vertices` =
+// batch.s_ov_x), and `obstacles_dirty` is left at ORCA_OBSTACLES_FAILED (2) instead of 0, so the host
 // can see it. Neither can happen under the shipped capacities (the CPU would have panicked).
 //
 // Loop budget on lavapipe: llvmpipe stops every loop of an invocation after 65535 loop
@@ -60,8 +60,21 @@
 // (fewer with RVO2's early exit); the shipped configs' rebuilds (tests/gpu_social.rs, stress
 // included) stay within it, but a much larger obstacle set could exceed it there.
 
-const ORCA_OBSTACLES_CAP: u32 = max(S_OV_X, 1u);
-const ORCA_OBSTACLES_MAX_POLYGONS: u32 = max(S_OV_X / 8u, 1u);
+// Sizes of the arrays below: compile-time size classes (backend::wgsl::SizeClasses), at least
+// the batch's capacities, which every count is compared with (`orca_obstacles_cap`,
+// `orca_obstacles_max_polygons`).
+const ORCA_OBSTACLES_ARRAY: u32 = ARRAY_OBSTACLE_VERTICES;
+const ORCA_OBSTACLES_POLYGONS_ARRAY: u32 = ARRAY_OBSTACLE_VERTICES / 8u;
+
+// Obstacle vertices of one environment (at least 1).
+fn orca_obstacles_cap() -> u32 {
+    return max(batch.s_ov_x, 1u);
+}
+
+// Polygons of one environment (at least 1).
+fn orca_obstacles_max_polygons() -> u32 {
+    return max(batch.s_ov_x / 8u, 1u);
+}
 // `overflow` bit of a polygon list the Rust scenario would reject (see the header).
 const ORCA_OBSTACLES_INVALID: u32 = 16u;
 // `obstacles_dirty` after a rebuild that failed (see the header).
@@ -81,18 +94,18 @@ struct OrcaObstaclePolygon {
 struct OrcaObstaclePolygons {
     len: u32,
     overflow: u32,
-    v: array<array<vec2<f32>, 4>, ORCA_OBSTACLES_MAX_POLYGONS>,
+    v: array<array<vec2<f32>, 4>, ORCA_OBSTACLES_POLYGONS_ARRAY>,
 }
 
 // Rust `ObstacleSet`'s vertex columns (the tree itself is not kept: nothing reads it).
 struct OrcaObstacleSet {
     len: u32,
     overflow: u32,
-    point: array<vec2<f32>, ORCA_OBSTACLES_CAP>,
-    dir: array<vec2<f32>, ORCA_OBSTACLES_CAP>,
-    next: array<u32, ORCA_OBSTACLES_CAP>,
-    prev: array<u32, ORCA_OBSTACLES_CAP>,
-    convex: array<u32, ORCA_OBSTACLES_CAP>,
+    point: array<vec2<f32>, ORCA_OBSTACLES_ARRAY>,
+    dir: array<vec2<f32>, ORCA_OBSTACLES_ARRAY>,
+    next: array<u32, ORCA_OBSTACLES_ARRAY>,
+    prev: array<u32, ORCA_OBSTACLES_ARRAY>,
+    convex: array<u32, ORCA_OBSTACLES_ARRAY>,
 }
 
 // ---- orca_obstacles.rs: the polygons ------------------------------------------------------------
@@ -139,19 +152,19 @@ fn orca_obstacles_square(x: f32, y: f32, h: f32) -> array<vec2<f32>, 4> {
 
 // Rust `perception::laptop_use_disc` for global laptop-user slot u of environment e.
 fn orca_obstacles_laptop_use_disc(e: u32, u: u32) -> Disc {
-    let h = e * S_H_X + su[C_LU_HUMAN + u];
-    let l = e * S_L_X + su[C_LU_LAPTOP + u];
+    let h = e * batch.s_h_x + su[batch.c_lu_human + u];
+    let l = e * batch.s_l_x + su[batch.c_lu_laptop + u];
     return Disc(
-        0.5 * (sf[C_L_X + l] + sf[C_H_X + h]),
-        0.5 * (sf[C_L_Y + l] + sf[C_H_Y + h]),
+        0.5 * (sf[batch.c_l_x + l] + sf[batch.c_h_x + h]),
+        0.5 * (sf[batch.c_l_y + l] + sf[batch.c_h_y + h]),
         0.5 * (params.laptop_width + params.human_laptop_distance),
     );
 }
 
 // The number of raw indices of `orca_obstacles_polygon` for environment e.
 fn orca_obstacles_raw_count(e: u32) -> u32 {
-    return su[C_N_TABLES + e] + su[C_N_LAPTOPS + e] + su[C_N_PLANTS + e] + su[C_N_WALLS + e]
-        + su[C_N_LAPTOP_USERS + e] + su[C_N_GROUPS + e];
+    return su[batch.c_n_tables + e] + su[batch.c_n_laptops + e] + su[batch.c_n_plants + e] + su[batch.c_n_walls + e]
+        + su[batch.c_n_laptop_users + e] + su[batch.c_n_groups + e];
 }
 
 fn orca_obstacles_rect_polygon(r: Rect) -> OrcaObstaclePolygon {
@@ -166,55 +179,55 @@ fn orca_obstacles_disc_polygon(d: Disc, v: array<vec2<f32>, 4>) -> OrcaObstacleP
 fn orca_obstacles_polygon(e: u32, k_in: u32) -> OrcaObstaclePolygon {
     var none: OrcaObstaclePolygon;
     var k = k_in;
-    let n_tables = su[C_N_TABLES + e];
+    let n_tables = su[batch.c_n_tables + e];
     if (k < n_tables) {
         return orca_obstacles_rect_polygon(world_table_rect(e, k));
     }
     k -= n_tables;
-    let n_laptops = su[C_N_LAPTOPS + e];
+    let n_laptops = su[batch.c_n_laptops + e];
     if (k < n_laptops) {
-        if (su[C_L_USER + e * S_L_X + k] == NONE) {
+        if (su[batch.c_l_user + e * batch.s_l_x + k] == NONE) {
             return orca_obstacles_rect_polygon(world_laptop_rect(e, k));
         }
         return none;
     }
     k -= n_laptops;
-    let n_plants = su[C_N_PLANTS + e];
+    let n_plants = su[batch.c_n_plants + e];
     if (k < n_plants) {
-        let i = e * S_P_X + k;
-        let x = sf[C_P_X + i];
-        let y = sf[C_P_Y + i];
+        let i = e * batch.s_p_x + k;
+        let x = sf[batch.c_p_x + i];
+        let y = sf[batch.c_p_y + i];
         let r = params.plant_radius;
         return orca_obstacles_disc_polygon(Disc(x, y, r), orca_obstacles_square(x, y, r));
     }
     k -= n_plants;
-    let n_walls = su[C_N_WALLS + e];
+    let n_walls = su[batch.c_n_walls + e];
     if (k < n_walls) {
         return orca_obstacles_rect_polygon(world_wall_rect(e, k));
     }
     k -= n_walls;
-    let n_users = su[C_N_LAPTOP_USERS + e];
+    let n_users = su[batch.c_n_laptop_users + e];
     if (k < n_users) {
-        let u = e * S_LU_HUMAN + k;
-        let h = e * S_H_X + su[C_LU_HUMAN + u];
+        let u = e * batch.s_lu_human + k;
+        let h = e * batch.s_h_x + su[batch.c_lu_human + u];
         return orca_obstacles_disc_polygon(
             orca_obstacles_laptop_use_disc(e, u),
-            orca_obstacles_square(sf[C_H_X + h], sf[C_H_Y + h], params.laptop_user_half_side),
+            orca_obstacles_square(sf[batch.c_h_x + h], sf[batch.c_h_y + h], params.laptop_user_half_side),
         );
     }
     k -= n_users;
-    let g = e * S_G_X + k;
-    if (k < su[C_N_GROUPS + e] && su[C_G_KIND + g] == GROUP_STANDING) {
+    let g = e * batch.s_g_x + k;
+    if (k < su[batch.c_n_groups + e] && su[batch.c_g_kind + g] == GROUP_STANDING) {
         // Rust `perception::group_disc`.
-        let d = Disc(sf[C_G_X + g], sf[C_G_Y + g], params.group_radius);
-        return orca_obstacles_disc_polygon(d, orca_obstacles_square(sf[C_G_X + g], sf[C_G_Y + g], params.group_radius));
+        let d = Disc(sf[batch.c_g_x + g], sf[batch.c_g_y + g], params.group_radius);
+        return orca_obstacles_disc_polygon(d, orca_obstacles_square(sf[batch.c_g_x + g], sf[batch.c_g_y + g], params.group_radius));
     }
     return none;
 }
 
-// Appends polygon `v` to `list`; past ORCA_OBSTACLES_MAX_POLYGONS it flags the overflow.
+// Appends polygon `v` to `list`; past `orca_obstacles_max_polygons()` it flags the overflow.
 fn orca_obstacles_push(list: ptr<function, OrcaObstaclePolygons>, v: array<vec2<f32>, 4>) {
-    if ((*list).len == ORCA_OBSTACLES_MAX_POLYGONS) {
+    if ((*list).len == orca_obstacles_max_polygons()) {
         (*list).overflow |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
         return;
     }
@@ -273,7 +286,7 @@ fn orca_obstacles_push_vertex(
     convex: u32,
 ) -> bool {
     let i = (*obs).len;
-    if (i == ORCA_OBSTACLES_CAP) {
+    if (i == orca_obstacles_cap()) {
         (*obs).overflow |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
         return false;
     }
@@ -340,7 +353,7 @@ fn orca_obstacles_key_less(a0: u32, a1: u32, b0: u32, b1: u32) -> bool {
 // Rust `choose_split` over the list `arena[start..start + n]`: (position, L, R).
 fn orca_obstacles_choose_split(
     obs: ptr<function, OrcaObstacleSet>,
-    arena: ptr<function, array<u32, ORCA_OBSTACLES_CAP>>,
+    arena: ptr<function, array<u32, ORCA_OBSTACLES_ARRAY>>,
     start: u32,
     n: u32,
 ) -> vec3<u32> {
@@ -419,9 +432,9 @@ fn orca_obstacles_process(polygons: ptr<function, OrcaObstaclePolygons>, obs: pt
 
     // `build_node` from the root list of every vertex, with an explicit stack of edge lists
     // (`arena[..end]`, list lengths in `lens[..depth]`, the top list last).
-    var arena: array<u32, ORCA_OBSTACLES_CAP>;
-    var lens: array<u32, ORCA_OBSTACLES_CAP>;
-    var tmp: array<u32, ORCA_OBSTACLES_CAP>;
+    var arena: array<u32, ORCA_OBSTACLES_ARRAY>;
+    var lens: array<u32, ORCA_OBSTACLES_ARRAY>;
+    var tmp: array<u32, ORCA_OBSTACLES_ARRAY>;
     let n = (*obs).len;
     for (var i = 0u; i < n; i++) {
         arena[i] = i;
@@ -481,7 +494,7 @@ fn orca_obstacles_process(polygons: ptr<function, OrcaObstaclePolygons>, obs: pt
         }
         // Pop this list, push the right list, then the left one (built next, completely).
         // Cannot overflow (see the header); checked all the same.
-        if (lc != n_left || rc != n_right || start + n_left + n_right > ORCA_OBSTACLES_CAP) {
+        if (lc != n_left || rc != n_right || start + n_left + n_right > orca_obstacles_cap()) {
             (*obs).overflow |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
             return;
         }
@@ -525,36 +538,36 @@ fn orca_obstacles_gather(e: u32, list: ptr<function, OrcaObstaclePolygons>) {
 
 // Rust `store` (a obs with an overflow poisons the columns instead; see the header).
 fn orca_obstacles_store(e: u32, obs: ptr<function, OrcaObstacleSet>) {
-    let b = e * S_OV_X;
+    let b = e * batch.s_ov_x;
     if ((*obs).overflow != 0u) {
-        for (var k = 0u; k < S_OV_X; k++) {
-            sf[C_OV_X + b + k] = math_nan();
-            sf[C_OV_Y + b + k] = math_nan();
-            sf[C_OV_DIR_X + b + k] = math_nan();
-            sf[C_OV_DIR_Y + b + k] = math_nan();
-            su[C_OV_NEXT + b + k] = (k + 1u) % ORCA_OBSTACLES_CAP;
-            su[C_OV_PREV + b + k] = (k + ORCA_OBSTACLES_CAP - 1u) % ORCA_OBSTACLES_CAP;
-            su[C_OV_CONVEX + b + k] = 1u;
+        for (var k = 0u; k < batch.s_ov_x; k++) {
+            sf[batch.c_ov_x + b + k] = math_nan();
+            sf[batch.c_ov_y + b + k] = math_nan();
+            sf[batch.c_ov_dir_x + b + k] = math_nan();
+            sf[batch.c_ov_dir_y + b + k] = math_nan();
+            su[batch.c_ov_next + b + k] = (k + 1u) % orca_obstacles_cap();
+            su[batch.c_ov_prev + b + k] = (k + orca_obstacles_cap() - 1u) % orca_obstacles_cap();
+            su[batch.c_ov_convex + b + k] = 1u;
         }
-        su[C_N_OBSTACLE_VERTICES + e] = S_OV_X;
+        su[batch.c_n_obstacle_vertices + e] = batch.s_ov_x;
         return;
     }
     let n = (*obs).len;
     for (var k = 0u; k < n; k++) {
-        sf[C_OV_X + b + k] = (*obs).point[k].x;
-        sf[C_OV_Y + b + k] = (*obs).point[k].y;
-        sf[C_OV_DIR_X + b + k] = (*obs).dir[k].x;
-        sf[C_OV_DIR_Y + b + k] = (*obs).dir[k].y;
-        su[C_OV_NEXT + b + k] = (*obs).next[k];
-        su[C_OV_PREV + b + k] = (*obs).prev[k];
-        su[C_OV_CONVEX + b + k] = (*obs).convex[k];
+        sf[batch.c_ov_x + b + k] = (*obs).point[k].x;
+        sf[batch.c_ov_y + b + k] = (*obs).point[k].y;
+        sf[batch.c_ov_dir_x + b + k] = (*obs).dir[k].x;
+        sf[batch.c_ov_dir_y + b + k] = (*obs).dir[k].y;
+        su[batch.c_ov_next + b + k] = (*obs).next[k];
+        su[batch.c_ov_prev + b + k] = (*obs).prev[k];
+        su[batch.c_ov_convex + b + k] = (*obs).convex[k];
     }
-    su[C_N_OBSTACLE_VERTICES + e] = n;
+    su[batch.c_n_obstacle_vertices + e] = n;
 }
 
 // Rust `rebuild_if_dirty` (see the header).
 fn orca_obstacles_rebuild_if_dirty(e: u32) {
-    if (su[C_OBSTACLES_DIRTY + e] == 0u) {
+    if (su[batch.c_obstacles_dirty + e] == 0u) {
         return;
     }
     var polygons: OrcaObstaclePolygons;
@@ -563,8 +576,8 @@ fn orca_obstacles_rebuild_if_dirty(e: u32) {
     orca_obstacles_process(&polygons, &obs);
     orca_obstacles_store(e, &obs);
     if (obs.overflow != 0u) {
-        su[C_OBSTACLES_DIRTY + e] = ORCA_OBSTACLES_FAILED;
+        su[batch.c_obstacles_dirty + e] = ORCA_OBSTACLES_FAILED;
     } else {
-        su[C_OBSTACLES_DIRTY + e] = 0u;
+        su[batch.c_obstacles_dirty + e] = 0u;
     }
 }

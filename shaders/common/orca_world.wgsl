@@ -22,7 +22,7 @@
 // when every obstacle polygon is seen, none when none of those seen comes within the obstacle
 // range, else the visible polygons processed afresh (`orca_world_visible`, then
 // common/orca_obstacles.wgsl's `orca_obstacles_process`, RVO2's `processObstacles`). A processed
-// set that would overflow its capacity (S_OV_X vertices, as the `ov_*` columns) makes the
+// set that would overflow its capacity (batch.s_ov_x vertices, as the `ov_*` columns) makes the
 // velocity NaN, like the list overflows below.
 //
 // Candidate identity. Rust collects the candidates into a list and selects by list index; the
@@ -85,11 +85,11 @@ fn orca_world_agent(e: u32, pos: vec2<f32>, vel: vec2<f32>, pref: vec2<f32>, rad
         vel,
         pref,
         radius,
-        sf[C_ORCA_MAX_SPEED + e],
-        sf[C_ORCA_NEIGHBOR_DIST + e],
-        su[C_N_HUMANS + e],
-        sf[C_ORCA_TIME_HORIZON + e],
-        sf[C_ORCA_TIME_HORIZON_OBST + e],
+        sf[batch.c_orca_max_speed + e],
+        sf[batch.c_orca_neighbor_dist + e],
+        su[batch.c_n_humans + e],
+        sf[batch.c_orca_time_horizon + e],
+        sf[batch.c_orca_time_horizon_obst + e],
     );
 }
 
@@ -102,21 +102,21 @@ fn orca_world_candidate(e: u32, tag: u32) -> OrcaNeighbor {
     var vel = vec2<f32>(0.0, 0.0);
     if (kind == ORCA_WORLD_HUMAN) {
         if (actual) {
-            vel = vec2<f32>(sf[C_H_VX + slot], sf[C_H_VY + slot]);
+            vel = vec2<f32>(sf[batch.c_h_vx + slot], sf[batch.c_h_vy + slot]);
         }
-        return OrcaNeighbor(vec2<f32>(sf[C_H_X + slot], sf[C_H_Y + slot]), vel, params.human_radius);
+        return OrcaNeighbor(vec2<f32>(sf[batch.c_h_x + slot], sf[batch.c_h_y + slot]), vel, params.human_radius);
     }
     if (kind == ORCA_WORLD_ROBOT) {
         // Rust `reward::robot_world_velocity`.
         if (actual) {
-            vel = vec2<f32>(sf[C_ROBOT_WVX + e], sf[C_ROBOT_WVY + e]);
+            vel = vec2<f32>(sf[batch.c_robot_wvx + e], sf[batch.c_robot_wvy + e]);
         }
-        return OrcaNeighbor(vec2<f32>(sf[C_ROBOT_X + e], sf[C_ROBOT_Y + e]), vel, params.robot_radius);
+        return OrcaNeighbor(vec2<f32>(sf[batch.c_robot_x + e], sf[batch.c_robot_y + e]), vel, params.robot_radius);
     }
     if (actual) {
-        vel = vec2<f32>(sf[C_G_VX + slot], sf[C_G_VY + slot]);
+        vel = vec2<f32>(sf[batch.c_g_vx + slot], sf[batch.c_g_vy + slot]);
     }
-    return OrcaNeighbor(vec2<f32>(sf[C_G_X + slot], sf[C_G_Y + slot]), vel, orca_world_group_agent_radius());
+    return OrcaNeighbor(vec2<f32>(sf[batch.c_g_x + slot], sf[batch.c_g_y + slot]), vel, orca_world_group_agent_radius());
 }
 
 // Rust `gather` then `select`: RVO2's neighbour selection for `first` over the other agents in
@@ -124,41 +124,41 @@ fn orca_world_candidate(e: u32, tag: u32) -> OrcaNeighbor {
 // `list` must be empty.
 fn orca_world_select(e: u32, first: OrcaAgent, others: OrcaWorldOthers, list: ptr<function, OrcaAgentNeighbors>) {
     var range_sq = orca_agent_range_sq(first.neighbor_dist);
-    let hb = e * S_H_X;
-    let n_lone = su[C_N_STATIC + e] + su[C_N_DYNAMIC + e];
+    let hb = e * batch.s_h_x;
+    let n_lone = su[batch.c_n_static + e] + su[batch.c_n_dynamic + e];
     for (var i = hb; i < hb + n_lone; i++) {
         if (i == others.skip_human || !perception_sees_human(others.view, e, i)) {
             continue;
         }
-        let pos = vec2<f32>(sf[C_H_X + i], sf[C_H_Y + i]);
+        let pos = vec2<f32>(sf[batch.c_h_x + i], sf[batch.c_h_y + i]);
         orca_agent_neighbor_candidate(list, first.max_neighbors, first.pos, ORCA_WORLD_HUMAN | i, pos, &range_sq);
     }
     if (others.robot) {
-        let pos = vec2<f32>(sf[C_ROBOT_X + e], sf[C_ROBOT_Y + e]);
+        let pos = vec2<f32>(sf[batch.c_robot_x + e], sf[batch.c_robot_y + e]);
         orca_agent_neighbor_candidate(list, first.max_neighbors, first.pos, ORCA_WORLD_ROBOT, pos, &range_sq);
     }
-    let gb = e * S_G_X;
-    for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + g] != GROUP_MOVING || g == others.skip_group
+    let gb = e * batch.s_g_x;
+    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+        if (su[batch.c_g_kind + g] != GROUP_MOVING || g == others.skip_group
             || !perception_maybe_sees_disc(others.view, perception_group_disc(g))) {
             continue;
         }
-        let pos = vec2<f32>(sf[C_G_X + g], sf[C_G_Y + g]);
+        let pos = vec2<f32>(sf[batch.c_g_x + g], sf[batch.c_g_y + g]);
         orca_agent_neighbor_candidate(list, first.max_neighbors, first.pos, ORCA_WORLD_GROUP | g, pos, &range_sq);
     }
 }
 
 // Processed obstacle vertex `v` (local index) of environment e, as `orca_obstacle_line` reads it.
 fn orca_world_vertex(e: u32, v: u32) -> OrcaVertex {
-    let ob = e * S_OV_X;
+    let ob = e * batch.s_ov_x;
     let g = ob + v;
-    let prev = ob + su[C_OV_PREV + g];
+    let prev = ob + su[batch.c_ov_prev + g];
     return orca_vertex(
         v,
-        vec2<f32>(sf[C_OV_X + g], sf[C_OV_Y + g]),
-        vec2<f32>(sf[C_OV_DIR_X + g], sf[C_OV_DIR_Y + g]),
-        vec2<f32>(sf[C_OV_DIR_X + prev], sf[C_OV_DIR_Y + prev]),
-        su[C_OV_CONVEX + g],
+        vec2<f32>(sf[batch.c_ov_x + g], sf[batch.c_ov_y + g]),
+        vec2<f32>(sf[batch.c_ov_dir_x + g], sf[batch.c_ov_dir_y + g]),
+        vec2<f32>(sf[batch.c_ov_dir_x + prev], sf[batch.c_ov_dir_y + prev]),
+        su[batch.c_ov_convex + g],
     );
 }
 
@@ -223,18 +223,18 @@ fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> Orc
     let range_sq = orca_obstacle_range_sq(first.time_horizon_obst, first.max_speed, first.radius);
     if (obstacles == ORCA_WORLD_OBSTACLES_CACHED) {
         // `obstacle_neighbors` over the environment's vertices, in index order.
-        let ob = e * S_OV_X;
-        for (var v = 0u; v < su[C_N_OBSTACLE_VERTICES + e]; v++) {
+        let ob = e * batch.s_ov_x;
+        for (var v = 0u; v < su[batch.c_n_obstacle_vertices + e]; v++) {
             let g = ob + v;
-            let n = ob + su[C_OV_NEXT + g];
-            let a = vec2<f32>(sf[C_OV_X + g], sf[C_OV_Y + g]);
-            let b = vec2<f32>(sf[C_OV_X + n], sf[C_OV_Y + n]);
+            let n = ob + su[batch.c_ov_next + g];
+            let a = vec2<f32>(sf[batch.c_ov_x + g], sf[batch.c_ov_y + g]);
+            let b = vec2<f32>(sf[batch.c_ov_x + n], sf[batch.c_ov_y + n]);
             orca_obstacle_neighbor_candidate(&onb, first.pos, range_sq, v, a, b);
         }
         // `solve`: obstacle lines, then agent lines, then LP2/LP3.
         for (var k = 0u; k < onb.len; k++) {
             let o1 = onb.items[k].index;
-            let o2 = su[C_OV_NEXT + ob + o1];
+            let o2 = su[batch.c_ov_next + ob + o1];
             orca_push_obstacle_line(first, orca_world_vertex(e, o1), orca_world_vertex(e, o2), &lines);
         }
     } else if (obstacles == ORCA_WORLD_OBSTACLES_SUBSET) {

@@ -54,7 +54,7 @@ fn perception_view_of_human(i: u32) -> MaybeView {
     if (perception_sees_everything(params.fov_angle)) {
         return perception_everything();
     }
-    return MaybeView(true, perception_view_new(sf[C_H_X + i], sf[C_H_Y + i], sf[C_H_THETA + i], params.fov_angle));
+    return MaybeView(true, perception_view_new(sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_h_theta + i], params.fov_angle));
 }
 
 // Rust `View::contains`: is the point (px, py) (m) in the wedge?
@@ -141,17 +141,17 @@ fn perception_maybe_sees_rect(mv: MaybeView, r: Rect) -> bool {
 
 // Rust `group_disc`: group slot `g` (global) as the disc of the group radius around its centre.
 fn perception_group_disc(g: u32) -> Disc {
-    return Disc(sf[C_G_X + g], sf[C_G_Y + g], params.group_radius);
+    return Disc(sf[batch.c_g_x + g], sf[batch.c_g_y + g], params.group_radius);
 }
 
 // Rust `laptop_use_disc`: laptop use `u` (global slot) of environment e, centred halfway between
 // the laptop and its user, of radius half the seat distance.
 fn perception_laptop_use_disc(e: u32, u: u32) -> Disc {
-    let h = e * S_H_X + su[C_LU_HUMAN + u];
-    let l = e * S_L_X + su[C_LU_LAPTOP + u];
+    let h = e * batch.s_h_x + su[batch.c_lu_human + u];
+    let l = e * batch.s_l_x + su[batch.c_lu_laptop + u];
     return Disc(
-        0.5 * (sf[C_L_X + l] + sf[C_H_X + h]),
-        0.5 * (sf[C_L_Y + l] + sf[C_H_Y + h]),
+        0.5 * (sf[batch.c_l_x + l] + sf[batch.c_h_x + h]),
+        0.5 * (sf[batch.c_l_y + l] + sf[batch.c_h_y + h]),
         0.5 * (params.laptop_width + params.human_laptop_distance),
     );
 }
@@ -162,14 +162,14 @@ fn perception_sees_human(mv: MaybeView, e: u32, j: u32) -> bool {
     if (!mv.some) {
         return true;
     }
-    let r = su[C_H_ROLE + j];
+    let r = su[batch.c_h_role + j];
     if (r == ROLE_MOVING_GROUP || r == ROLE_STANDING_GROUP) {
-        let g = e * S_G_X + su[C_H_GROUP + j];
+        let g = e * batch.s_g_x + su[batch.c_h_group + j];
         return perception_sees_disc(mv.view, perception_group_disc(g));
     }
     if (r == ROLE_LAPTOP_USER) {
-        let u = e * S_LU_HUMAN + su[C_H_LAPTOP_USER + j];
+        let u = e * batch.s_lu_human + su[batch.c_h_laptop_user + j];
         return perception_sees_disc(mv.view, perception_laptop_use_disc(e, u));
     }
-    return perception_sees_disc(mv.view, Disc(sf[C_H_X + j], sf[C_H_Y + j], params.human_radius));
+    return perception_sees_disc(mv.view, Disc(sf[batch.c_h_x + j], sf[batch.c_h_y + j], params.human_radius));
 }

@@ -5,12 +5,19 @@
 // (no entry point, reads `params`). Same operations in the same order as the Rust file; change
 // both in the same commit. A pose is a vec3<f32> (x m, y m, heading rad).
 //
-// Group layouts fill arrays of PLACE_GROUP_CAP poses, the capacity of a forming crowd's slots
+// Group layouts fill arrays of place_group_cap() poses, the capacity of a forming crowd's slots
 // (`group_size`'s maximum): every group the step lays out (a crowd forming or formed) has at most
 // that many members (Rust's bound is PLACE_MAX_GROUP, which validation keeps above it); members
 // beyond it are not laid out.
 
-const PLACE_GROUP_CAP: u32 = max(S_CF_HUMAN, 1u);
+// Size of the member arrays: a compile-time size class (backend::wgsl::SizeClasses), at least
+// the batch's capacity `place_group_cap`, which counts are compared with.
+const PLACE_GROUP_ARRAY: u32 = ARRAY_CROWD_MEMBERS;
+
+// Members of one forming crowd (at least 1).
+fn place_group_cap() -> u32 {
+    return max(batch.s_cf_human, 1u);
+}
 
 // Rust `SamplingBox::new`: half extents of the box [-X/2 + margin, X/2 - margin] ×
 // [-Y/2 + margin, Y/2 - margin] of an x by y room (m).
@@ -30,7 +37,7 @@ fn place_heading(rng: ptr<function, RngStream>) -> f32 {
     return rng_uniform(rng, -MATH_PI, MATH_PI);
 }
 
-// Rust `group_layout`: the poses of the n (<= PLACE_GROUP_CAP) members of a group around
+// Rust `group_layout`: the poses of the n (<= place_group_cap()) members of a group around
 // (cx, cy) into out[0..n].
 fn place_group_layout(
     rng: ptr<function, RngStream>,
@@ -38,11 +45,11 @@ fn place_group_layout(
     cy: f32,
     n: u32,
     standing: bool,
-    out: ptr<function, array<vec3<f32>, PLACE_GROUP_CAP>>,
+    out: ptr<function, array<vec3<f32>, PLACE_GROUP_ARRAY>>,
 ) {
     let jitter = MATH_PI / 14.0;
     let shared_theta = place_heading(rng);
-    for (var k = 0u; k < min(n, PLACE_GROUP_CAP); k++) {
+    for (var k = 0u; k < min(n, place_group_cap()); k++) {
         let phi = math_wrap_angle(2.0 * MATH_PI * f32(k) / f32(n));
         let d1 = rng_uniform(rng, -jitter, jitter);
         let d2 = rng_uniform(rng, -jitter, jitter);

@@ -12,7 +12,7 @@
 // change both in the same commit. `i` arguments are global human slots (as the Rust `usize`
 // slots), `e` the environment.
 //
-// The permutations, their keys and inverses are PERMUTE_CAP long (the prelude's largest capacity
+// The permutations, their keys and inverses are PERMUTE_CAP long (a size class of the largest capacity
 // of humans, groups, laptop users and laptops), so they cannot overflow. Every large local lives
 // in one place (one canonicalize per call site): Mesa inlines
 // every call, and llvmpipe's compile time grows quickly with the private memory of a shader.
@@ -25,65 +25,65 @@ struct RegroupPerm {
 
 // Rust `next_seq`: the next list position of environment e.
 fn regroup_next_seq(e: u32) -> u32 {
-    let v = su[C_SEQ_NEXT + e];
-    su[C_SEQ_NEXT + e] = v + 1u;
+    let v = su[batch.c_seq_next + e];
+    su[batch.c_seq_next + e] = v + 1u;
     return v;
 }
 
 // Rust `number_lists`: list positions from the current slot order.
 fn regroup_number_lists(e: u32) {
-    let hb = e * S_H_SEQ;
-    let gb = e * S_G_SEQ;
-    let lb = e * S_L_SEQ;
-    let ub = e * S_LU_SEQ;
-    for (var k = 0u; k < su[C_N_HUMANS + e]; k++) {
-        su[C_H_SEQ + hb + k] = k;
+    let hb = e * batch.s_h_seq;
+    let gb = e * batch.s_g_seq;
+    let lb = e * batch.s_l_seq;
+    let ub = e * batch.s_lu_seq;
+    for (var k = 0u; k < su[batch.c_n_humans + e]; k++) {
+        su[batch.c_h_seq + hb + k] = k;
     }
-    for (var k = 0u; k < su[C_N_GROUPS + e]; k++) {
-        su[C_G_SEQ + gb + k] = k;
+    for (var k = 0u; k < su[batch.c_n_groups + e]; k++) {
+        su[batch.c_g_seq + gb + k] = k;
     }
-    for (var k = 0u; k < su[C_N_LAPTOPS + e]; k++) {
-        su[C_L_SEQ + lb + k] = k;
+    for (var k = 0u; k < su[batch.c_n_laptops + e]; k++) {
+        su[batch.c_l_seq + lb + k] = k;
     }
-    for (var k = 0u; k < su[C_N_LAPTOP_USERS + e]; k++) {
-        su[C_LU_SEQ + ub + k] = k;
+    for (var k = 0u; k < su[batch.c_n_laptop_users + e]; k++) {
+        su[batch.c_lu_seq + ub + k] = k;
     }
-    su[C_SEQ_NEXT + e] = su[C_N_HUMANS + e] + su[C_N_GROUPS + e] + su[C_N_LAPTOPS + e]
-        + su[C_N_LAPTOP_USERS + e];
+    su[batch.c_seq_next + e] = su[batch.c_n_humans + e] + su[batch.c_n_groups + e] + su[batch.c_n_laptops + e]
+        + su[batch.c_n_laptop_users + e];
 }
 
 // Rust `to_lone_walker`: human slot i becomes a lone walker at the end of the walkers' list, with
 // a new goal if one is free.
 fn regroup_to_lone_walker(e: u32, i: u32, rng: ptr<function, RngStream>) {
-    su[C_H_ROLE + i] = ROLE_DYNAMIC;
-    su[C_H_GROUP + i] = NONE;
-    su[C_H_LAPTOP_USER + i] = NONE;
-    su[C_H_FORMING + i] = FORMING_NONE;
-    su[C_H_SEQ + i] = regroup_next_seq(e);
+    su[batch.c_h_role + i] = ROLE_DYNAMIC;
+    su[batch.c_h_group + i] = NONE;
+    su[batch.c_h_laptop_user + i] = NONE;
+    su[batch.c_h_forming + i] = FORMING_NONE;
+    su[batch.c_h_seq + i] = regroup_next_seq(e);
     let g = goals_sample_goal(e, rng, params.human_goal_radius);
     if (g.found) {
-        sf[C_H_GOAL_X + i] = g.disc.x;
-        sf[C_H_GOAL_Y + i] = g.disc.y;
+        sf[batch.c_h_goal_x + i] = g.disc.x;
+        sf[batch.c_h_goal_y + i] = g.disc.y;
     }
 }
 
 // Rust `stop`: speed 0 (and world velocity 0) for human slot i.
 fn regroup_stop(i: u32) {
-    sf[C_H_SPEED + i] = 0.0;
-    sf[C_H_VX + i] = 0.0;
-    sf[C_H_VY + i] = 0.0;
+    sf[batch.c_h_speed + i] = 0.0;
+    sf[batch.c_h_vx + i] = 0.0;
+    sf[batch.c_h_vy + i] = 0.0;
 }
 
 // Rust `to_lone_static`: human slot i becomes a lone static human at the end of their list.
 fn regroup_to_lone_static(e: u32, i: u32) {
-    su[C_H_ROLE + i] = ROLE_STATIC;
-    su[C_H_GROUP + i] = NONE;
-    su[C_H_LAPTOP_USER + i] = NONE;
-    su[C_H_FORMING + i] = FORMING_NONE;
-    su[C_H_SEQ + i] = regroup_next_seq(e);
+    su[batch.c_h_role + i] = ROLE_STATIC;
+    su[batch.c_h_group + i] = NONE;
+    su[batch.c_h_laptop_user + i] = NONE;
+    su[batch.c_h_forming + i] = FORMING_NONE;
+    su[batch.c_h_seq + i] = regroup_next_seq(e);
     regroup_stop(i);
-    sf[C_H_GOAL_X + i] = sf[C_H_X + i];
-    sf[C_H_GOAL_Y + i] = sf[C_H_Y + i];
+    sf[batch.c_h_goal_x + i] = sf[batch.c_h_x + i];
+    sf[batch.c_h_goal_y + i] = sf[batch.c_h_y + i];
 }
 
 // Lexicographic `a < b` of the Rust tuple keys (shorter tuples padded with zeros).
@@ -107,44 +107,44 @@ fn regroup_key_less(a: vec4<u32>, b: vec4<u32>) -> bool {
 // then those in use in their users' order).
 fn regroup_key(e: u32, kind: u32, k: u32) -> vec4<u32> {
     if (kind == 0u) {
-        let g = e * S_G_KIND + k;
-        return vec4<u32>(su[C_G_KIND + g], su[C_G_SEQ + g], 0u, 0u);
+        let g = e * batch.s_g_kind + k;
+        return vec4<u32>(su[batch.c_g_kind + g], su[batch.c_g_seq + g], 0u, 0u);
     }
-    let ub = e * S_LU_SEQ;
+    let ub = e * batch.s_lu_seq;
     if (kind == 1u) {
         let u = ub + k;
-        return vec4<u32>(u32(su[C_LU_HUMAN + u] == NONE), su[C_LU_SEQ + u], 0u, 0u);
+        return vec4<u32>(u32(su[batch.c_lu_human + u] == NONE), su[batch.c_lu_seq + u], 0u, 0u);
     }
     if (kind == 2u) {
-        let i = e * S_H_ROLE + k;
-        let r = su[C_H_ROLE + i];
-        let seq = su[C_H_SEQ + i];
+        let i = e * batch.s_h_role + k;
+        let r = su[batch.c_h_role + i];
+        let seq = su[batch.c_h_seq + i];
         if (r == ROLE_STATIC) {
             return vec4<u32>(0u, 0u, 0u, seq);
         } else if (r == ROLE_DYNAMIC) {
             return vec4<u32>(1u, 0u, 0u, seq);
         } else if (r == ROLE_MOVING_GROUP || r == ROLE_STANDING_GROUP) {
-            let g = e * S_G_KIND + su[C_H_GROUP + i];
-            return vec4<u32>(2u, su[C_G_KIND + g], su[C_G_SEQ + g], seq);
+            let g = e * batch.s_g_kind + su[batch.c_h_group + i];
+            return vec4<u32>(2u, su[batch.c_g_kind + g], su[batch.c_g_seq + g], seq);
         }
-        return vec4<u32>(3u, 0u, su[C_LU_SEQ + ub + su[C_H_LAPTOP_USER + i]], seq);
+        return vec4<u32>(3u, 0u, su[batch.c_lu_seq + ub + su[batch.c_h_laptop_user + i]], seq);
     }
-    let l = e * S_L_USER + k;
-    let u = su[C_L_USER + l];
+    let l = e * batch.s_l_user + k;
+    let u = su[batch.c_l_user + l];
     if (u == NONE) {
-        return vec4<u32>(0u, su[C_L_SEQ + l], 0u, 0u);
+        return vec4<u32>(0u, su[batch.c_l_seq + l], 0u, 0u);
     }
-    return vec4<u32>(1u, su[C_LU_SEQ + ub + u], 0u, 0u);
+    return vec4<u32>(1u, su[batch.c_lu_seq + ub + u], 0u, 0u);
 }
 
 // Whether sorted entry `old` of kind `kind` is kept: Rust `sorted_groups` and `sorted_users`
 // keep the leading live entries (dissolved groups and ended uses sort last).
 fn regroup_live(e: u32, kind: u32, old: u32) -> bool {
     if (kind == 0u) {
-        return su[C_G_KIND + e * S_G_KIND + old] != GROUP_DISSOLVED;
+        return su[batch.c_g_kind + e * batch.s_g_kind + old] != GROUP_DISSOLVED;
     }
     if (kind == 1u) {
-        return su[C_LU_HUMAN + e * S_LU_HUMAN + old] != NONE;
+        return su[batch.c_lu_human + e * batch.s_lu_human + old] != NONE;
     }
     return true;
 }
@@ -152,15 +152,15 @@ fn regroup_live(e: u32, kind: u32, old: u32) -> bool {
 // The slot count of kind `kind` (as `regroup_key`) of environment e.
 fn regroup_count(e: u32, kind: u32) -> u32 {
     if (kind == 0u) {
-        return su[C_N_GROUPS + e];
+        return su[batch.c_n_groups + e];
     }
     if (kind == 1u) {
-        return su[C_N_LAPTOP_USERS + e];
+        return su[batch.c_n_laptop_users + e];
     }
     if (kind == 2u) {
-        return su[C_N_HUMANS + e];
+        return su[batch.c_n_humans + e];
     }
-    return su[C_N_LAPTOPS + e];
+    return su[batch.c_n_laptops + e];
 }
 
 // Rust `sorted_groups`, `sorted_users`, `sorted_humans` or `sorted_laptops` (index `kind` of
@@ -224,55 +224,55 @@ fn regroup_map(inv: ptr<function, array<u32, PERMUTE_CAP>>, v: u32) -> u32 {
 
 // Rust `remap`.
 fn regroup_remap(e: u32, perms: ptr<function, array<RegroupPerm, 4>>) {
-    let hb = e * S_H_GROUP;
-    let gb = e * S_G_COUNT;
-    let lb = e * S_L_USER;
-    let ub = e * S_LU_HUMAN;
-    let n_humans = su[C_N_HUMANS + e];
-    var inv_g = regroup_inverse((*perms)[0], su[C_N_GROUPS + e]);
-    var inv_u = regroup_inverse((*perms)[1], su[C_N_LAPTOP_USERS + e]);
+    let hb = e * batch.s_h_group;
+    let gb = e * batch.s_g_count;
+    let lb = e * batch.s_l_user;
+    let ub = e * batch.s_lu_human;
+    let n_humans = su[batch.c_n_humans + e];
+    var inv_g = regroup_inverse((*perms)[0], su[batch.c_n_groups + e]);
+    var inv_u = regroup_inverse((*perms)[1], su[batch.c_n_laptop_users + e]);
     var inv_h = regroup_inverse((*perms)[2], n_humans);
-    var inv_l = regroup_inverse((*perms)[3], su[C_N_LAPTOPS + e]);
+    var inv_l = regroup_inverse((*perms)[3], su[batch.c_n_laptops + e]);
     var n_static = 0u;
     var n_dynamic = 0u;
     for (var i = hb; i < hb + n_humans; i++) {
-        su[C_H_GROUP + i] = regroup_map(&inv_g, su[C_H_GROUP + i]);
-        su[C_H_LAPTOP_USER + i] = regroup_map(&inv_u, su[C_H_LAPTOP_USER + i]);
-        n_static += u32(su[C_H_ROLE + i] == ROLE_STATIC);
-        n_dynamic += u32(su[C_H_ROLE + i] == ROLE_DYNAMIC);
+        su[batch.c_h_group + i] = regroup_map(&inv_g, su[batch.c_h_group + i]);
+        su[batch.c_h_laptop_user + i] = regroup_map(&inv_u, su[batch.c_h_laptop_user + i]);
+        n_static += u32(su[batch.c_h_role + i] == ROLE_STATIC);
+        n_dynamic += u32(su[batch.c_h_role + i] == ROLE_DYNAMIC);
     }
-    su[C_N_STATIC + e] = n_static;
-    su[C_N_DYNAMIC + e] = n_dynamic;
-    su[C_N_GROUPS + e] = (*perms)[0].len;
-    su[C_N_LAPTOP_USERS + e] = (*perms)[1].len;
+    su[batch.c_n_static + e] = n_static;
+    su[batch.c_n_dynamic + e] = n_dynamic;
+    su[batch.c_n_groups + e] = (*perms)[0].len;
+    su[batch.c_n_laptop_users + e] = (*perms)[1].len;
     for (var u = ub; u < ub + (*perms)[1].len; u++) {
-        su[C_LU_HUMAN + u] = regroup_map(&inv_h, su[C_LU_HUMAN + u]);
-        su[C_LU_LAPTOP + u] = regroup_map(&inv_l, su[C_LU_LAPTOP + u]);
+        su[batch.c_lu_human + u] = regroup_map(&inv_h, su[batch.c_lu_human + u]);
+        su[batch.c_lu_laptop + u] = regroup_map(&inv_l, su[batch.c_lu_laptop + u]);
     }
-    for (var l = lb; l < lb + su[C_N_LAPTOPS + e]; l++) {
-        su[C_L_USER + l] = regroup_map(&inv_u, su[C_L_USER + l]);
+    for (var l = lb; l < lb + su[batch.c_n_laptops + e]; l++) {
+        su[batch.c_l_user + l] = regroup_map(&inv_u, su[batch.c_l_user + l]);
     }
     // Members are consecutive now: each group's first slot and count from the humans.
     for (var g = gb; g < gb + (*perms)[0].len; g++) {
-        su[C_G_COUNT + g] = 0u;
+        su[batch.c_g_count + g] = 0u;
     }
     for (var k = 0u; k < n_humans; k++) {
-        let g = su[C_H_GROUP + hb + k];
+        let g = su[batch.c_h_group + hb + k];
         if (g != NONE) {
             let gg = gb + g;
-            if (su[C_G_COUNT + gg] == 0u) {
-                su[C_G_FIRST + gg] = k;
+            if (su[batch.c_g_count + gg] == 0u) {
+                su[batch.c_g_first + gg] = k;
             }
-            su[C_G_COUNT + gg] += 1u;
+            su[batch.c_g_count + gg] += 1u;
         }
     }
-    let sb = e * S_CF_HUMAN;
-    for (var k = sb; k < sb + su[C_CF_COUNT + e]; k++) {
-        su[C_CF_HUMAN + k] = regroup_map(&inv_h, su[C_CF_HUMAN + k]);
+    let sb = e * batch.s_cf_human;
+    for (var k = sb; k < sb + su[batch.c_cf_count + e]; k++) {
+        su[batch.c_cf_human + k] = regroup_map(&inv_h, su[batch.c_cf_human + k]);
     }
-    if (su[C_LF_ACTIVE + e] != 0u) {
-        su[C_LF_HUMAN + e] = regroup_map(&inv_h, su[C_LF_HUMAN + e]);
-        su[C_LF_LAPTOP + e] = regroup_map(&inv_l, su[C_LF_LAPTOP + e]);
+    if (su[batch.c_lf_active + e] != 0u) {
+        su[batch.c_lf_human + e] = regroup_map(&inv_h, su[batch.c_lf_human + e]);
+        su[batch.c_lf_laptop + e] = regroup_map(&inv_l, su[batch.c_lf_laptop + e]);
     }
 }
 
@@ -284,15 +284,15 @@ fn regroup_canonicalize(e: u32) {
     perms[1] = regroup_sorted(e, 1u);
     perms[2] = regroup_sorted(e, 2u);
     perms[3] = regroup_sorted(e, 3u);
-    let n_groups = su[C_N_GROUPS + e];
-    let n_users = su[C_N_LAPTOP_USERS + e];
+    let n_groups = su[batch.c_n_groups + e];
+    let n_users = su[batch.c_n_laptop_users + e];
     state_permute_groups(e, perms[0].v, perms[0].len, n_groups);
     state_permute_laptop_users(e, perms[1].v, perms[1].len, n_users);
-    state_permute_humans(e, perms[2].v, perms[2].len, su[C_N_HUMANS + e]);
-    state_permute_laptops(e, perms[3].v, perms[3].len, su[C_N_LAPTOPS + e]);
+    state_permute_humans(e, perms[2].v, perms[2].len, su[batch.c_n_humans + e]);
+    state_permute_laptops(e, perms[3].v, perms[3].len, su[batch.c_n_laptops + e]);
     regroup_remap(e, &perms);
     // Compact list positions, as a loaded document numbers them.
     regroup_number_lists(e);
-    su[C_OBSTACLES_DIRTY + e] = 1u;
+    su[batch.c_obstacles_dirty + e] = 1u;
     orca_obstacles_rebuild_if_dirty(e);
 }

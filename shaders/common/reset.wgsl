@@ -10,9 +10,9 @@
 
 // Reset environment `e` and write its first observation; reward 0, flags cleared, info zeroed.
 fn reset_and_observe(e: u32) {
-    outf[CO_REWARD + e] = 0.0;
-    outu[CO_TERMINATED + e] = 0u;
-    outu[CO_TRUNCATED + e] = 0u;
+    outf[batch.co_reward + e] = 0.0;
+    outu[batch.co_terminated + e] = 0u;
+    outu[batch.co_truncated + e] = 0u;
     reset_and_observe_keep_step_outputs(e);
 }
 
@@ -20,8 +20,8 @@ fn reset_and_observe(e: u32) {
 // reward and flags (SAME_STEP autoreset returns those of the finishing step).
 fn reset_and_observe_keep_step_outputs(e: u32) {
     pool_copy_state(e);
-    for (var k = 0u; k < SO_INFO; k++) {
-        outf[CO_INFO + e * SO_INFO + k] = 0.0;
+    for (var k = 0u; k < batch.so_info; k++) {
+        outf[batch.co_info + e * batch.so_info + k] = 0.0;
     }
     pool_copy_observation(e);
 }

@@ -68,20 +68,20 @@ fn sfm_push_rect(view: MaybeView, pos: vec2<f32>, r0: f32, rc: Rect, fo: ptr<fun
 // Rust `pedestrian_forces`: Σ f_ij over the lone humans, moving-group members and laptop users
 // `view` sees (standing-group members are obstacles through their group's disc).
 fn sfm_pedestrian_forces(e: u32, i: u32, sp: SfmParams, view: MaybeView) -> vec2<f32> {
-    let hb = e * S_H_X;
-    let xi = sf[C_H_X + i];
-    let yi = sf[C_H_Y + i];
-    let vix = sf[C_H_VX + i];
-    let viy = sf[C_H_VY + i];
+    let hb = e * batch.s_h_x;
+    let xi = sf[batch.c_h_x + i];
+    let yi = sf[batch.c_h_y + i];
+    let vix = sf[batch.c_h_vx + i];
+    let viy = sf[batch.c_h_vy + i];
     var fx = 0.0;
     var fy = 0.0;
-    for (var j = hb; j < hb + su[C_N_HUMANS + e]; j++) {
-        if (j == i || su[C_H_ROLE + j] == ROLE_STANDING_GROUP || !perception_sees_human(view, e, j)) {
+    for (var j = hb; j < hb + su[batch.c_n_humans + e]; j++) {
+        if (j == i || su[batch.c_h_role + j] == ROLE_STANDING_GROUP || !perception_sees_human(view, e, j)) {
             continue;
         }
-        let vjx = sf[C_H_VX + j];
-        let vjy = sf[C_H_VY + j];
-        let u = sfm_unit(sf[C_H_X + j] - xi, sf[C_H_Y + j] - yi);
+        let vjx = sf[batch.c_h_vx + j];
+        let vjy = sf[batch.c_h_vy + j];
+        let u = sfm_unit(sf[batch.c_h_x + j] - xi, sf[batch.c_h_y + j] - yi);
         let ex = u.x;
         let ey = u.y;
         let dx = sp.lambda * (vjx - vix) + ex;
@@ -97,7 +97,7 @@ fn sfm_pedestrian_forces(e: u32, i: u32, sp: SfmParams, view: MaybeView) -> vec2
         let theta = math_acos(clamp(ex * tx + ey * ty, -1.0, 1.0));
         let nx = -ey;
         let ny = ex;
-        let d = sfm_length(xi - sf[C_H_X + j], yi - sf[C_H_Y + j]);
+        let d = sfm_length(xi - sf[batch.c_h_x + j], yi - sf[batch.c_h_y + j]);
         let m = -math_exp(-d / b);
         let a1 = sp.n_prime * b * theta;
         let a2 = sp.n * b * theta;
@@ -113,42 +113,42 @@ fn sfm_pedestrian_forces(e: u32, i: u32, sp: SfmParams, view: MaybeView) -> vec2
 // e; `robot`: whether it takes the robot into account this step; `view`: what it sees.
 fn sfm_velocity(e: u32, i: u32, robot: bool, view: MaybeView) -> vec2<f32> {
     let sp = SfmParams(
-        sf[C_SFM_R0 + e],
-        sf[C_SFM_GAMMA + e],
-        sf[C_SFM_N + e],
-        sf[C_SFM_N_PRIME + e],
-        sf[C_SFM_LAMBDA + e],
+        sf[batch.c_sfm_r0 + e],
+        sf[batch.c_sfm_gamma + e],
+        sf[batch.c_sfm_n + e],
+        sf[batch.c_sfm_n_prime + e],
+        sf[batch.c_sfm_lambda + e],
     );
-    let pos = vec2<f32>(sf[C_H_X + i], sf[C_H_Y + i]);
-    let du = sfm_unit(sf[C_H_GOAL_X + i] - pos.x, sf[C_H_GOAL_Y + i] - pos.y);
+    let pos = vec2<f32>(sf[batch.c_h_x + i], sf[batch.c_h_y + i]);
+    let du = sfm_unit(sf[batch.c_h_goal_x + i] - pos.x, sf[batch.c_h_goal_y + i] - pos.y);
     var fdx = params.human_max_speed * du.x;
     var fdy = params.human_max_speed * du.y;
     var fo = vec2<f32>(0.0, 0.0);
-    let pb = e * S_P_X;
-    for (var k = pb; k < pb + su[C_N_PLANTS + e]; k++) {
-        sfm_push_disc(view, pos, sp.r0, Disc(sf[C_P_X + k], sf[C_P_Y + k], params.plant_radius), &fo);
+    let pb = e * batch.s_p_x;
+    for (var k = pb; k < pb + su[batch.c_n_plants + e]; k++) {
+        sfm_push_disc(view, pos, sp.r0, Disc(sf[batch.c_p_x + k], sf[batch.c_p_y + k], params.plant_radius), &fo);
     }
-    for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
+    for (var w = 0u; w < su[batch.c_n_walls + e]; w++) {
         sfm_push_rect(view, pos, sp.r0, world_wall_rect(e, w), &fo);
     }
-    for (var t = 0u; t < su[C_N_TABLES + e]; t++) {
+    for (var t = 0u; t < su[batch.c_n_tables + e]; t++) {
         sfm_push_rect(view, pos, sp.r0, world_table_rect(e, t), &fo);
     }
-    let lb = e * S_L_X;
-    for (var l = 0u; l < su[C_N_LAPTOPS + e]; l++) {
-        if (su[C_L_USER + lb + l] == NONE) {
+    let lb = e * batch.s_l_x;
+    for (var l = 0u; l < su[batch.c_n_laptops + e]; l++) {
+        if (su[batch.c_l_user + lb + l] == NONE) {
             sfm_push_rect(view, pos, sp.r0, world_laptop_rect(e, l), &fo);
         }
     }
-    let gb = e * S_G_X;
-    for (var g = gb; g < gb + su[C_N_GROUPS + e]; g++) {
-        if (su[C_G_KIND + g] == GROUP_STANDING) {
+    let gb = e * batch.s_g_x;
+    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+        if (su[batch.c_g_kind + g] == GROUP_STANDING) {
             sfm_push_disc(view, pos, sp.r0, perception_group_disc(g), &fo);
         }
     }
     if (robot) {
-        let rx = sf[C_ROBOT_X + e];
-        let ry = sf[C_ROBOT_Y + e];
+        let rx = sf[batch.c_robot_x + e];
+        let ry = sf[batch.c_robot_y + e];
         sfm_obstacle(pos, sp.r0, rx, ry, sfm_disc_gap(pos, rx, ry, params.robot_radius), &fo);
     }
     let fp = sfm_pedestrian_forces(e, i, sp, view);

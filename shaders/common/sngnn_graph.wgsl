@@ -2,13 +2,13 @@
 //
 // Twin of src/sngnn/graph.rs and history::select: the graph SNGNN-v2 sees for one environment
 // (spec 7.3-7.4), built into its packed regions (src/sngnn/packed.rs: `sn_gu` words nodes,
-// edges, src[], dst[], rel[]; `sn_gf` features[SN_MAX_NODES x SN_NODE_FEATURES], dist[]), nodes
+// edges, src[], dst[], rel[]; `sn_gf` features[batch.sn_max_nodes x SN_NODE_FEATURES], dist[]), nodes
 // and edges in the CPU's order with the CPU's float operations, so that lavapipe writes
 // exactly what `PackedLayout::pack` writes for `graph::build`'s graph. Unused words are zeroed.
 // Change both in the same commit.
 //
 // Loop budget (llvmpipe stops every loop after 65535 iterations per invocation): zeroing the
-// regions costs (SN_U32_STRIDE + SN_F32_STRIDE) / 8 iterations, a frame about 3 x nodes +
+// regions costs (batch.sn_u32_stride + batch.sn_f32_stride) / 8 iterations, a frame about 3 x nodes +
 // 2 x people x segments; tests/sngnn_graph.rs bounds the total for every shipped config.
 
 // graph.rs's constants: /10 positions, 0.1.1's MAX_HUMANS, 97 cm segments, 1.5 m wall links.
@@ -37,7 +37,7 @@ struct SnSegment {
 }
 
 // Segments per wall of the graph being built (counted on the newest frame).
-var<private> sn_wall_segments: array<u32, SN_WALLS>;
+var<private> sn_wall_segments: array<u32, ARRAY_SN_WALLS>;
 
 // The identity, opaque to the compiler (`params.pad[0]` is always 0, Rust `StepParams::_pad`):
 // keeps Mesa's NIR from rewriting an expression around it.
@@ -48,17 +48,17 @@ fn sn_keep(x: f32) -> f32 {
 // ---- packed regions ----
 
 fn sn_ubase(e: u32) -> u32 {
-    return e * SN_U32_STRIDE;
+    return e * batch.sn_u32_stride;
 }
 
 fn sn_fbase(e: u32) -> u32 {
-    return e * SN_F32_STRIDE;
+    return e * batch.sn_f32_stride;
 }
 
 // Eight stores per loop iteration, written out: zeroing the regions is the pass's largest loop,
 // and llvmpipe counts iterations, not stores, against its budget. The tail loops take the rest.
 fn sn_zero_graph(e: u32) {
-    let u_end = sn_ubase(e) + SN_U32_STRIDE;
+    let u_end = sn_ubase(e) + batch.sn_u32_stride;
     var i = sn_ubase(e);
     for (; i + 8u <= u_end; i += 8u) {
         sn_gu[i] = 0u;
@@ -73,7 +73,7 @@ fn sn_zero_graph(e: u32) {
     for (; i < u_end; i++) {
         sn_gu[i] = 0u;
     }
-    let f_end = sn_fbase(e) + SN_F32_STRIDE;
+    let f_end = sn_fbase(e) + batch.sn_f32_stride;
     var j = sn_fbase(e);
     for (; j + 8u <= f_end; j += 8u) {
         sn_gf[j] = 0.0;
@@ -96,23 +96,23 @@ fn sn_feature_at(e: u32, node: u32, k: u32) -> u32 {
 }
 
 fn sn_set_feature(e: u32, node: u32, k: u32, v: f32) {
-    if (node < SN_MAX_NODES) {
+    if (node < batch.sn_max_nodes) {
         sn_gf[sn_feature_at(e, node, k)] = v;
     }
 }
 
-// Append the edge src -> dst (graph nodes); an edge beyond SN_MAX_EDGES is dropped (never for a
+// Append the edge src -> dst (graph nodes); an edge beyond batch.sn_max_edges is dropped (never for a
 // config's own `graph::capacity`).
 fn sn_push_edge(e: u32, src: u32, dst: u32, relation: u32, dist: f32) {
     let ub = sn_ubase(e);
     let k = sn_gu[ub + SN_WORD_EDGES];
-    if (k >= SN_MAX_EDGES) {
+    if (k >= batch.sn_max_edges) {
         return;
     }
     sn_gu[ub + SN_WORD_SRC + k] = src;
-    sn_gu[ub + SN_WORD_SRC + SN_MAX_EDGES + k] = dst;
-    sn_gu[ub + SN_WORD_SRC + 2u * SN_MAX_EDGES + k] = relation;
-    sn_gf[sn_fbase(e) + SN_NODE_FEATURES * SN_MAX_NODES + k] = dist;
+    sn_gu[ub + SN_WORD_SRC + batch.sn_max_edges + k] = dst;
+    sn_gu[ub + SN_WORD_SRC + 2u * batch.sn_max_edges + k] = relation;
+    sn_gf[sn_fbase(e) + SN_NODE_FEATURES * batch.sn_max_nodes + k] = dist;
     sn_gu[ub + SN_WORD_EDGES] = k + 1u;
 }
 
@@ -128,13 +128,15 @@ fn sn_tick_gap(a: u32, b: u32) -> u32 {
 }
 
 // Ticks back from a frame at tick `last` to the next frame the selection may take
-// (`history::TickGaps::gap_after`): SN_INTERVAL_TICKS, one more where SN_GAP_EXTRA marks the
-// tick (0.1.1's f64 timestamps at time steps such as 0.1 s).
+// (`history::TickGaps::gap_after`, with the table of `TickGaps::words` in `sn_gaps`): the base
+// gap, one more where the extra bits mark the tick (0.1.1's f64 timestamps at time steps such as
+// 0.1 s).
 fn sn_gap_after(last: u32) -> u32 {
-    if (last >= SN_GAP_TICKS) {
-        return SN_INTERVAL_TICKS;
+    let base = sn_gaps[0];
+    if (last >= sn_gaps[1]) {
+        return base;
     }
-    return SN_INTERVAL_TICKS + ((SN_GAP_EXTRA[last / 32u] >> (last % 32u)) & 1u);
+    return base + ((sn_gaps[2u + last / 32u] >> (last % 32u)) & 1u);
 }
 
 // The newest frame, then walking back every frame at least one second (`sn_gap_after`) from
@@ -142,16 +144,16 @@ fn sn_gap_after(last: u32) -> u32 {
 fn sn_select(e: u32) -> SnSelection {
     var out: SnSelection;
     out.len = 0u;
-    let count = su[C_SN_FRAME_COUNT + e];
+    let count = su[batch.c_sn_frame_count + e];
     if (count == 0u) {
         return out;
     }
     out.slots[0] = sn_slot_of_age(e, 0u);
     out.len = 1u;
-    var last = su[C_SF_TICK + sn_frame_row(e, out.slots[0])];
+    var last = su[batch.c_sf_tick + sn_frame_row(e, out.slots[0])];
     for (var age = 1u; age < count; age++) {
         let slot = sn_slot_of_age(e, age);
-        let t = su[C_SF_TICK + sn_frame_row(e, slot)];
+        let t = su[batch.c_sf_tick + sn_frame_row(e, slot)];
         if (sn_tick_gap(t, last) < sn_gap_after(last)) {
             continue;
         }
@@ -169,12 +171,12 @@ fn sn_select(e: u32) -> SnSelection {
 
 // frame::wall_ends: wall w's end points (x1, y1, x2, y2) (m, SNGNN axes) seen from `robot`.
 fn sn_wall_ends(e: u32, w: u32, robot: SnRobot) -> vec4<f32> {
-    let i = e * S_W_X + w;
-    let half = 0.5 * sf[C_W_LENGTH + i];
-    let dx = half * sf[C_W_COS + i];
-    let dy = half * sf[C_W_SIN + i];
-    let p1 = sn_axes(robot, sf[C_W_X + i] - dx, sf[C_W_Y + i] - dy);
-    let p2 = sn_axes(robot, sf[C_W_X + i] + dx, sf[C_W_Y + i] + dy);
+    let i = e * batch.s_w_x + w;
+    let half = 0.5 * sf[batch.c_w_length + i];
+    let dx = half * sf[batch.c_w_cos + i];
+    let dy = half * sf[batch.c_w_sin + i];
+    let p1 = sn_axes(robot, sf[batch.c_w_x + i] - dx, sf[batch.c_w_y + i] - dy);
+    let p2 = sn_axes(robot, sf[batch.c_w_x + i] + dx, sf[batch.c_w_y + i] + dy);
     // Opaque: NIR would factor the difference of two end points, (c·a − s·b) − (c·d − s·f),
     // into c·(a − d) − s·(b − f), which rounds differently from Rust.
     return vec4<f32>(sn_keep(p1.x), sn_keep(p1.y), sn_keep(p2.x), sn_keep(p2.y));
@@ -222,15 +224,15 @@ fn sn_segment(w: SnWallSplit, i: u32, node: u32) -> SnSegment {
 // graph::Layout::of: the newest frame's entities and the walls' segment counts.
 fn sn_layout(e: u32, newest: u32) -> SnLayout {
     let f = sn_frame_row(e, newest);
-    let robot = sn_robot(sf[C_SF_ROBOT_X + f], sf[C_SF_ROBOT_Y + f], sf[C_SF_ROBOT_THETA + f]);
-    let walls = min(su[C_N_WALLS + e], SN_WALLS);
+    let robot = sn_robot(sf[batch.c_sf_robot_x + f], sf[batch.c_sf_robot_y + f], sf[batch.c_sf_robot_theta + f]);
+    let walls = min(su[batch.c_n_walls + e], batch.sn_walls);
     var total = 0u;
     for (var w = 0u; w < walls; w++) {
         sn_wall_segments[w] = sn_segment_count(sn_wall_ends(e, w, robot));
         total += sn_wall_segments[w];
     }
-    let people = su[C_SF_N_PEOPLE + f];
-    let objects = su[C_SF_N_OBJECTS + f];
+    let people = su[batch.c_sf_n_people + f];
+    let objects = su[batch.c_sf_n_objects + f];
     let goal = 1u + people + objects;
     return SnLayout(goal + 1u + total, people, objects, goal, walls);
 }
@@ -256,15 +258,15 @@ struct SnEntity {
 }
 
 fn sn_person_of(f: u32, j: u32) -> SnEntity {
-    let i = f * SN_FRAME_PEOPLE + j;
-    return SnEntity(su[C_FP_ID + i], sf[C_FP_X + i], sf[C_FP_Y + i], sf[C_FP_A + i],
-        sf[C_FP_VX + i], sf[C_FP_VY + i], sf[C_FP_VA + i]);
+    let i = f * batch.sn_frame_people + j;
+    return SnEntity(su[batch.c_fp_id + i], sf[batch.c_fp_x + i], sf[batch.c_fp_y + i], sf[batch.c_fp_a + i],
+        sf[batch.c_fp_vx + i], sf[batch.c_fp_vy + i], sf[batch.c_fp_va + i]);
 }
 
 fn sn_object_of(f: u32, j: u32) -> SnEntity {
-    let i = f * SN_FRAME_OBJECTS + j;
-    return SnEntity(su[C_FO_ID + i], sf[C_FO_X + i], sf[C_FO_Y + i], sf[C_FO_A + i],
-        sf[C_FO_VX + i], sf[C_FO_VY + i], sf[C_FO_VA + i]);
+    let i = f * batch.sn_frame_objects + j;
+    return SnEntity(su[batch.c_fo_id + i], sf[batch.c_fo_x + i], sf[batch.c_fo_y + i], sf[batch.c_fo_a + i],
+        sf[batch.c_fo_vx + i], sf[batch.c_fo_vy + i], sf[batch.c_fo_va + i]);
 }
 
 // FrameGraph::kinematics: the nine position and velocity features from `at` on; returns rho.
@@ -284,12 +286,12 @@ fn sn_kinematics(e: u32, node: u32, at: u32, p: SnEntity, dist_at: u32) -> f32 {
 }
 
 fn sn_room(e: u32, base: u32, f: u32) {
-    let people = f32(su[C_SF_N_PEOPLE + f]);
+    let people = f32(su[batch.c_sf_n_people + f]);
     sn_set_feature(e, base, SN_F_ROOM, 1.0);
     sn_set_feature(e, base, SN_F_ROOM_HUMANS, people / SN_MAX_HUMANS);
     sn_set_feature(e, base, SN_F_ROOM_HUMANS + 1u, people * people / SN_MAX_HUMANS_SQ);
-    sn_set_feature(e, base, SN_F_ROBOT, sf[C_SF_ADVANCE + f] / SN_MAX_ADVANCE);
-    sn_set_feature(e, base, SN_F_ROBOT + 1u, sf[C_SF_ROTATION + f] / SN_MAX_ROTATION);
+    sn_set_feature(e, base, SN_F_ROBOT, sf[batch.c_sf_advance + f] / SN_MAX_ADVANCE);
+    sn_set_feature(e, base, SN_F_ROBOT + 1u, sf[batch.c_sf_rotation + f] / SN_MAX_ROTATION);
 }
 
 fn sn_person(e: u32, base: u32, p: SnEntity) {
@@ -312,8 +314,8 @@ fn sn_object(e: u32, base: u32, o: SnEntity, size: vec2<f32>) {
 }
 
 fn sn_goal(e: u32, base: u32, f: u32, lay: SnLayout) {
-    let x = sf[C_SF_GOAL_X + f];
-    let y = sf[C_SF_GOAL_Y + f];
+    let x = sf[batch.c_sf_goal_x + f];
+    let y = sf[batch.c_sf_goal_y + f];
     let rho = sn_scaled_distance(x, y);
     let node = base + lay.goal;
     let at = SN_F_GOAL_BASE;
@@ -405,13 +407,13 @@ fn sn_person_to_wall_edges(e: u32, base: u32, f: u32, lay: SnLayout, robot: SnRo
 // graph::Endpoint: the person or object `id` of frame row f: its /10 position and whether it is
 // a person (w = 1). The CPU panics on an unknown id; the device takes the origin.
 fn sn_endpoint(f: u32, id: u32) -> vec3<f32> {
-    for (var j = 0u; j < su[C_SF_N_PEOPLE + f]; j++) {
+    for (var j = 0u; j < su[batch.c_sf_n_people + f]; j++) {
         let p = sn_person_of(f, j);
         if (p.id == id) {
             return vec3<f32>(p.x / SN_POSITION_SCALE, p.y / SN_POSITION_SCALE, 1.0);
         }
     }
-    for (var j = 0u; j < su[C_SF_N_OBJECTS + f]; j++) {
+    for (var j = 0u; j < su[batch.c_sf_n_objects + f]; j++) {
         let o = sn_object_of(f, j);
         if (o.id == id) {
             return vec3<f32>(o.x / SN_POSITION_SCALE, o.y / SN_POSITION_SCALE, 0.0);
@@ -433,10 +435,10 @@ fn sn_relation(src_person: bool, dst_person: bool) -> u32 {
 
 // FrameGraph::interaction_edges: each entry src -> dst and back.
 fn sn_interaction_edges(e: u32, base: u32, f: u32) {
-    for (var k = 0u; k < su[C_SF_N_LINKS + f]; k++) {
-        let i = f * SN_FRAME_LINKS + k;
-        let src = su[C_FL_SRC + i];
-        let dst = su[C_FL_DST + i];
+    for (var k = 0u; k < su[batch.c_sf_n_links + f]; k++) {
+        let i = f * batch.sn_frame_links + k;
+        let src = su[batch.c_fl_src + i];
+        let dst = su[batch.c_fl_dst + i];
         let a = sn_endpoint(f, src);
         let b = sn_endpoint(f, dst);
         let dx = a.x - b.x;
@@ -449,8 +451,8 @@ fn sn_interaction_edges(e: u32, base: u32, f: u32) {
 
 // The object sizes as frame records hold them.
 fn sn_object_size(f: u32, j: u32) -> vec2<f32> {
-    let i = f * SN_FRAME_OBJECTS + j;
-    return vec2<f32>(sf[C_FO_SIZE_X + i], sf[C_FO_SIZE_Y + i]);
+    let i = f * batch.sn_frame_objects + j;
+    return vec2<f32>(sf[batch.c_fo_size_x + i], sf[batch.c_fo_size_y + i]);
 }
 
 // FrameGraph::add: frame k (ring slot `slot`) at nodes k * lay.nodes.., in 0.1.1's order.
@@ -458,14 +460,14 @@ fn sn_add_frame(e: u32, slot: u32, k: u32, lay: SnLayout) {
     let base = k * lay.nodes;
     let f = sn_frame_row(e, slot);
     sn_room(e, base, f);
-    for (var j = 0u; j < su[C_SF_N_PEOPLE + f]; j++) {
+    for (var j = 0u; j < su[batch.c_sf_n_people + f]; j++) {
         sn_person(e, base, sn_person_of(f, j));
     }
-    for (var j = 0u; j < su[C_SF_N_OBJECTS + f]; j++) {
+    for (var j = 0u; j < su[batch.c_sf_n_objects + f]; j++) {
         sn_object(e, base, sn_object_of(f, j), sn_object_size(f, j));
     }
     sn_goal(e, base, f, lay);
-    let robot = sn_robot(sf[C_SF_ROBOT_X + f], sf[C_SF_ROBOT_Y + f], sf[C_SF_ROBOT_THETA + f]);
+    let robot = sn_robot(sf[batch.c_sf_robot_x + f], sf[batch.c_sf_robot_y + f], sf[batch.c_sf_robot_theta + f]);
     sn_walls(e, base, lay, robot);
     sn_wall_to_person_edges(e, base, f, lay, robot);
     sn_person_to_wall_edges(e, base, f, lay, robot);

@@ -11,25 +11,25 @@ struct Touches {
 }
 
 fn world_wall_rect(e: u32, w: u32) -> Rect {
-    let i = e * S_W_X + w;
+    let i = e * batch.s_w_x + w;
     return geo_rect_with_trig(
-        sf[C_W_X + i], sf[C_W_Y + i], sf[C_W_COS + i], sf[C_W_SIN + i], sf[C_W_LENGTH + i],
+        sf[batch.c_w_x + i], sf[batch.c_w_y + i], sf[batch.c_w_cos + i], sf[batch.c_w_sin + i], sf[batch.c_w_length + i],
         params.wall_thickness,
     );
 }
 
 fn world_table_rect(e: u32, t: u32) -> Rect {
-    let i = e * S_T_X + t;
+    let i = e * batch.s_t_x + t;
     return geo_rect_with_trig(
-        sf[C_T_X + i], sf[C_T_Y + i], sf[C_T_COS + i], sf[C_T_SIN + i], params.table_length,
+        sf[batch.c_t_x + i], sf[batch.c_t_y + i], sf[batch.c_t_cos + i], sf[batch.c_t_sin + i], params.table_length,
         params.table_width,
     );
 }
 
 fn world_laptop_rect(e: u32, l: u32) -> Rect {
-    let i = e * S_L_X + l;
+    let i = e * batch.s_l_x + l;
     return geo_rect_with_trig(
-        sf[C_L_X + i], sf[C_L_Y + i], sf[C_L_COS + i], sf[C_L_SIN + i], params.laptop_length,
+        sf[batch.c_l_x + i], sf[batch.c_l_y + i], sf[batch.c_l_cos + i], sf[batch.c_l_sin + i], params.laptop_length,
         params.laptop_width,
     );
 }
@@ -39,36 +39,36 @@ fn world_laptop_rect(e: u32, l: u32) -> Rect {
 fn world_touches(e: u32, d: Disc) -> Touches {
     let shape = params.contact_shape;
     var t = Touches(false, false, false);
-    let hb = e * S_H_X;
-    for (var i = hb; i < hb + su[C_N_HUMANS + e]; i++) {
-        if (geo_disc_disc_as(shape, d, Disc(sf[C_H_X + i], sf[C_H_Y + i], params.human_radius))) {
+    let hb = e * batch.s_h_x;
+    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+        if (geo_disc_disc_as(shape, d, Disc(sf[batch.c_h_x + i], sf[batch.c_h_y + i], params.human_radius))) {
             t.human = true;
             break;
         }
     }
-    for (var w = 0u; w < su[C_N_WALLS + e]; w++) {
+    for (var w = 0u; w < su[batch.c_n_walls + e]; w++) {
         if (geo_disc_rect_as(shape, d, world_wall_rect(e, w))) {
             t.wall = true;
             break;
         }
     }
     var plant = false;
-    let pb = e * S_P_X;
-    for (var i = pb; i < pb + su[C_N_PLANTS + e]; i++) {
-        if (geo_disc_disc_as(shape, d, Disc(sf[C_P_X + i], sf[C_P_Y + i], params.plant_radius))) {
+    let pb = e * batch.s_p_x;
+    for (var i = pb; i < pb + su[batch.c_n_plants + e]; i++) {
+        if (geo_disc_disc_as(shape, d, Disc(sf[batch.c_p_x + i], sf[batch.c_p_y + i], params.plant_radius))) {
             plant = true;
             break;
         }
     }
     var table = false;
-    for (var k = 0u; k < su[C_N_TABLES + e]; k++) {
+    for (var k = 0u; k < su[batch.c_n_tables + e]; k++) {
         if (geo_disc_rect_as(shape, d, world_table_rect(e, k))) {
             table = true;
             break;
         }
     }
     var laptop = false;
-    for (var k = 0u; k < su[C_N_LAPTOPS + e]; k++) {
+    for (var k = 0u; k < su[batch.c_n_laptops + e]; k++) {
         if (geo_disc_rect_as(shape, d, world_laptop_rect(e, k))) {
             laptop = true;
             break;

@@ -131,6 +131,18 @@ impl TickGaps {
     pub fn ticks(&self) -> usize {
         32 * self.extra.len()
     }
+
+    /// The table as the GPU's frame selection reads it (`sn_gaps` of
+    /// `backend::wgsl::sngnn_prelude`): `base`, [`TickGaps::ticks`], then `extra`.
+    ///
+    /// # Panics
+    /// If the table covers more than `u32::MAX` ticks (the GPU backend bounds it far below).
+    pub fn words(&self) -> Vec<u32> {
+        let ticks = u32::try_from(self.ticks()).expect("a tick count fits a u32");
+        let mut words = vec![self.base, ticks];
+        words.extend_from_slice(&self.extra);
+        words
+    }
 }
 
 /// The timestamp (s) of a frame taken at `tick`: tick · dt in f64, as 0.1.1 computes it.

@@ -9,8 +9,8 @@
 //!   (spec 7.3), node for node and edge for edge as 0.1.1.
 //! - [`model`]: the network and its reference forward pass; [`pieces`]: its edge weights as
 //!   exact piecewise-linear tables, the fast pass; [`Scorer`]: both, shared per process.
-//! - `gpu` (feature `gpu`): the tables' pass on a device for a batch of packed graphs
-//!   ([`packed`]).
+//! - On a device, the tables' pass over a batch of [`packed`] graphs is the GPU backend's
+//!   (`backend::gpu::sngnn_net`): this module is domain code, and GPU code depends on it.
 //! - Weights: [`Weights::load`] reads the PyTorch file without torch; [`weights_path`] finds it.
 //!
 //! The weights are GPL-3.0 and never part of this repository: `socnav sngnn install` fetches
@@ -19,8 +19,6 @@
 
 mod cache;
 pub mod frame;
-#[cfg(feature = "gpu")]
-pub mod gpu;
 pub mod graph;
 pub mod heatmap;
 pub mod history;

@@ -125,6 +125,8 @@ pub struct GpuDevice {
     /// The limits the device was opened with (the adapter's own).
     pub limits: wgpu::Limits,
     errors: Arc<Mutex<Vec<String>>>,
+    /// The pipelines compiled on this device ([`super::kit::PipelineCache`]).
+    pub(crate) pipelines: Arc<super::kit::PipelineCache>,
 }
 
 impl std::fmt::Debug for GpuDevice {
@@ -136,8 +138,29 @@ impl std::fmt::Debug for GpuDevice {
 }
 
 impl GpuDevice {
-    /// Open the best adapter the policy allows (see the module docs).
+    /// The device of the best adapter the policy allows (see the module docs), opened on the
+    /// first call and shared by every later call with the same policy and the same
+    /// `WGPU_ADAPTER_NAME`/`WGPU_BACKEND`, so that batches reuse the pipelines it compiled
+    /// ([`GpuDevice::pipeline_builds`]).
     pub fn open(policy: AdapterPolicy) -> Result<Self, SimError> {
+        type Key = (AdapterPolicy, Option<String>, Option<String>);
+        static OPEN: Mutex<Vec<(Key, GpuDevice)>> = Mutex::new(Vec::new());
+        let var = |name: &str| std::env::var(name).ok().filter(|s| !s.is_empty());
+        let key = (policy, var("WGPU_ADAPTER_NAME"), var("WGPU_BACKEND"));
+        // Held while opening, so that threads asking at once share one device.
+        let mut open = OPEN
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if let Some((_, dev)) = open.iter().find(|(k, _)| *k == key) {
+            return Ok(dev.clone());
+        }
+        let dev = Self::open_new(policy)?;
+        open.push((key, dev.clone()));
+        Ok(dev)
+    }
+
+    /// A device of its own (see [`GpuDevice::open`]).
+    fn open_new(policy: AdapterPolicy) -> Result<Self, SimError> {
         let (instance, backends) = instance();
         let adapters = pollster::block_on(instance.enumerate_adapters(backends));
         let name_filter = std::env::var("WGPU_ADAPTER_NAME")
@@ -170,7 +193,13 @@ impl GpuDevice {
             adapter: AdapterSummary::of(&info),
             limits,
             errors,
+            pipelines: Arc::default(),
         })
+    }
+
+    /// Compute pipelines compiled on this device so far, by every batch that shares it.
+    pub fn pipeline_builds(&self) -> usize {
+        self.pipelines.builds()
     }
 
     /// The validation errors wgpu reported since the last call, as one error.

@@ -4,36 +4,43 @@
 //! - [`device`]: finding and opening an adapter under the policy of DESIGN.md section 8.
 //! - [`GpuStages`]: the state and the outputs each packed into two storage buffers (every f32
 //!   column back to back, every u32 column likewise, in declaration order; offsets and strides
-//!   reach the shaders as generated constants, [`crate::backend::wgsl::prelude`]), the step
-//!   parameters, the actions and the reset pool, and one compute pipeline per stage shader,
-//!   built once. It runs any sequence of passes in one submit, single stages included, which is
+//!   reach the shaders at run time in the uniform `batch`, [`crate::backend::wgsl::BatchLayout`]),
+//!   the step parameters, the actions and the reset pool, and one compute pipeline per stage
+//!   shader, taken from the device's [`kit::PipelineCache`] (compiled once per device and
+//!   source, whatever the batch size). It runs any sequence of passes in one submit, single stages included, which is
 //!   what the CPU/GPU parity tests of each stage need (`tests/gpu_stages.rs`,
 //!   `tests/gpu_observation.rs`). [`GpuStages::with_sngnn_graphs`] adds every environment's
 //!   packed SNGNN-v2 graph (bindings 7 and 8) and the pass `sngnn_graph`, which records the
 //!   frame and builds the graph on the device (`tests/gpu_sngnn_graph.rs`);
 //!   [`GpuStages::attach_sngnn_net`] adds SNGNN-v2's network over those graphs as the pass
-//!   [`SNGNN_SCORE`] (`sngnn::gpu::GpuNet`), which writes each scored environment's raw score
+//!   [`SNGNN_SCORE`] ([`GpuNet`]), which writes each scored environment's raw score
 //!   into its `r_discomfort_sngnn` column for the reward stage.
 //! - [`GpuBackend`]: the whole step in one submit, with one readback of the outputs, and resets
 //!   from a pool of rows the host generates off the step's critical path.
 
+//! - [`kit`]: buffers, bind group layouts, readback and the pipeline cache every pass uses.
+//! - [`sngnn_net`]: SNGNN-v2's network over the packed graphs ([`GpuNet`]).
+
 pub mod backend;
 pub mod device;
+pub(crate) mod kit;
+pub mod sngnn_net;
 
 pub use backend::GpuBackend;
 pub use device::{AdapterPolicy, AdapterSummary, GpuDevice, list_adapters};
+pub use sngnn_net::GpuNet;
 
 use crate::backend::wgsl;
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
-use crate::sngnn::gpu::{GpuNet, StepBuffers};
 use crate::sngnn::history::TickGaps;
 use crate::sngnn::model::Model;
 use crate::sngnn::packed::PackedLayout;
 use crate::sngnn::pieces::Tables;
 use crate::state::BatchState;
-use crate::state::columns::Elem;
+use kit::{Binding, bind_buffers, bytes_of, map_and_read, storage_buffer, uniform_buffer};
+use sngnn_net::StepBuffers;
 
 /// The pass of SNGNN-v2's network in a step ([`GpuStages::attach_sngnn_net`]): its sort and
 /// layers, recorded between the `sngnn_graph` pass and the reward stage.
@@ -84,7 +91,7 @@ pub struct GpuStages {
     episode_offset: usize,
     bind_group: wgpu::BindGroup,
     pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
-    /// The packed SNGNN graphs (u32 and f32 regions), bindings 7 and 8, with their layout; only
+    /// The packed SNGNN graphs (u32 and f32 regions), bindings 8 and 9, with their layout; only
     /// when built by [`GpuStages::with_sngnn_graphs`].
     sngnn_graphs: Option<(PackedLayout, wgpu::Buffer, wgpu::Buffer)>,
     /// SNGNN-v2's network over those graphs ([`GpuStages::attach_sngnn_net`]).
@@ -109,11 +116,6 @@ struct SngnnBinding {
     gaps: TickGaps,
 }
 
-/// Most ticks of frame gaps the SNGNN prelude carries (`SN_GAP_EXTRA`, one bit per tick): it
-/// bounds the episode length of SNGNN batches on the device at time steps whose gap is not one
-/// constant (0.1, 0.2 s).
-const MAX_GAP_TICKS: u32 = 1 << 17;
-
 impl std::fmt::Debug for GpuStages {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("GpuStages")
@@ -123,85 +125,6 @@ impl std::fmt::Debug for GpuStages {
     }
 }
 
-/// Word offset of column `name`, of kind `elem`, in the packed buffer of that kind of a table of
-/// `columns` over `n_envs` environments (every column before it of the same kind, in declaration
-/// order).
-fn column_offset(columns: wgsl::Columns<'_>, n_envs: usize, name: &str, elem: Elem) -> usize {
-    debug_assert!(columns.iter().any(|c| c.0 == name && c.1 == elem), "{name}");
-    n_envs
-        * columns
-            .iter()
-            .filter(|c| c.1 == elem)
-            .take_while(|c| c.0 != name)
-            .map(|c| c.2)
-            .sum::<usize>()
-}
-
-pub(crate) fn bytes_of<T>(n: usize) -> u64 {
-    // A binding may not be empty: at least one element.
-    (n.max(1) * std::mem::size_of::<T>()) as u64
-}
-
-/// A storage buffer the host writes and reads back.
-pub(crate) fn storage_buffer(dev: &GpuDevice, label: &str, size: u64) -> wgpu::Buffer {
-    dev.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size,
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_DST
-            | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    })
-}
-
-/// A bind group layout of storage buffers at bindings 0, 1, ..., read-only where `read_only`
-/// says so, for compute shaders.
-pub(crate) fn storage_layout(
-    dev: &GpuDevice,
-    label: &str,
-    read_only: &[bool],
-) -> wgpu::BindGroupLayout {
-    let entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..)
-        .zip(read_only)
-        .map(|(binding, &read_only)| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        })
-        .collect();
-    dev.device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(label),
-            entries: &entries,
-        })
-}
-
-/// A bind group of `layout` with `buffers`, whole, at bindings 0, 1, ...
-pub(crate) fn bind_buffers(
-    dev: &GpuDevice,
-    label: &str,
-    layout: &wgpu::BindGroupLayout,
-    buffers: &[&wgpu::Buffer],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry<'_>> = (0u32..)
-        .zip(buffers)
-        .map(|(binding, buf)| wgpu::BindGroupEntry {
-            binding,
-            resource: buf.as_entire_binding(),
-        })
-        .collect();
-    dev.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(label),
-        layout,
-        entries: &entries,
-    })
-}
-
 /// The packed SNGNN graph buffers of `n_envs` environments at `layout`'s strides (u32, f32),
 /// or why the adapter cannot bind them.
 fn sngnn_buffers(
@@ -209,8 +132,8 @@ fn sngnn_buffers(
     n_envs: usize,
     layout: PackedLayout,
 ) -> Result<(PackedLayout, wgpu::Buffer, wgpu::Buffer), SimError> {
-    // The prelude's 7 bindings and the two graph regions.
-    const BINDINGS: u32 = 9;
+    // The prelude's 7 storage bindings, the two graph regions and the frame gaps.
+    const BINDINGS: u32 = 10;
     if dev.limits.max_storage_buffers_per_shader_stage < BINDINGS {
         return Err(SimError::BackendUnavailable(format!(
             "{} allows {} storage buffers per shader stage; the SNGNN graph pass needs {BINDINGS}",
@@ -285,14 +208,13 @@ impl GpuStages {
     }
 
     /// [`GpuStages::new`] with the SNGNN graph buffers: every environment's packed graph at
-    /// `graphs`' strides (bindings 7 and 8, zeroed), which makes the SNGNN passes
-    /// ([`wgsl::SNGNN_PASSES`]) available among `stages`. `graphs` is normally
+    /// `graphs`' strides (bindings 8 and 9, zeroed) and the frame selection's gaps (10), which
+    /// makes the SNGNN passes ([`wgsl::SNGNN_PASSES`]) available among `stages`. `graphs` is normally
     /// `sngnn::graph::capacity(config)`.
     ///
     /// # Errors
-    /// `SimError::BackendUnavailable` when the state has no SNGNN history, the frame gaps of the
-    /// time step ([`TickGaps`]) would need a table of more than 2^17 ticks (episodes that long
-    /// at a time step such as 0.1 s), the adapter allows fewer than 9 storage buffers per shader
+    /// `SimError::BackendUnavailable` when the state has no SNGNN history, the time step has no
+    /// frame gaps ([`TickGaps`]), the adapter allows fewer than 10 storage buffers per shader
     /// stage or the graphs exceed a binding, or anything [`GpuStages::new`] reports.
     pub fn with_sngnn_graphs(
         dev: GpuDevice,
@@ -307,17 +229,12 @@ impl GpuStages {
                 "the SNGNN graph passes need a state with the SNGNN frame history (reward.kind = \"sngnn\")".into(),
             ));
         }
-        let gaps = TickGaps::new(params.dt, params.episode_length)
-            .filter(|g| g.ticks() <= MAX_GAP_TICKS as usize)
-            .ok_or_else(|| {
-                SimError::BackendUnavailable(format!(
-                    "the device's SNGNN frame selection at a time step of {} s holds a table of \
-                     at most {MAX_GAP_TICKS} ticks, and episodes of {} steps need more: use the \
-                     CPU backend, shorter episodes, or a time step of 1 s or a dyadic one (0.5, \
-                     0.25 s), whose gap is one constant",
-                    params.dt, params.episode_length
-                ))
-            })?;
+        let gaps = TickGaps::new(params.dt, params.episode_length).ok_or_else(|| {
+            SimError::BackendUnavailable(format!(
+                "the SNGNN frame selection has no frame gaps at a time step of {} s",
+                params.dt
+            ))
+        })?;
         let binding = SngnnBinding {
             layout: graphs,
             gaps,
@@ -354,7 +271,23 @@ impl GpuStages {
             )));
         }
         let pool = storage_buffer(&dev, "reset pool", pool_bytes);
-        let episode_offset = column_offset(&state.columns(), n_envs, "episode", Elem::U32);
+        let layout = wgsl::BatchLayout::new(
+            n_envs,
+            &state.columns(),
+            &outputs.columns(),
+            &outputs.strides.layout,
+            sngnn.as_ref().map(|b| wgsl::SngnnSizes {
+                caps: &state.strides,
+                graphs: &b.layout,
+            }),
+        );
+        let layout_at = |column: &str| {
+            layout
+                .get(column)
+                .expect("the batch layout has every column") as usize
+        };
+        let episode_offset = layout_at("c_episode");
+        let sngnn_score_at = layout_at("c_r_discomfort_sngnn");
         // The outputs (f32 words, then u32 words), the state's episode counters and, with the
         // SNGNN graphs, the network's status words, read back after every step.
         let status_words = if sngnn.is_some() { n_envs } else { 0 };
@@ -388,41 +321,51 @@ impl GpuStages {
             mapped_at_creation: false,
         });
         // Bindings of the prelude (`backend::wgsl::prelude`): params, sf, su, actions, outf, outu,
-        // pool.
-        // With the SNGNN graphs, bindings 7 and 8 (`backend::wgsl::sngnn_prelude`).
+        // pool, the batch layout; with the SNGNN graphs, bindings 8 to 10
+        // (`backend::wgsl::sngnn_prelude`).
+        let batch = uniform_buffer(&dev, "batch layout", &layout.words());
+        let storage = |read_only| Binding::Storage { read_only };
         let mut bound = vec![
-            (&params_buf, true),
-            (&state_table.f32s, false),
-            (&state_table.u32s, false),
-            (&actions, true),
-            (&outputs_table.f32s, false),
-            (&outputs_table.u32s, false),
-            (&pool, true),
+            (&params_buf, storage(true)),
+            (&state_table.f32s, storage(false)),
+            (&state_table.u32s, storage(false)),
+            (&actions, storage(true)),
+            (&outputs_table.f32s, storage(false)),
+            (&outputs_table.u32s, storage(false)),
+            (&pool, storage(true)),
+            (&batch, Binding::Uniform),
         ];
-        if let Some((_, gu, gf)) = &sngnn_graphs {
-            bound.extend([(gu, false), (gf, false)]);
+        let gaps = sngnn.as_ref().map(|b| {
+            let gaps = storage_buffer(
+                &dev,
+                "sngnn frame gaps",
+                bytes_of::<u32>(b.gaps.words().len()),
+            );
+            dev.queue
+                .write_buffer(&gaps, 0, bytemuck::cast_slice(&b.gaps.words()));
+            gaps
+        });
+        if let (Some((_, gu, gf)), Some(gaps)) = (&sngnn_graphs, &gaps) {
+            bound.extend([
+                (gu, storage(false)),
+                (gf, storage(false)),
+                (gaps, storage(true)),
+            ]);
         }
-        let read_only: Vec<bool> = bound.iter().map(|&(_, r)| r).collect();
-        let layout = storage_layout(&dev, "stage bindings", &read_only);
+        let bindings: Vec<Binding> = bound.iter().map(|&(_, b)| b).collect();
+        let (bind_layout, _) = dev.pipelines.layout(&dev, &bindings);
         let buffers: Vec<&wgpu::Buffer> = bound.iter().map(|&(b, _)| b).collect();
-        let bind_group = bind_buffers(&dev, "stage bindings", &layout, &buffers);
-        let pipeline_layout = dev
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("stages"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
+        let bind_group = bind_buffers(&dev, "stage bindings", &bind_layout, &buffers);
+        let columns = state.columns();
         let mut prelude = wgsl::prelude(
-            n_envs,
-            &state.columns(),
+            &columns,
             &outputs.columns(),
-            &outputs.strides.layout,
+            &wgsl::SizeClasses::of(&columns),
         );
-        if let Some(b) = &sngnn {
-            prelude.push_str(&wgsl::sngnn_prelude(&state.strides, &b.layout, &b.gaps));
+        if sngnn.is_some() {
+            prelude.push_str(&wgsl::sngnn_prelude());
         }
-        let mut sources = Vec::with_capacity(stages.len());
+        let mut pipelines = Vec::with_capacity(stages.len());
         for &stage in stages {
             if wgsl::SNGNN_PASSES.contains(&stage) && sngnn.is_none() {
                 return Err(SimError::BackendUnavailable(format!(
@@ -438,14 +381,16 @@ impl GpuStages {
                 && !wgsl::SNGNN_PASSES.contains(&stage)
             {
                 return Err(SimError::BackendUnavailable(format!(
-                    "stage {stage:?} has no shader yet (stages with shaders: {STAGES_WITH_SHADERS:?})"
+                    "stage {stage:?} has no shader (stages with shaders: {STAGES_WITH_SHADERS:?})"
                 )));
             }
             let src = wgsl::assemble(&format!("{stage}.wgsl"), &prelude)
                 .map_err(SimError::BackendUnavailable)?;
-            sources.push((stage, src));
+            let pipeline = dev
+                .pipelines
+                .pipeline(&dev, stage, &bindings, &src, "main")?;
+            pipelines.push((stage, pipeline));
         }
-        let pipelines = compile_pipelines(&dev, &pipeline_layout, &sources)?;
         let this = Self {
             dev,
             n_envs,
@@ -462,12 +407,7 @@ impl GpuStages {
             pipelines,
             sngnn_graphs,
             sngnn_net: None,
-            sngnn_score_at: column_offset(
-                &state.columns(),
-                n_envs,
-                "r_discomfort_sngnn",
-                Elem::F32,
-            ),
+            sngnn_score_at,
             sngnn_status: vec![0; status_words],
             sngnn_unread: false,
         };
@@ -515,7 +455,7 @@ impl GpuStages {
     /// The error of the last step's SNGNN-v2 network, if an environment's graph could not be
     /// scored (an edge outside the tables, a graph beyond its layout).
     pub fn sngnn_failure(&self) -> Option<SimError> {
-        crate::sngnn::gpu::failure(&self.sngnn_status)
+        sngnn_net::failure(&self.sngnn_status)
     }
 
     fn write(&self, t: &DeviceTable) {
@@ -725,66 +665,4 @@ impl GpuStages {
     ) -> Result<(), SimError> {
         map_and_read(&self.dev, buffer, bytes, read)
     }
-}
-
-/// One compute pipeline (entry point `main`) of `layout` per `(label, WGSL source)`, in order.
-/// (On lavapipe the create calls take well under a second each: llvmpipe compiles a shader to
-/// machine code at its first dispatch, minutes for the stages with the ORCA core.)
-fn compile_pipelines(
-    dev: &GpuDevice,
-    layout: &wgpu::PipelineLayout,
-    sources: &[(&'static str, String)],
-) -> Result<Vec<(&'static str, wgpu::ComputePipeline)>, SimError> {
-    let mut pipelines = Vec::with_capacity(sources.len());
-    for (label, src) in sources {
-        let module = dev
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(label),
-                source: wgpu::ShaderSource::Wgsl(src.as_str().into()),
-            });
-        let pipeline = dev
-            .device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(label),
-                layout: Some(layout),
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-        dev.take_errors()?;
-        pipelines.push((*label, pipeline));
-    }
-    Ok(pipelines)
-}
-
-/// Map the first `bytes` of `buffer` (after the work submitted so far), hand its words to
-/// `read`, and unmap it; then report any validation error of the device.
-pub(crate) fn map_and_read(
-    dev: &GpuDevice,
-    buffer: &wgpu::Buffer,
-    bytes: u64,
-    read: impl FnOnce(&[u32]),
-) -> Result<(), SimError> {
-    let failed = |e: &dyn std::fmt::Display| {
-        SimError::BackendUnavailable(format!("GPU readback failed: {e}"))
-    };
-    let slice = buffer.slice(..bytes);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        // The receiver lives until the poll below has delivered this.
-        let _ = tx.send(r);
-    });
-    dev.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| failed(&e))?;
-    rx.recv().map_err(|e| failed(&e))?.map_err(|e| failed(&e))?;
-    {
-        let view = slice.get_mapped_range().map_err(|e| failed(&e))?;
-        let words = bytemuck::try_cast_slice::<u8, u32>(&view).map_err(|e| failed(&e))?;
-        read(words);
-    }
-    buffer.unmap();
-    dev.take_errors()
 }

@@ -11,21 +11,20 @@
 //! graphs of the environments its reward does not score this step, and their outputs are left
 //! as they were. The device has no edge network: an edge the tables do not cover makes
 //! [`GpuNet::forward`] (and the step) fail with `SimError::Sngnn` (the CPU would take the edge
-//! network). The tables of [`super::table_range`] cover every distance of the config's rooms.
+//! network). The tables of [`crate::sngnn::table_range`] cover every distance of the config's rooms.
 //!
 //! A net built by [`GpuNet::new`] owns its graph and output buffers (tests, benchmarks); the GPU
 //! backend's step builds one with `GpuNet::in_step` over its own packed graphs, writing the
 //! room node's first output straight into a state column, and records it in the step's compute
 //! pass (`GpuNet::record`).
 
-use super::model::{MAX_WIDTH, Model, Output};
-use super::packed::PackedLayout;
-use super::pieces::Tables;
-use crate::backend::gpu::{
-    AdapterSummary, GpuDevice, bind_buffers, bytes_of, map_and_read, storage_buffer, storage_layout,
-};
+use super::kit::{Binding, bind_buffers, bytes_of, map_and_read, storage_bindings, storage_buffer};
+use super::{AdapterSummary, GpuDevice};
 use crate::backend::wgsl;
 use crate::error::SimError;
+use crate::sngnn::model::{MAX_WIDTH, Model, Output};
+use crate::sngnn::packed::PackedLayout;
+use crate::sngnn::pieces::Tables;
 
 /// Invocations per workgroup of both entry points.
 const WORKGROUP: u32 = 64;
@@ -250,8 +249,9 @@ impl GpuNet {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let bind_layout = storage_layout(&dev, "SNGNN bindings", &BINDINGS);
-        let (sort, layer) = pipelines(&dev, &bind_layout)?;
+        let bindings = storage_bindings(&BINDINGS);
+        let (bind_layout, _) = dev.pipelines.layout(&dev, &bindings);
+        let (sort, layer) = pipelines(&dev, &bindings)?;
         let mut groups = Vec::with_capacity(model.layers.len());
         for (l, mlp_layer) in model.layers.iter().enumerate() {
             let flat = tables.flat_layer(l);
@@ -500,38 +500,17 @@ impl LayerParams {
     }
 }
 
-/// The `sort` and `layer` pipelines of `shaders/sngnn.wgsl`.
+/// The `sort` and `layer` pipelines of `shaders/sngnn.wgsl` (compiled once per device).
 fn pipelines(
     dev: &GpuDevice,
-    layout: &wgpu::BindGroupLayout,
+    bindings: &[Binding],
 ) -> Result<(wgpu::ComputePipeline, wgpu::ComputePipeline), SimError> {
     let src = wgsl::assemble_standalone("sngnn.wgsl").map_err(SimError::BackendUnavailable)?;
-    let module = dev
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("sngnn"),
-            source: wgpu::ShaderSource::Wgsl(src.into()),
-        });
-    let pipeline_layout = dev
-        .device
-        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("SNGNN"),
-            bind_group_layouts: &[Some(layout)],
-            immediate_size: 0,
-        });
-    let pipeline = |entry: &str| {
-        dev.device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-    };
-    let sort = pipeline("sort");
-    let layer = pipeline("layer");
-    dev.take_errors()?;
+    let sort = dev
+        .pipelines
+        .pipeline(dev, "sngnn sort", bindings, &src, "sort")?;
+    let layer = dev
+        .pipelines
+        .pipeline(dev, "sngnn layer", bindings, &src, "layer")?;
     Ok((sort, layer))
 }
