@@ -2,24 +2,23 @@
 //! [`crate::pipeline::STAGES`] as WGSL compute shaders (`shaders/<stage>.wgsl`).
 //!
 //! - [`device`]: finding and opening an adapter under the policy of DESIGN.md section 8.
+//! - `kit`: buffers, bind group layouts, readback, and the device's pipeline cache
+//!   (`kit::PipelineCache`: each pipeline compiled once per device and source, whatever the
+//!   batch size or config).
 //! - [`GpuStages`]: the state and the outputs each packed into two storage buffers (every f32
 //!   column back to back, every u32 column likewise, in declaration order; offsets and strides
 //!   reach the shaders at run time in the uniform `batch`, [`crate::backend::wgsl::BatchLayout`]),
 //!   the step parameters, the actions and the reset pool, and one compute pipeline per stage
-//!   shader, taken from the device's [`kit::PipelineCache`] (compiled once per device and
-//!   source, whatever the batch size). It runs any sequence of passes in one submit, single stages included, which is
-//!   what the CPU/GPU parity tests of each stage need (`tests/gpu_stages.rs`,
+//!   shader. It runs any sequence of passes in one submit, single stages included, which is what
+//!   the CPU/GPU parity tests of each stage need (`tests/gpu_stages.rs`,
 //!   `tests/gpu_observation.rs`). [`GpuStages::with_sngnn_graphs`] adds every environment's
-//!   packed SNGNN-v2 graph (bindings 7 and 8) and the pass `sngnn_graph`, which records the
-//!   frame and builds the graph on the device (`tests/gpu_sngnn_graph.rs`);
+//!   packed SNGNN-v2 graph (bindings 8 and 9, the frame gaps at 10) and the pass `sngnn_graph`,
+//!   which records the frame and builds the graph on the device (`tests/gpu_sngnn_graph.rs`);
 //!   [`GpuStages::attach_sngnn_net`] adds SNGNN-v2's network over those graphs as the pass
-//!   [`SNGNN_SCORE`] ([`GpuNet`]), which writes each scored environment's raw score
-//!   into its `r_discomfort_sngnn` column for the reward stage.
+//!   [`SNGNN_SCORE`] ([`GpuNet`], [`sngnn_net`]), which writes each scored environment's raw
+//!   score into its `r_discomfort_sngnn` column for the reward stage.
 //! - [`GpuBackend`]: the whole step in one submit, with one readback of the outputs, and resets
 //!   from a pool of rows the host generates off the step's critical path.
-
-//! - [`kit`]: buffers, bind group layouts, readback and the pipeline cache every pass uses.
-//! - [`sngnn_net`]: SNGNN-v2's network over the packed graphs ([`GpuNet`]).
 
 pub mod backend;
 pub mod device;
