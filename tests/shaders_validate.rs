@@ -1,7 +1,8 @@
 //! Every `.wgsl` file under `shaders/` parses and validates with naga (no GPU needed): stage
 //! shaders as the GPU backend assembles them (generated prelude included), libraries with their
 //! requirements. The embedded copies are the files; the common libraries stay in step with their
-//! Rust twins; the generated `StepParams` has the same layout in WGSL as in Rust.
+//! Rust twins; the generated `StepParams` has the same layout in WGSL as in Rust; no shader
+//! redefines a constant the generated heads take from Rust.
 //!
 //! Library files declare what they build on with header lines `// requires: <path>` (relative to
 //! `shaders/`), before the first non-comment line. A file is validated with its requirements
@@ -289,6 +290,56 @@ fn generated_step_params_layout_matches_rust() {
             "StepParams member (name, type, offset, size): WGSL vs Rust"
         );
     }
+}
+
+/// The names of the `const` declarations (module or function scope) in WGSL source `src`, one
+/// per line that starts with `const` (comment lines do not).
+fn wgsl_const_names(src: &str) -> BTreeSet<String> {
+    src.lines()
+        .filter_map(|l| l.trim().strip_prefix("const "))
+        .map(|rest| {
+            rest.trim_start()
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect()
+        })
+        .collect()
+}
+
+/// A constant is written once: no file under shaders/ declares a constant that a generated head
+/// already defines from its Rust value (the stages' prelude, the SNGNN passes' part of it, the
+/// standalone shaders' head). Naga rejects such a pair only where both meet in one assembled
+/// shader; this catches it in any file.
+#[test]
+fn shaders_do_not_redefine_generated_constants() {
+    let generated: BTreeSet<String> = [sngnn_prelude(), wgsl::standalone_head()]
+        .iter()
+        .flat_map(|head| wgsl_const_names(head))
+        .collect();
+    for name in [
+        "WORKGROUP_SIZE",
+        "REWARD_SNGNN",
+        "SNGNN_WEIGHT",
+        "CONTACT_SLOP",
+        "GEO_POLY64_COS",
+        "SN_FRAME_PERIOD",
+        "STATUS_EMPTY",
+    ] {
+        assert!(generated.contains(name), "the generated heads lack {name}");
+    }
+    let mut files = Vec::new();
+    wgsl_files(&shaders_dir(), &mut files);
+    let mut twice = Vec::new();
+    for p in &files {
+        let rel = p.strip_prefix(shaders_dir()).expect("under shaders/");
+        for name in wgsl_const_names(&read(p)).intersection(&generated) {
+            twice.push(format!("shaders/{}: {name}", rel.display()));
+        }
+    }
+    assert!(
+        twice.is_empty(),
+        "constants the generated heads define from Rust, declared again in a shader: {twice:?}"
+    );
 }
 
 /// The 32-bit pattern of every hexadecimal literal in `src`: integers as written (without `_`
