@@ -6,14 +6,11 @@
 // static human only takes the speed (0.1.1 neither moves nor turns it). Whether a human touches
 // an object is decided with discs shaped as `params.contact_shape` says, an overlap of at most
 // CONTACT_SLOP not counting. Change both files in the same commit.
-
-// Softness of the contact (m), MPE's `contact_margin`: the f32 of 1e-3.
-const CONTACT_MARGIN: f32 = 0x1.0624dep-10f;
-// Stiffness of the contact, MPE's `contact_force`.
-const CONTACT_STIFFNESS: f32 = 100.0;
-// Overlap (m) that does not count as a contact, the f32 of 1e-6: the f32 rounding of a position
-// update, which leaves walkers that ORCA holds at an obstacle's surface slightly inside it.
-const CONTACT_SLOP: f32 = 0x1.0c6f7ap-20f;
+//
+// The prelude defines, from the Rust constants: CONTACT_MARGIN (softness of the contact, m, MPE's
+// `contact_margin`), CONTACT_STIFFNESS (MPE's `contact_force`) and CONTACT_SLOP (the overlap, m,
+// that does not count as a contact: the f32 rounding of a position update, which leaves walkers
+// that ORCA holds at an obstacle's surface slightly inside it).
 
 // The human's disc for the contact decision: its radius less CONTACT_SLOP.
 fn human_disc(i: u32) -> Disc {

@@ -2,11 +2,9 @@
 //
 // Twin of src/systems/metrics.rs (stage `metrics`, spec 8.2 and 8.3): every info metric of the
 // step, the running accumulators behind them, and, when the episode ends, its statistics as the
-// paper's table aggregates them. Change both files in the same commit.
-
-// Personal-space threshold (m) between the robot's surface and a human's centre (0.45, exactly
-// the f32 of the Rust constant).
-const PERSONAL_SPACE: f32 = 0x1.ccccccp-2f;
+// paper's table aggregates them. Change both files in the same commit. PERSONAL_SPACE (m,
+// between the robot's surface and a human's centre) comes from the prelude (Rust
+// `metrics::PERSONAL_SPACE`).
 
 // The start of environment e's info row in `outf`.
 fn info_row(e: u32) -> u32 {

@@ -9,10 +9,9 @@
 // SNGNN-v2's score comes from the passes before this one (`sngnn_graph`, then the network,
 // `GpuStages::attach_sngnn_net`): for every environment this stage scores, they leave the room
 // node's first output in `r_discomfort_sngnn`, which is clamped here as the CPU clamps it.
-
-// `StepParams::reward_kind` of the SNGNN-v2 reward, and 0.1.1's weight of its term.
-const REWARD_SNGNN: u32 = 1u;
-const SNGNN_WEIGHT: f32 = 1.0;
+//
+// The prelude defines REWARD_SNGNN (`StepParams::reward_kind` of the SNGNN-v2 reward) and
+// SNGNN_WEIGHT (0.1.1's weight of its term) from the Rust constants.
 
 // The robot's world-frame velocity (m/s), computed with the motion.
 fn robot_world_velocity(e: u32) -> vec2<f32> {

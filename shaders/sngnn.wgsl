@@ -5,7 +5,8 @@
 // src/sngnn/model.rs): graphs packed per environment (src/sngnn/packed.rs), edge weights W(e)
 // from the flat piecewise-linear tables (`Tables::flat_layer`), one layer per dispatch.
 //
-// Not a batch stage: it has its own bindings (src/backend/gpu/sngnn_net.rs builds them) and no prelude.
+// Not a batch stage: it has its own bindings (src/backend/gpu/sngnn_net.rs builds them) and no
+// prelude, only the standalone head (below).
 // Entry points:
 // - `sort`: one invocation per environment groups its edges by destination with a stable
 //   counting sort (CSR), so that each node can sum its messages alone, in build order.
@@ -25,25 +26,13 @@
 // llvmpipe stops every loop of an invocation after 65535 iterations in all (docs/ARCHITECTURE.md):
 // `sort` runs about 3 nodes + 3 edges iterations, `layer` about (inputs + 14) per incoming edge,
 // far below it for SNGNN's graphs.
-
-// Graph words (src/sngnn/packed.rs `words`).
-const G_NODES: u32 = 0u;
-const G_EDGES: u32 = 1u;
-const G_SRC: u32 = 2u;
-// Node features per node in the packed graph, and the stride of node rows everywhere.
-const NODE_FEATURES: u32 = 42u;
-// Relations with a table entry.
-const RELATIONS: u32 = 18u;
-// Words per relation in a layer's index (src/sngnn/pieces.rs `flat`).
-const T_ZERO: u32 = 0u;
-const T_KNOTS: u32 = 1u;
-const T_AT: u32 = 2u;
-const T_VALUES: u32 = 3u;
-const T_WORDS: u32 = 4u;
-// Status bits of an environment.
-const STATUS_UNSUPPORTED: u32 = 1u;
-const STATUS_BAD_GRAPH: u32 = 2u;
-const STATUS_EMPTY: u32 = 4u;
+//
+// The standalone head (`backend::wgsl::standalone_head`) defines, from the Rust values: the graph
+// words G_NODES, G_EDGES, G_SRC (src/sngnn/packed.rs `words`); NODE_FEATURES (features per node
+// in the packed graph, and the stride of node rows everywhere); RELATIONS (relations with a table
+// entry); the words of a relation's entry in a layer's index T_ZERO, T_KNOTS, T_AT, T_VALUES,
+// T_WORDS (src/sngnn/pieces.rs `flat`); an environment's status bits STATUS_UNSUPPORTED,
+// STATUS_BAD_GRAPH, STATUS_EMPTY (`backend::wgsl::sngnn_status`).
 
 // One layer's constants (src/sngnn/gpu.rs `LayerParams`, the same order).
 struct NetParams {

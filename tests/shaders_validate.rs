@@ -1,7 +1,8 @@
 //! Every `.wgsl` file under `shaders/` parses and validates with naga (no GPU needed): stage
 //! shaders as the GPU backend assembles them (generated prelude included), libraries with their
 //! requirements. The embedded copies are the files; the common libraries stay in step with their
-//! Rust twins; `StepParams` has the same layout in WGSL as in Rust.
+//! Rust twins; the generated `StepParams` has the same layout in WGSL as in Rust; no shader
+//! redefines a constant the generated heads take from Rust.
 //!
 //! Library files declare what they build on with header lines `// requires: <path>` (relative to
 //! `shaders/`), before the first non-comment line. A file is validated with its requirements
@@ -102,7 +103,7 @@ fn validate(path: &Path) -> Result<(), String> {
 }
 
 /// `shaders/<path>` as the GPU backend assembles it for a batch of experiment 2 (every column
-/// kind in use): the generated prelude, `common/params.wgsl`, the file's requirements, the file.
+/// kind in use): the generated prelude, the file's requirements, the file.
 fn validate_assembled(path: &str) -> Result<naga::Module, String> {
     if wgsl::needs_sngnn(path) {
         return validate_assembled_sngnn(path);
@@ -126,6 +127,14 @@ fn validate_assembled(path: &str) -> Result<naga::Module, String> {
 /// SNGNN-v2 reward: the prelude of a state with the frame history (built without `BatchEnv`,
 /// which would need the weights), then the SNGNN part.
 fn validate_assembled_sngnn(path: &str) -> Result<naga::Module, String> {
+    let src = wgsl::assemble(path, &sngnn_prelude())?;
+    validate_source(&src, &format!("{path} (assembled, SNGNN)"))
+}
+
+/// The prelude of the SNGNN passes for experiment 2 with the SNGNN-v2 reward: the prelude of a
+/// state with the frame history (built without `BatchEnv`, which would need the weights), then
+/// the SNGNN part.
+fn sngnn_prelude() -> String {
     let config = socnav::Config::from_name_or_path("exp2_sngnn").expect("exp2_sngnn");
     let caps = socnav::state::Caps::from_config(&config);
     let state = socnav::state::BatchState::new(4, caps);
@@ -138,8 +147,7 @@ fn validate_assembled_sngnn(path: &str) -> Result<naga::Module, String> {
         &wgsl::SizeClasses::of(&columns),
     );
     prelude.push_str(&wgsl::sngnn_prelude());
-    let src = wgsl::assemble(path, &prelude)?;
-    validate_source(&src, &format!("{path} (assembled, SNGNN)"))
+    prelude
 }
 
 #[test]
@@ -165,10 +173,7 @@ fn all_wgsl_shaders_validate() {
         }
         errors.extend(validate_assembled(rel).err());
         // The pure libraries also stand alone, with their requirements only.
-        if matches!(
-            rel,
-            "common/math.wgsl" | "common/rng.wgsl" | "common/params.wgsl"
-        ) {
+        if matches!(rel, "common/math.wgsl" | "common/rng.wgsl") {
             errors.extend(validate(p).err());
         }
     }
@@ -200,13 +205,42 @@ fn stage_shaders_are_stages_with_a_main() {
     }
 }
 
-/// `StepParams` in WGSL (`shaders/common/params.wgsl`) has the Rust struct's layout: every field
-/// at the same byte offset with the same size, in the same order, and the same total size. The
-/// offsets on the Rust side come from `offset_of!` over the field list of src/params.rs.
+/// The WGSL type of a struct member as a WGSL spelling (`f32`, `array<i32, 24>`), for the scalar
+/// and array members `StepParams` may have; anything else is spelled with naga's debug form, so
+/// that it differs from every Rust field's type.
+fn naga_type_name(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String {
+    let scalar = |s: &naga::Scalar| match *s {
+        naga::Scalar::F32 => Some("f32"),
+        naga::Scalar::U32 => Some("u32"),
+        naga::Scalar::I32 => Some("i32"),
+        _ => None,
+    };
+    match &module.types[ty].inner {
+        naga::TypeInner::Scalar(s) => scalar(s).map(str::to_owned),
+        naga::TypeInner::Array {
+            base,
+            size: naga::ArraySize::Constant(n),
+            ..
+        } => match &module.types[*base].inner {
+            naga::TypeInner::Scalar(s) => scalar(s).map(|s| format!("array<{s}, {n}>")),
+            _ => None,
+        },
+        _ => None,
+    }
+    .unwrap_or_else(|| format!("{:?}", module.types[ty].inner))
+}
+
+/// The generated `StepParams` (`wgsl::step_params_struct`, in every stage's prelude) has the
+/// Rust struct's layout under WGSL's layout rules: as naga lays out an assembled stage shader,
+/// every member has the Rust field's name, type, byte offset and size (`offset_of!` and
+/// `size_of`, listed by `step_params!` in src/params.rs), and the struct has Rust's size.
+/// Generation makes the names and their order agree; what can still differ is the layout: a
+/// member whose WGSL alignment, array stride or padding is not repr(C)'s (a vector, a uniform
+/// array with its 16-byte stride, a struct size rounded up), or a Rust field the list lacks.
 #[test]
-fn step_params_layout_matches_rust() {
-    let src = read(&shaders_dir().join("common/params.wgsl"));
-    let module = validate_source(&src, "common/params.wgsl").unwrap_or_else(|e| panic!("{e}"));
+fn generated_step_params_layout_matches_rust() {
+    use socnav::StepParams;
+    let module = validate_assembled("reward.wgsl").unwrap_or_else(|e| panic!("{e}"));
     let layouter = {
         let mut l = naga::proc::Layouter::default();
         l.update(module.to_ctx()).expect("layout");
@@ -216,157 +250,96 @@ fn step_params_layout_matches_rust() {
         .types
         .iter()
         .find(|(_, t)| t.name.as_deref() == Some("StepParams"))
-        .expect("struct StepParams in params.wgsl");
+        .expect("struct StepParams in the prelude");
     let naga::TypeInner::Struct { members, span } = &ty.inner else {
         panic!("StepParams is not a struct")
     };
-    let wgsl: Vec<(String, u32, u32)> = members
+    let size = std::mem::size_of::<StepParams>();
+    assert_eq!(*span as usize, size, "size of StepParams (WGSL vs Rust)");
+    assert_eq!(layouter[handle].size as usize, size);
+    // The field list covers the Rust struct: its fields tile it, in order, without gaps.
+    let mut end = 0;
+    for f in StepParams::WGSL_FIELDS {
+        assert_eq!(
+            f.offset, end,
+            "StepParams::{} follows its predecessor",
+            f.name
+        );
+        end += f.size;
+    }
+    assert_eq!(end, size, "StepParams::WGSL_FIELDS covers the struct");
+    let wgsl: Vec<(String, String, usize, usize)> = members
         .iter()
         .map(|m| {
             (
                 m.name.clone().unwrap_or_default(),
-                m.offset,
-                layouter[m.ty].size,
+                naga_type_name(&module, m.ty),
+                m.offset as usize,
+                layouter[m.ty].size as usize,
             )
         })
         .collect();
-    let rust = rust_step_params_fields();
-    assert_eq!(
-        *span as usize,
-        std::mem::size_of::<socnav::StepParams>(),
-        "size of StepParams (WGSL vs Rust)"
-    );
-    assert_eq!(
-        layouter[handle].size as usize,
-        std::mem::size_of::<socnav::StepParams>()
-    );
-    assert_eq!(
-        wgsl.len(),
-        rust.len(),
-        "field count: WGSL {:?} vs Rust {:?}",
-        wgsl.iter().map(|f| &f.0).collect::<Vec<_>>(),
-        rust.iter().map(|f| f.0).collect::<Vec<_>>()
-    );
-    for ((wname, woff, wsize), (rname, roff, rsize)) in wgsl.iter().zip(&rust) {
-        // Rust's private padding field is `_pad`; WGSL names cannot start with `_`.
-        let rname = rname.trim_start_matches('_');
+    let rust: Vec<(String, String, usize, usize)> = StepParams::WGSL_FIELDS
+        .iter()
+        .map(|f| (f.wgsl_name().to_owned(), f.wgsl_type(), f.offset, f.size))
+        .collect();
+    assert_eq!(wgsl.len(), rust.len(), "StepParams member count");
+    for (w, r) in wgsl.iter().zip(&rust) {
         assert_eq!(
-            (wname.as_str(), *woff as usize, *wsize as usize),
-            (rname, *roff, *rsize),
-            "StepParams member (name, offset, size): WGSL vs Rust"
+            w, r,
+            "StepParams member (name, type, offset, size): WGSL vs Rust"
         );
     }
 }
 
-/// (name, offset, size) of every field of `StepParams`, read from src/params.rs: the names and
-/// order from the source, the offsets and sizes from the compiled struct.
-fn rust_step_params_fields() -> Vec<(&'static str, usize, usize)> {
-    let src = repo_file("src/params.rs");
-    let body = &src[src.find("pub struct StepParams {").expect("struct")..];
-    let body = &body[..body.find("\n}\n").expect("end of struct")];
-    let names: Vec<String> = body
-        .lines()
-        .filter_map(|l| l.trim().strip_prefix("pub "))
-        .filter_map(|l| l.split(':').next())
-        .filter(|n| !n.starts_with("struct"))
-        .map(str::to_owned)
+/// The names of the `const` declarations (module or function scope) in WGSL source `src`, one
+/// per line that starts with `const` (comment lines do not).
+fn wgsl_const_names(src: &str) -> BTreeSet<String> {
+    src.lines()
+        .filter_map(|l| l.trim().strip_prefix("const "))
+        .map(|rest| {
+            rest.trim_start()
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect()
+        })
+        .collect()
+}
+
+/// A constant is written once: no file under shaders/ declares a constant that a generated head
+/// already defines from its Rust value (the stages' prelude, the SNGNN passes' part of it, the
+/// standalone shaders' head). Naga rejects such a pair only where both meet in one assembled
+/// shader; this catches it in any file.
+#[test]
+fn shaders_do_not_redefine_generated_constants() {
+    let generated: BTreeSet<String> = [sngnn_prelude(), wgsl::standalone_head()]
+        .iter()
+        .flat_map(|head| wgsl_const_names(head))
         .collect();
-    let offsets = step_params_offsets();
-    assert_eq!(
-        names.iter().map(String::as_str).collect::<Vec<_>>(),
-        offsets.iter().map(|f| f.0).collect::<Vec<_>>(),
-        "the offset table below must list src/params.rs's fields in order"
-    );
-    let mut sized = Vec::new();
-    for (k, &(name, off)) in offsets.iter().enumerate() {
-        let end = offsets
-            .get(k + 1)
-            .map_or(std::mem::size_of::<socnav::StepParams>(), |n| n.1);
-        sized.push((name, off, end - off));
+    for name in [
+        "WORKGROUP_SIZE",
+        "REWARD_SNGNN",
+        "SNGNN_WEIGHT",
+        "CONTACT_SLOP",
+        "GEO_POLY64_COS",
+        "SN_FRAME_PERIOD",
+        "STATUS_EMPTY",
+    ] {
+        assert!(generated.contains(name), "the generated heads lack {name}");
     }
-    sized
-}
-
-macro_rules! offsets {
-    ($($f:ident),* $(,)?) => {
-        vec![$((stringify!($f), std::mem::offset_of!(socnav::StepParams, $f))),*]
-    };
-}
-
-fn step_params_offsets() -> Vec<(&'static str, usize)> {
-    offsets!(
-        dt,
-        episode_length,
-        robot_radius,
-        goal_radius,
-        robot_max_speed,
-        robot_max_rotation,
-        holonomic,
-        human_radius,
-        human_goal_radius,
-        human_max_speed,
-        speed_threshold,
-        gaze_angle,
-        fov_angle,
-        prob_avoid_robot,
-        human_policy,
-        group_radius,
-        group_goal_radius,
-        group_noise_std,
-        human_laptop_distance,
-        laptop_width,
-        laptop_length,
-        plant_radius,
-        table_width,
-        table_length,
-        wall_thickness,
-        wall_segment_size,
-        margin,
-        shape,
-        corridors,
-        size_x_min,
-        size_x_max,
-        size_y_min,
-        size_y_max,
-        counts,
-        p_crowd_dispersal,
-        p_laptop_dispersal,
-        p_crowd_formation,
-        p_laptop_formation,
-        reward_kind,
-        reward_reach,
-        reward_out_of_map,
-        reward_timeout,
-        reward_collision,
-        reward_alive,
-        reward_distance_scale,
-        reward_discomfort_distance,
-        reward_discomfort_factor,
-        reward_personal_space_weight,
-        reward_personal_space_distance,
-        reward_obstacle_weight,
-        reward_obstacle_distance,
-        reward_stalled_weight,
-        reward_acceleration_weight,
-        obs_padded,
-        obs_robot_velocity,
-        obs_world_frame,
-        obs_partial,
-        obs_fov,
-        obs_range,
-        obs_noise_on,
-        obs_noise,
-        orca_actual_velocity,
-        group_velocity_divided,
-        laptop_user_half_side,
-        dsrnn_pseudo_humans,
-        autoreset,
-        seed_lo,
-        seed_hi,
-        replay,
-        contact_shape,
-        _pad,
-    )
+    let mut files = Vec::new();
+    wgsl_files(&shaders_dir(), &mut files);
+    let mut twice = Vec::new();
+    for p in &files {
+        let rel = p.strip_prefix(shaders_dir()).expect("under shaders/");
+        for name in wgsl_const_names(&read(p)).intersection(&generated) {
+            twice.push(format!("shaders/{}: {name}", rel.display()));
+        }
+    }
+    assert!(
+        twice.is_empty(),
+        "constants the generated heads define from Rust, declared again in a shader: {twice:?}"
+    );
 }
 
 /// The 32-bit pattern of every hexadecimal literal in `src`: integers as written (without `_`

@@ -56,10 +56,9 @@ const ORCA_OVERFLOW_OBSTACLE_NEIGHBORS: u32 = 2u;
 const ORCA_OVERFLOW_LINES: u32 = 4u;
 const ORCA_OVERFLOW_OBSTACLE_VERTICES: u32 = 8u;
 
-// RVO2's RVO_EPSILON: the f32 nearest 1e-5 (Rust `1e-5_f32`).
-const ORCA_RVO_EPSILON: f32 = 0x1.4f8b58p-17f;
-// `1.0 + 1e-3` evaluated in f32, as Rust folds it in `obstacle_neighbors`.
-const ORCA_OBSTACLE_REJECT_FACTOR: f32 = 0x1.00418ap0f;
+// The prelude defines ORCA_RVO_EPSILON (RVO2's RVO_EPSILON, Rust `orca::RVO_EPSILON`) and
+// ORCA_OBSTACLE_REJECT_FACTOR (the obstacle prefilter's margin, Rust
+// `orca::OBSTACLE_REJECT_FACTOR`) from the Rust constants.
 
 // ---- vector.rs ----------------------------------------------------------------------------------
 

@@ -9,11 +9,9 @@
 //
 // Rust `Option<View>` is `MaybeView` (`some == false`: everything is visible); Rust
 // `sees(view, shape)` is `perception_maybe_sees_disc` / `perception_maybe_sees_rect`.
-
-// Rust `FULL_VIEW_TOLERANCE`: the f32 nearest 0.1.
-const PERCEPTION_FULL_VIEW_TOLERANCE: f32 = 0x1.99999ap-4f;
-// Rust `f32::MAX`, the far end of a ray's slab test.
-const PERCEPTION_F32_MAX: f32 = 0x1.fffffep+127f;
+//
+// The prelude defines PERCEPTION_FULL_VIEW_TOLERANCE (Rust `FULL_VIEW_TOLERANCE`) and
+// PERCEPTION_F32_MAX (Rust `f32::MAX`, the far end of a ray's slab test) from the Rust values.
 
 // Rust `View`: the apex (m) and the unit directions of the clockwise (heading − fov/2) and
 // counter-clockwise (heading + fov/2) bounding rays; `wide` when the opening exceeds π.

@@ -7,10 +7,8 @@
 // forces), w = 1/√3. Only the obstacles and humans in the walker's field of view push it
 // (common/perception.wgsl); the robot, when the walker avoids it this step, pushes it seen or not.
 // Library file (no entry point) over the prelude's `sf`/`su`/`params`. Same operations in the
-// same order as the Rust file; change both files in the same commit.
-
-// Rust `W`: the weight of each force group, the f32 of 0.577_350_26 (1/√3).
-const SFM_W: f32 = 0x1.279a74p-1f;
+// same order as the Rust file; change both files in the same commit. SFM_W, the weight of each
+// force group (1/√3), comes from the prelude (Rust `sfm::W`).
 
 // Rust `Params`: the per-episode SFM parameters of an environment.
 struct SfmParams {

@@ -5,13 +5,9 @@
 // robot-frame poses kept for the next step's velocities. Needs the SNGNN prelude
 // (`backend::wgsl::sngnn_prelude`) and the history's sizes in the batch layout (`batch.sn_frames`,
 // `batch.sn_frame_people`, ...). Same operations in the same order as the Rust, so that lavapipe computes the CPU's bits. Change both in the same commit.
-
-// frame::ADVANCE_SCALE (9.4), ROTATION_SCALE (10.32), FRAME_PERIOD (0.2 s) as f32.
-const SN_ADVANCE_SCALE: f32 = 0x1.2ccccc0p3f;
-const SN_MAX_ADVANCE: f32 = 3.5;
-const SN_ROTATION_SCALE: f32 = 0x1.4a3d70p3f;
-const SN_MAX_ROTATION: f32 = 4.0;
-const SN_FRAME_PERIOD: f32 = 0x1.99999ap-3f;
+//
+// The SNGNN prelude defines frame.rs's constants from their Rust values: SN_ADVANCE_SCALE,
+// SN_MAX_ADVANCE, SN_ROTATION_SCALE, SN_MAX_ROTATION and SN_FRAME_PERIOD (s).
 
 // frame::RobotPose: a robot pose (m, m, rad; world) with the cos and sin of its heading.
 struct SnRobot {

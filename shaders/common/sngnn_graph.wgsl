@@ -10,13 +10,10 @@
 // Loop budget (llvmpipe stops every loop after 65535 iterations per invocation): zeroing the
 // regions costs (batch.sn_u32_stride + batch.sn_f32_stride) / 8 iterations, a frame about 3 x nodes +
 // 2 x people x segments; tests/sngnn_graph.rs bounds the total for every shipped config.
-
-// graph.rs's constants: /10 positions, 0.1.1's MAX_HUMANS, 97 cm segments, 1.5 m wall links.
-const SN_POSITION_SCALE: f32 = 10.0;
-const SN_MAX_HUMANS_SQ: f32 = 225.0;
-const SN_MAX_HUMANS: f32 = 15.0;
-const SN_SEGMENT_CM: f32 = 97.0;
-const SN_HUMAN_WALL_THRESHOLD: f32 = 1.5;
+//
+// The SNGNN prelude defines graph.rs's constants from their Rust values: SN_POSITION_SCALE (/10
+// positions), SN_MAX_HUMANS (0.1.1's MAX_HUMANS) and SN_MAX_HUMANS_SQ (its square, as Rust folds
+// it), SN_SEGMENT_CM (97 cm segments), SN_HUMAN_WALL_THRESHOLD (1.5 m wall links).
 
 // graph::Layout: where one frame's nodes go (the same for every frame of a graph).
 struct SnLayout {

@@ -84,8 +84,8 @@ pub use kdtree::AgentKdTree;
 pub use lines::{Line, push_agent_lines, push_obstacle_lines};
 pub use lp::{lp1, lp2, lp3};
 pub use neighbors::{
-    Neighbor, agent_neighbors, insert_agent_neighbor, insert_obstacle_neighbor, obstacle_neighbors,
-    obstacle_neighbors_tree, obstacle_range_sq,
+    Neighbor, OBSTACLE_REJECT_FACTOR, agent_neighbors, insert_agent_neighbor,
+    insert_obstacle_neighbor, obstacle_neighbors, obstacle_neighbors_tree, obstacle_range_sq,
 };
 pub use obstacle_build::process_obstacles;
 pub use obstacles::{NONE, ObstacleScratch, ObstacleSet, ObstacleTree, ObstacleVerts, RVO_EPSILON};

@@ -17,6 +17,11 @@
 use super::obstacles::{NONE, ObstacleTree, ObstacleVerts};
 use super::vector::{Vec2, dist_sq_point_segment, left_of};
 
+/// Margin factor of the bounding-box prefilter of obstacle edges (`1.0 + 1e-3`, folded in f32):
+/// a squared box distance above `range_sq` times this rejects the edge. It keeps f32 rounding of
+/// the box distance from rejecting an edge the exact test would accept.
+pub const OBSTACLE_REJECT_FACTOR: f32 = 1.0 + 1e-3;
+
 /// One selected neighbour: the sort key and the index of the agent (or the start vertex of
 /// the obstacle edge).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -158,7 +163,7 @@ pub fn obstacle_neighbors(
     // Edges whose bounding box is out of range cannot be within range: the box contains the
     // segment. The margin keeps f32 rounding of the box distance from rejecting an edge the exact
     // test below would accept, so the prefilter changes no result, only skips work.
-    let reject_sq = range_sq * (1.0 + 1e-3);
+    let reject_sq = range_sq * OBSTACLE_REJECT_FACTOR;
     for v in 0..obstacles.len() {
         let a = obstacles.point(v);
         let b = obstacles.point(obstacles.next(v));

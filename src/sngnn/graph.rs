@@ -26,13 +26,13 @@ use crate::params::StepParams;
 use crate::state::{Caps, StateChunk, caps};
 
 /// Positions are divided by this (m) for the node features (0.1.1: /10, walls cm/1000).
-const POSITION_SCALE: f32 = 10.0;
+pub const POSITION_SCALE: f32 = 10.0;
 /// 0.1.1's `MAX_HUMANS`, the room's normaliser.
-const MAX_HUMANS: f32 = 15.0;
+pub const MAX_HUMANS: f32 = 15.0;
 /// Wall segment length (cm) the split aims at.
-const WALL_SEGMENT_CM: f32 = 97.0;
+pub const WALL_SEGMENT_CM: f32 = 97.0;
 /// A person and a wall segment closer than this (m) are linked.
-const HUMAN_WALL_THRESHOLD: f32 = 1.5;
+pub const HUMAN_WALL_THRESHOLD: f32 = 1.5;
 /// Walls an environment can have (`Caps::walls` is at most 12).
 pub const MAX_WALLS: usize = 16;
 

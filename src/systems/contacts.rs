@@ -16,9 +16,9 @@ use crate::pipeline::Batch;
 use crate::state::{NONE, StateChunk, role};
 
 /// Softness of the contact (m), MPE's `contact_margin`.
-const MARGIN: f32 = 1e-3;
+pub const MARGIN: f32 = 1e-3;
 /// Stiffness of the contact, MPE's `contact_force`.
-const STIFFNESS: f32 = 100.0;
+pub const STIFFNESS: f32 = 100.0;
 /// Overlap (m) that does not count as a contact: the f32 rounding of a position update. ORCA
 /// stops a walker exactly at an obstacle's surface (RVO2's obstacle constraint), and may hold it
 /// there for many steps; 0.1.1 moves it in f64 and leaves it outside by ~1e-8 m, socnav's f32

@@ -16,7 +16,8 @@ use std::cell::RefCell;
 use crate::fixed::Fixed;
 use crate::geometry::{Disc, Rect, Shape};
 use crate::orca::{
-    ObstacleScratch, ObstacleSet, ObstacleVerts, OrcaAgent, obstacle_range_sq, process_obstacles,
+    OBSTACLE_REJECT_FACTOR, ObstacleScratch, ObstacleSet, ObstacleVerts, OrcaAgent,
+    obstacle_range_sq, process_obstacles,
 };
 use crate::params::StepParams;
 use crate::state::{NONE, StateChunk, group_kind};
@@ -61,7 +62,7 @@ pub fn with_visible<R>(
     // As RVO2's neighbour search, with a margin so that f32 rounding of the bounding-box distance
     // never calls far a polygon whose edges the search would accept.
     let range_sq = obstacle_range_sq(agent.time_horizon_obst, agent.max_speed, agent.radius);
-    let reject_sq = range_sq * (1.0 + 1e-3);
+    let reject_sq = range_sq * OBSTACLE_REJECT_FACTOR;
     let mut polygons: Fixed<Polygon, MAX_POLYGONS> = Fixed::default();
     let (mut all, mut near) = (0, false);
     for_each_polygon(p, s, e, |seen_as, polygon| {

@@ -85,10 +85,10 @@ pub fn dsrnn_discomfort(p: &StepParams, d_min: f32) -> f32 {
     }
 }
 
-/// `StepParams::reward_kind` of the SNGNN-v2 reward.
-const REWARD_SNGNN: u32 = 1;
-/// 0.1.1's weight of the SNGNN term.
-const SNGNN_WEIGHT: f32 = 1.0;
+/// `StepParams::reward_kind` of the SNGNN-v2 reward (the shaders get it from the prelude).
+pub const REWARD_SNGNN: u32 = 1;
+/// 0.1.1's weight of the SNGNN term (the shaders get it from the prelude).
+pub const SNGNN_WEIGHT: f32 = 1.0;
 
 /// SNGNN-v2's discomfort of this step in [0, 1]: the step's frame joins the history, the graph
 /// of the selected frames goes through the network, and the room node's first output is

@@ -12,7 +12,7 @@ use crate::state::{StateChunk, group_kind, role};
 use super::perception::{self, View};
 
 /// Weight of each force group (0.1.1: 1/√3 each).
-const W: f32 = 0.577_350_26;
+pub const W: f32 = 0.577_350_26;
 
 /// Per-episode SFM parameters of an environment.
 #[derive(Debug, Clone, Copy)]

@@ -21,6 +21,9 @@
 use super::kit::{Binding, bind_buffers, bytes_of, map_and_read, storage_bindings, storage_buffer};
 use super::{AdapterSummary, GpuDevice};
 use crate::backend::wgsl;
+use crate::backend::wgsl::sngnn_status::{
+    BAD_GRAPH as STATUS_BAD_GRAPH, EMPTY as STATUS_EMPTY, UNSUPPORTED as STATUS_UNSUPPORTED,
+};
 use crate::error::SimError;
 use crate::sngnn::model::{MAX_WIDTH, Model, Output};
 use crate::sngnn::packed::PackedLayout;
@@ -28,11 +31,6 @@ use crate::sngnn::pieces::Tables;
 
 /// Invocations per workgroup of both entry points.
 const WORKGROUP: u32 = 64;
-/// Status bits of an environment (`shaders/sngnn.wgsl`).
-const STATUS_UNSUPPORTED: u32 = 1;
-const STATUS_BAD_GRAPH: u32 = 2;
-/// Not an error: the graph has no nodes, so the environment is not scored.
-const STATUS_EMPTY: u32 = 4;
 /// Storage bindings of the shader, in order: params, graph u32, graph f32, CSR, table floats,
 /// table index, h in, h out, outputs, status; `true` where read-only.
 const BINDINGS: [bool; 10] = [
