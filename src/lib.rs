@@ -28,6 +28,7 @@ pub mod episodes;
 pub mod error;
 pub mod fixed;
 pub mod geometry;
+pub mod limits;
 pub mod math;
 pub mod orca;
 pub mod outputs;

@@ -15,6 +15,7 @@ use std::cell::RefCell;
 
 use crate::fixed::Fixed;
 use crate::geometry::{Disc, Rect, Shape};
+use crate::limits::MAX_POLYGONS;
 use crate::orca::{
     ObstacleScratch, ObstacleSet, ObstacleVerts, OrcaAgent, obstacle_range_sq, process_obstacles,
 };
@@ -24,9 +25,6 @@ use crate::state::{NONE, StateChunk, group_kind};
 use super::perception::{self, View};
 
 type Polygon = [[f32; 2]; 4];
-
-/// Most obstacle polygons of one environment.
-pub const MAX_POLYGONS: usize = 256;
 
 thread_local! {
     static BUILD: RefCell<(ObstacleScratch, ObstacleSet)> = RefCell::new(Default::default());
