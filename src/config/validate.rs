@@ -239,7 +239,7 @@ fn check_counts(c: &Config, v: &mut Problems) {
             c.counts.max_laptop_users()
         ));
     }
-    let polygons = crate::state::caps::max_obstacle_polygons(c);
+    let polygons = super::bounds::max_obstacle_polygons(c);
     if polygons > MAX_POLYGONS {
         v.0.push(format!(
             "at most {MAX_POLYGONS} ORCA obstacles per environment (walls, tables, laptops, \

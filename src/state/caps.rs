@@ -1,6 +1,7 @@
 //! Fixed capacities of the batched state, taken from a config's maximum counts. Every per-entity
 //! column has one of these strides; the GPU backend sizes its buffers and shader arrays from them.
 
+use crate::config::bounds::{SocialSlots, max_obstacle_polygons, max_walls, social_slots};
 use crate::config::{Config, RewardKind, Shape};
 
 /// Capacities (slots per environment) of every entity kind.
@@ -112,63 +113,6 @@ pub(crate) fn for_each_room(
     }
 }
 
-/// Slots for humans, groups, laptops and laptop users, formations during an episode included.
-struct SocialCaps {
-    humans: usize,
-    groups: usize,
-    laptops: usize,
-    laptop_users: usize,
-}
-
-fn social_caps(c: &Config) -> SocialCaps {
-    let n = &c.counts;
-    let humans = n.max_humans().max(0) as usize;
-    let configured_groups = n.max_groups().max(0) as usize;
-    // Crowd formation turns lone walkers into new groups of at least 2 members.
-    let groups = if c.events.crowd_formation_probability > 0.0 {
-        configured_groups.max(humans / 2)
-    } else {
-        configured_groups
-    };
-    let laptops = n.max_laptops().max(0) as usize;
-    // Laptop-use formation seats walkers at free laptops: at most one user per laptop.
-    let laptop_users = if c.events.laptop_formation_probability > 0.0 {
-        laptops
-    } else {
-        n.max_laptop_users().max(0) as usize
-    };
-    SocialCaps {
-        humans,
-        groups,
-        laptops,
-        laptop_users,
-    }
-}
-
-/// The most ORCA obstacle polygons an environment of `c` can have: walls, tables, laptops,
-/// plants, laptop users and standing groups (validation bounds it by the step's scratch).
-pub fn max_obstacle_polygons(c: &Config) -> usize {
-    let max = |r: [i32; 2]| r[1].max(0) as usize;
-    let k = social_caps(c);
-    max_walls(c)
-        + max(c.counts.tables)
-        + k.laptops
-        + max(c.counts.plants)
-        + k.laptop_users
-        + k.groups
-}
-
-/// Wall rectangles: the room's outline (4, or 8 for an L) and 4 corridor walls.
-fn max_walls(c: &Config) -> usize {
-    let base = match c.room.shape {
-        Shape::NoWalls => 0,
-        Shape::Square | Shape::Rectangle => 4,
-        Shape::L | Shape::Random => 8,
-    };
-    let corridors = if c.room.corridors && base > 0 { 4 } else { 0 };
-    base + corridors
-}
-
 /// Capacities of the SNGNN frame history and previous-pose cache (spec 7.2-7.4).
 struct SngnnCaps {
     frames: usize,
@@ -213,12 +157,12 @@ impl Caps {
     pub fn from_config(c: &Config) -> Self {
         let n = &c.counts;
         let max = |r: [i32; 2]| r[1].max(0) as usize;
-        let SocialCaps {
+        let SocialSlots {
             humans,
             groups,
             laptops,
             laptop_users,
-        } = social_caps(c);
+        } = social_slots(c);
         let walls = max_walls(c);
         let corridors = c.room.corridors && c.room.shape != Shape::NoWalls;
         let wall_segments = max_wall_segments(c);
