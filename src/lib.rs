@@ -37,6 +37,7 @@ pub mod pipeline;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod rng;
+pub mod room;
 pub mod scenario;
 pub mod sngnn;
 pub mod spec;

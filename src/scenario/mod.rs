@@ -5,7 +5,6 @@
 //! plants, tables, laptops, moving groups, standing groups, laptop users, then the walls' ids and
 //! the goals. Human slots are then laid out in observation order (see [`crate::state`]).
 
-pub mod layout;
 pub mod place;
 
 use crate::error::SimError;
@@ -13,8 +12,8 @@ use crate::geometry::{Disc, Rect, Shape};
 use crate::math;
 use crate::params::{StepParams, count, shape_code};
 use crate::rng::{RngStream, stream_id};
+use crate::room::{self, RoomLayout};
 use crate::state::{NONE, StateChunk, blocker_kind, group_kind, policy, role, room_shape};
-use layout::RoomLayout;
 use place::{Kind, SamplingBox, SpawnList};
 
 /// RNG stream kind of scenario generation (`sub` = attempt).
@@ -100,10 +99,10 @@ fn generate(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngStream) -
     let n = draw_counts(p, rng);
     let (shape, x, y, l_location) = draw_room(p, rng);
     draw_human_params(p, s, e, rng);
-    let mut room = RoomLayout::default();
-    layout::build(p, rng, shape, x, y, l_location, &mut room);
+    let mut layout = RoomLayout::default();
+    room::build(p, rng, shape, x, y, l_location, &mut layout);
     let mut spawn = SpawnList::default();
-    write_room(s, e, shape, x, y, &room, &mut spawn);
+    write_room(s, e, shape, x, y, &layout, &mut spawn);
     let area = SamplingBox::new(p, x, y);
     let mut g = Gen {
         p,

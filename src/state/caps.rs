@@ -3,6 +3,8 @@
 
 use crate::config::bounds::{SocialSlots, max_obstacle_polygons, max_walls, social_slots};
 use crate::config::{Config, RewardKind, Shape};
+use crate::params::StepParams;
+use crate::room::{self, RoomLayout, room_shape};
 
 /// Capacities (slots per environment) of every entity kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -53,7 +55,6 @@ const SPLIT_VERTICES_PER_VERTEX: usize = 1;
 /// (every room size, shape and L location is built), bounded for corridor walls (their doors are
 /// continuous draws: each corridor line gives at most ceil(L / s) + 2 segments).
 fn max_wall_segments(c: &Config) -> usize {
-    use crate::scenario::layout;
     let step = c.objects.wall_segment_size;
     let mut most = 0u32;
     for_each_room(c, |room, x, y| {
@@ -61,7 +62,7 @@ fn max_wall_segments(c: &Config) -> usize {
             .walls
             .as_slice()
             .iter()
-            .map(|w| layout::segment_count(w.length, step))
+            .map(|w| room::segment_count(w.length, step))
             .sum();
         if c.room.corridors {
             let line = x.max(y);
@@ -75,13 +76,7 @@ fn max_wall_segments(c: &Config) -> usize {
 /// Call `visit` with the outer walls of every room the config can build (each size, shape and
 /// L location, corridors left out) and its size (m): what capacities that depend on the walls
 /// take their maximum over.
-pub(crate) fn for_each_room(
-    c: &Config,
-    mut visit: impl FnMut(&crate::scenario::layout::RoomLayout, f32, f32),
-) {
-    use crate::params::StepParams;
-    use crate::scenario::layout::{self, RoomLayout};
-    use crate::state::room_shape;
+pub(crate) fn for_each_room(c: &Config, mut visit: impl FnMut(&RoomLayout, f32, f32)) {
     let mut p = StepParams::new(c, 0, Default::default());
     p.corridors = 0;
     let shapes: &[u32] = match c.room.shape {
@@ -92,7 +87,7 @@ pub(crate) fn for_each_room(
         Shape::Random => &[room_shape::RECTANGLE, room_shape::SQUARE, room_shape::L],
     };
     let mut rng = crate::rng::RngStream::new(0, 0, 0, 0);
-    let mut room = RoomLayout::default();
+    let mut layout = RoomLayout::default();
     for &shape in shapes {
         let square = shape != room_shape::RECTANGLE;
         for x in c.room.size_x[0]..=c.room.size_x[1] {
@@ -105,8 +100,8 @@ pub(crate) fn for_each_room(
                 let locations = if shape == room_shape::L { 0..4 } else { 0..1 };
                 for loc in locations {
                     let (x, y) = (x as f32, y as f32);
-                    layout::build(&p, &mut rng, shape, x, y, loc, &mut room);
-                    visit(&room, x, y);
+                    room::build(&p, &mut rng, shape, x, y, loc, &mut layout);
+                    visit(&layout, x, y);
                 }
             }
         }
