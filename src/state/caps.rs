@@ -31,8 +31,8 @@ pub struct Caps {
     pub blockers: usize,
     /// ORCA obstacle vertices after RVO2's processing (which may split edges).
     pub obstacle_vertices: usize,
-    /// Frames the SNGNN frame history holds (`sngnn::history::capacity_for` the time step); 0
-    /// without the SNGNN reward, so that other configs carry no SNGNN columns at all.
+    /// Frames the SNGNN frame history holds ([`capacity_for`] the time step); 0 without the SNGNN
+    /// reward, so that other configs carry no SNGNN columns at all.
     pub frames: usize,
     /// People per frame: every human (0 without the SNGNN reward).
     pub frame_people: usize,
@@ -108,6 +108,23 @@ pub(crate) fn for_each_room(c: &Config, mut visit: impl FnMut(&RoomLayout, f32, 
     }
 }
 
+/// Frames stacked in one SNGNN graph at most (0.1.1's `N_INTERVALS`).
+pub const MAX_GRAPH_FRAMES: usize = 3;
+
+/// Frames the SNGNN frame history must hold so that [`select`](crate::sngnn::history::select)
+/// finds every frame it would take in 0.1.1's unbounded list, at time step `dt` (s). The last
+/// frame taken lies two intervals back; an interval is ⌈1 s / dt⌉ steps, or one more where dt
+/// divides 1 s in decimal but not in binary (dt = 0.1 or 0.2: 0.1.1's f64 timestamps can fall a
+/// rounding short of 1 s apart), so F = 2 (⌈1/dt⌉ + 1) + 1 (25 frames at dt = 0.1 s). At
+/// dt ≥ 1 s every step is an interval: F = 3.
+pub fn capacity_for(dt: f32) -> usize {
+    if dt >= 1.0 {
+        return MAX_GRAPH_FRAMES;
+    }
+    let interval_steps = (1.0 / f64::from(dt)).ceil() as usize + 1;
+    (MAX_GRAPH_FRAMES - 1) * interval_steps + 1
+}
+
 /// Capacities of the SNGNN frame history and previous-pose cache (spec 7.2-7.4).
 struct SngnnCaps {
     frames: usize,
@@ -137,7 +154,7 @@ fn sngnn_caps(
     let max = |r: [i32; 2]| r[1].max(0) as usize;
     let objects = laptops + max(c.counts.plants) + max(c.counts.tables);
     SngnnCaps {
-        frames: crate::sngnn::history::capacity_for(c.episode.time_step),
+        frames: capacity_for(c.episode.time_step),
         people: humans,
         objects,
         // A group of n members gives n (n − 1) entries (each pair twice, spec 7.2): at most
