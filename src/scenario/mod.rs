@@ -26,7 +26,8 @@ pub const MAX_SCENARIO_ATTEMPTS: u32 = 16;
 type Attempt = Result<(), &'static str>;
 
 /// Generate a new episode for environment `e` of the chunk (batch index `env_index`), then count
-/// the episode. Errors when no attempt could place everything.
+/// the episode. Errors when no attempt could place everything. What the scenario does not draw
+/// (counters, caches, obstacles) is then initialised by `systems::reset::init_episode`.
 pub fn reset_env(
     p: &StepParams,
     s: &mut StateChunk,
@@ -45,7 +46,6 @@ pub fn reset_env(
         match generate(p, s, e, &mut rng) {
             Ok(()) => {
                 s.episode[e] = episode.wrapping_add(1);
-                crate::systems::reset::init_episode(p, s, e);
                 return Ok(());
             }
             Err(what) => last = what,
