@@ -14,12 +14,12 @@
 use crate::limits::MAX_GROUP;
 use crate::math;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::rng::RngStream;
 use crate::scenario::place::{self, Pose};
 use crate::spec::event;
 use crate::state::{NONE, StateChunk, forming, group_kind, policy, role};
 
+use super::Batch;
 use super::regroup;
 
 /// RNG stream kind of formation completions (`sub` = tick).

@@ -7,9 +7,10 @@
 //! (0.1.1 re-evaluates a leaked loop variable instead).
 
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::spec::{EPISODE_KEYS, info};
 use crate::state::StateChunk;
+
+use super::Batch;
 
 /// Personal-space threshold (m) between the robot's surface and a human's centre ("the value
 /// used in SEAN 2.0").

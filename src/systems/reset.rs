@@ -3,9 +3,10 @@
 
 use crate::math;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::scenario;
 use crate::state::StateChunk;
+
+use super::Batch;
 
 /// Initialise everything of environment `e` that is not drawn by the scenario: counters, robot
 /// command, shadow robot, metric accumulators, reward memory, observation caches, the SNGNN frame

@@ -7,14 +7,14 @@
 //! advances it by ω·dt twice); a pseudo-human's heading is its own group's (0.1.1 takes it from a
 //! leaked loop variable).
 
-use super::metrics;
 use crate::geometry::origin_segment_distance;
 use crate::math;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::sngnn::{self, Scorer};
 use crate::spec::info;
 use crate::state::StateChunk;
+
+use super::{Batch, metrics};
 
 /// Score the step of environment `e`.
 pub fn reward(p: &StepParams, b: &mut Batch<'_>, e: usize) {

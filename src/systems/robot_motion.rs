@@ -4,7 +4,8 @@
 
 use crate::math::{self, FRAC_PI_2};
 use crate::params::StepParams;
-use crate::pipeline::Batch;
+
+use super::Batch;
 
 /// The physical command (v_x, v_y in m/s, robot frame; ω in rad/s) of an action in [-1, 1]³:
 /// each component scaled, then clipped to its maximum; the lateral one is 0 for diff-drive.

@@ -29,9 +29,10 @@ mod records;
 use crate::math;
 use crate::outputs::OutChunk;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::spec::{RECORD, entity};
 use crate::state::StateChunk;
+
+use super::Batch;
 
 pub use noise::STREAM_OBS_NOISE;
 
