@@ -169,7 +169,7 @@ impl OrcaWorld {
         }
         if others.robot {
             let vel = if actual {
-                let (vx, vy) = super::reward::robot_world_velocity(s, e);
+                let (vx, vy) = super::robot_motion::robot_world_velocity(s, e);
                 [vx, vy]
             } else {
                 [0.0, 0.0]

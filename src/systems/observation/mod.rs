@@ -91,7 +91,7 @@ impl<const WORLD: bool, const PARTIAL: bool> Frame<WORLD, PARTIAL> {
     fn of(p: &StepParams, s: &StateChunk, e: usize) -> Self {
         let theta = s.robot_theta[e];
         let (sin, cos) = math::sin_cos(theta);
-        let (vx, vy) = super::reward::robot_world_velocity(s, e);
+        let (vx, vy) = super::robot_motion::robot_world_velocity(s, e);
         let (cx, cy) = (s.robot_vx[e], s.robot_vy[e]);
         let (ref_theta, object_v, object_w) = if WORLD {
             (0.0, 0.0, 0.0)
