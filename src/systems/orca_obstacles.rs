@@ -42,6 +42,21 @@ pub fn rebuild_if_dirty(p: &StepParams, s: &mut StateChunk, e: usize) {
     s.obstacles_dirty[e] = 0;
 }
 
+/// The processed ORCA obstacles of environment `e`.
+pub fn obstacles<'s>(s: &'s StateChunk, e: usize) -> ObstacleVerts<'s> {
+    let b = e * s.strides.obstacle_vertices;
+    let n = b + s.n_obstacle_vertices[e] as usize;
+    ObstacleVerts {
+        x: &s.ov_x[b..n],
+        y: &s.ov_y[b..n],
+        dir_x: &s.ov_dir_x[b..n],
+        dir_y: &s.ov_dir_y[b..n],
+        next: &s.ov_next[b..n],
+        prev: &s.ov_prev[b..n],
+        convex: &s.ov_convex[b..n],
+    }
+}
+
 /// Run `f` on the processed obstacles of environment `e` that `view` sees, for `agent`'s solve:
 /// the cached set when it sees them all (bit for bit what a walker seeing everything gets); no
 /// obstacles when none it sees comes within its obstacle range (split edges are pieces of the
@@ -70,7 +85,7 @@ pub fn with_visible<R>(
         }
     });
     if polygons.len() == all {
-        return f(&super::orca_world::obstacles(s, e));
+        return f(&obstacles(s, e));
     }
     if !near {
         return f(&ObstacleVerts::EMPTY);
