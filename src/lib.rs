@@ -23,6 +23,7 @@
 
 pub mod backend;
 pub mod config;
+pub mod document;
 mod env;
 pub mod episodes;
 pub mod error;

@@ -35,8 +35,9 @@ use rayon::prelude::*;
 
 use super::Scorer;
 use crate::config::{Config, RewardKind};
+use crate::document;
 use crate::geometry::Disc;
-use crate::state::{BatchState, Caps, StateChunk, blocker_kind, document};
+use crate::state::{BatchState, Caps, StateChunk, blocker_kind};
 use crate::systems::{reward, world};
 use crate::{Actions, AutoresetMode, BatchEnv, EnvOptions, SimError, StepParams};
 

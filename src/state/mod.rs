@@ -16,7 +16,6 @@
 
 pub mod caps;
 pub mod columns;
-pub mod document;
 
 pub use crate::room::{blocker_kind, room_shape};
 pub use caps::Caps;
