@@ -29,6 +29,7 @@ pub mod episodes;
 pub mod error;
 pub mod fixed;
 pub mod geometry;
+pub mod heatmap;
 pub mod limits;
 pub mod math;
 pub mod orca;

@@ -22,7 +22,6 @@ pub mod frame;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod graph;
-pub mod heatmap;
 pub mod history;
 pub mod model;
 pub mod packed;
