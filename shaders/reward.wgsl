@@ -13,7 +13,8 @@
 // The prelude defines REWARD_SNGNN (`StepParams::reward_kind` of the SNGNN-v2 reward) and
 // SNGNN_WEIGHT (0.1.1's weight of its term) from the Rust constants.
 
-// The robot's world-frame velocity (m/s), computed with the motion.
+// The robot's world-frame velocity (m/s), computed with the motion (Rust
+// `robot_motion::robot_world_velocity`).
 fn robot_world_velocity(e: u32) -> vec2<f32> {
     return vec2<f32>(sf[batch.c_robot_wvx + e], sf[batch.c_robot_wvy + e]);
 }

@@ -3,13 +3,14 @@
 
 use crate::backend::{Backend, BackendChoice};
 use crate::config::{Config, Kinematics, RewardKind};
+use crate::document;
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::{AutoresetMode, StepParams};
 use crate::pipeline::STAGES;
 use crate::sngnn::SngnnReward;
 use crate::spec::{DISCRETE_ACTIONS, ObsLayout};
-use crate::state::{BatchState, Caps, document};
+use crate::state::{BatchState, Caps};
 
 /// Options of a batch that are not part of the scenario configuration.
 #[derive(Debug, Clone, PartialEq, Eq)]

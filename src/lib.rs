@@ -23,11 +23,14 @@
 
 pub mod backend;
 pub mod config;
+pub mod document;
 mod env;
 pub mod episodes;
 pub mod error;
 pub mod fixed;
 pub mod geometry;
+pub mod heatmap;
+pub mod limits;
 pub mod math;
 pub mod orca;
 pub mod outputs;
@@ -36,6 +39,7 @@ pub mod pipeline;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod rng;
+pub mod room;
 pub mod scenario;
 pub mod sngnn;
 pub mod spec;

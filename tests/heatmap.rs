@@ -1,4 +1,4 @@
-//! The discomfort heatmap (`socnav::sngnn::heatmap`, `socnav heatmap`): the DSRNN field against a
+//! The discomfort heatmap (`socnav::heatmap`, `socnav heatmap`): the DSRNN field against a
 //! hand computation of spec 6.2 (no weights needed), the SNGNN-v2 field's range, masks,
 //! determinism and its shape around people (needs the weights: skipped loudly without them
 //! unless `REQUIRE_SNGNN=1`), and the command's output and errors.
@@ -8,8 +8,8 @@ mod common;
 use std::process::Command;
 
 use socnav::Config;
+use socnav::heatmap::{Heatmap, Scene, cell};
 use socnav::sngnn::Scorer;
-use socnav::sngnn::heatmap::{Heatmap, Scene, cell};
 
 fn no_progress(_: usize) {}
 

@@ -2,7 +2,7 @@
 //! records, the robot's field of view and sensor range, Gaussian sensor noise, and the interaction
 //! pairs of `info["interactions"]` (spec 5.2), with their recomputation for what is visible.
 //!
-//! Scenes are written by hand as state documents (the format of `src/state/document.rs`) and
+//! Scenes are written by hand as state documents (the format of `src/document.rs`) and
 //! loaded with `set_state`, which rewrites the observation; every expected value is worked out in
 //! the comments. Tolerances sit next to their asserts.
 

@@ -26,13 +26,13 @@ use std::collections::BTreeMap;
 
 use serde_json::{Value, json};
 use socnav::config::RewardKind;
+use socnav::document;
 use socnav::outputs::Outputs;
 use socnav::pipeline::{Batch, STAGES};
 use socnav::sngnn::frame::{RobotPose, wall_ends};
 use socnav::sngnn::history::{self, History};
 use socnav::sngnn::{EDGE_FEATURES, Graph, NODE_FEATURES, feature as graph_feature, graph};
 use socnav::spec::ObsLayout;
-use socnav::state::document;
 use socnav::state::{BatchState, Caps};
 use socnav::{AutoresetMode, Config, StepParams};
 

@@ -17,10 +17,11 @@ use std::collections::BTreeMap;
 
 use golden::{Episode, Step, config_for, golden_dir_or_skip, load_episodes, num};
 use serde_json::Value;
+use socnav::document;
 use socnav::rng::RngStream;
 use socnav::scenario::place::Pose;
 use socnav::spec::{EVENT_KEYS, event};
-use socnav::state::{BatchState, NONE, document, forming, role};
+use socnav::state::{BatchState, NONE, forming, role};
 use socnav::systems::social_events::{
     disperse_group, end_laptop_use, send_to_laptop, start_crowd_formation,
 };

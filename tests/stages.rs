@@ -1,5 +1,5 @@
 //! Hand-computed cases for the stages of the step (spec 4-6, 8), on exact scenes loaded with
-//! `set_state` from small JSON documents written here (the format of `src/state/document.rs`).
+//! `set_state` from small JSON documents written here (the format of `src/document.rs`).
 //!
 //! Every expected value is worked out by hand in the comments. Floats are compared with small
 //! tolerances because the simulator computes in f32 (ulp 6e-8 at 1, 5e-7 at 5 m) with its own

@@ -107,7 +107,7 @@ fn orca_world_candidate(e: u32, tag: u32) -> OrcaNeighbor {
         return OrcaNeighbor(vec2<f32>(sf[batch.c_h_x + slot], sf[batch.c_h_y + slot]), vel, params.human_radius);
     }
     if (kind == ORCA_WORLD_ROBOT) {
-        // Rust `reward::robot_world_velocity`.
+        // Rust `robot_motion::robot_world_velocity`.
         if (actual) {
             vel = vec2<f32>(sf[batch.c_robot_wvx + e], sf[batch.c_robot_wvy + e]);
         }

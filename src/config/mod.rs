@@ -9,6 +9,7 @@
 //! serde's `deny_unknown_fields`, which would stop at the first one and hide every other problem.
 //! `configs/README.md` documents every key with its unit, default and valid range.
 
+pub mod bounds;
 mod socnavgym;
 mod validate;
 

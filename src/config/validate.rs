@@ -2,9 +2,7 @@
 //! and the offending value, so a user fixes a file in one go.
 
 use super::{Config, ObsFrame, Shape};
-use crate::scenario::place::MAX_GROUP;
-use crate::state::columns::MAX_PERMUTE;
-use crate::systems::orca_obstacles::MAX_POLYGONS;
+use crate::limits::{MAX_GROUP, MAX_PERMUTE, MAX_POLYGONS};
 
 /// Fraction of the sampling area that the footprints of the largest entity counts may cover.
 /// Random sequential placement of discs jams at about 55 % coverage (the random sequential
@@ -241,7 +239,7 @@ fn check_counts(c: &Config, v: &mut Problems) {
             c.counts.max_laptop_users()
         ));
     }
-    let polygons = crate::state::caps::max_obstacle_polygons(c);
+    let polygons = super::bounds::max_obstacle_polygons(c);
     if polygons > MAX_POLYGONS {
         v.0.push(format!(
             "at most {MAX_POLYGONS} ORCA obstacles per environment (walls, tables, laptops, \

@@ -1,4 +1,4 @@
-//! The discomfort heatmap figure ([`crate::sngnn::heatmap`]): two panels side by side, SNGNN-v2
+//! The discomfort heatmap figure ([`crate::heatmap`]): two panels side by side, SNGNN-v2
 //! on the left and DSRNN on the right, each the room seen from above with the field painted
 //! cell by cell and the scene drawn over it (the robot's goal, furniture, walls, humans with
 //! their headings, group and laptop links); masked cells (the robot would touch a human, an
@@ -18,8 +18,8 @@ use super::scene::{self, Scene};
 use super::view::View;
 use crate::error::SimError;
 use crate::geometry::Rect;
+use crate::heatmap::Heatmap;
 use crate::params::StepParams;
-use crate::sngnn::heatmap::Heatmap;
 use crate::state::BatchState;
 
 /// What to draw: a heatmap, the scene it was computed on, and the caption's words.
@@ -139,7 +139,7 @@ fn panel(
     for row in 0..h.n {
         for col in 0..h.n {
             let k = row * h.n + col;
-            let colour = if h.mask[k] == crate::sngnn::heatmap::cell::OUTSIDE {
+            let colour = if h.mask[k] == crate::heatmap::cell::OUTSIDE {
                 continue;
             } else if values[k].is_nan() {
                 MASKED

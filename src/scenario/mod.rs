@@ -5,7 +5,6 @@
 //! plants, tables, laptops, moving groups, standing groups, laptop users, then the walls' ids and
 //! the goals. Human slots are then laid out in observation order (see [`crate::state`]).
 
-pub mod layout;
 pub mod place;
 
 use crate::error::SimError;
@@ -13,8 +12,8 @@ use crate::geometry::{Disc, Rect, Shape};
 use crate::math;
 use crate::params::{StepParams, count, shape_code};
 use crate::rng::{RngStream, stream_id};
+use crate::room::{self, RoomLayout};
 use crate::state::{NONE, StateChunk, blocker_kind, group_kind, policy, role, room_shape};
-use layout::RoomLayout;
 use place::{Kind, SamplingBox, SpawnList};
 
 /// RNG stream kind of scenario generation (`sub` = attempt).
@@ -27,7 +26,8 @@ pub const MAX_SCENARIO_ATTEMPTS: u32 = 16;
 type Attempt = Result<(), &'static str>;
 
 /// Generate a new episode for environment `e` of the chunk (batch index `env_index`), then count
-/// the episode. Errors when no attempt could place everything.
+/// the episode. Errors when no attempt could place everything. What the scenario does not draw
+/// (counters, caches, obstacles) is then initialised by `systems::reset::init_episode`.
 pub fn reset_env(
     p: &StepParams,
     s: &mut StateChunk,
@@ -46,7 +46,6 @@ pub fn reset_env(
         match generate(p, s, e, &mut rng) {
             Ok(()) => {
                 s.episode[e] = episode.wrapping_add(1);
-                crate::systems::reset::init_episode(p, s, e);
                 return Ok(());
             }
             Err(what) => last = what,
@@ -100,10 +99,10 @@ fn generate(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngStream) -
     let n = draw_counts(p, rng);
     let (shape, x, y, l_location) = draw_room(p, rng);
     draw_human_params(p, s, e, rng);
-    let mut room = RoomLayout::default();
-    layout::build(p, rng, shape, x, y, l_location, &mut room);
+    let mut layout = RoomLayout::default();
+    room::build(p, rng, shape, x, y, l_location, &mut layout);
     let mut spawn = SpawnList::default();
-    write_room(s, e, shape, x, y, &room, &mut spawn);
+    write_room(s, e, shape, x, y, &layout, &mut spawn);
     let area = SamplingBox::new(p, x, y);
     let mut g = Gen {
         p,

@@ -122,8 +122,7 @@ impl SamplingBox {
     }
 }
 
-/// Most members a group may have: group layouts live in stack arrays (validation enforces it).
-pub const MAX_GROUP: usize = 64;
+pub use crate::limits::MAX_GROUP;
 
 /// A pose (m, m, rad).
 pub type Pose = (f32, f32, f32);

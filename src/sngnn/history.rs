@@ -35,21 +35,8 @@ pub use write::{begin_frame, clear, push_link, push_object, push_person};
 
 /// Seconds between the frames a graph stacks (0.1.1's `FRAMES_INTERVAL`).
 pub const FRAMES_INTERVAL: f64 = 1.0;
-/// Frames stacked in one graph at most (0.1.1's `N_INTERVALS`).
-pub const MAX_GRAPH_FRAMES: usize = 3;
-
-/// Frames a history must hold so that [`select`] finds every frame it would take in 0.1.1's
-/// unbounded list, at time step `dt` (s). The last frame taken lies two intervals back; an
-/// interval is ⌈1 s / dt⌉ steps, or one more where dt divides 1 s in decimal but not in binary
-/// (dt = 0.1 or 0.2: 0.1.1's f64 timestamps can fall a rounding short of 1 s apart), so F =
-/// 2 (⌈1/dt⌉ + 1) + 1 (25 frames at dt = 0.1 s). At dt ≥ 1 s every step is an interval: F = 3.
-pub fn capacity_for(dt: f32) -> usize {
-    if dt >= 1.0 {
-        return MAX_GRAPH_FRAMES;
-    }
-    let interval_steps = (1.0 / f64::from(dt)).ceil() as usize + 1;
-    (MAX_GRAPH_FRAMES - 1) * interval_steps + 1
-}
+// The history's capacity is a capacity of the state's columns, computed with the others.
+pub use crate::state::caps::{MAX_GRAPH_FRAMES, capacity_for};
 
 /// The time step (s) as 0.1.1 holds it: the config's decimal value as an f64 (`time_step: 0.2`
 /// is the f64 0.2, not the f32 0.2000000030), recovered as the decimal with the fewest digits

@@ -20,7 +20,6 @@
 mod cache;
 pub mod frame;
 pub mod graph;
-pub mod heatmap;
 pub mod history;
 pub mod model;
 pub mod packed;

@@ -1,7 +1,10 @@
 //! Fixed capacities of the batched state, taken from a config's maximum counts. Every per-entity
 //! column has one of these strides; the GPU backend sizes its buffers and shader arrays from them.
 
+use crate::config::bounds::{SocialSlots, max_obstacle_polygons, max_walls, social_slots};
 use crate::config::{Config, RewardKind, Shape};
+use crate::params::StepParams;
+use crate::room::{self, RoomLayout, room_shape};
 
 /// Capacities (slots per environment) of every entity kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -28,8 +31,8 @@ pub struct Caps {
     pub blockers: usize,
     /// ORCA obstacle vertices after RVO2's processing (which may split edges).
     pub obstacle_vertices: usize,
-    /// Frames the SNGNN frame history holds (`sngnn::history::capacity_for` the time step); 0
-    /// without the SNGNN reward, so that other configs carry no SNGNN columns at all.
+    /// Frames the SNGNN frame history holds ([`capacity_for`] the time step); 0 without the SNGNN
+    /// reward, so that other configs carry no SNGNN columns at all.
     pub frames: usize,
     /// People per frame: every human (0 without the SNGNN reward).
     pub frame_people: usize,
@@ -52,7 +55,6 @@ const SPLIT_VERTICES_PER_VERTEX: usize = 1;
 /// (every room size, shape and L location is built), bounded for corridor walls (their doors are
 /// continuous draws: each corridor line gives at most ceil(L / s) + 2 segments).
 fn max_wall_segments(c: &Config) -> usize {
-    use crate::scenario::layout;
     let step = c.objects.wall_segment_size;
     let mut most = 0u32;
     for_each_room(c, |room, x, y| {
@@ -60,7 +62,7 @@ fn max_wall_segments(c: &Config) -> usize {
             .walls
             .as_slice()
             .iter()
-            .map(|w| layout::segment_count(w.length, step))
+            .map(|w| room::segment_count(w.length, step))
             .sum();
         if c.room.corridors {
             let line = x.max(y);
@@ -74,13 +76,7 @@ fn max_wall_segments(c: &Config) -> usize {
 /// Call `visit` with the outer walls of every room the config can build (each size, shape and
 /// L location, corridors left out) and its size (m): what capacities that depend on the walls
 /// take their maximum over.
-pub(crate) fn for_each_room(
-    c: &Config,
-    mut visit: impl FnMut(&crate::scenario::layout::RoomLayout, f32, f32),
-) {
-    use crate::params::StepParams;
-    use crate::scenario::layout::{self, RoomLayout};
-    use crate::state::room_shape;
+pub(crate) fn for_each_room(c: &Config, mut visit: impl FnMut(&RoomLayout, f32, f32)) {
     let mut p = StepParams::new(c, 0, Default::default());
     p.corridors = 0;
     let shapes: &[u32] = match c.room.shape {
@@ -91,7 +87,7 @@ pub(crate) fn for_each_room(
         Shape::Random => &[room_shape::RECTANGLE, room_shape::SQUARE, room_shape::L],
     };
     let mut rng = crate::rng::RngStream::new(0, 0, 0, 0);
-    let mut room = RoomLayout::default();
+    let mut layout = RoomLayout::default();
     for &shape in shapes {
         let square = shape != room_shape::RECTANGLE;
         for x in c.room.size_x[0]..=c.room.size_x[1] {
@@ -104,69 +100,29 @@ pub(crate) fn for_each_room(
                 let locations = if shape == room_shape::L { 0..4 } else { 0..1 };
                 for loc in locations {
                     let (x, y) = (x as f32, y as f32);
-                    layout::build(&p, &mut rng, shape, x, y, loc, &mut room);
-                    visit(&room, x, y);
+                    room::build(&p, &mut rng, shape, x, y, loc, &mut layout);
+                    visit(&layout, x, y);
                 }
             }
         }
     }
 }
 
-/// Slots for humans, groups, laptops and laptop users, formations during an episode included.
-struct SocialCaps {
-    humans: usize,
-    groups: usize,
-    laptops: usize,
-    laptop_users: usize,
-}
+/// Frames stacked in one SNGNN graph at most (0.1.1's `N_INTERVALS`).
+pub const MAX_GRAPH_FRAMES: usize = 3;
 
-fn social_caps(c: &Config) -> SocialCaps {
-    let n = &c.counts;
-    let humans = n.max_humans().max(0) as usize;
-    let configured_groups = n.max_groups().max(0) as usize;
-    // Crowd formation turns lone walkers into new groups of at least 2 members.
-    let groups = if c.events.crowd_formation_probability > 0.0 {
-        configured_groups.max(humans / 2)
-    } else {
-        configured_groups
-    };
-    let laptops = n.max_laptops().max(0) as usize;
-    // Laptop-use formation seats walkers at free laptops: at most one user per laptop.
-    let laptop_users = if c.events.laptop_formation_probability > 0.0 {
-        laptops
-    } else {
-        n.max_laptop_users().max(0) as usize
-    };
-    SocialCaps {
-        humans,
-        groups,
-        laptops,
-        laptop_users,
+/// Frames the SNGNN frame history must hold so that [`select`](crate::sngnn::history::select)
+/// finds every frame it would take in 0.1.1's unbounded list, at time step `dt` (s). The last
+/// frame taken lies two intervals back; an interval is ⌈1 s / dt⌉ steps, or one more where dt
+/// divides 1 s in decimal but not in binary (dt = 0.1 or 0.2: 0.1.1's f64 timestamps can fall a
+/// rounding short of 1 s apart), so F = 2 (⌈1/dt⌉ + 1) + 1 (25 frames at dt = 0.1 s). At
+/// dt ≥ 1 s every step is an interval: F = 3.
+pub fn capacity_for(dt: f32) -> usize {
+    if dt >= 1.0 {
+        return MAX_GRAPH_FRAMES;
     }
-}
-
-/// The most ORCA obstacle polygons an environment of `c` can have: walls, tables, laptops,
-/// plants, laptop users and standing groups (validation bounds it by the step's scratch).
-pub fn max_obstacle_polygons(c: &Config) -> usize {
-    let max = |r: [i32; 2]| r[1].max(0) as usize;
-    let k = social_caps(c);
-    max_walls(c)
-        + max(c.counts.tables)
-        + k.laptops
-        + max(c.counts.plants)
-        + k.laptop_users
-        + k.groups
-}
-
-/// Wall rectangles: the room's outline (4, or 8 for an L) and 4 corridor walls.
-fn max_walls(c: &Config) -> usize {
-    let base = match c.room.shape {
-        Shape::NoWalls => 0,
-        Shape::Square | Shape::Rectangle => 4,
-        Shape::L | Shape::Random => 8,
-    };
-    let corridors = if c.room.corridors && base > 0 { 4 } else { 0 };
-    base + corridors
+    let interval_steps = (1.0 / f64::from(dt)).ceil() as usize + 1;
+    (MAX_GRAPH_FRAMES - 1) * interval_steps + 1
 }
 
 /// Capacities of the SNGNN frame history and previous-pose cache (spec 7.2-7.4).
@@ -198,7 +154,7 @@ fn sngnn_caps(
     let max = |r: [i32; 2]| r[1].max(0) as usize;
     let objects = laptops + max(c.counts.plants) + max(c.counts.tables);
     SngnnCaps {
-        frames: crate::sngnn::history::capacity_for(c.episode.time_step),
+        frames: capacity_for(c.episode.time_step),
         people: humans,
         objects,
         // A group of n members gives n (n − 1) entries (each pair twice, spec 7.2): at most
@@ -213,12 +169,12 @@ impl Caps {
     pub fn from_config(c: &Config) -> Self {
         let n = &c.counts;
         let max = |r: [i32; 2]| r[1].max(0) as usize;
-        let SocialCaps {
+        let SocialSlots {
             humans,
             groups,
             laptops,
             laptop_users,
-        } = social_caps(c);
+        } = social_slots(c);
         let walls = max_walls(c);
         let corridors = c.room.corridors && c.room.shape != Shape::NoWalls;
         let wall_segments = max_wall_segments(c);

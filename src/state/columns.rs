@@ -197,15 +197,15 @@ macro_rules! soa {
             /// Reorder the first `used` slots of kind `kind` of local environment `env`: slot `k`
             /// receives the old slot `perm[k]`, in every column of that kind; slots from
             /// `perm.len()` to `used` (entries the permutation drops) are zeroed. Used by the social
-            /// events, which regroup humans, groups and laptops (rare; at most [`MAX_PERMUTE`](crate::state::columns::MAX_PERMUTE)
+            /// events, which regroup humans, groups and laptops (rare; at most [`MAX_PERMUTE`](crate::limits::MAX_PERMUTE)
             /// slots).
             pub fn permute(&mut self, kind: &str, env: usize, perm: &[u32], used: usize) {
-                assert!(used <= $crate::state::columns::MAX_PERMUTE && perm.len() <= used, "permutation of {} of {used} slots", perm.len());
+                assert!(used <= $crate::limits::MAX_PERMUTE && perm.len() <= used, "permutation of {} of {used} slots", perm.len());
                 $(
                     if stringify!($kind) == kind {
                         let s = self.strides.$kind();
                         let col = &mut self.$col[env * s..env * s + used];
-                        let mut tmp = [<$ty>::default(); $crate::state::columns::MAX_PERMUTE];
+                        let mut tmp = [<$ty>::default(); $crate::limits::MAX_PERMUTE];
                         for (k, &from) in perm.iter().enumerate() {
                             tmp[k] = col[from as usize];
                         }
@@ -258,10 +258,6 @@ pub fn fnv(mut h: u64, word: u32) -> u64 {
     }
     h
 }
-
-/// Most slots of one kind a permutation can reorder (humans, groups, laptops, laptop users of
-/// one environment); `BatchEnv::new` rejects configs whose capacities exceed it.
-pub const MAX_PERMUTE: usize = 256;
 
 /// FNV-1a offset basis.
 pub const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;

@@ -16,8 +16,8 @@
 
 pub mod caps;
 pub mod columns;
-pub mod document;
 
+pub use crate::room::{blocker_kind, room_shape};
 pub use caps::Caps;
 use columns::soa;
 
@@ -64,26 +64,6 @@ pub mod forming {
     pub const CROWD: u32 = 1;
     /// The seat at a laptop.
     pub const LAPTOP: u32 = 2;
-}
-
-/// Kind of an invisible spawn blocker (column `b_kind`): which entity type 0.1.1 used for it.
-pub mod blocker_kind {
-    /// The removed block of an L-shaped room (0.1.1 uses a laptop-typed rectangle).
-    pub const L_BLOCK: u32 = 0;
-    /// A corridor door gap (0.1.1 uses a wall-typed rectangle).
-    pub const DOOR: u32 = 1;
-}
-
-/// Room shape of the current episode (column `room_shape`).
-pub mod room_shape {
-    /// Square.
-    pub const SQUARE: u32 = 0;
-    /// Rectangle.
-    pub const RECTANGLE: u32 = 1;
-    /// L-shaped.
-    pub const L: u32 = 2;
-    /// No walls.
-    pub const NO_WALLS: u32 = 3;
 }
 
 soa! {

@@ -3,7 +3,8 @@
 //! environment so that `begin_step` resets it at the next step; DISABLED leaves it to the caller.
 
 use crate::params::{AutoresetMode, StepParams};
-use crate::pipeline::Batch;
+
+use super::Batch;
 
 /// Apply the batch's autoreset mode to an environment that finished at this step.
 pub fn autoreset(p: &StepParams, b: &mut Batch<'_>, e: usize) {

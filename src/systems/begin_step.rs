@@ -5,7 +5,8 @@
 //! first, as 0.1.1 does.
 
 use crate::params::StepParams;
-use crate::pipeline::Batch;
+
+use super::Batch;
 
 /// Clear the per-step output flags and pick the environments whose dynamics run this step.
 pub fn begin_step(p: &StepParams, b: &mut Batch<'_>, e: usize) {

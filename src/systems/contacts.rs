@@ -12,8 +12,9 @@
 use crate::geometry::{Disc, Rect, disc_disc_as, disc_rect_as};
 use crate::math;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::state::{NONE, StateChunk, role};
+
+use super::Batch;
 
 /// Softness of the contact (m), MPE's `contact_margin`.
 pub const MARGIN: f32 = 1e-3;

@@ -11,14 +11,15 @@
 //! A walker heading for a laptop seat sits down when within its goal radius of the seat: it is
 //! snapped to the seat pose and becomes a laptop user (keeping its speed, as 0.1.1 does).
 
+use crate::limits::MAX_GROUP;
 use crate::math;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::rng::RngStream;
-use crate::scenario::place::{self, MAX_GROUP, Pose};
+use crate::scenario::place::{self, Pose};
 use crate::spec::event;
 use crate::state::{NONE, StateChunk, forming, group_kind, policy, role};
 
+use super::Batch;
 use super::regroup;
 
 /// RNG stream kind of formation completions (`sub` = tick).

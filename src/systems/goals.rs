@@ -7,10 +7,11 @@
 
 use crate::geometry::{Disc, Shape, disc_disc};
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::rng::RngStream;
 use crate::scenario::place::{MAX_TRIES, SamplingBox};
 use crate::state::{StateChunk, group_kind};
+
+use super::Batch;
 
 /// RNG stream kind of goal re-sampling (`sub` = tick).
 pub const STREAM_GOALS: u32 = 2;

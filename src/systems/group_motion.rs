@@ -5,8 +5,9 @@
 
 use crate::math;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::state::group_kind;
+
+use super::Batch;
 
 /// RNG stream kind of the group velocity noise (`sub` = tick).
 pub const STREAM_GROUP_NOISE: u32 = 4;

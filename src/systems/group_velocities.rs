@@ -4,9 +4,9 @@
 //! robot). All groups are solved from the positions at the start of the step.
 
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::state::group_kind;
 
+use super::Batch;
 use super::orca_world::{self, Others};
 
 /// Compute the ORCA velocity of each moving group of environment `e` into `g_vx`, `g_vy`.

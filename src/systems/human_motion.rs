@@ -7,9 +7,9 @@
 
 use crate::math;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::state::{StateChunk, policy};
 
+use super::Batch;
 use super::orca_world::{self, Others};
 use super::perception::View;
 

@@ -7,9 +7,10 @@
 //! (0.1.1 re-evaluates a leaked loop variable instead).
 
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::spec::{EPISODE_KEYS, info};
 use crate::state::StateChunk;
+
+use super::Batch;
 
 /// Personal-space threshold (m) between the robot's surface and a human's centre ("the value
 /// used in SEAN 2.0").
@@ -145,7 +146,7 @@ pub fn min_human_distance(s: &StateChunk, e: usize) -> f32 {
 /// Steps until the robot and a human touch at constant velocities, the smallest over the humans;
 /// 0 when already touching, -1 when none approaches (spec 8.2).
 pub fn time_to_collision(p: &StepParams, s: &StateChunk, e: usize) -> f32 {
-    let (vrx, vry) = super::reward::robot_world_velocity(s, e);
+    let (vrx, vry) = super::robot_motion::robot_world_velocity(s, e);
     let (rx, ry) = (s.robot_x[e], s.robot_y[e]);
     let reach = p.robot_radius + p.human_radius;
     let hb = e * s.strides.humans;

@@ -1,9 +1,69 @@
 //! The stages of the step, one file each (named in [`crate::pipeline::STAGES`]), plus the shared
-//! pieces they use: world queries, the ORCA glue, the social force model and resets.
+//! pieces they use: [`Batch`] (what a stage runs on), world queries, the ORCA glue, the social
+//! force model and resets.
 
+use crate::error::SimError;
+use crate::outputs::OutChunk;
 use crate::params::StepParams;
 use crate::rng::{RngStream, stream_id};
+use crate::sngnn::Scorer;
 use crate::state::StateChunk;
+
+/// Everything a stage reads and writes for a contiguous range of environments.
+#[derive(Debug)]
+pub struct Batch<'a> {
+    /// State of the environments.
+    pub s: StateChunk<'a>,
+    /// Their outputs.
+    pub o: OutChunk<'a>,
+    /// Their actions: 3 floats per environment in [-1, 1] (forward, lateral, rotation), already
+    /// validated at the API boundary.
+    pub actions: &'a [f32],
+    /// The SNGNN-v2 scorer, when the reward is SNGNN-v2's (shared, read-only).
+    pub sngnn: Option<&'a Scorer>,
+    /// The first error a stage met (only resets can fail: an unsatisfiable scenario).
+    pub error: Option<SimError>,
+}
+
+impl<'a> Batch<'a> {
+    /// Split into the first `mid` environments and the rest.
+    pub fn split_at(self, mid: usize) -> (Batch<'a>, Batch<'a>) {
+        let (s0, s1) = self.s.split_at(mid);
+        let (o0, o1) = self.o.split_at(mid);
+        // Resets run without actions: both halves then get none.
+        let (a0, a1) = if self.actions.is_empty() {
+            (self.actions, self.actions)
+        } else {
+            self.actions.split_at(3 * mid)
+        };
+        (
+            Batch {
+                s: s0,
+                o: o0,
+                actions: a0,
+                sngnn: self.sngnn,
+                error: None,
+            },
+            Batch {
+                s: s1,
+                o: o1,
+                actions: a1,
+                sngnn: self.sngnn,
+                error: self.error,
+            },
+        )
+    }
+
+    /// Number of environments.
+    pub fn n_envs(&self) -> usize {
+        self.s.n_envs
+    }
+
+    /// Batch index of local environment `e` (keys the RNG).
+    pub fn env_index(&self, e: usize) -> u32 {
+        (self.s.first_env + e) as u32
+    }
+}
 
 /// The random stream of kind `kind` for this step of environment `e` (batch index `env`): keyed by
 /// the batch seed, the environment, its episode and the tick, so draws never depend on other

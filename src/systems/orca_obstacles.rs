@@ -15,6 +15,7 @@ use std::cell::RefCell;
 
 use crate::fixed::Fixed;
 use crate::geometry::{Disc, Rect, Shape};
+use crate::limits::MAX_POLYGONS;
 use crate::orca::{
     OBSTACLE_REJECT_FACTOR, ObstacleScratch, ObstacleSet, ObstacleVerts, OrcaAgent,
     obstacle_range_sq, process_obstacles,
@@ -25,9 +26,6 @@ use crate::state::{NONE, StateChunk, group_kind};
 use super::perception::{self, View};
 
 type Polygon = [[f32; 2]; 4];
-
-/// Most obstacle polygons of one environment.
-pub const MAX_POLYGONS: usize = 256;
 
 thread_local! {
     static BUILD: RefCell<(ObstacleScratch, ObstacleSet)> = RefCell::new(Default::default());
@@ -43,6 +41,21 @@ pub fn rebuild_if_dirty(p: &StepParams, s: &mut StateChunk, e: usize) {
     let cap = s.strides.obstacle_vertices;
     with_processed(cap, polygons.as_slice(), |set| store(s, e, set));
     s.obstacles_dirty[e] = 0;
+}
+
+/// The processed ORCA obstacles of environment `e`.
+pub fn obstacles<'s>(s: &'s StateChunk, e: usize) -> ObstacleVerts<'s> {
+    let b = e * s.strides.obstacle_vertices;
+    let n = b + s.n_obstacle_vertices[e] as usize;
+    ObstacleVerts {
+        x: &s.ov_x[b..n],
+        y: &s.ov_y[b..n],
+        dir_x: &s.ov_dir_x[b..n],
+        dir_y: &s.ov_dir_y[b..n],
+        next: &s.ov_next[b..n],
+        prev: &s.ov_prev[b..n],
+        convex: &s.ov_convex[b..n],
+    }
 }
 
 /// Run `f` on the processed obstacles of environment `e` that `view` sees, for `agent`'s solve:
@@ -73,7 +86,7 @@ pub fn with_visible<R>(
         }
     });
     if polygons.len() == all {
-        return f(&super::orca_world::obstacles(s, e));
+        return f(&obstacles(s, e));
     }
     if !near {
         return f(&ObstacleVerts::EMPTY);

@@ -15,12 +15,12 @@ use std::cell::RefCell;
 
 use crate::geometry::Shape;
 use crate::orca::{
-    Neighbor, ObstacleVerts, OrcaAgent, OrcaNeighbor, OrcaScratch, compute_new_velocity,
-    insert_agent_neighbor,
+    Neighbor, OrcaAgent, OrcaNeighbor, OrcaScratch, compute_new_velocity, insert_agent_neighbor,
 };
 use crate::params::StepParams;
 use crate::state::{StateChunk, group_kind};
 
+use super::orca_obstacles;
 use super::perception::{self, View};
 
 /// Reusable per-thread buffers (they keep their capacity, so a warm step does not allocate).
@@ -73,21 +73,6 @@ pub fn preferred(x: f32, y: f32, gx: f32, gy: f32, speed: f32) -> [f32; 2] {
     }
 }
 
-/// The processed ORCA obstacles of environment `e`.
-pub fn obstacles<'s>(s: &'s StateChunk, e: usize) -> ObstacleVerts<'s> {
-    let b = e * s.strides.obstacle_vertices;
-    let n = b + s.n_obstacle_vertices[e] as usize;
-    ObstacleVerts {
-        x: &s.ov_x[b..n],
-        y: &s.ov_y[b..n],
-        dir_x: &s.ov_dir_x[b..n],
-        dir_y: &s.ov_dir_y[b..n],
-        next: &s.ov_next[b..n],
-        prev: &s.ov_prev[b..n],
-        convex: &s.ov_convex[b..n],
-    }
-}
-
 /// An ORCA agent with the environment's per-episode parameters.
 pub fn agent(
     s: &StateChunk,
@@ -125,8 +110,14 @@ impl OrcaWorld {
         self.select(first);
         let (neighbors, scratch) = (&self.neighbors, &mut self.scratch);
         match &others.view {
-            None => compute_new_velocity(first, neighbors, &obstacles(s, e), p.dt, scratch),
-            Some(view) => super::orca_obstacles::with_visible(p, s, e, view, first, |seen| {
+            None => compute_new_velocity(
+                first,
+                neighbors,
+                &orca_obstacles::obstacles(s, e),
+                p.dt,
+                scratch,
+            ),
+            Some(view) => orca_obstacles::with_visible(p, s, e, view, first, |seen| {
                 compute_new_velocity(first, neighbors, seen, p.dt, scratch)
             }),
         }
@@ -169,7 +160,7 @@ impl OrcaWorld {
         }
         if others.robot {
             let vel = if actual {
-                let (vx, vy) = super::reward::robot_world_velocity(s, e);
+                let (vx, vy) = super::robot_motion::robot_world_velocity(s, e);
                 [vx, vy]
             } else {
                 [0.0, 0.0]

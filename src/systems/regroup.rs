@@ -9,9 +9,9 @@
 //! simple sort-and-permute costs nothing on average.
 
 use crate::fixed::Fixed;
+use crate::limits::MAX_PERMUTE;
 use crate::params::StepParams;
 use crate::rng::RngStream;
-use crate::state::columns::MAX_PERMUTE;
 use crate::state::{NONE, StateChunk, forming, group_kind, role};
 
 /// The next list position of environment `e`.

@@ -3,9 +3,10 @@
 
 use crate::math;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::scenario;
 use crate::state::StateChunk;
+
+use super::Batch;
 
 /// Initialise everything of environment `e` that is not drawn by the scenario: counters, robot
 /// command, shadow robot, metric accumulators, reward memory, observation caches, the SNGNN frame
@@ -108,6 +109,7 @@ pub fn reset_and_observe_keep_step_outputs(p: &StepParams, b: &mut Batch<'_>, e:
         b.error.get_or_insert(err);
         return;
     }
+    init_episode(p, &mut b.s, e);
     let info = b.o.strides.info();
     b.o.info[e * info..(e + 1) * info].fill(0.0);
     super::observation::write_observation(p, &mut b.s, &mut b.o, e);

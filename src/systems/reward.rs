@@ -7,14 +7,15 @@
 //! advances it by ω·dt twice); a pseudo-human's heading is its own group's (0.1.1 takes it from a
 //! leaked loop variable).
 
-use super::metrics;
 use crate::geometry::origin_segment_distance;
 use crate::math;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::sngnn::{self, Scorer};
 use crate::spec::info;
 use crate::state::StateChunk;
+
+use super::robot_motion::robot_world_velocity;
+use super::{Batch, metrics};
 
 /// Score the step of environment `e`.
 pub fn reward(p: &StepParams, b: &mut Batch<'_>, e: usize) {
@@ -124,13 +125,6 @@ fn with_extra_terms(p: &StepParams, s: &StateChunk, e: usize, mut r: f32) -> f32
         r += p.reward_acceleration_weight * metrics::speed(ax, ay);
     }
     r
-}
-
-/// The robot's world-frame velocity (m/s): its command turned by its heading, computed with the
-/// motion (`robot_wvx`, `robot_wvy`).
-#[inline]
-pub fn robot_world_velocity(s: &StateChunk, e: usize) -> (f32, f32) {
-    (s.robot_wvx[e], s.robot_wvy[e])
 }
 
 /// The smallest clearance (m) between the robot and any human over the next dt, assuming

@@ -4,7 +4,9 @@
 
 use crate::math::{self, FRAC_PI_2};
 use crate::params::StepParams;
-use crate::pipeline::Batch;
+use crate::state::StateChunk;
+
+use super::Batch;
 
 /// The physical command (v_x, v_y in m/s, robot frame; ω in rad/s) of an action in [-1, 1]³:
 /// each component scaled, then clipped to its maximum; the lateral one is 0 for diff-drive.
@@ -68,6 +70,13 @@ pub fn integrate(dt: f32, x: f32, y: f32, theta: f32, vx: f32, vy: f32, w: f32) 
 pub fn world_velocity(theta: f32, vx: f32, vy: f32) -> (f32, f32) {
     let m = integrate(0.0, 0.0, 0.0, theta, vx, vy, 0.0);
     (m.vx, m.vy)
+}
+
+/// The robot's world-frame velocity (m/s): its command turned by its heading, computed with the
+/// motion (`robot_wvx`, `robot_wvy`).
+#[inline]
+pub fn robot_world_velocity(s: &StateChunk, e: usize) -> (f32, f32) {
+    (s.robot_wvx[e], s.robot_wvy[e])
 }
 
 /// Apply this step's action to the robot.

@@ -9,9 +9,9 @@
 use crate::geometry::Disc;
 use crate::math;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::state::StateChunk;
 
+use super::Batch;
 use super::orca_world::{self, Others};
 
 /// Advance the shadow robot of environment `e`.

@@ -9,14 +9,14 @@
 
 use crate::fixed::Fixed;
 use crate::geometry::{Disc, Shape};
+use crate::limits::{MAX_GROUP, MAX_PERMUTE};
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::rng::RngStream;
-use crate::scenario::place::{self, MAX_GROUP, MAX_TRIES, Pose, SamplingBox};
+use crate::scenario::place::{self, MAX_TRIES, Pose, SamplingBox};
 use crate::spec::event;
-use crate::state::columns::MAX_PERMUTE;
 use crate::state::{NONE, StateChunk, forming, group_kind, policy, role};
 
+use super::Batch;
 use super::regroup;
 
 /// RNG stream kind of the social events (`sub` = tick).

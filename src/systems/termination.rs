@@ -6,8 +6,9 @@
 
 use crate::geometry::Disc;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::spec::info;
+
+use super::Batch;
 
 /// Outcome of the step for environment `e`.
 pub fn termination(p: &StepParams, b: &mut Batch<'_>, e: usize) {

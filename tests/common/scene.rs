@@ -1,4 +1,4 @@
-//! Hand-written scenes as state documents (the format of `src/state/document.rs`), loaded with
+//! Hand-written scenes as state documents (the format of `src/document.rs`), loaded with
 //! `set_state`: an empty 10 m room with the robot and its goal, then entities pushed into its
 //! lists.
 

@@ -1,13 +1,13 @@
 //! `socnav heatmap`: the SocNavGym paper's figure of discomfort around people for one scene,
-//! SNGNN-v2 beside DSRNN (`socnav::sngnn::heatmap` computes the fields, `socnav::render::heatmap`
+//! SNGNN-v2 beside DSRNN (`socnav::heatmap` computes the fields, `socnav::render::heatmap`
 //! draws them). Inputs are checked before the weights are loaded, so a bad argument fails fast.
 
 use std::time::Instant;
 
 use socnav::Config;
+use socnav::heatmap::{self, Scene, cell};
 use socnav::render::{self, heatmap::Figure};
 use socnav::sngnn::Scorer;
-use socnav::sngnn::heatmap::{self, Scene, cell};
 
 use crate::args::HeatmapArgs;
 

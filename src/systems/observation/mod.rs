@@ -29,9 +29,10 @@ mod records;
 use crate::math;
 use crate::outputs::OutChunk;
 use crate::params::StepParams;
-use crate::pipeline::Batch;
 use crate::spec::{RECORD, entity};
 use crate::state::StateChunk;
+
+use super::Batch;
 
 pub use noise::STREAM_OBS_NOISE;
 
@@ -90,7 +91,7 @@ impl<const WORLD: bool, const PARTIAL: bool> Frame<WORLD, PARTIAL> {
     fn of(p: &StepParams, s: &StateChunk, e: usize) -> Self {
         let theta = s.robot_theta[e];
         let (sin, cos) = math::sin_cos(theta);
-        let (vx, vy) = super::reward::robot_world_velocity(s, e);
+        let (vx, vy) = super::robot_motion::robot_world_velocity(s, e);
         let (cx, cy) = (s.robot_vx[e], s.robot_vy[e]);
         let (ref_theta, object_v, object_w) = if WORLD {
             (0.0, 0.0, 0.0)

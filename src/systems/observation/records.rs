@@ -270,7 +270,7 @@ pub(super) fn walls<const W: bool, const P: bool>(
             },
         };
         let sc = math::sin_cos(s.w_theta[w] - f.ref_theta);
-        let (full, rest) = crate::scenario::layout::segments(length, step);
+        let (full, rest) = crate::room::segments(length, step);
         // Every segment of a wall shares its record but for the position and the remainder's
         // radius: write the template, then the two coordinates.
         let mut template = [0.0f32; RECORD];

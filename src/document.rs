@@ -10,13 +10,17 @@
 //! "nan" (as in the golden files). Sizes that are config constants in socnav (radii, table and
 //! laptop sizes, wall thickness) must match the batch's config. A snapshot larger than the
 //! batch's capacities is an error naming the capacity.
+//!
+//! The module sits above the stages, not in `state`: loading a document recomputes what the stages
+//! derive (list positions, episode sums, formations, the robot's world velocity, the SNGNN
+//! history) with the stages' own code.
 
 use serde_json::{Map, Value, json};
 
-use super::{BatchState, NONE, blocker_kind, forming, group_kind, policy, role, room_shape};
 use crate::error::SimError;
 use crate::math;
 use crate::params::StepParams;
+use crate::state::{BatchState, NONE, blocker_kind, forming, group_kind, policy, role, room_shape};
 
 mod read;
 mod sngnn;

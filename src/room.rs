@@ -5,11 +5,35 @@
 //! L room's two inner walls are centred on the removed block's edges. Wall order and headings
 //! follow 0.1.1 (checked against the golden episodes' headers), because they fix the order and
 //! direction of the observed wall segments.
+//!
+//! Below the state: scenario generation builds an episode's room with it and `state::Caps` builds
+//! every room a config allows to size the wall columns. The codes of the state's `room_shape` and
+//! `b_kind` columns live here with the layouts that use them (`state` re-exports them).
 
 use crate::fixed::Fixed;
 use crate::math::{FRAC_PI_2, PI};
 use crate::params::StepParams;
 use crate::rng::RngStream;
+
+/// Kind of an invisible spawn blocker (column `b_kind`): which entity type 0.1.1 used for it.
+pub mod blocker_kind {
+    /// The removed block of an L-shaped room (0.1.1 uses a laptop-typed rectangle).
+    pub const L_BLOCK: u32 = 0;
+    /// A corridor door gap (0.1.1 uses a wall-typed rectangle).
+    pub const DOOR: u32 = 1;
+}
+
+/// Room shape of the current episode (column `room_shape`).
+pub mod room_shape {
+    /// Square.
+    pub const SQUARE: u32 = 0;
+    /// Rectangle.
+    pub const RECTANGLE: u32 = 1;
+    /// L-shaped.
+    pub const L: u32 = 2;
+    /// No walls.
+    pub const NO_WALLS: u32 = 3;
+}
 
 /// A wall or blocker rectangle (m, rad).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -56,7 +80,7 @@ pub fn segment_count(length: f32, step: f32) -> u32 {
     full + u32::from(rest > 0.0)
 }
 
-/// Build the walls of an `x` by `y` room (m) of shape `shape` (`state::room_shape::*`); `l_location`
+/// Build the walls of an `x` by `y` room (m) of shape `shape` ([`room_shape`]); `l_location`
 /// (0 top-right, 1 top-left, 2 bottom-right, 3 bottom-left) picks the L room's removed corner.
 pub fn build(
     p: &StepParams,
@@ -67,7 +91,6 @@ pub fn build(
     l_location: u32,
     out: &mut RoomLayout,
 ) {
-    use crate::state::room_shape;
     out.walls.clear();
     out.blockers.clear();
     let t = p.wall_thickness;
@@ -172,8 +195,7 @@ fn l_room(t: f32, x: f32, y: f32, loc: u32, out: &mut RoomLayout) -> (f32, f32) 
         length: lx,
         width: ly,
     };
-    out.blockers
-        .push((crate::state::blocker_kind::L_BLOCK, block));
+    out.blockers.push((blocker_kind::L_BLOCK, block));
     (lx, ly)
 }
 
@@ -232,7 +254,7 @@ fn corridor_wall(
     wall(out, t, rx, ry, theta, right_len);
     let (dx, dy) = at(c);
     out.blockers.push((
-        crate::state::blocker_kind::DOOR,
+        blocker_kind::DOOR,
         Piece {
             x: dx,
             y: dy,
@@ -259,7 +281,7 @@ mod tests {
         build(
             &params(),
             &mut rng,
-            crate::state::room_shape::SQUARE,
+            room_shape::SQUARE,
             10.0,
             10.0,
             0,
@@ -288,15 +310,7 @@ mod tests {
         // lroom_mixed seed 2: 11 m room, block removed top-right (7.333 x 3.667).
         let mut out = RoomLayout::default();
         let mut rng = RngStream::new(0, 0, 0, 0);
-        build(
-            &params(),
-            &mut rng,
-            crate::state::room_shape::L,
-            11.0,
-            11.0,
-            0,
-            &mut out,
-        );
+        build(&params(), &mut rng, room_shape::L, 11.0, 11.0, 0, &mut out);
         let expected = [
             (-1.833_333_3, 3.666_666_7, FRAC_PI_2, 3.666_666_5),
             (-3.666_666_5, 5.4, PI, 3.666_667),
@@ -329,15 +343,7 @@ mod tests {
         for k in 0..50 {
             let mut out = RoomLayout::default();
             let mut rng = RngStream::new(7, k, 0, 0);
-            build(
-                &p,
-                &mut rng,
-                crate::state::room_shape::RECTANGLE,
-                14.0,
-                11.0,
-                0,
-                &mut out,
-            );
+            build(&p, &mut rng, room_shape::RECTANGLE, 14.0, 11.0, 0, &mut out);
             assert_eq!(out.walls.len(), 8);
             assert_eq!(out.blockers.len(), 2);
             for (i, (_, door)) in out.blockers.as_slice().iter().enumerate() {

@@ -12,9 +12,9 @@
 //!   command, zero velocity), as if it had stood there during the step; the goal, the humans and
 //!   the objects stay as they are. Humans are not re-simulated for each placement.
 //! - **SNGNN-v2.** The frame is the one the reward would record for that placement on that step
-//!   ([`super::frame::record`]): positions and headings in the placed robot's frame, velocities
-//!   the backward differences from each entity's pose before the step (seen from the same
-//!   placement, since the robot did not move), command zero. The history holds only this frame,
+//!   ([`crate::sngnn::frame::record`]): positions and headings in the placed robot's frame,
+//!   velocities the backward differences from each entity's pose before the step (seen from the
+//!   same placement, since the robot did not move), command zero. The history holds only this frame,
 //!   so the graph is a single-frame graph (as on an episode's first step). The value is the
 //!   room node's q1 clipped to [0, 1], the reward's `DISCOMFORT_SNGNN`; the SNGNN reward term
 //!   is q1 − 1, so 1 is "no discomfort" and lower values are worse.
@@ -28,15 +28,19 @@
 //! Cells are independent: they are evaluated in parallel on rayon's pool, each thread with two
 //! one-environment states it reuses (no state per cell), so the fields do not depend on the
 //! thread count.
+//!
+//! A tool over the whole simulator (it runs a `BatchEnv`, loads state documents and calls the
+//! reward's terms), so it sits at the top beside `render`, not inside `sngnn`.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use rayon::prelude::*;
 
-use super::Scorer;
 use crate::config::{Config, RewardKind};
+use crate::document;
 use crate::geometry::Disc;
-use crate::state::{BatchState, Caps, StateChunk, blocker_kind, document};
+use crate::sngnn::{self, Scorer};
+use crate::state::{BatchState, Caps, StateChunk, blocker_kind};
 use crate::systems::{reward, world};
 use crate::{Actions, AutoresetMode, BatchEnv, EnvOptions, SimError, StepParams};
 
@@ -242,12 +246,12 @@ impl Scene {
         };
         // The entities' poses before the step, seen from the placement, are the previous poses
         // behind the frame's velocities.
-        super::frame::remember_poses(&mut before.chunk(), 0);
+        sngnn::frame::remember_poses(&mut before.chunk(), 0);
         after.sn_prev_x.copy_from_slice(&before.sn_prev_x);
         after.sn_prev_y.copy_from_slice(&before.sn_prev_y);
         after.sn_prev_theta.copy_from_slice(&before.sn_prev_theta);
         let mut c = after.chunk();
-        super::history::clear(&mut c, 0);
+        sngnn::history::clear(&mut c, 0);
         (reward::sngnn_discomfort(p, &mut c, scorer, 0), dsrnn)
     }
 }

@@ -3,10 +3,10 @@
 
 use serde_json::Value;
 
-use super::super::{BatchState, NONE, blocker_kind, forming, group_kind, policy, role};
 use super::{ROLE_NAMES, shape_code};
 use crate::error::SimError;
 use crate::params::StepParams;
+use crate::state::{BatchState, NONE, blocker_kind, forming, group_kind, policy, role};
 
 /// A JSON value with the path it was reached by.
 #[derive(Clone)]
