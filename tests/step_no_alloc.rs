@@ -89,9 +89,11 @@ fn a_warm_step_does_not_allocate() {
     let steps = 250;
     let n = allocations_per_run(named("exp2"), 256, 2, steps);
     // One worker beside the caller: one boxed job per step, plus its thread-local buffers
-    // (ORCA world, obstacle build: a handful) on their first use.
+    // (ORCA world, obstacle build, visible-obstacle subsets: a handful) on their first use, which
+    // depends on which thread takes which environments, and rayon's queues growing now and
+    // then (seen: 254 to 265 in 250 steps). One allocation per environment-step would be 64,000.
     assert!(
-        n <= steps + 8,
+        n <= steps + 32,
         "{n} allocations in {steps} warm steps on two threads"
     );
     println!("two threads: {n} allocations in {steps} steps");
