@@ -1,4 +1,4 @@
-// requires: common/reset.wgsl
+// requires: common/pool_reset.wgsl
 //
 // Twin of src/systems/autoreset.rs (stage `autoreset`): what happens to an environment whose
 // episode ended at this step. SAME_STEP keeps the final observation, interactions and info aside

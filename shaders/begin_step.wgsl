@@ -1,4 +1,4 @@
-// requires: common/reset.wgsl
+// requires: common/pool_reset.wgsl
 //
 // Twin of src/systems/begin_step.rs (stage `begin_step`): clear the per-step output flags, reset
 // an environment that finished at the previous step under NEXT_STEP (it returns its first

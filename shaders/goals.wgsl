@@ -1,11 +1,11 @@
 // requires: common/rng.wgsl
-// requires: common/goals.wgsl
+// requires: common/goal_sampling.wgsl
 //
 // Twin of src/systems/goals.rs (stage `goals`, spec 4.1 step 8): a lone walker within reach of
 // its goal (human radius + goal radius) gets a new goal; a moving group whose members are all
 // within reach of the group goal (human radius + the members' own goal radius,
 // `g_member_goal_radius`) gets a new group goal (and so do its members). New goals are
-// rejection-sampled in the margin box by `goals_sample_goal` (common/goals.wgsl, shared with the
+// rejection-sampled in the margin box by `goals_sample_goal` (common/goal_sampling.wgsl, shared with the
 // social events and formation), free of every entity where it is now and of every current goal;
 // after PLACE_MAX_TRIES tries the goal stays unchanged. Draws come from the step's STREAM_GOALS stream, in the Rust order.
 // Same operations in the same order as the Rust file; change both files in the same commit.

@@ -1,4 +1,4 @@
-// requires: common/reset.wgsl
+// requires: common/pool_reset.wgsl
 //
 // Twin of `CpuBackend::reset` (src/backend/cpu.rs): reset the environments the caller asked for
 // and write their first observations. Not a stage of the step: the GPU backend runs it alone for

@@ -1,4 +1,4 @@
-// requires: common/sngnn_graph.wgsl
+// requires: common/sngnn_graph_build.wgsl
 //
 // Pass `sngnn_graph` (not a stage of the step): what the reward stage does for SNGNN-v2 before
 // the network scores, on the device. For every stepping environment whose step is not terminal

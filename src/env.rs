@@ -258,6 +258,13 @@ impl BatchEnv {
         self.backend.state()
     }
 
+    /// How many GPU pipelines creating this batch compiled: 0 when an earlier batch in this
+    /// process compiled them on the same device (pipelines depend on the config's size classes,
+    /// never on the batch size), and always 0 on the CPU.
+    pub fn pipelines_compiled(&self) -> usize {
+        self.backend.pipelines_compiled()
+    }
+
     /// Time each stage of the following steps ([`BatchEnv::stage_seconds`]); off by default.
     pub fn set_stage_timing(&mut self, on: bool) {
         self.backend.set_stage_timing(on);

@@ -41,7 +41,7 @@ use crate::document;
 use crate::geometry::Disc;
 use crate::sngnn::{self, Scorer};
 use crate::state::{BatchState, Caps, StateChunk, blocker_kind};
-use crate::systems::{reward, world};
+use crate::systems::{reward, sngnn_score, world};
 use crate::{Actions, AutoresetMode, BatchEnv, EnvOptions, SimError, StepParams};
 
 /// Smallest grid side.
@@ -252,7 +252,7 @@ impl Scene {
         after.sn_prev_theta.copy_from_slice(&before.sn_prev_theta);
         let mut c = after.chunk();
         sngnn::history::clear(&mut c, 0);
-        (reward::sngnn_discomfort(p, &mut c, scorer, 0), dsrnn)
+        (sngnn_score::discomfort(p, &mut c, scorer, 0), dsrnn)
     }
 }
 

@@ -241,9 +241,10 @@ fn main_copies(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 ";
 
-/// The kernel's WGSL: the library with its requirements, then [`KERNEL`].
+/// The kernel's WGSL: the constants the step's shaders share with Rust, the library with its
+/// requirements, then [`KERNEL`].
 fn kernel_source() -> String {
-    let mut src = String::new();
+    let mut src = wgsl::shared_head();
     for p in wgsl::resolve("common/orca.wgsl").expect("orca.wgsl is embedded") {
         let _ = writeln!(src, "// ---- shaders/{p}");
         src.push_str(wgsl::source(p).expect("resolved files are embedded"));

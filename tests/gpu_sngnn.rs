@@ -1,4 +1,4 @@
-//! SNGNN-v2 on the device (`backend::gpu::GpuNet`, `shaders/sngnn.wgsl`) against the CPU's
+//! SNGNN-v2 on the device (`backend::gpu::GpuNet`, `shaders/sngnn_score.wgsl`) against the CPU's
 //! tables pass (`Tables::forward`): the recorded graphs of the golden SNGNN episodes with the
 //! real weights (also within 1e-4 of 0.1.1's recorded outputs), and random graphs with random
 //! weights of the real shapes. On lavapipe the device sums in the CPU's order with the same

@@ -1,7 +1,7 @@
 //! CPU/GPU parity of the social-structure stages (`social_events`, `formation`) and of the
 //! libraries under them (`common/regroup.wgsl`: the slot sorts, permutations and remapping;
 //! `common/orca_obstacles.wgsl`: the ORCA obstacle rebuild with RVO2's edge splits;
-//! `common/goals.wgsl`, `common/place.wgsl`): from the same state, parameters and actions, both
+//! `common/goal_sampling.wgsl`, `common/place.wgsl`): from the same state, parameters and actions, both
 //! backends must leave every state and output column bit-identical on lavapipe.
 //!
 //! States are rolled out on the CPU with raised event probabilities, then perturbed before every

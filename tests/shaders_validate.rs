@@ -165,7 +165,7 @@ fn all_wgsl_shaders_validate() {
             Some(_) => errors.push(format!("{rel}: the embedded copy differs (rebuild)")),
             None => errors.push(format!("{rel} is not listed in backend::wgsl::FILES")),
         }
-        if wgsl::STANDALONE.contains(&rel) {
+        if wgsl::is_standalone(rel) {
             // Its own bindings, no batch prelude: validated as the SNGNN host assembles it.
             let src = wgsl::assemble_standalone(rel).expect("assembled");
             errors.extend(validate_source(&src, rel).err());
@@ -181,27 +181,39 @@ fn all_wgsl_shaders_validate() {
     assert!(errors.is_empty(), "{}", errors.join("\n"));
 }
 
-/// Every stage shader is named after a stage of the step (or one of the passes beside the step,
-/// `wgsl::PASSES`) and has the entry point `main`; `wgsl::STANDALONE` shaders are not stages.
+/// The top of `shaders/` is the step: one file per stage of `pipeline::STAGES` (named after it),
+/// plus the reset pass (`wgsl::RESET_PASS`), nothing else. A batch shader has the entry point
+/// `main`; a network shader assembles on its own (`wgsl::is_standalone`).
 #[test]
-fn stage_shaders_are_stages_with_a_main() {
-    let mut names: Vec<&str> = socnav::pipeline::STAGES.iter().map(|s| s.name).collect();
-    names.extend(wgsl::PASSES);
-    names.extend(wgsl::SNGNN_PASSES);
-    let stage_files = wgsl::FILES
+fn top_level_shaders_are_the_stages_and_the_reset_pass() {
+    use socnav::pipeline::{STAGES, Shader};
+    let mut expected: Vec<String> = STAGES.iter().map(|s| s.shader_file()).collect();
+    expected.push(format!("{}.wgsl", wgsl::RESET_PASS));
+    expected.sort();
+    let mut top: Vec<String> = wgsl::FILES
         .iter()
-        .filter(|(p, _)| !p.contains('/') && !wgsl::STANDALONE.contains(p));
-    for (path, _) in stage_files {
-        let stage = path.strip_suffix(".wgsl").expect(".wgsl");
-        assert!(
-            names.contains(&stage),
-            "shaders/{path} is not a stage of pipeline::STAGES"
-        );
-        let module = validate_assembled(path).unwrap_or_else(|e| panic!("{e}"));
-        assert!(
-            module.entry_points.iter().any(|ep| ep.name == "main"),
-            "shaders/{path} has no entry point `main`"
-        );
+        .filter(|(p, _)| !p.contains('/'))
+        .map(|(p, _)| (*p).to_owned())
+        .collect();
+    top.sort();
+    assert_eq!(top, expected, "shaders/*.wgsl against the step's stages");
+    for stage in &STAGES {
+        let path = stage.shader_file();
+        match stage.shader {
+            Shader::Batch => {
+                assert!(!wgsl::is_standalone(&path), "{path} has the batch prelude");
+                let module = validate_assembled(&path).unwrap_or_else(|e| panic!("{e}"));
+                assert!(
+                    module.entry_points.iter().any(|ep| ep.name == "main"),
+                    "shaders/{path} has no entry point `main`"
+                );
+            }
+            Shader::Network => {
+                assert!(wgsl::is_standalone(&path), "{path} stands alone");
+                let src = wgsl::assemble_standalone(&path).expect("assembled");
+                validate_source(&src, &path).unwrap_or_else(|e| panic!("{e}"));
+            }
+        }
     }
 }
 

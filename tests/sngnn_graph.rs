@@ -4,9 +4,10 @@
 //!
 //! Every episode is replayed as the golden README (section 8) says: before each step the
 //! reference state is loaded through a state document whose `sngnn_frames` are socnav's own
-//! frames of the earlier steps, the recorded action is taken through the stages, and where 0.1.1
-//! called SNGNN (`steps[i].sngnn` not null, i.e. non-terminal steps) the frame is recorded right
-//! after the reward stage, as the SNGNN reward does, from the state after the motion.
+//! frames of the earlier steps and the recorded action is taken through the stages with the
+//! SNGNN-v2 reward, whose stage `sngnn_graph` records the frame where 0.1.1 called SNGNN
+//! (`steps[i].sngnn` not null, i.e. non-terminal steps), from the state after the motion. The
+//! network (`sngnn_score`) does not run: the frames do not need the weights.
 //!
 //! - Frames: every field of socnav's frame against `steps[i].sngnn.frame` (ids, order, positions,
 //!   angles, velocities, sizes, interaction entries, goal, command, timestamp, wall end points).
@@ -154,10 +155,9 @@ impl Sim {
         socnav::systems::orca_obstacles::rebuild_if_dirty(&self.p, &mut chunk, 0);
     }
 
-    /// Take `action` through every stage, recording the SNGNN frame right after the reward
-    /// stage of a non-terminal step; returns whether a frame was recorded. The stages score
-    /// with the DSRNN reward, so that no network (and no weight file) is needed: the reward
-    /// stage records the same frame itself when it scores with SNGNN-v2.
+    /// Take `action` through every stage but the network (`sngnn_score`) with the SNGNN-v2
+    /// reward; returns whether stage `sngnn_graph` recorded a frame (the reward scores the step
+    /// with its terms).
     fn step(&mut self, action: &[f32]) -> bool {
         let mut b = Batch {
             s: self.s.chunk(),
@@ -166,15 +166,14 @@ impl Sim {
             sngnn: None,
             error: None,
         };
-        let mut dsrnn = self.p;
-        dsrnn.reward_kind = 0;
         let mut recorded = false;
         for stage in &STAGES {
-            (stage.run)(&dsrnn, &mut b, 0);
-            if stage.name == "reward" && b.o.terminated[0] == 0 && b.o.truncated[0] == 0 {
-                socnav::sngnn::frame::record(&self.p, &mut b.s, 0);
-                recorded = true;
+            match stage.name {
+                "sngnn_score" => continue,
+                "sngnn_graph" => recorded = socnav::systems::reward::scores_terms(&b, 0),
+                _ => {}
             }
+            (stage.run)(&self.p, &mut b, 0);
         }
         assert!(b.error.is_none(), "step failed: {:?}", b.error);
         recorded
@@ -883,6 +882,111 @@ fn a_warm_build_allocates_nothing() {
     let (frames, allocations) = warm.expect("step 4 replayed");
     assert_eq!(frames, 3);
     assert_eq!(allocations, 0, "{name}: graph::build allocated when warm");
+}
+
+/// Run the stages of `STAGES` that `which` selects over every environment of `r`, with `p`.
+fn run_stages(r: &mut SngnnRollout, p: &StepParams, actions: &[f32], which: impl Fn(&str) -> bool) {
+    let n = r.s.n_envs;
+    let mut b = Batch {
+        s: r.s.chunk(),
+        o: r.o.chunk(),
+        actions,
+        sngnn: None,
+        error: None,
+    };
+    for stage in STAGES.iter().filter(|s| which(s.name)) {
+        for e in 0..n {
+            (stage.run)(p, &mut b, e);
+        }
+    }
+    assert!(b.error.is_none(), "step: {:?}", b.error);
+}
+
+/// Contract: the SNGNN-v2 stages change nothing without the SNGNN-v2 reward, and with it
+/// `sngnn_graph` records a frame for exactly the environments the reward scores with its terms
+/// (stepping, not terminal), as the test rollout's own rule (`SngnnRollout::scores`) does it.
+#[test]
+fn sngnn_stages_record_exactly_the_scored_steps() {
+    let config = Config::from_name_or_path("exp2_sngnn").expect("exp2_sngnn");
+    let mut a = SngnnRollout::new(&config, 32, 5);
+    let mut b = SngnnRollout::new(&config, 32, 5);
+    let mut dsrnn = a.p;
+    dsrnn.reward_kind = 0;
+    let before_reward = |name: &str| {
+        let reward = STAGES
+            .iter()
+            .position(|s| s.name == "reward")
+            .expect("reward");
+        STAGES.iter().position(|s| s.name == name).expect("a stage") < reward
+    };
+    let mut rng = socnav::rng::RngStream::new(11, 0, 0, 0);
+    let mut scored = 0;
+    for step in 0..40 {
+        let actions = a.random_actions(&mut rng);
+        // Both up to the reward with the DSRNN reward (the SNGNN stages included, as no-ops).
+        run_stages(&mut a, &dsrnn, &actions, before_reward);
+        run_stages(&mut b, &dsrnn, &actions, before_reward);
+        assert!(
+            a.s.differing_columns(&b.s).is_empty(),
+            "step {step}: the SNGNN stages changed the state without the SNGNN reward"
+        );
+        // a: frames recorded where the rollout's rule says; b: stage sngnn_graph with the SNGNN
+        // reward.
+        for e in 0..a.s.n_envs {
+            if a.scores(e) {
+                scored += 1;
+                socnav::sngnn::frame::record(&a.p, &mut a.s.env_chunk(e), 0);
+            }
+        }
+        let p = b.p;
+        run_stages(&mut b, &p, &actions, |name| name == "sngnn_graph");
+        let differ = a.s.differing_columns(&b.s);
+        assert!(differ.is_empty(), "step {step}: columns {differ:?} differ");
+        a.finish_step(&actions);
+        b.finish_step(&actions);
+    }
+    assert!(scored > 32 * 20, "only {scored} scored steps");
+}
+
+/// Contract: the reward clips the raw score stage `sngnn_score` leaves in `r_discomfort_sngnn`
+/// to [0, 1] (spec 6.3): discomfort = clip(q1), the SNGNN term discomfort − 1, and the reward
+/// (discomfort − 1)·1 + distance + alive.
+#[test]
+fn reward_clips_the_raw_sngnn_score() {
+    let config = Config::from_name_or_path("exp2_sngnn").expect("exp2_sngnn");
+    let mut r = SngnnRollout::new(&config, 3, 2);
+    let p = r.p;
+    let actions = vec![0.0; 9];
+    let reward = STAGES
+        .iter()
+        .position(|s| s.name == "reward")
+        .expect("reward");
+    let names: Vec<&str> = STAGES[..reward].iter().map(|s| s.name).collect();
+    run_stages(&mut r, &p, &actions, |name| {
+        names.contains(&name) && !name.starts_with("sngnn")
+    });
+    for e in 0..3 {
+        assert!(r.scores(e), "environment {e} is scored on its first step");
+    }
+    let raw = [1.7_f32, -0.3, 0.25];
+    r.s.r_discomfort_sngnn.copy_from_slice(&raw);
+    run_stages(&mut r, &p, &actions, |name| name == "reward");
+    for (e, (q1, discomfort)) in raw.iter().zip([1.0_f32, 0.0, 0.25]).enumerate() {
+        let info = |k: usize| r.o.info[e * socnav::spec::N_INFO + k];
+        assert_eq!(
+            info(socnav::spec::info::DISCOMFORT_SNGNN),
+            discomfort,
+            "q1 = {q1}"
+        );
+        assert_eq!(
+            info(socnav::spec::info::SNGNN_REWARD),
+            discomfort - 1.0,
+            "q1 = {q1}"
+        );
+        let expected =
+            (discomfort - 1.0) + info(socnav::spec::info::DISTANCE_REWARD) + p.reward_alive;
+        assert_eq!(r.o.reward[e], expected, "q1 = {q1}");
+    }
 }
 
 // A global allocator that counts allocations per thread (the test harness runs tests on

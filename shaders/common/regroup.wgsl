@@ -1,4 +1,4 @@
-// requires: common/goals.wgsl
+// requires: common/goal_sampling.wgsl
 // requires: common/orca_obstacles.wgsl
 //
 // Twin of src/systems/regroup.rs: what the social events do to the lists of 0.1.1 (lone static

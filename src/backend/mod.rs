@@ -128,6 +128,11 @@ pub trait Backend: Send + Sync {
     fn stage_seconds(&self) -> Vec<f64>;
     /// Short name, e.g. "cpu".
     fn name(&self) -> &'static str;
+    /// How many GPU pipelines creating this batch compiled (0 when its device had compiled them
+    /// for an earlier batch, and always 0 on the CPU).
+    fn pipelines_compiled(&self) -> usize {
+        0
+    }
     /// What runs the batch, for logs and benchmark records: the CPU threads, or the GPU adapter.
     fn device(&self) -> String;
     /// Seconds `steps` steps take on the device alone (see `BatchEnv::time_device_steps`);

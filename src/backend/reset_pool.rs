@@ -2,7 +2,7 @@
 //! that state's first observation, as one row of 32-bit words, generated on the host by the same
 //! Rust code as the CPU backend's resets (`systems::reset::reset_and_observe`). The GPU backend
 //! keeps the rows on the device; its `begin_step`, `autoreset` and `reset` shaders copy a row
-//! into an environment instead of generating a scenario (`shaders/common/reset.wgsl`).
+//! into an environment instead of generating a scenario (`shaders/common/pool_reset.wgsl`).
 //!
 //! This works because a reset is a pure function of the step constants, the environment's batch
 //! index and its episode counter: scenario generation clears every slot and writes every

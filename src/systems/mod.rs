@@ -116,6 +116,8 @@ pub mod reward;
 pub mod robot_motion;
 pub mod sfm;
 pub mod shadow_robot;
+pub mod sngnn_graph;
+pub mod sngnn_score;
 pub mod social_events;
 pub mod termination;
 pub mod world;

@@ -1,6 +1,7 @@
 //! Stage `reward`: the DSRNN-style reward (spec 6.2) or SNGNN-v2's (spec 6.3). Terminal steps
 //! get the outcome's constant; other steps the potential-based distance term, the discomfort term
-//! (DSRNN's predicted clearance, or SNGNN-v2's score of the scene) and the alive term. The
+//! (DSRNN's predicted clearance, or SNGNN-v2's score of the scene, which stages `sngnn_graph`
+//! and `sngnn_score` leave in `r_discomfort_sngnn`) and the alive term. The
 //! reward's info values persist: a terminal step reports those of the previous step (0.1.1).
 //!
 //! Fixed 0.1.1 bugs (docs/fidelity.md): the robot velocity uses the robot's heading once (0.1.1
@@ -10,7 +11,6 @@
 use crate::geometry::origin_segment_distance;
 use crate::math;
 use crate::params::StepParams;
-use crate::sngnn::{self, Scorer};
 use crate::spec::info;
 use crate::state::StateChunk;
 
@@ -33,7 +33,7 @@ pub fn reward(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     } else if flag(info::TIMEOUT) {
         p.reward_timeout
     } else {
-        step_reward(p, &mut b.s, b.sngnn, e)
+        step_reward(p, &mut b.s, e)
     };
     b.o.reward[e] = r;
     let s = &b.s;
@@ -45,8 +45,21 @@ pub fn reward(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     out[info::SNGNN_REWARD] = s.r_sngnn[e];
 }
 
+/// Whether the reward scores environment `e`'s step with its terms (distance, discomfort, alive)
+/// rather than an outcome's constant: the environment steps and termination raised no outcome
+/// flag. The SNGNN-v2 stages before the reward score exactly these steps.
+pub fn scores_terms(b: &Batch<'_>, e: usize) -> bool {
+    let row = e * b.o.strides.info();
+    let flag = |k: usize| b.o.info[row + k] != 0.0;
+    b.s.stepping[e] != 0
+        && !flag(info::OUT_OF_MAP)
+        && !flag(info::SUCCESS)
+        && !flag(info::COLLISION)
+        && !flag(info::TIMEOUT)
+}
+
 /// The reward of a non-terminal step; updates the reward memory.
-fn step_reward(p: &StepParams, s: &mut StateChunk, sngnn: Option<&Scorer>, e: usize) -> f32 {
+fn step_reward(p: &StepParams, s: &mut StateChunk, e: usize) -> f32 {
     let dx = s.goal_x[e] - s.robot_x[e];
     let dy = s.goal_y[e] - s.robot_y[e];
     let d = (dx * dx + dy * dy).sqrt();
@@ -63,8 +76,8 @@ fn step_reward(p: &StepParams, s: &mut StateChunk, sngnn: Option<&Scorer>, e: us
     s.r_discomfort_dsrnn[e] = r_disc;
     s.r_alive[e] = p.reward_alive;
     let r = if p.reward_kind == REWARD_SNGNN {
-        let scorer = sngnn.expect("BatchEnv gives a batch with the SNGNN-v2 reward its scorer");
-        let discomfort = sngnn_discomfort(p, s, scorer, e);
+        // Stage sngnn_score left the network's raw output here.
+        let discomfort = clip_sngnn(s.r_discomfort_sngnn[e]);
         s.r_discomfort_sngnn[e] = discomfort;
         s.r_sngnn[e] = discomfort - 1.0;
         // Spec 6.3: the DSRNN discomfort is computed for the info only.
@@ -91,15 +104,8 @@ pub const REWARD_SNGNN: u32 = 1;
 /// 0.1.1's weight of the SNGNN term (the shaders get it from the prelude).
 pub const SNGNN_WEIGHT: f32 = 1.0;
 
-/// SNGNN-v2's discomfort of this step in [0, 1]: the step's frame joins the history, the graph
-/// of the selected frames goes through the network, and the room node's first output is
-/// clipped to [0, 1] (spec 6.3).
-pub fn sngnn_discomfort(p: &StepParams, s: &mut StateChunk, scorer: &Scorer, e: usize) -> f32 {
-    sngnn::frame::record(p, s, e);
-    let s = &*s;
-    let [q1, _] = scorer.score_with(|graph| {
-        sngnn::graph::build(p, s, e, graph);
-    });
+/// SNGNN-v2's discomfort in [0, 1] from the network's raw output `q1` (spec 6.3).
+pub fn clip_sngnn(q1: f32) -> f32 {
     q1.clamp(0.0, 1.0)
 }
 

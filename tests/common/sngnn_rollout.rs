@@ -1,7 +1,7 @@
 //! SNGNN-v2 batches rolled out on the CPU without `BatchEnv` (which would need the weights):
 //! every stage of the step with the DSRNN reward, and where the SNGNN-v2 reward would score (a
 //! stepping environment whose step is not terminal) the frame recorded and the graph built and
-//! packed, as the reward stage does before the network runs. The step is split at that point so
+//! packed, as the stages `sngnn_graph` and `sngnn_score` do before the network runs. The step is split at that point so
 //! that a device pass can start from the same state.
 
 use socnav::outputs::Outputs;
@@ -127,7 +127,7 @@ impl SngnnRollout {
             && !flag(info::TIMEOUT)
     }
 
-    /// What the SNGNN-v2 reward does before the network, for every environment it scores:
+    /// What the SNGNN-v2 stages do before the network, for every environment the reward scores:
     /// record the frame, build the graph, pack it; every other environment's packed graph gets
     /// no nodes, as the device's `sngnn_graph` pass does so that its network skips them.
     /// Returns how many environments scored.

@@ -5,10 +5,10 @@
 //! outputs and the episode counters into a mapped readback buffer in the same submit, and reads
 //! them into the host outputs it keeps ([`Backend::outputs`]) without allocating.
 //!
-//! With the SNGNN-v2 reward, the reward stage is preceded by the pass `sngnn_graph` (frames and
-//! packed graphs of the environments the reward scores) and by the network's dispatches
-//! ([`super::SNGNN_SCORE`]), still in the same pass and submit; the network's status words are
-//! read back with the outputs.
+//! With the SNGNN-v2 reward, the step includes the stages only that reward runs: `sngnn_graph`
+//! (frames and packed graphs of the environments the reward scores) and `sngnn_score` (the
+//! network's dispatches, [`super::GpuNet`]), still in the same pass and submit; the network's
+//! status words are read back with the outputs.
 //!
 //! Resets copy rows of the reset pool (`src/backend/reset_pool.rs`): an environment whose episode
 //! counter moved on the device has consumed its row, and the host generates its next one (on its
@@ -29,7 +29,7 @@ use crate::pipeline::STAGES;
 use crate::sngnn::SngnnReward;
 use crate::state::{BatchState, Caps};
 
-use super::{GpuDevice, GpuStages, SNGNN_SCORE};
+use super::{GpuDevice, GpuStages};
 
 /// `row_episode` of a pool row that holds nothing valid.
 const NO_ROW: u32 = u32::MAX;
@@ -64,8 +64,7 @@ pub struct GpuBackend {
     timing: bool,
     stage_seconds: Vec<f64>,
     actions_mask: Vec<f32>,
-    /// The passes of a step: the stages of [`STAGES`], with the SNGNN-v2 passes before the
-    /// reward when the reward is SNGNN-v2's.
+    /// The passes of a step ([`step_passes`]).
     step_passes: Vec<&'static str>,
 }
 
@@ -96,7 +95,7 @@ impl GpuBackend {
     ) -> Result<Self, SimError> {
         let step_passes = step_passes(sngnn.is_some());
         let mut passes = step_passes.clone();
-        passes.extend(crate::backend::wgsl::PASSES);
+        passes.push(crate::backend::wgsl::RESET_PASS);
         let gpu = match sngnn {
             None => GpuStages::new(dev, &params, &state, &out, &passes)?,
             Some(r) => {
@@ -201,8 +200,11 @@ impl GpuBackend {
     /// read the outputs and episode counters back, and account for the pool rows consumed.
     fn run(&mut self, step: bool) -> Result<(), SimError> {
         let _ = self.state.take();
-        let passes: &[&'static str] = if step { &self.step_passes } else { &["reset"] };
-        // Stage timing covers the step's stages; the SNGNN-v2 passes count as the reward's.
+        let passes: &[&'static str] = if step {
+            &self.step_passes
+        } else {
+            &[crate::backend::wgsl::RESET_PASS]
+        };
         if self.timing && step {
             for pass in passes {
                 let start = Instant::now();
@@ -244,31 +246,22 @@ impl GpuBackend {
     }
 }
 
-/// The passes of a step: every stage of `STAGES`, in order; with the SNGNN-v2 reward, the
-/// `sngnn_graph` pass and the network ([`SNGNN_SCORE`]) right before the reward stage.
+/// The passes of a step: the stages of `STAGES`, in order, those only the SNGNN-v2 reward runs
+/// included when it is the reward.
 fn step_passes(sngnn: bool) -> Vec<&'static str> {
-    let mut passes = Vec::with_capacity(STAGES.len() + 2);
-    for stage in &STAGES {
-        if sngnn && stage.name == "reward" {
-            passes.extend(["sngnn_graph", SNGNN_SCORE]);
-        }
-        passes.push(stage.name);
-    }
-    passes
-}
-
-/// The index in `STAGES` whose time a pass of the step counts to (the SNGNN-v2 passes: the
-/// reward's).
-fn stage_of(pass: &str) -> usize {
-    let name = if pass == "sngnn_graph" || pass == SNGNN_SCORE {
-        "reward"
-    } else {
-        pass
-    };
     STAGES
         .iter()
-        .position(|s| s.name == name)
-        .expect("every pass of the step is a stage or an SNGNN-v2 pass")
+        .filter(|s| sngnn || !s.sngnn_reward_only)
+        .map(|s| s.name)
+        .collect()
+}
+
+/// The index in `STAGES` of a pass of the step, for its time.
+fn stage_of(pass: &str) -> usize {
+    STAGES
+        .iter()
+        .position(|s| s.name == pass)
+        .expect("every pass of the step is a stage")
 }
 
 impl Backend for GpuBackend {
@@ -361,6 +354,10 @@ impl Backend for GpuBackend {
 
     fn stage_seconds(&self) -> Vec<f64> {
         self.stage_seconds.clone()
+    }
+
+    fn pipelines_compiled(&self) -> usize {
+        self.gpu.pipelines_compiled()
     }
 
     fn name(&self) -> &'static str {

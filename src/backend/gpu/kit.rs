@@ -48,14 +48,17 @@ pub(crate) fn storage_bindings(read_only: &[bool]) -> Vec<Binding> {
         .collect()
 }
 
-/// What a compiled pipeline is found by: its bindings, its WGSL source and its entry point.
-type PipelineKey = (Vec<Binding>, String, String);
+/// The bind groups of a pipeline layout: group 0, 1, ..., each a list of bindings.
+pub(crate) type Groups = Vec<Vec<Binding>>;
+
+/// What a compiled pipeline is found by: its bind groups, its WGSL source and its entry point.
+type PipelineKey = (Groups, String, String);
 
 /// The compiled compute pipelines of one device, shared by every batch that uses it, with the
 /// bind group and pipeline layouts they were compiled against.
 #[derive(Default)]
 pub(crate) struct PipelineCache {
-    layouts: Mutex<HashMap<Vec<Binding>, (wgpu::BindGroupLayout, wgpu::PipelineLayout)>>,
+    layouts: Mutex<HashMap<Groups, (Vec<wgpu::BindGroupLayout>, wgpu::PipelineLayout)>>,
     pipelines: Mutex<HashMap<PipelineKey, wgpu::ComputePipeline>>,
     builds: AtomicUsize,
 }
@@ -65,60 +68,67 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
+/// The bind group layout of `bindings`, numbered 0, 1, ...
+fn group_layout(dev: &GpuDevice, bindings: &[Binding]) -> wgpu::BindGroupLayout {
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..)
+        .zip(bindings)
+        .map(|(binding, kind)| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: kind.ty(),
+            count: None,
+        })
+        .collect();
+    dev.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("socnav bindings"),
+            entries: &entries,
+        })
+}
+
 impl PipelineCache {
-    /// The bind group layout of `bindings` (and the pipeline layout of that one group), made
-    /// once per device.
+    /// The bind group layouts of `groups` and the pipeline layout of them all, made once per
+    /// device.
     pub(crate) fn layout(
         &self,
         dev: &GpuDevice,
-        bindings: &[Binding],
-    ) -> (wgpu::BindGroupLayout, wgpu::PipelineLayout) {
+        groups: &[Vec<Binding>],
+    ) -> (Vec<wgpu::BindGroupLayout>, wgpu::PipelineLayout) {
         let mut layouts = lock(&self.layouts);
         layouts
-            .entry(bindings.to_vec())
+            .entry(groups.to_vec())
             .or_insert_with(|| {
-                let entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..)
-                    .zip(bindings)
-                    .map(|(binding, kind)| wgpu::BindGroupLayoutEntry {
-                        binding,
-                        visibility: wgpu::ShaderStages::COMPUTE,
-                        ty: kind.ty(),
-                        count: None,
-                    })
-                    .collect();
-                let group = dev
-                    .device
-                    .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                        label: Some("socnav bindings"),
-                        entries: &entries,
-                    });
+                let bind: Vec<wgpu::BindGroupLayout> =
+                    groups.iter().map(|g| group_layout(dev, g)).collect();
+                let refs: Vec<Option<&wgpu::BindGroupLayout>> = bind.iter().map(Some).collect();
                 let pipeline = dev
                     .device
                     .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                         label: Some("socnav pipelines"),
-                        bind_group_layouts: &[Some(&group)],
+                        bind_group_layouts: &refs,
                         immediate_size: 0,
                     });
-                (group, pipeline)
+                (bind, pipeline)
             })
             .clone()
     }
 
-    /// The pipeline of entry point `entry` of WGSL `source` over one bind group of `bindings`,
-    /// compiled on the first request and shared afterwards; `label` names it in wgpu's errors.
+    /// The pipeline of entry point `entry` of WGSL `source` over bind groups `groups`, compiled
+    /// on the first request and shared afterwards; `label` names it in wgpu's errors. With it,
+    /// whether this call compiled it.
     pub(crate) fn pipeline(
         &self,
         dev: &GpuDevice,
         label: &str,
-        bindings: &[Binding],
+        groups: &[Vec<Binding>],
         source: &str,
         entry: &str,
-    ) -> Result<wgpu::ComputePipeline, SimError> {
-        let key = (bindings.to_vec(), source.to_owned(), entry.to_owned());
+    ) -> Result<(wgpu::ComputePipeline, bool), SimError> {
+        let key = (groups.to_vec(), source.to_owned(), entry.to_owned());
         if let Some(p) = lock(&self.pipelines).get(&key) {
-            return Ok(p.clone());
+            return Ok((p.clone(), false));
         }
-        let (_, layout) = self.layout(dev, bindings);
+        let (_, layout) = self.layout(dev, groups);
         let module = dev
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -138,7 +148,10 @@ impl PipelineCache {
         dev.take_errors()?;
         self.builds.fetch_add(1, Ordering::Relaxed);
         // Two threads may have compiled the same source at once: either result serves.
-        Ok(lock(&self.pipelines).entry(key).or_insert(pipeline).clone())
+        Ok((
+            lock(&self.pipelines).entry(key).or_insert(pipeline).clone(),
+            true,
+        ))
     }
 
     /// Pipelines compiled so far.

@@ -12,10 +12,10 @@
 //!   shader. It runs any sequence of passes in one submit, single stages included, which is what
 //!   the CPU/GPU parity tests of each stage need (`tests/gpu_stages.rs`,
 //!   `tests/gpu_observation.rs`). [`GpuStages::with_sngnn_graphs`] adds every environment's
-//!   packed SNGNN-v2 graph (bindings 8 and 9, the frame gaps at 10) and the pass `sngnn_graph`,
-//!   which records the frame and builds the graph on the device (`tests/gpu_sngnn_graph.rs`);
-//!   [`GpuStages::attach_sngnn_net`] adds SNGNN-v2's network over those graphs as the pass
-//!   [`SNGNN_SCORE`] ([`GpuNet`], [`sngnn_net`]), which writes each scored environment's raw
+//!   packed SNGNN-v2 graph and the frame gaps (bind group 1) and the stage `sngnn_graph`, which
+//!   records the frame and builds the graph on the device (`tests/gpu_sngnn_graph.rs`);
+//!   [`GpuStages::attach_sngnn_net`] adds SNGNN-v2's network over those graphs as the stage
+//!   `sngnn_score` ([`GpuNet`], [`sngnn_net`]), which writes each scored environment's raw
 //!   score into its `r_discomfort_sngnn` column for the reward stage.
 //! - [`GpuBackend`]: the whole step in one submit, with one readback of the outputs, and resets
 //!   from a pool of rows the host generates off the step's critical path.
@@ -33,36 +33,14 @@ use crate::backend::wgsl;
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
+use crate::pipeline::Shader;
 use crate::sngnn::history::TickGaps;
 use crate::sngnn::model::Model;
 use crate::sngnn::packed::PackedLayout;
 use crate::sngnn::pieces::Tables;
 use crate::state::BatchState;
-use kit::{Binding, bind_buffers, bytes_of, map_and_read, storage_buffer, uniform_buffer};
+use kit::{Binding, Groups, bind_buffers, bytes_of, map_and_read, storage_buffer, uniform_buffer};
 use sngnn_net::StepBuffers;
-
-/// The pass of SNGNN-v2's network in a step ([`GpuStages::attach_sngnn_net`]): its sort and
-/// layers, recorded between the `sngnn_graph` pass and the reward stage.
-pub const SNGNN_SCORE: &str = "sngnn_score";
-
-/// The stages that have a shader so far, in [`crate::pipeline::STAGES`] order.
-pub const STAGES_WITH_SHADERS: &[&str] = &[
-    "begin_step",
-    "robot_motion",
-    "shadow_robot",
-    "group_velocities",
-    "human_motion",
-    "group_motion",
-    "goals",
-    "formation",
-    "contacts",
-    "termination",
-    "reward",
-    "metrics",
-    "observation",
-    "social_events",
-    "autoreset",
-];
 
 /// A packed table on the device: every f32 column in one storage buffer, every u32 column in
 /// another, and the host copies they are packed from and read back into.
@@ -88,19 +66,24 @@ pub struct GpuStages {
     step_readback: wgpu::Buffer,
     /// Word offset of the `episode` column in the state's u32 buffer.
     episode_offset: usize,
-    bind_group: wgpu::BindGroup,
-    pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
-    /// The packed SNGNN graphs (u32 and f32 regions), bindings 8 and 9, with their layout; only
+    /// Group 0 (the prelude's bindings), and group 1 (the SNGNN graphs) when the batch has them.
+    bind_groups: Vec<wgpu::BindGroup>,
+    /// The passes built, by name: a compute pipeline, or `None` for the network stage
+    /// ([`Shader::Network`], recorded by [`GpuNet`]).
+    pipelines: Vec<(&'static str, Option<wgpu::ComputePipeline>)>,
+    /// How many pipelines building this batch compiled rather than found on its device.
+    compiled: usize,
+    /// The packed SNGNN graphs (u32 and f32 regions), bind group 1, with their layout; only
     /// when built by [`GpuStages::with_sngnn_graphs`].
     sngnn_graphs: Option<(PackedLayout, wgpu::Buffer, wgpu::Buffer)>,
     /// SNGNN-v2's network over those graphs ([`GpuStages::attach_sngnn_net`]).
     sngnn_net: Option<GpuNet>,
     /// Word offset of the `r_discomfort_sngnn` column in the state's f32 buffer.
     sngnn_score_at: usize,
-    /// Each environment's network status, as the last readback after [`SNGNN_SCORE`] ran read
+    /// Each environment's network status, as the last readback after the network stage ran read
     /// it (all 0 after a readback with no network run since the one before).
     sngnn_status: Vec<u32>,
-    /// [`SNGNN_SCORE`] ran since the last readback of the outputs.
+    /// the network stage ran since the last readback of the outputs.
     sngnn_unread: bool,
 }
 
@@ -194,8 +177,8 @@ impl DeviceTable {
 }
 
 impl GpuStages {
-    /// Upload `state`, `outputs` and `params` and build the pipelines of `stages` (names from
-    /// [`STAGES_WITH_SHADERS`] or [`wgsl::PASSES`]). The reset pool starts zeroed.
+    /// Upload `state`, `outputs` and `params` and build the pipelines of `stages` (stages of
+    /// [`crate::pipeline::STAGES`], or [`wgsl::RESET_PASS`]). The reset pool starts zeroed.
     pub fn new(
         dev: GpuDevice,
         params: &StepParams,
@@ -207,9 +190,9 @@ impl GpuStages {
     }
 
     /// [`GpuStages::new`] with the SNGNN graph buffers: every environment's packed graph at
-    /// `graphs`' strides (bindings 8 and 9, zeroed) and the frame selection's gaps (10), which
-    /// makes the SNGNN passes ([`wgsl::SNGNN_PASSES`]) available among `stages`. `graphs` is normally
-    /// `sngnn::graph::capacity(config)`.
+    /// `graphs`' strides (zeroed) and the frame selection's gaps, in bind group 1, which makes
+    /// the stages only the SNGNN-v2 reward runs (`sngnn_graph`, `sngnn_score`) available among
+    /// `stages`. `graphs` is normally `sngnn::graph::capacity(config)`.
     ///
     /// # Errors
     /// `SimError::BackendUnavailable` when the state has no SNGNN history, the time step has no
@@ -319,12 +302,13 @@ impl GpuStages {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        // Bindings of the prelude (`backend::wgsl::prelude`): params, sf, su, actions, outf, outu,
-        // pool, the batch layout; with the SNGNN graphs, bindings 8 to 10
-        // (`backend::wgsl::sngnn_prelude`).
+        // Group 0, the bindings of the prelude (`backend::wgsl::prelude`): params, sf, su,
+        // actions, outf, outu, pool, the batch layout. With the SNGNN graphs, group 1: the packed
+        // graphs and the frame gaps (`backend::wgsl::sngnn_prelude`), bound only by the shaders
+        // that use them, so that every other shader is the same pipeline as without them.
         let batch = uniform_buffer(&dev, "batch layout", &layout.words());
         let storage = |read_only| Binding::Storage { read_only };
-        let mut bound = vec![
+        let mut bound = vec![vec![
             (&params_buf, storage(true)),
             (&state_table.f32s, storage(false)),
             (&state_table.u32s, storage(false)),
@@ -333,7 +317,7 @@ impl GpuStages {
             (&outputs_table.u32s, storage(false)),
             (&pool, storage(true)),
             (&batch, Binding::Uniform),
-        ];
+        ]];
         let gaps = sngnn.as_ref().map(|b| {
             let gaps = storage_buffer(
                 &dev,
@@ -345,50 +329,37 @@ impl GpuStages {
             gaps
         });
         if let (Some((_, gu, gf)), Some(gaps)) = (&sngnn_graphs, &gaps) {
-            bound.extend([
+            bound.push(vec![
                 (gu, storage(false)),
                 (gf, storage(false)),
                 (gaps, storage(true)),
             ]);
         }
-        let bindings: Vec<Binding> = bound.iter().map(|&(_, b)| b).collect();
-        let (bind_layout, _) = dev.pipelines.layout(&dev, &bindings);
-        let buffers: Vec<&wgpu::Buffer> = bound.iter().map(|&(b, _)| b).collect();
-        let bind_group = bind_buffers(&dev, "stage bindings", &bind_layout, &buffers);
+        let groups: Groups = bound
+            .iter()
+            .map(|g| g.iter().map(|&(_, kind)| kind).collect())
+            .collect();
+        let (bind_layouts, _) = dev.pipelines.layout(&dev, &groups);
+        let bind_groups = bound
+            .iter()
+            .zip(&bind_layouts)
+            .map(|(g, l)| {
+                let buffers: Vec<&wgpu::Buffer> = g.iter().map(|&(b, _)| b).collect();
+                bind_buffers(&dev, "stage bindings", l, &buffers)
+            })
+            .collect();
         let columns = state.columns();
-        let mut prelude = wgsl::prelude(
+        let prelude = wgsl::prelude(
             &columns,
             &outputs.columns(),
             &wgsl::SizeClasses::of(&columns),
         );
-        if sngnn.is_some() {
-            prelude.push_str(&wgsl::sngnn_prelude());
-        }
         let mut pipelines = Vec::with_capacity(stages.len());
+        let mut compiled = 0;
         for &stage in stages {
-            if wgsl::SNGNN_PASSES.contains(&stage) && sngnn.is_none() {
-                return Err(SimError::BackendUnavailable(format!(
-                    "pass {stage:?} needs the SNGNN graph buffers (GpuStages::with_sngnn_graphs)"
-                )));
-            }
-            if stage == SNGNN_SCORE {
-                // The network is attached afterwards (`attach_sngnn_net`): no stage shader.
-                continue;
-            }
-            if !STAGES_WITH_SHADERS.contains(&stage)
-                && !wgsl::PASSES.contains(&stage)
-                && !wgsl::SNGNN_PASSES.contains(&stage)
-            {
-                return Err(SimError::BackendUnavailable(format!(
-                    "stage {stage:?} has no shader (stages with shaders: {STAGES_WITH_SHADERS:?})"
-                )));
-            }
-            let src = wgsl::assemble(&format!("{stage}.wgsl"), &prelude)
-                .map_err(SimError::BackendUnavailable)?;
-            let pipeline = dev
-                .pipelines
-                .pipeline(&dev, stage, &bindings, &src, "main")?;
-            pipelines.push((stage, pipeline));
+            let built = build_pass(&dev, stage, &groups, &prelude)?;
+            compiled += usize::from(built.as_ref().is_some_and(|b| b.1));
+            pipelines.push((stage, built.map(|b| b.0)));
         }
         let this = Self {
             dev,
@@ -402,8 +373,9 @@ impl GpuStages {
             readback,
             step_readback,
             episode_offset,
-            bind_group,
+            bind_groups,
             pipelines,
+            compiled,
             sngnn_graphs,
             sngnn_net: None,
             sngnn_score_at,
@@ -420,8 +392,8 @@ impl GpuStages {
         &self.dev.adapter
     }
 
-    /// Add SNGNN-v2's network (`model` with `tables`) over the packed graphs, as the pass
-    /// [`SNGNN_SCORE`]: each environment with a graph gets the room node's first output written
+    /// Add SNGNN-v2's network (`model` with `tables`) over the packed graphs, as the stage
+    /// `sngnn_score`: each environment with a graph gets the room node's first output written
     /// into its `r_discomfort_sngnn` state column, where the reward stage clamps it (the
     /// `sngnn_graph` pass empties the graphs of the environments the reward does not score).
     ///
@@ -449,6 +421,17 @@ impl GpuStages {
             },
         )?);
         Ok(())
+    }
+
+    /// How many pipelines building this batch compiled (its stages' and, once attached, its
+    /// network's), rather than found compiled on its device: 0 for a second batch of a config on
+    /// the same device, whatever its size.
+    pub fn pipelines_compiled(&self) -> usize {
+        self.compiled
+            + self
+                .sngnn_net
+                .as_ref()
+                .map_or(0, GpuNet::pipelines_compiled)
     }
 
     /// The error of the last step's SNGNN-v2 network, if an environment's graph could not be
@@ -539,24 +522,23 @@ impl GpuStages {
                 label: Some("step"),
                 timestamp_writes: None,
             });
-            pass.set_bind_group(0, &self.bind_group, &[]);
+            self.bind(&mut pass);
             for &stage in stages {
-                if stage == SNGNN_SCORE {
-                    let Some(net) = &self.sngnn_net else {
-                        return Err(SimError::BackendUnavailable(format!(
-                            "pass {SNGNN_SCORE:?} needs SNGNN-v2's network \
-                             (GpuStages::attach_sngnn_net)"
-                        )));
-                    };
-                    net.record(&mut pass);
-                    pass.set_bind_group(0, &self.bind_group, &[]);
-                    self.sngnn_unread = true;
-                    continue;
-                }
                 let Some((_, pipeline)) = self.pipelines.iter().find(|(s, _)| *s == stage) else {
                     return Err(SimError::BackendUnavailable(format!(
                         "stage {stage:?} was not built for this batch"
                     )));
+                };
+                let Some(pipeline) = pipeline else {
+                    let Some(net) = &self.sngnn_net else {
+                        return Err(SimError::BackendUnavailable(format!(
+                            "stage {stage:?} needs SNGNN-v2's network (GpuStages::attach_sngnn_net)"
+                        )));
+                    };
+                    net.record(&mut pass);
+                    self.bind(&mut pass);
+                    self.sngnn_unread = true;
+                    continue;
                 };
                 pass.set_pipeline(pipeline);
                 pass.dispatch_workgroups((self.n_envs as u32).div_ceil(wgsl::WORKGROUP_SIZE), 1, 1);
@@ -595,6 +577,13 @@ impl GpuStages {
                 status.fill(0);
             }
         })
+    }
+
+    /// Set the batch's bind groups on `pass`.
+    fn bind(&self, pass: &mut wgpu::ComputePass<'_>) {
+        for (index, group) in (0u32..).zip(&self.bind_groups) {
+            pass.set_bind_group(index, group, &[]);
+        }
     }
 
     /// Wait until the device has finished the work submitted so far.
@@ -664,4 +653,51 @@ impl GpuStages {
     ) -> Result<(), SimError> {
         map_and_read(&self.dev, buffer, bytes, read)
     }
+}
+
+/// The pipeline of pass `stage` over the batch (`prelude`, bind `groups`) and whether it was
+/// compiled now: `None` for a network stage, whose pipelines [`GpuStages::attach_sngnn_net`]
+/// adds. A shader that needs the SNGNN
+/// graphs ([`wgsl::needs_sngnn`]) gets [`wgsl::sngnn_prelude`] and group 1; any other, group 0
+/// alone, whether the batch has the graphs or not.
+fn build_pass(
+    dev: &GpuDevice,
+    stage: &'static str,
+    groups: &[Vec<Binding>],
+    prelude: &str,
+) -> Result<Option<(wgpu::ComputePipeline, bool)>, SimError> {
+    let has_sngnn = groups.len() > 1;
+    let missing_graphs = || {
+        SimError::BackendUnavailable(format!(
+            "stage {stage:?} needs the SNGNN graph buffers (GpuStages::with_sngnn_graphs)"
+        ))
+    };
+    if stage != wgsl::RESET_PASS {
+        let Some(s) = crate::pipeline::stage(stage) else {
+            return Err(SimError::BackendUnavailable(format!(
+                "{stage:?} is neither a stage of the step nor the reset pass"
+            )));
+        };
+        if s.sngnn_reward_only && !has_sngnn {
+            return Err(missing_graphs());
+        }
+        if s.shader == Shader::Network {
+            return Ok(None);
+        }
+    }
+    let file = format!("{stage}.wgsl");
+    let files = wgsl::resolve(&file).map_err(SimError::BackendUnavailable)?;
+    let needs_sngnn = files.iter().any(|f| wgsl::needs_sngnn(f));
+    if needs_sngnn && !has_sngnn {
+        return Err(missing_graphs());
+    }
+    let (prelude, groups) = if needs_sngnn {
+        (format!("{prelude}{}", wgsl::sngnn_prelude()), &groups[..2])
+    } else {
+        (prelude.to_owned(), &groups[..1])
+    };
+    let src = wgsl::assemble(&file, &prelude).map_err(SimError::BackendUnavailable)?;
+    dev.pipelines
+        .pipeline(dev, stage, groups, &src, "main")
+        .map(Some)
 }

@@ -1,5 +1,5 @@
 //! SNGNN-v2 inference on the device: [`GpuNet`] scores a batch of graphs packed per environment
-//! ([`PackedLayout`]) with `shaders/sngnn.wgsl`, the twin of [`Tables::forward`].
+//! ([`PackedLayout`]) with `shaders/sngnn_score.wgsl`, the twin of [`Tables::forward`].
 //!
 //! One forward is one submit: a dispatch that sorts each environment's edges by destination
 //! (stable, so build order is kept), then one dispatch per layer with one invocation per
@@ -96,6 +96,8 @@ pub struct GpuNet {
     readback: wgpu::Buffer,
     sort: wgpu::ComputePipeline,
     layer: wgpu::ComputePipeline,
+    /// How many of `sort` and `layer` this net compiled rather than found on its device.
+    compiled: usize,
     /// Per layer: its bind group and the workgroups along x.
     groups: Vec<(wgpu::BindGroup, u32)>,
 }
@@ -247,9 +249,9 @@ impl GpuNet {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let bindings = storage_bindings(&BINDINGS);
-        let (bind_layout, _) = dev.pipelines.layout(&dev, &bindings);
-        let (sort, layer) = pipelines(&dev, &bindings)?;
+        let groups_of_net = [storage_bindings(&BINDINGS)];
+        let (bind_layouts, _) = dev.pipelines.layout(&dev, &groups_of_net);
+        let ((sort, sort_compiled), (layer, layer_compiled)) = pipelines(&dev, &groups_of_net)?;
         let mut groups = Vec::with_capacity(model.layers.len());
         for (l, mlp_layer) in model.layers.iter().enumerate() {
             let flat = tables.flat_layer(l);
@@ -291,7 +293,7 @@ impl GpuNet {
                 &q,
                 &status,
             ];
-            let group = bind_buffers(&dev, "SNGNN bindings", &bind_layout, &bound);
+            let group = bind_buffers(&dev, "SNGNN bindings", &bind_layouts[0], &bound);
             let x = word(layout.max_nodes * outputs).div_ceil(WORKGROUP);
             groups.push((group, x));
         }
@@ -308,8 +310,14 @@ impl GpuNet {
             readback,
             sort,
             layer,
+            compiled: usize::from(sort_compiled) + usize::from(layer_compiled),
             groups,
         })
+    }
+
+    /// How many pipelines building this net compiled (0 when its device had them already).
+    pub fn pipelines_compiled(&self) -> usize {
+        self.compiled
     }
 
     /// The graph layout the batch was built for.
@@ -498,17 +506,18 @@ impl LayerParams {
     }
 }
 
-/// The `sort` and `layer` pipelines of `shaders/sngnn.wgsl` (compiled once per device).
-fn pipelines(
-    dev: &GpuDevice,
-    bindings: &[Binding],
-) -> Result<(wgpu::ComputePipeline, wgpu::ComputePipeline), SimError> {
-    let src = wgsl::assemble_standalone("sngnn.wgsl").map_err(SimError::BackendUnavailable)?;
+/// A pipeline, and whether getting it compiled it.
+type Built = (wgpu::ComputePipeline, bool);
+
+/// The `sort` and `layer` pipelines of `shaders/sngnn_score.wgsl` (compiled once per device).
+fn pipelines(dev: &GpuDevice, groups: &[Vec<Binding>]) -> Result<(Built, Built), SimError> {
+    let src =
+        wgsl::assemble_standalone("sngnn_score.wgsl").map_err(SimError::BackendUnavailable)?;
     let sort = dev
         .pipelines
-        .pipeline(dev, "sngnn sort", bindings, &src, "sort")?;
+        .pipeline(dev, "sngnn sort", groups, &src, "sort")?;
     let layer = dev
         .pipelines
-        .pipeline(dev, "sngnn layer", bindings, &src, "layer")?;
+        .pipeline(dev, "sngnn layer", groups, &src, "layer")?;
     Ok((sort, layer))
 }
