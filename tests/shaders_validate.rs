@@ -555,3 +555,42 @@ fn shipped_configs_share_preludes() {
     assert_eq!(groups.len(), 2, "configs by prelude: {groups:?}");
     assert_eq!(groups[0], ["stress"], "configs by prelude: {groups:?}");
 }
+
+/// A size class's constant is only in the shaders that use it: `stress`, whose only other class
+/// is `ARRAY_OBSTACLE_VERTICES`, shares every stage shader with experiment 1 but those holding
+/// ORCA's obstacle processing (`common/orca_obstacles.wgsl`), so its batches compile only those.
+#[test]
+fn stress_recompiles_only_the_obstacle_shaders() {
+    let prelude_of = |name: &str| {
+        let config = socnav::Config::from_name_or_path(name).expect("a shipped config");
+        let caps = socnav::state::Caps::from_config(&config);
+        let state = socnav::state::BatchState::new(1, caps);
+        let layout = socnav::spec::ObsLayout::new(&caps, &config.observation);
+        let outputs = socnav::outputs::Outputs::new(1, layout);
+        let columns = state.columns();
+        wgsl::prelude(
+            &columns,
+            &outputs.columns(),
+            &wgsl::SizeClasses::of(&columns),
+        )
+    };
+    let (exp1, stress) = (prelude_of("exp1"), prelude_of("stress"));
+    let mut differing = Vec::new();
+    let mut holding_obstacles = Vec::new();
+    for stage in &socnav::pipeline::STAGES {
+        let file = stage.shader_file();
+        if wgsl::is_standalone(&file) {
+            continue;
+        }
+        let files = wgsl::resolve(&file).expect("resolved");
+        if files.contains(&"common/orca_obstacles.wgsl") {
+            holding_obstacles.push(stage.name);
+        }
+        let assembled = |prelude: &str| wgsl::assemble(&file, prelude).expect("assembled");
+        if assembled(&exp1) != assembled(&stress) {
+            differing.push(stage.name);
+        }
+    }
+    assert!(!holding_obstacles.is_empty());
+    assert_eq!(differing, holding_obstacles);
+}

@@ -171,9 +171,11 @@ impl GpuDevice {
         let info = adapter.get_info();
         // The adapter's own limits: large batches need storage bindings beyond WebGPU's defaults.
         let limits = adapter.limits();
+        // wgpu's pipeline cache, where the backend has one (`kit::DiskCache`).
+        let features = adapter.features() & wgpu::Features::PIPELINE_CACHE;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("socnav"),
-            required_features: wgpu::Features::empty(),
+            required_features: features,
             required_limits: limits.clone(),
             ..Default::default()
         }))
@@ -187,14 +189,23 @@ impl GpuDevice {
                 .unwrap_or_else(std::sync::PoisonError::into_inner)
                 .push(e.to_string());
         }));
+        let disk = super::kit::DiskCache::open(&device, features, &info);
         Ok(Self {
             device,
             queue,
             adapter: AdapterSummary::of(&info),
             limits,
             errors,
-            pipelines: Arc::default(),
+            pipelines: Arc::new(super::kit::PipelineCache::new(disk)),
         })
+    }
+
+    /// The file wgpu's pipeline cache of this device is kept in between processes: on Vulkan
+    /// adapters, `pipelines/<adapter key>` in socnav's cache directory (`$SOCNAV_CACHE_DIR`, else
+    /// `$XDG_CACHE_HOME/socnav`, else `~/.cache/socnav`); `None` on other backends or with
+    /// `SOCNAV_PIPELINE_CACHE=0`.
+    pub fn pipeline_cache_file(&self) -> Option<&std::path::Path> {
+        self.pipelines.disk_path()
     }
 
     /// Compute pipelines compiled on this device so far, by every batch that shares it.

@@ -4,12 +4,14 @@
 //! A shader's text holds no batch size and, through `backend::wgsl::SizeClasses`, the same text
 //! serves most configs; a pipeline is therefore compiled once per device and source, and every
 //! later batch on that device (another size, another config of the same size classes) reuses it.
-//! Across processes, the driver's own shader cache (Mesa's on lavapipe, the vendor's on a real
-//! GPU) keeps what it compiled.
+//! Across processes, wgpu's pipeline cache keeps what the driver compiled where the backend
+//! offers one (Vulkan: [`DiskCache`], a file per adapter in socnav's cache directory), and so do
+//! the drivers' own shader caches (Mesa's on lavapipe, the vendor's on a real GPU).
 
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
 use super::GpuDevice;
 use crate::error::SimError;
@@ -59,8 +61,85 @@ type PipelineKey = (Groups, String, String);
 #[derive(Default)]
 pub(crate) struct PipelineCache {
     layouts: Mutex<HashMap<Groups, (Vec<wgpu::BindGroupLayout>, wgpu::PipelineLayout)>>,
-    pipelines: Mutex<HashMap<PipelineKey, wgpu::ComputePipeline>>,
+    /// Each pipeline behind a lock of its own, held while it compiles: a thread asking for a
+    /// pipeline another thread is compiling waits for it instead of compiling it again.
+    pipelines: Mutex<HashMap<PipelineKey, Arc<Mutex<Option<wgpu::ComputePipeline>>>>>,
     builds: AtomicUsize,
+    disk: Option<DiskCache>,
+}
+
+/// Environment variable that turns the pipeline cache file off (`0`).
+pub const PIPELINE_CACHE_ENV: &str = "SOCNAV_PIPELINE_CACHE";
+
+/// wgpu's pipeline cache of one device, kept in a file so that the next process on the same
+/// machine and adapter starts from what this one compiled: `pipelines/<key>` in socnav's cache
+/// directory (`sngnn::cache_dir`), `<key>` being wgpu's name for the adapter
+/// (`wgpu::util::pipeline_cache_key`: vendor and device). Only Vulkan offers one; wgpu checks
+/// that a file's data came from the same adapter, driver and wgpu version, and otherwise starts
+/// empty. Writing is best effort: a failed write costs the next process its compiles, nothing
+/// else.
+pub(crate) struct DiskCache {
+    cache: wgpu::PipelineCache,
+    path: PathBuf,
+}
+
+impl DiskCache {
+    /// The cache of `device` (opened with the features `features`) on the adapter `info`, loaded
+    /// from its file if there is one; `None` where the backend has no pipeline cache or
+    /// `SOCNAV_PIPELINE_CACHE=0`.
+    pub(crate) fn open(
+        device: &wgpu::Device,
+        features: wgpu::Features,
+        info: &wgpu::AdapterInfo,
+    ) -> Option<Self> {
+        if std::env::var(PIPELINE_CACHE_ENV).is_ok_and(|v| v == "0")
+            || !features.contains(wgpu::Features::PIPELINE_CACHE)
+        {
+            return None;
+        }
+        let path = crate::sngnn::cache_dir()
+            .join("pipelines")
+            .join(wgpu::util::pipeline_cache_key(info)?);
+        let data = std::fs::read(&path).ok();
+        let cache = create_pipeline_cache(device, data.as_deref());
+        Some(Self { cache, path })
+    }
+
+    /// Write the cache's data to its file (through a temporary file in the same directory, so
+    /// that a reader never sees half a file).
+    fn save(&self) {
+        let Some(data) = self.cache.get_data() else {
+            return;
+        };
+        let write = |path: &Path| -> std::io::Result<()> {
+            let dir = path.parent().unwrap_or(Path::new("."));
+            std::fs::create_dir_all(dir)?;
+            let temp = path.with_extension(format!("{}.tmp", std::process::id()));
+            std::fs::write(&temp, &data)?;
+            std::fs::rename(&temp, path)
+        };
+        // Best effort (see the type's docs): a read-only cache directory is not an error.
+        let _ = write(&self.path);
+    }
+}
+
+/// wgpu's pipeline cache of `device`, started from `data`.
+#[expect(
+    unsafe_code,
+    reason = "wgpu::Device::create_pipeline_cache is unsafe; sound here, see below"
+)]
+fn create_pipeline_cache(device: &wgpu::Device, data: Option<&[u8]>) -> wgpu::PipelineCache {
+    // SAFETY: `data` is what `PipelineCache::get_data` returned in an earlier process (the only
+    // writer of the file is `DiskCache::save`). wgpu validates the data's header (magic, wgpu
+    // version, backend, adapter and driver, size, checksum) before handing it to the driver, and
+    // with `fallback` it starts an empty cache when the data does not match.
+    unsafe {
+        device.create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
+            label: Some("socnav pipelines"),
+            data,
+            fallback: true,
+        })
+    }
 }
 
 /// A lock that survives a panic elsewhere (the maps stay consistent: each insert is one call).
@@ -87,6 +166,19 @@ fn group_layout(dev: &GpuDevice, bindings: &[Binding]) -> wgpu::BindGroupLayout 
 }
 
 impl PipelineCache {
+    /// An empty cache, backed by `disk` where the device has one.
+    pub(crate) fn new(disk: Option<DiskCache>) -> Self {
+        Self {
+            disk,
+            ..Self::default()
+        }
+    }
+
+    /// The file wgpu's pipeline cache is kept in, where the device has one.
+    pub(crate) fn disk_path(&self) -> Option<&Path> {
+        self.disk.as_ref().map(|d| d.path.as_path())
+    }
+
     /// The bind group layouts of `groups` and the pipeline layout of them all, made once per
     /// device.
     pub(crate) fn layout(
@@ -125,7 +217,9 @@ impl PipelineCache {
         entry: &str,
     ) -> Result<(wgpu::ComputePipeline, bool), SimError> {
         let key = (groups.to_vec(), source.to_owned(), entry.to_owned());
-        if let Some(p) = lock(&self.pipelines).get(&key) {
+        let slot = Arc::clone(lock(&self.pipelines).entry(key).or_default());
+        let mut slot = lock(&slot);
+        if let Some(p) = slot.as_ref() {
             return Ok((p.clone(), false));
         }
         let (_, layout) = self.layout(dev, groups);
@@ -143,15 +237,15 @@ impl PipelineCache {
                 module: &module,
                 entry_point: Some(entry),
                 compilation_options: Default::default(),
-                cache: None,
+                cache: self.disk.as_ref().map(|d| &d.cache),
             });
         dev.take_errors()?;
         self.builds.fetch_add(1, Ordering::Relaxed);
-        // Two threads may have compiled the same source at once: either result serves.
-        Ok((
-            lock(&self.pipelines).entry(key).or_insert(pipeline).clone(),
-            true,
-        ))
+        if let Some(disk) = &self.disk {
+            disk.save();
+        }
+        *slot = Some(pipeline.clone());
+        Ok((pipeline, true))
     }
 
     /// Pipelines compiled so far.

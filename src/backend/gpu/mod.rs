@@ -655,6 +655,9 @@ impl GpuStages {
     }
 }
 
+/// A pipeline, and whether getting it compiled it.
+type Built = Option<(wgpu::ComputePipeline, bool)>;
+
 /// The pipeline of pass `stage` over the batch (`prelude`, bind `groups`) and whether it was
 /// compiled now: `None` for a network stage, whose pipelines [`GpuStages::attach_sngnn_net`]
 /// adds. A shader that needs the SNGNN
@@ -665,7 +668,7 @@ fn build_pass(
     stage: &'static str,
     groups: &[Vec<Binding>],
     prelude: &str,
-) -> Result<Option<(wgpu::ComputePipeline, bool)>, SimError> {
+) -> Result<Built, SimError> {
     let has_sngnn = groups.len() > 1;
     let missing_graphs = || {
         SimError::BackendUnavailable(format!(
