@@ -1,9 +1,10 @@
-//! Helpers shared by several test files (each test file is its own crate and includes this
-//! module with `mod common;`).
+//! Helpers shared by the test crates: the suite (`tests/suite/main.rs`, whose modules reach this
+//! one as `crate::common`), `golden_replay`, `step_no_alloc` and `orca_no_alloc`, each of which
+//! includes it as its own module (`mod common;`, or `#[path]` from the suite).
 
 #![allow(
     dead_code,
-    reason = "each test crate uses a different part of this module"
+    reason = "each test crate that includes this module uses a different part of it"
 )]
 
 #[cfg(feature = "gpu")]

@@ -3,7 +3,7 @@
 #![allow(
     dead_code,
     unused_imports,
-    reason = "each test binary that includes this module uses a different part of it"
+    reason = "the suite and golden_replay each use a different part of this module"
 )]
 
 mod compare;

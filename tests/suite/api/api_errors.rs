@@ -1,0 +1,385 @@
+//! The API boundary (STYLE.md rules 7 and 8): `BatchEnv` rejects what a caller can get wrong
+//! with a typed error whose message names the environment and the value, and a rejected call
+//! changes nothing. And the state documents: `get_state` → `set_state` → `get_state` is exact,
+//! and a loaded environment steps exactly as the original does.
+
+use crate::common;
+
+use common::valid_outputs;
+use std::path::Path;
+
+use serde_json::{Value, json};
+use socnav::state::columns::FNV_OFFSET;
+use socnav::{Actions, BatchEnv, Config, EnvOptions, SimError};
+
+fn config(name: &str) -> Config {
+    Config::from_file(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("configs")
+            .join(format!("{name}.toml")),
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn make(config: Config, n_envs: usize, seed: u64) -> BatchEnv {
+    let mut env = BatchEnv::new(
+        config,
+        EnvOptions {
+            n_envs,
+            seed,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    env.reset(None).unwrap();
+    env
+}
+
+/// Actions that depend on (env, step) only.
+fn actions(n: usize, t: usize) -> Vec<f32> {
+    (0..n)
+        .flat_map(|k| {
+            [
+                ((k + 2 * t) % 5) as f32 / 2.0 - 1.0,
+                0.0,
+                ((k * 3 + t) % 7) as f32 / 3.0 - 1.0,
+            ]
+        })
+        .collect()
+}
+
+/// Fingerprints of the state and of every output column.
+fn fingerprints(env: &BatchEnv) -> (u64, u64) {
+    let o = env.outputs();
+    (
+        env.state().fingerprint(),
+        (0..o.n_envs).fold(FNV_OFFSET, |h, e| o.fingerprint_env(e, h)),
+    )
+}
+
+/// Step with invalid actions, expect `SimError::Action` whose message holds every needle, and
+/// check that nothing changed.
+fn rejected(env: &mut BatchEnv, actions: Actions<'_>, needles: &[&str]) {
+    let before = fingerprints(env);
+    let err = env
+        .step(actions)
+        .expect_err("invalid actions must be rejected");
+    let SimError::Action(msg) = &err else {
+        panic!("expected SimError::Action, got {err:?}")
+    };
+    for needle in needles {
+        assert!(
+            msg.contains(needle),
+            "message {msg:?} does not name {needle:?}"
+        );
+    }
+    assert_eq!(
+        fingerprints(env),
+        before,
+        "a rejected step changed the batch ({msg})"
+    );
+}
+
+/// Contract: invalid continuous actions are rejected before anything moves, naming the
+/// environment and the offending value.
+#[test]
+fn step_rejects_invalid_continuous_actions() {
+    let n = 4;
+    let mut env = make(config("exp1"), n, 0);
+    env.step(Actions::Continuous(&actions(n, 0))).unwrap(); // mid-episode, not just after reset
+    let good = actions(n, 1);
+    rejected(&mut env, Actions::Continuous(&good[..11]), &["12", "11"]);
+    rejected(
+        &mut env,
+        Actions::Continuous(&[good.clone(), vec![0.0; 3]].concat()),
+        &["12", "15"],
+    );
+    let mut nan = good.clone();
+    nan[3 * 2] = f32::NAN;
+    rejected(
+        &mut env,
+        Actions::Continuous(&nan),
+        &["environment 2", "NaN"],
+    );
+    let mut inf = good.clone();
+    inf[3 * 3 + 2] = f32::NEG_INFINITY;
+    rejected(
+        &mut env,
+        Actions::Continuous(&inf),
+        &["environment 3", "inf"],
+    );
+    let mut lateral = good.clone();
+    lateral[3 + 1] = 0.5;
+    rejected(
+        &mut env,
+        Actions::Continuous(&lateral),
+        &["environment 1", "0.5", "diff-drive"],
+    );
+    // The valid actions still step afterwards.
+    env.step(Actions::Continuous(&good)).unwrap();
+}
+
+/// Contract: a holonomic robot accepts a lateral component (the diff-drive check is the only
+/// reason to reject it).
+#[test]
+fn holonomic_robot_accepts_lateral_actions() {
+    let mut c = config("exp1");
+    c.robot.kinematics = socnav::config::Kinematics::Holonomic;
+    let mut env = make(c, 2, 0);
+    env.step(Actions::Continuous(&[0.0, 0.5, 0.0, 0.0, -1.0, 0.0]))
+        .unwrap();
+}
+
+/// Contract: discrete actions must be one per environment and in 0..7.
+#[test]
+fn step_rejects_invalid_discrete_actions() {
+    let mut env = make(config("exp1"), 4, 0);
+    rejected(&mut env, Actions::Discrete(&[0, 1, 2]), &["4", "3"]);
+    rejected(
+        &mut env,
+        Actions::Discrete(&[0, 1, 2, 7]),
+        &["environment 3", "7"],
+    );
+    rejected(
+        &mut env,
+        Actions::Discrete(&[0, u32::MAX, 2, 3]),
+        &["environment 1", &u32::MAX.to_string()],
+    );
+    env.step(Actions::Discrete(&[0, 1, 2, 6])).unwrap();
+}
+
+/// Contract: a batch needs environments and threads.
+#[test]
+fn options_are_validated() {
+    let err = BatchEnv::new(
+        config("exp1"),
+        EnvOptions {
+            n_envs: 0,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&err, SimError::Shape(m) if m.contains("n_envs") && m.contains('0')),
+        "{err:?}"
+    );
+    let err = BatchEnv::new(
+        config("exp1"),
+        EnvOptions {
+            threads: Some(0),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&err, SimError::Shape(m) if m.contains("threads") && m.contains('0')),
+        "{err:?}"
+    );
+}
+
+/// Contract: a reset mask has one entry per environment; a wrong one changes nothing.
+#[test]
+fn reset_envs_rejects_a_wrong_mask() {
+    let mut env = make(config("exp1"), 4, 0);
+    env.step(Actions::Continuous(&actions(4, 0))).unwrap();
+    let before = fingerprints(&env);
+    let err = env.reset_envs(&[true, false, true]).unwrap_err();
+    assert!(
+        matches!(&err, SimError::Shape(m) if m.contains('3') && m.contains('4')),
+        "{err:?}"
+    );
+    assert_eq!(fingerprints(&env), before);
+}
+
+/// Contract: environment indices are checked.
+#[test]
+fn state_documents_check_the_environment_index() {
+    let mut env = make(config("exp1"), 3, 0);
+    let err = env.get_state(3).unwrap_err();
+    assert!(
+        matches!(&err, SimError::Shape(m) if m.contains('3')),
+        "{err:?}"
+    );
+    let doc = env.get_state(0).unwrap();
+    let err = env.set_state(3, &doc).unwrap_err();
+    assert!(
+        matches!(&err, SimError::Shape(m) if m.contains('3')),
+        "{err:?}"
+    );
+}
+
+/// `doc` with the value at a `/`-separated path removed.
+fn without(doc: &Value, path: &str) -> Value {
+    let mut doc = doc.clone();
+    let (parent, key) = path.rsplit_once('/').unwrap();
+    let target = doc
+        .pointer_mut(parent)
+        .unwrap_or_else(|| panic!("no {parent}"));
+    match target {
+        Value::Object(m) => assert!(m.remove(key).is_some(), "no {path}"),
+        other => panic!("{parent} is {other}"),
+    }
+    doc
+}
+
+/// Load `doc` into environment 0, expect a `SimError::Shape` holding every needle, and check
+/// that the environment is unchanged by the failed load.
+fn load_rejected(env: &mut BatchEnv, doc: &Value, needles: &[&str]) -> String {
+    let before = (
+        env.state().fingerprint_env(0, FNV_OFFSET),
+        env.get_state(0).unwrap(),
+    );
+    let err = env
+        .set_state(0, doc)
+        .expect_err("the document must be rejected");
+    let SimError::Shape(msg) = &err else {
+        panic!("expected SimError::Shape, got {err:?}")
+    };
+    for needle in needles {
+        assert!(
+            msg.contains(needle),
+            "message {msg:?} does not name {needle:?}"
+        );
+    }
+    let after = (
+        env.state().fingerprint_env(0, FNV_OFFSET),
+        env.get_state(0).unwrap(),
+    );
+    assert!(
+        after == before,
+        "a rejected set_state changed environment 0 ({msg})"
+    );
+    msg.clone()
+}
+
+/// Contract: a document missing a key is rejected with the path of the key.
+#[test]
+fn set_state_names_the_path_of_a_missing_key() {
+    let mut env = make(config("exp2"), 2, 0);
+    let doc = env.get_state(1).unwrap();
+    for (pointer, path) in [
+        ("/state/robot/x", "state.robot.x"),
+        ("/human_params/sfm_r0", "human_params.sfm_r0"),
+        ("/state/humans/0/x", "state.humans[0].x"),
+        ("/state/metrics/v_min", "state.metrics.v_min"),
+        ("/room/map_x", "room.map_x"),
+    ] {
+        let msg = load_rejected(&mut env, &without(&doc, pointer), &[path, "missing"]);
+        println!("{path}: {msg}");
+    }
+    // A value of the wrong type names its path too.
+    let mut bad = doc.clone();
+    bad["state"]["tables"][0]["theta"] = json!("north");
+    load_rejected(&mut env, &bad, &["state.tables[0].theta", "north"]);
+}
+
+/// Contract: a document larger than the batch's capacities names the capacity.
+#[test]
+fn set_state_names_an_exceeded_capacity() {
+    let mut env = make(config("exp1"), 1, 0); // capacity: 1 human
+    let mut doc = env.get_state(0).unwrap();
+    let mut second = doc["state"]["humans"][0].clone();
+    second["id"] = json!(99);
+    second["x"] = json!(-3.0);
+    doc["state"]["humans"].as_array_mut().unwrap().push(second);
+    let msg = load_rejected(&mut env, &doc, &["2 humans", "capacity is 1"]);
+    println!("{msg}");
+}
+
+/// Contract: sizes that are config constants in socnav must match the batch's config, and the
+/// message gives both values.
+#[test]
+fn set_state_names_a_radius_that_differs_from_the_config() {
+    let mut env = make(config("exp1"), 1, 0);
+    let mut doc = env.get_state(0).unwrap();
+    doc["state"]["robot"]["radius"] = json!(0.7);
+    let msg = load_rejected(
+        &mut env,
+        &doc,
+        &["state.robot.radius", "0.7", "0.25", "robot.radius"],
+    );
+    println!("{msg}");
+}
+
+/// Contract: `get_state` → `set_state` → `get_state` gives the same JSON, exactly, for several
+/// environments of every shipped config (mid-episode, after autoresets), both into the same
+/// environment and into another batch.
+#[test]
+fn state_documents_round_trip_exactly() {
+    let mut checked = 0;
+    for name in common::config_names() {
+        let mut c = config(&name);
+        c.episode.length = 12; // autoresets inside the run
+        let n = 8;
+        let mut env = make(c.clone(), n, 3);
+        for t in 0..20 {
+            env.step(Actions::Continuous(&actions(n, t))).unwrap();
+        }
+        let mut other = make(c, n, 99);
+        for k in 0..n {
+            let doc = env.get_state(k).unwrap();
+            env.set_state(k, &doc)
+                .unwrap_or_else(|e| panic!("{name} env {k}: {e}"));
+            assert_eq!(
+                env.get_state(k).unwrap(),
+                doc,
+                "{name} env {k}: round trip in place"
+            );
+            let j = n - 1 - k;
+            other
+                .set_state(j, &doc)
+                .unwrap_or_else(|e| panic!("{name} env {k} into env {j}: {e}"));
+            assert_eq!(
+                other.get_state(j).unwrap(),
+                doc,
+                "{name} env {k}: round trip into another batch"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 5 * 8, "only {checked} documents checked");
+}
+
+/// Contract: a loaded state steps exactly as the original. Every environment of a batch that has
+/// run (with autoresets) is loaded into a fresh batch of the same seed; both then take the same
+/// actions and must have the same documents, outputs and whole-state fingerprint (unused slots
+/// included: they hold zeros, module docs of `socnav::state`) after every step.
+#[test]
+fn a_loaded_state_steps_identically() {
+    for name in common::config_names() {
+        let mut c = config(&name);
+        c.episode.length = 15;
+        let n = 8;
+        let mut original = make(c.clone(), n, 21);
+        for t in 0..25 {
+            original.step(Actions::Continuous(&actions(n, t))).unwrap();
+        }
+        let mut loaded = make(c, n, 21);
+        for k in 0..n {
+            loaded
+                .set_state(k, &original.get_state(k).unwrap())
+                .unwrap();
+        }
+        for t in 25..60 {
+            let a = actions(n, t);
+            original.step(Actions::Continuous(&a)).unwrap();
+            loaded.step(Actions::Continuous(&a)).unwrap();
+            for k in 0..n {
+                assert_eq!(
+                    original.get_state(k).unwrap(),
+                    loaded.get_state(k).unwrap(),
+                    "{name} env {k}: documents after step {t}"
+                );
+            }
+            assert!(
+                valid_outputs(original.outputs()) == valid_outputs(loaded.outputs()),
+                "{name}: outputs after step {t}"
+            );
+            assert_eq!(
+                original.state().differing_columns(loaded.state()),
+                Vec::<&str>::new(),
+                "{name}: state columns after step {t}"
+            );
+        }
+    }
+}

@@ -1,0 +1,11 @@
+//! What users touch: the public API's errors, config validation, the command-line tool's
+//! backends, rendering, the heatmap figure and the SNGNN-v2 weight file.
+
+mod api_errors;
+#[cfg(all(feature = "gpu", feature = "cli"))]
+mod cli_backends;
+mod config_validation;
+mod heatmap;
+#[cfg(feature = "render")]
+mod render;
+mod sngnn_weights;

@@ -1,0 +1,8 @@
+//! The pieces under everything: the counter-based random streams (`src/rng.rs`), the accuracy of
+//! `socnav::math`, the shaders' validation and the parts generated into them, and the crate's
+//! module graph.
+
+mod math_accuracy;
+mod module_graph;
+mod rng;
+mod shaders_validate;

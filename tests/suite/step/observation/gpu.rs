@@ -1,0 +1,190 @@
+//! CPU/GPU parity of stage `observation` (DESIGN.md section 4): from the same state and
+//! parameters, `shaders/observation.wgsl` must leave the observation, the counts, the interaction
+//! pairs and the humans' relative-heading cache bit-identical to the Rust stage on lavapipe, in
+//! every shipped config and with every observation option (world frame, the robot's command,
+//! a limited field of view and range, noise per type, the padded layout).
+//!
+//! Runs either chain (the heading cache carries over) or start from states where the robot,
+//! humans and objects are scattered over the room with random headings, so that what the sensor
+//! sees varies (the harness: `tests/common/gpu.rs`).
+
+use crate::common;
+
+use common::gpu::*;
+use socnav::config::{Gaussian, ObsFrame};
+use socnav::outputs::Outputs;
+use socnav::rng::RngStream;
+use socnav::state::BatchState;
+use socnav::{Config, StepParams};
+
+/// Robot, humans, laptops and plants scattered over the room with random headings (the robot's
+/// exactly 0 now and then), random heading caches, ticks and episodes (new noise draws).
+fn scatter(s: &mut BatchState, _: &mut Outputs, _: &StepParams, rng: &mut RngStream) {
+    let tau = std::f32::consts::TAU;
+    for e in 0..s.n_envs {
+        let (hx, hy) = (0.5 * s.map_x[e], 0.5 * s.map_y[e]);
+        s.robot_x[e] = uniform(rng, -hx, hx);
+        s.robot_y[e] = uniform(rng, -hy, hy);
+        s.robot_theta[e] = if rng.next_f32() < 0.1 {
+            0.0
+        } else {
+            uniform(rng, -tau, tau)
+        };
+        s.robot_vx[e] = uniform(rng, -0.1, 0.1);
+        s.robot_w[e] = uniform(rng, -0.4, 0.4);
+        s.robot_wvx[e] = uniform(rng, -0.1, 0.1);
+        s.robot_wvy[e] = uniform(rng, -0.1, 0.1);
+        s.tick[e] = rng.next_u32() % 200;
+        s.episode[e] = rng.next_u32() % 5;
+        let hb = e * s.strides.humans;
+        for i in hb..hb + s.n_humans[e] as usize {
+            s.h_x[i] = uniform(rng, -hx, hx);
+            s.h_y[i] = uniform(rng, -hy, hy);
+            s.h_theta[i] = uniform(rng, -tau, tau);
+            s.h_prev_rel_theta[i] = uniform(rng, -3.2, 3.2);
+        }
+        let lb = e * s.strides.laptops;
+        for i in lb..lb + s.n_laptops[e] as usize {
+            s.l_x[i] = uniform(rng, -hx, hx);
+            s.l_y[i] = uniform(rng, -hy, hy);
+        }
+        let pb = e * s.strides.plants;
+        for i in pb..pb + s.n_plants[e] as usize {
+            s.p_x[i] = uniform(rng, -hx, hx);
+            s.p_y[i] = uniform(rng, -hy, hy);
+        }
+    }
+}
+
+/// Noise on every type and the robot's goal, with means and deviations of every sign pattern.
+fn noisy(mut c: Config) -> Config {
+    let n = &mut c.observation.noise;
+    n.robot = Gaussian {
+        mean: 0.0,
+        std: 0.2,
+    };
+    n.humans = Gaussian {
+        mean: 0.1,
+        std: 0.3,
+    };
+    n.laptops = Gaussian {
+        mean: -0.05,
+        std: 0.0,
+    };
+    n.tables = Gaussian {
+        mean: 0.0,
+        std: 0.5,
+    };
+    n.plants = Gaussian {
+        mean: 0.02,
+        std: 0.1,
+    };
+    n.walls = Gaussian {
+        mean: 0.0,
+        std: 0.25,
+    };
+    c
+}
+
+/// A field of view of 100° and a range of 4 m.
+fn partial(mut c: Config) -> Config {
+    c.observation.fov = 1.75;
+    c.observation.range = Some(4.0);
+    c
+}
+
+fn world(mut c: Config) -> Config {
+    c.observation.frame = ObsFrame::World;
+    c
+}
+
+/// Both kinds of run: chained, then from scattered states.
+fn both(c: Config, n_envs: usize, runs: usize) {
+    if check_parity("observation", c.clone(), n_envs, runs, None).is_none() {
+        return;
+    }
+    check_parity("observation", c, n_envs, runs, Some(scatter));
+}
+
+/// Contract: `observation` in every shipped config (plain path: robot frame, everything visible,
+/// no noise; walls, tables, laptops, plants, groups and laptop users).
+#[test]
+fn shipped_configs() {
+    for name in ["exp1", "exp2", "exp3", "lroom_mixed", "corridor_mixed"] {
+        both(config(name), 256, 10);
+    }
+    both(config("stress"), 64, 5);
+}
+
+/// Contract: the robot's command appended to the robot-frame robot record.
+#[test]
+fn robot_velocity() {
+    for name in ["exp2", "lroom_mixed"] {
+        let mut c = config(name);
+        c.observation.robot_velocity = true;
+        both(c, 256, 10);
+    }
+}
+
+/// Contract: world-frame records (16-float robot record, world positions, headings and human
+/// velocities), alone and with a limited sensor.
+#[test]
+fn world_frame() {
+    for name in ["exp2", "exp3", "lroom_mixed", "corridor_mixed"] {
+        both(world(config(name)), 256, 10);
+        both(partial(world(config(name))), 256, 10);
+    }
+}
+
+/// Contract: partial observation (fov, range, each alone and together): visible records
+/// compacted in order, counts, and the pairs re-indexed among the visible.
+#[test]
+fn partial_observation() {
+    // The sensor hides some humans and not all of them, so the compaction is exercised.
+    let env = rolled_out(partial(config("exp3")), 256, 40);
+    let seen: u32 = (0..256).map(|e| env.outputs().obs_count[5 * e]).sum();
+    let present: u32 = env.state().n_humans.iter().sum();
+    assert!(
+        0 < seen && seen < present,
+        "{seen} of {present} humans seen"
+    );
+    for name in ["exp1", "exp2", "exp3", "lroom_mixed", "corridor_mixed"] {
+        both(partial(config(name)), 256, 10);
+        let mut c = config(name);
+        c.observation.fov = 3.0;
+        both(c, 256, 10);
+        let mut c = config(name);
+        c.observation.range = Some(2.5);
+        both(c, 256, 10);
+    }
+    both(partial(config("stress")), 64, 5);
+}
+
+/// Contract: Gaussian noise per type from stream kind 7, unpadded (records present) and padded
+/// (the whole capacity), with a limited sensor and in the world frame.
+#[test]
+fn noise() {
+    for name in ["exp1", "exp2", "exp3", "lroom_mixed", "corridor_mixed"] {
+        both(noisy(config(name)), 256, 10);
+        both(noisy(partial(config(name))), 256, 10);
+        let mut c = noisy(config(name));
+        c.observation.padded = true;
+        both(c, 256, 10);
+    }
+    both(noisy(world(partial(config("lroom_mixed")))), 256, 10);
+}
+
+/// Contract: the padded layout (no walls), alone, with the command, in the world frame and with
+/// a limited sensor.
+#[test]
+fn padded() {
+    for name in ["exp2", "exp3", "lroom_mixed"] {
+        let mut c = config(name);
+        c.observation.padded = true;
+        both(c.clone(), 256, 10);
+        c.observation.robot_velocity = true;
+        both(c.clone(), 256, 10);
+        c.observation.robot_velocity = false;
+        both(partial(world(c)), 256, 10);
+    }
+}

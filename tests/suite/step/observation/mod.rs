@@ -1,0 +1,6 @@
+//! Stage `observation` (`src/systems/observation/`, `shaders/observation.wgsl`): the observation
+//! options of 0.1.1's wrappers (`options`) and CPU/GPU parity (`gpu`).
+
+#[cfg(feature = "gpu")]
+mod gpu;
+mod options;

@@ -1,0 +1,366 @@
+//! CPU/GPU parity of the social-structure stages (`social_events`, `formation`) and of the
+//! libraries under them (`common/regroup.wgsl`: the slot sorts, permutations and remapping;
+//! `common/orca_obstacles.wgsl`: the ORCA obstacle rebuild with RVO2's edge splits;
+//! `common/goal_sampling.wgsl`, `common/place.wgsl`): from the same state, parameters and actions, both
+//! backends must leave every state and output column bit-identical on lavapipe.
+//!
+//! States are rolled out on the CPU with raised event probabilities, then perturbed before every
+//! run (new tick, so new draws; formations cleared, started, brought to their slots or held
+//! together; spawn areas blocked) and uploaded as the GPU's. The processed obstacle columns are
+//! overwritten with garbage before each run, so an environment that regroups must rebuild them on
+//! the GPU exactly as on the CPU. The CPU side counts every event kind and the rebuilds that split
+//! edges, and the tests require each to have happened.
+
+use crate::common;
+
+use common::gpu::*;
+use socnav::backend::gpu::GpuStages;
+use socnav::outputs::Outputs;
+use socnav::rng::RngStream;
+use socnav::scenario::place;
+use socnav::spec::{EVENT_KEYS, N_EVENTS, event};
+use socnav::state::{BatchState, forming, role};
+use socnav::systems::{orca_obstacles, social_events};
+use socnav::{Config, StepParams};
+
+/// What the CPU side saw over the runs.
+#[derive(Default, Debug)]
+struct Seen {
+    events: [usize; N_EVENTS],
+    /// Obstacle rebuilds (environments whose `ov_*` columns were rewritten) ...
+    rebuilds: usize,
+    /// ... of which produced split vertices.
+    rebuilds_with_splits: usize,
+}
+
+/// `name` with every event probability set to `prob` (and its capacities grown to match).
+fn eventful(name: &str, prob: f32) -> Config {
+    let mut c = config(name);
+    c.events.crowd_dispersal_probability = prob;
+    c.events.laptop_dispersal_probability = prob;
+    c.events.crowd_formation_probability = prob;
+    c.events.laptop_formation_probability = prob;
+    c
+}
+
+/// A marker in the obstacle columns: a rebuild overwrites it.
+const GARBAGE: f32 = -1234.5;
+
+/// Overwrite every processed obstacle column with garbage (see the module docs).
+fn scramble_obstacles(s: &mut BatchState, rng: &mut RngStream) {
+    for v in s.ov_x.iter_mut() {
+        *v = GARBAGE;
+    }
+    for v in s.ov_y.iter_mut() {
+        *v = uniform(rng, -5.0, 5.0);
+    }
+    for v in s.ov_dir_x.iter_mut().chain(s.ov_dir_y.iter_mut()) {
+        *v = uniform(rng, -1.0, 1.0);
+    }
+    for v in s.ov_next.iter_mut().chain(s.ov_prev.iter_mut()) {
+        *v = rng.next_u32() % 7;
+    }
+    for v in s.ov_convex.iter_mut() {
+        *v = rng.next_u32() % 2;
+    }
+}
+
+/// No formation in progress in environment `e` (its walkers become ordinary walkers).
+fn clear_formations(s: &mut BatchState, e: usize) {
+    let mut ch = s.env_chunk(e);
+    socnav::systems::formation::clear_crowd_formation(&mut ch, 0);
+    socnav::systems::formation::clear_laptop_formation(&mut ch, 0);
+    let hb = e * s.strides.humans;
+    for i in hb..hb + s.n_humans[e] as usize {
+        s.h_forming[i] = forming::NONE;
+    }
+}
+
+/// Local slots of the free lone walkers of environment `e`.
+fn free_walkers(s: &BatchState, e: usize) -> Vec<u32> {
+    let hb = e * s.strides.humans;
+    (0..s.n_humans[e])
+        .filter(|&k| {
+            let i = hb + k as usize;
+            s.h_role[i] == role::DYNAMIC && s.h_forming[i] == forming::NONE
+        })
+        .collect()
+}
+
+/// Common part of the perturbations: a new tick (new draws), most environments stepping and not
+/// done, and the obstacle columns scrambled.
+fn next_run(s: &mut BatchState, rng: &mut RngStream) {
+    for e in 0..s.n_envs {
+        s.tick[e] += 1;
+        s.stepping[e] = u32::from(rng.next_f32() < 0.95);
+        s.done[e] = u32::from(rng.next_f32() < 0.05);
+    }
+    scramble_obstacles(s, rng);
+}
+
+/// For `social_events`: formations cleared in a third of the environments (so that new ones can
+/// start).
+///
+/// Not covered: a sampler that exhausts its 2000 tries (a crowd formation that gives up, a
+/// dispersed walker that keeps its goal because no spot is free). On lavapipe that cannot be
+/// bit-identical: llvmpipe (Mesa 22.3, `LP_MAX_TGSI_LOOP_ITERATIONS`) ends every loop of an
+/// invocation once 65535 loop iterations have run in it (one budget for all the loops of the
+/// shader, shared by the lanes of a SIMD batch), and 2000 tries over the room's entities exceed it.
+/// (Blocking every spot with a room-sized spawn blocker showed it: every loop after the sampler
+/// ran once.) Hardware drivers have no such limit.
+fn perturb_events(s: &mut BatchState, _: &mut Outputs, _: &StepParams, rng: &mut RngStream) {
+    next_run(s, rng);
+    for e in 0..s.n_envs {
+        if rng.next_f32() < 0.35 {
+            clear_formations(s, e);
+        }
+    }
+}
+
+/// For `formation`: crowd and laptop-use formations started where none is in progress, then the
+/// walkers brought to their slots (the crowd forms), held together near the centre for the last
+/// step before an approximate crowd, partly arrived, or left walking; laptop walkers brought to
+/// their seats or not.
+fn perturb_formation(s: &mut BatchState, _: &mut Outputs, p: &StepParams, rng: &mut RngStream) {
+    next_run(s, rng);
+    for e in 0..s.n_envs {
+        let walkers = free_walkers(s, e);
+        if s.cf_active[e] == 0 && s.lf_active[e] == 0 && walkers.len() >= 2 && rng.next_f32() < 0.7
+        {
+            let n = walkers
+                .len()
+                .min(s.strides.group_size)
+                .min(2 + rng.below(3) as usize);
+            let chosen: Vec<u32> = walkers[..n].to_vec();
+            let hb = e * s.strides.humans;
+            let (mut cx, mut cy) = (0.0, 0.0);
+            for &h in &chosen {
+                cx += s.h_x[hb + h as usize] / n as f32;
+                cy += s.h_y[hb + h as usize] / n as f32;
+            }
+            let slots: Vec<place::Pose> = (0..n)
+                .map(|k| {
+                    let a = std::f32::consts::TAU * k as f32 / n as f32;
+                    (
+                        cx + p.group_radius * socnav::math::cos(a),
+                        cy + p.group_radius * socnav::math::sin(a),
+                        a - 3.0,
+                    )
+                })
+                .collect();
+            let mut ch = s.env_chunk(e);
+            social_events::start_crowd_formation(&mut ch, 0, &chosen, &slots);
+        }
+        let free_laptop = (0..s.n_laptops[e])
+            .find(|&l| s.l_user[e * s.strides.laptops + l as usize] == socnav::state::NONE);
+        let walkers = free_walkers(s, e);
+        if s.lf_active[e] == 0 && s.cf_active[e] == 0 && rng.next_f32() < 0.7 {
+            if let (Some(l), Some(&h)) = (free_laptop, walkers.first()) {
+                let ll = e * s.strides.laptops + l as usize;
+                let seat = place::seat(p, s.l_x[ll], s.l_y[ll], s.l_theta[ll]);
+                let mut ch = s.env_chunk(e);
+                social_events::start_laptop_formation(&mut ch, 0, h, l, seat);
+            }
+        }
+        let hb = e * s.strides.humans;
+        let sb = e * s.strides.group_size;
+        if s.cf_active[e] != 0 {
+            let n = s.cf_count[e] as usize;
+            let r = rng.next_f32();
+            for k in 0..n {
+                let i = hb + s.cf_human[sb + k] as usize;
+                let arrive = r < 0.4 || (r < 0.6 && k % 2 == 0);
+                if arrive {
+                    s.h_x[i] = s.cf_slot_x[sb + k] + uniform(rng, -0.1, 0.1);
+                    s.h_y[i] = s.cf_slot_y[sb + k] + uniform(rng, -0.1, 0.1);
+                } else if r < 0.85 {
+                    // Together near the centre, away from the slots.
+                    s.h_x[i] = s.cf_x[e] + uniform(rng, -0.2, 0.2);
+                    s.h_y[i] = s.cf_y[e] + uniform(rng, -0.2, 0.2);
+                }
+            }
+            if (0.6..0.85).contains(&r) {
+                s.cf_close_steps[e] = 24 - rng.below(2);
+            }
+        }
+        if s.lf_active[e] != 0 && rng.next_f32() < 0.6 {
+            let i = hb + s.lf_human[e] as usize;
+            s.h_x[i] = s.lf_seat_x[e] + uniform(rng, -0.1, 0.1);
+            s.h_y[i] = s.lf_seat_y[e] + uniform(rng, -0.1, 0.1);
+        }
+    }
+}
+
+/// Run `stage` `runs` times on both backends from the rolled-out state of `config`, perturbing
+/// and uploading the CPU's state before each run, comparing every column after it; what the CPU
+/// side saw, or `None` without a device.
+fn parity(
+    stage: &'static str,
+    config: Config,
+    n_envs: usize,
+    runs: usize,
+    perturb: Perturb,
+) -> Option<Seen> {
+    let dev = device()?;
+    let env = rolled_out(config, n_envs, 40);
+    let p = *env.params();
+    let mut cpu = env.state().clone();
+    let mut cpu_out = env.outputs().clone();
+    let mut gpu = GpuStages::new(dev, &p, &cpu, &cpu_out, &[stage]).expect("GPU stages");
+    let mut from_gpu = cpu.clone();
+    let mut from_gpu_out = cpu_out.clone();
+    let mut rng = RngStream::new(9, 0, 0, 2);
+    let mut seen = Seen::default();
+    for run in 0..runs {
+        perturb(&mut cpu, &mut cpu_out, &p, &mut rng);
+        gpu.upload_state(&cpu);
+        gpu.upload_outputs(&cpu_out);
+        let before = cpu_out.events.clone();
+        let actions = random_actions(&mut rng, n_envs, p.holonomic != 0);
+        cpu_stage(stage, &p, &mut cpu, &mut cpu_out, &actions);
+        gpu.upload_actions(&actions);
+        gpu.run(stage).expect("GPU stage");
+        gpu.download_state(&mut from_gpu).expect("readback");
+        gpu.download_outputs(&mut from_gpu_out).expect("readback");
+        for (k, (a, b)) in cpu_out.events.iter().zip(&before).enumerate() {
+            seen.events[k % N_EVENTS] += (a - b) as usize;
+        }
+        let cap = cpu.strides.obstacle_vertices;
+        let mut chunk = cpu.clone();
+        let chunk = chunk.chunk();
+        for e in 0..n_envs {
+            if cap > 0 && cpu.ov_x[e * cap] != GARBAGE {
+                seen.rebuilds += 1;
+                let mut inputs = 0;
+                orca_obstacles::for_each_polygon(&p, &chunk, e, |_, _| inputs += 4);
+                seen.rebuilds_with_splits += usize::from(cpu.n_obstacle_vertices[e] > inputs);
+            }
+        }
+        let differ_envs: Vec<usize> = (0..n_envs)
+            .filter(|&e| cpu.fingerprint_env(e, 0) != from_gpu.fingerprint_env(e, 0))
+            .collect();
+        let differ = cpu.differing_columns(&from_gpu);
+        let differ_out = cpu_out.differing_columns(&from_gpu_out);
+        assert!(
+            differ.is_empty() && differ_out.is_empty(),
+            "{stage} on {}, run {run}: state columns {differ:?} and output columns {differ_out:?} \
+             differ between CPU and GPU in environments {differ_envs:?}; first differences: {}; {}",
+            gpu.adapter(),
+            first_differences(
+                &cpu.columns(),
+                |f, u| cpu.pack(f, u),
+                |f, u| from_gpu.pack(f, u)
+            ),
+            first_differences(
+                &cpu_out.columns(),
+                |f, u| cpu_out.pack(f, u),
+                |f, u| from_gpu_out.pack(f, u)
+            ),
+        );
+    }
+    println!(
+        "{stage}: {runs} runs over {n_envs} environments bit-identical on {}; {seen:?}",
+        gpu.adapter()
+    );
+    Some(seen)
+}
+
+/// Whether config `name` runs: all of them, unless `GPU_SOCIAL_ONLY` names one (for debugging;
+/// the coverage assertions then do not apply).
+fn selected(name: &str) -> bool {
+    std::env::var("GPU_SOCIAL_ONLY").map_or(true, |only| only == name)
+}
+
+fn add(total: &mut Seen, s: Seen) {
+    for (t, n) in total.events.iter_mut().zip(s.events) {
+        *t += n;
+    }
+    total.rebuilds += s.rebuilds;
+    total.rebuilds_with_splits += s.rebuilds_with_splits;
+}
+
+/// Contract: `social_events` (dispersal of standing and moving groups, with and without
+/// dissolution; laptop-use dispersal; crowd and laptop-use formation starts, and laptop-use
+/// formations blocked; the regrouping and obstacle rebuild after each; see `perturb_events` for
+/// what lavapipe cannot cover) in square, L-shaped and corridor rooms
+/// and the stress config, one at dt = 0.3 s.
+#[test]
+fn social_events_parity() {
+    let mut total = Seen::default();
+    let mut exp3 = eventful("exp3", 0.5);
+    exp3.episode.time_step = 0.3;
+    let configs = [
+        ("exp2", eventful("exp2", 0.5), 256),
+        ("exp3", exp3, 256),
+        ("lroom_mixed", eventful("lroom_mixed", 0.5), 256),
+        ("corridor_mixed", eventful("corridor_mixed", 0.5), 256),
+        ("stress", eventful("stress", 0.5), 256),
+    ];
+    for (name, c, n) in configs {
+        if !selected(name) {
+            continue;
+        }
+        let Some(seen) = parity("social_events", c, n, 12, perturb_events) else {
+            return;
+        };
+        add(&mut total, seen);
+    }
+    println!("social_events overall: {total:?}");
+    if std::env::var("GPU_SOCIAL_ONLY").is_ok() {
+        return;
+    }
+    for k in [
+        event::CROWD_DISPERSAL,
+        event::LAPTOP_DISPERSAL,
+        event::CROWD_FORMATION_START,
+        event::LAPTOP_FORMATION_START,
+        event::LAPTOP_FORMATION_BLOCKED,
+    ] {
+        assert!(total.events[k] > 0, "{} never happened", EVENT_KEYS[k]);
+    }
+    assert!(
+        total.rebuilds > 0 && total.rebuilds_with_splits > 0,
+        "{total:?}"
+    );
+}
+
+/// Contract: `formation` (walkers taking their slot headings, crowds forming standing or moving
+/// with a new group goal, approximate crowds after the walkers stayed together, laptop users
+/// sitting down, the regrouping and obstacle rebuild after each) in square, L-shaped and corridor
+/// rooms, one at dt = 0.3 s.
+#[test]
+fn formation_parity() {
+    let mut total = Seen::default();
+    let mut exp3 = eventful("exp3", 0.3);
+    exp3.episode.time_step = 0.3;
+    let configs = [
+        ("exp3", exp3, 256),
+        ("exp2", eventful("exp2", 0.3), 256),
+        ("lroom_mixed", eventful("lroom_mixed", 0.3), 256),
+        ("corridor_mixed", eventful("corridor_mixed", 0.3), 128),
+    ];
+    for (name, c, n) in configs {
+        if !selected(name) {
+            continue;
+        }
+        let Some(seen) = parity("formation", c, n, 10, perturb_formation) else {
+            return;
+        };
+        add(&mut total, seen);
+    }
+    println!("formation overall: {total:?}");
+    if std::env::var("GPU_SOCIAL_ONLY").is_ok() {
+        return;
+    }
+    for k in [
+        event::CROWD_FORMATION_COMPLETE,
+        event::CROWD_FORMATION_APPROXIMATE,
+        event::LAPTOP_FORMATION_COMPLETE,
+    ] {
+        assert!(total.events[k] > 0, "{} never happened", EVENT_KEYS[k]);
+    }
+    assert!(
+        total.rebuilds > 0 && total.rebuilds_with_splits > 0,
+        "{total:?}"
+    );
+}

@@ -1,0 +1,390 @@
+//! CPU/GPU parity of the whole step (DESIGN.md section 4, issues 4 and 6): for every shipped
+//! config, the same batch stepped by both backends with the same actions gives bit-identical
+//! state, observation, reward, flags, info and episode statistics at every step, through
+//! autoresets in each mode, on lavapipe (and any adapter that rounds like it). The SNGNN-v2
+//! configs need the weight file (skipped loudly without it unless `REQUIRE_SNGNN=1`) and run
+//! with short episodes, since lavapipe scores few graphs per second.
+//!
+//! Half the environments drive towards their goal (so episodes end by success and collision as
+//! well as by timeout), half act at random. Needs a GPU adapter: without one the tests say so and
+//! pass, unless `REQUIRE_GPU=1`.
+//!
+//! On adapters other than lavapipe (whose rounding the shaders are written against), hardware
+//! drivers may contract `a·b + c` into a fused multiply-add or use faster division and square
+//! roots, so whole trajectories drift apart: there the tests run in *lockstep* instead. Before
+//! every step the GPU batch takes the CPU batch's state ([`BatchEnv::copy_state_from`]), both
+//! step, and the step's state and outputs must agree within [`TOLERANCE`] per float; an
+//! environment whose integers differ or whose floats exceed it has *diverged* (a decision taken
+//! the other way at a threshold), which at most [`MAX_DIVERGED`] of the environment-steps may do.
+//! `SOCNAV_PARITY=exact` or `=tolerance` forces a mode (the tolerance mode on lavapipe finds no
+//! difference at all, which `lockstep_mode_runs_on_this_adapter` checks).
+
+use crate::common;
+
+use common::gpu::{device, diverged_envs, first_differences, uniform};
+use socnav::backend::BackendChoice;
+use socnav::backend::gpu::AdapterSummary;
+use socnav::config::RewardKind;
+use socnav::rng::RngStream;
+use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions};
+
+fn batch(config: Config, n_envs: usize, mode: AutoresetMode, backend: BackendChoice) -> BatchEnv {
+    let mut env = BatchEnv::new(
+        config,
+        EnvOptions {
+            n_envs,
+            seed: 2024,
+            autoreset: mode,
+            backend,
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{backend:?} batch: {e}"));
+    env.reset(None).expect("reset");
+    env
+}
+
+/// Actions for `env`: the first half of the environments turn to their goal and drive when
+/// facing it, the rest act uniformly at random (lateral 0 unless holonomic).
+fn actions(env: &BatchEnv, rng: &mut RngStream, out: &mut [f32]) {
+    let s = env.state();
+    let holonomic = env.params().holonomic != 0;
+    let n = env.n_envs();
+    for e in 0..n {
+        let a = &mut out[3 * e..3 * e + 3];
+        if e < n / 2 {
+            let bearing =
+                socnav::math::atan2(s.goal_y[e] - s.robot_y[e], s.goal_x[e] - s.robot_x[e]);
+            let mut turn = bearing - s.robot_theta[e];
+            turn = (turn + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
+                - std::f32::consts::PI;
+            a[0] = if turn.abs() < 0.4 { 1.0 } else { 0.1 };
+            a[1] = 0.0;
+            a[2] = (2.0 * turn).clamp(-1.0, 1.0);
+        } else {
+            a[0] = uniform(rng, -1.0, 1.0);
+            a[1] = if holonomic {
+                uniform(rng, -1.0, 1.0)
+            } else {
+                0.0
+            };
+            a[2] = uniform(rng, -1.0, 1.0);
+        }
+    }
+}
+
+/// Assert that the two batches hold the same state and outputs, naming the first differences.
+fn assert_same(name: &str, step: usize, cpu: &BatchEnv, gpu: &BatchEnv) {
+    let (cs, gs) = (cpu.state(), gpu.state());
+    let (co, go) = (cpu.outputs(), gpu.outputs());
+    let differ = cs.differing_columns(gs);
+    let differ_out = co.differing_columns(go);
+    if differ.is_empty() && differ_out.is_empty() {
+        return;
+    }
+    panic!(
+        "{name}, step {step}: state columns {differ:?} and output columns {differ_out:?} differ \
+         between CPU and GPU; first differences: {}; {}",
+        first_differences(&cs.columns(), |f, u| cs.pack(f, u), |f, u| gs.pack(f, u)),
+        first_differences(&co.columns(), |f, u| co.pack(f, u), |f, u| go.pack(f, u)),
+    );
+}
+
+/// Absolute and relative tolerance of a float after one step from identical states, on
+/// adapters that round differently from lavapipe: a few float32 ulps of per-operation
+/// rounding, amplified by the iterative parts of the step (ORCA's linear programs, the social
+/// force sums) by at most two orders of magnitude.
+const TOLERANCE: (f32, f32) = (1e-5, 1e-4);
+/// The largest share of environment-steps allowed to diverge in lockstep (decisions within
+/// rounding of their threshold: collisions, goal reached, ORCA constraint choices).
+const MAX_DIVERGED: f64 = 0.01;
+
+/// How the two backends are compared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Parity {
+    /// Bit for bit over whole trajectories (lavapipe).
+    Exact,
+    /// One step at a time from identical states, within [`TOLERANCE`].
+    Lockstep,
+}
+
+/// Exact on lavapipe (Vulkan on llvmpipe; llvmpipe under wgpu's GL backend rounds differently),
+/// lockstep elsewhere, unless `SOCNAV_PARITY` says otherwise.
+fn parity_mode(adapter: &AdapterSummary) -> Parity {
+    match std::env::var("SOCNAV_PARITY").as_deref() {
+        Ok("exact") => Parity::Exact,
+        Ok("tolerance") => Parity::Lockstep,
+        _ if adapter.name.contains("llvmpipe") && adapter.backend == "Vulkan" => Parity::Exact,
+        _ => Parity::Lockstep,
+    }
+}
+
+/// What a comparison went through: episodes ended, and environment-steps whose SNGNN-v2
+/// discomfort was positive (0 with the DSRNN reward).
+#[derive(Debug, Default)]
+struct Tally {
+    ended: usize,
+    sngnn_scored: usize,
+}
+
+impl Tally {
+    /// Count the step `env` (the CPU batch) just took.
+    fn add(&mut self, env: &BatchEnv) {
+        let done = &env.outputs().episode_done;
+        self.ended += done.iter().filter(|&&d| d != 0).count();
+        let discomfort = &env.state().r_discomfort_sngnn;
+        self.sngnn_scored += discomfort.iter().filter(|&&d| d > 0.0).count();
+    }
+}
+
+/// Step `name` in lockstep (see the module docs) and check the share of diverged
+/// environment-steps.
+fn lockstep(
+    name: &str,
+    config: Config,
+    n_envs: usize,
+    steps: usize,
+    mode: AutoresetMode,
+) -> Option<Tally> {
+    device()?;
+    let mut cpu = batch(config.clone(), n_envs, mode, BackendChoice::Cpu);
+    let mut gpu = batch(config, n_envs, mode, BackendChoice::Gpu);
+    let mut rng = RngStream::new(77, 0, 0, 0);
+    let mut a = vec![0.0f32; 3 * n_envs];
+    let mut tally = Tally::default();
+    let (mut diverged, mut worst, mut worst_column) = (0usize, 0.0f32, "");
+    for _ in 0..steps {
+        actions(&cpu, &mut rng, &mut a);
+        gpu.copy_state_from(&cpu).expect("same shape");
+        cpu.step(Actions::Continuous(&a)).expect("CPU step");
+        gpu.step(Actions::Continuous(&a)).expect("GPU step");
+        let (cs, gs) = (cpu.state(), gpu.state());
+        let (co, go) = (cpu.outputs(), gpu.outputs());
+        let (in_state, w1, c1) = diverged_envs(
+            &cs.columns(),
+            n_envs,
+            |f, u| cs.pack(f, u),
+            |f, u| gs.pack(f, u),
+            TOLERANCE,
+        );
+        let (in_outputs, w2, c2) = diverged_envs(
+            &co.columns(),
+            n_envs,
+            |f, u| co.pack(f, u),
+            |f, u| go.pack(f, u),
+            TOLERANCE,
+        );
+        diverged += in_state
+            .iter()
+            .zip(&in_outputs)
+            .filter(|(a, b)| **a || **b)
+            .count();
+        for (w, c) in [(w1, c1), (w2, c2)] {
+            if w > worst {
+                (worst, worst_column) = (w, c);
+            }
+        }
+        tally.add(&cpu);
+        let done: Vec<bool> = cpu.outputs().episode_done.iter().map(|&d| d != 0).collect();
+        if mode == AutoresetMode::Disabled && done.iter().any(|&d| d) {
+            cpu.reset_envs(&done).expect("CPU masked reset");
+        }
+    }
+    let share = diverged as f64 / (steps * n_envs) as f64;
+    let agreement = if worst_column.is_empty() {
+        "every other float identical".to_string()
+    } else {
+        format!("the others within {worst:.2} of the tolerance (worst in {worst_column})")
+    };
+    println!(
+        "{name} ({mode:?}) in lockstep on {}: {diverged} of {} environment-steps diverged ({:.3} %), \
+         {agreement}; {} episodes ended, SNGNN-v2 discomfort positive in {} environment-steps",
+        gpu.device(),
+        steps * n_envs,
+        100.0 * share,
+        tally.ended,
+        tally.sngnn_scored,
+    );
+    assert!(
+        share <= MAX_DIVERGED,
+        "{name}: {diverged} of {} environment-steps diverged beyond the tolerance {TOLERANCE:?} \
+         (more than {:.1} %)",
+        steps * n_envs,
+        100.0 * MAX_DIVERGED
+    );
+    Some(tally)
+}
+
+/// Step `name` for `steps` steps on both backends and compare after the reset and every step.
+/// Under DISABLED the finished environments are reset with a mask after each step, as a caller
+/// would.
+fn parity(
+    name: &str,
+    config: Config,
+    n_envs: usize,
+    steps: usize,
+    mode: AutoresetMode,
+) -> Option<Tally> {
+    device()?;
+    let mut cpu = batch(config.clone(), n_envs, mode, BackendChoice::Cpu);
+    let mut gpu = batch(config, n_envs, mode, BackendChoice::Gpu);
+    assert_eq!(gpu.backend_name(), "gpu");
+    assert_same(name, 0, &cpu, &gpu);
+    let mut rng = RngStream::new(77, 0, 0, 0);
+    let mut a = vec![0.0f32; 3 * n_envs];
+    let mut tally = Tally::default();
+    for step in 1..=steps {
+        actions(&cpu, &mut rng, &mut a);
+        cpu.step(Actions::Continuous(&a)).expect("CPU step");
+        gpu.step(Actions::Continuous(&a)).expect("GPU step");
+        assert_same(name, step, &cpu, &gpu);
+        tally.add(&cpu);
+        let done: Vec<bool> = cpu.outputs().episode_done.iter().map(|&d| d != 0).collect();
+        if mode == AutoresetMode::Disabled && done.iter().any(|&d| d) {
+            cpu.reset_envs(&done).expect("CPU masked reset");
+            gpu.reset_envs(&done).expect("GPU masked reset");
+            assert_same(name, step, &cpu, &gpu);
+        }
+    }
+    println!(
+        "{name} ({mode:?}): {steps} steps of {n_envs} environments bit-identical, {} episodes \
+         ended, SNGNN-v2 discomfort positive in {} environment-steps",
+        tally.ended, tally.sngnn_scored
+    );
+    Some(tally)
+}
+
+fn check(name: &str, n_envs: usize, steps: usize, mode: AutoresetMode) {
+    check_config(name, common::load_config(name), n_envs, steps, mode);
+}
+
+/// [`check`] for an SNGNN-v2 config whose episodes last `length` steps (then time out), unless
+/// the weights are missing.
+fn check_sngnn(name: &str, length: u32, n_envs: usize, steps: usize, mode: AutoresetMode) {
+    if device().is_none() || common::sngnn::real_weights().is_none() {
+        return;
+    }
+    let mut config = common::load_config(name);
+    config.episode.length = length;
+    check_config(name, config, n_envs, steps, mode);
+}
+
+fn check_config(name: &str, config: Config, n_envs: usize, steps: usize, mode: AutoresetMode) {
+    let Some(dev) = device() else { return };
+    let run = match parity_mode(&dev.adapter) {
+        Parity::Exact => parity,
+        Parity::Lockstep => lockstep,
+    };
+    let sngnn = config.reward.kind == RewardKind::Sngnn;
+    if let Some(tally) = run(name, config, n_envs, steps, mode) {
+        assert!(
+            tally.ended >= n_envs,
+            "{name}: only {} episodes ended in {steps} steps: autoresets barely tested",
+            tally.ended
+        );
+        assert!(
+            !sngnn || tally.sngnn_scored >= n_envs,
+            "{name}: SNGNN-v2's discomfort was positive in only {} environment-steps: the \
+             comparison barely tested the network",
+            tally.sngnn_scored
+        );
+    }
+}
+
+/// Environments of each config's comparison: not a multiple of the workgroup (64), so the last
+/// workgroup runs idle invocations.
+const ENVS: usize = 100;
+/// Steps of each config's comparison: at least two episodes of every environment (200 steps at
+/// most), about 250 episodes in all.
+const STEPS: usize = 400;
+
+/// Contract: experiment 1 (lone walkers, plants, tables, laptops), NEXT_STEP autoreset.
+#[test]
+fn exp1() {
+    check("exp1", ENVS, STEPS, AutoresetMode::NextStep);
+}
+
+/// Contract: experiment 2 (groups, laptop use, laptop events), SAME_STEP autoreset.
+#[test]
+fn exp2() {
+    check("exp2", ENVS, STEPS, AutoresetMode::SameStep);
+}
+
+/// Contract: experiment 3 (every social event), NEXT_STEP autoreset.
+#[test]
+fn exp3() {
+    check("exp3", ENVS, STEPS, AutoresetMode::NextStep);
+}
+
+/// Contract: the L-shaped room (non-convex walls, noisy groups), DISABLED with masked resets.
+#[test]
+fn lroom_mixed() {
+    check("lroom_mixed", ENVS, STEPS, AutoresetMode::Disabled);
+}
+
+/// Contract: the corridor with every event, SAME_STEP autoreset.
+#[test]
+fn corridor_mixed() {
+    check("corridor_mixed", ENVS, STEPS, AutoresetMode::SameStep);
+}
+
+/// Contract: the stress config (34 humans), fewer steps to keep CI short.
+#[test]
+fn stress() {
+    check("stress", 67, 300, AutoresetMode::NextStep);
+}
+
+/// Contract: the lockstep comparison of other adapters works here too: on lavapipe nothing
+/// diverges, and the state copy between backends leaves the GPU batch stepping like the CPU's.
+#[test]
+fn lockstep_mode_runs_on_this_adapter() {
+    lockstep(
+        "exp1",
+        common::load_config("exp1"),
+        256,
+        100,
+        AutoresetMode::NextStep,
+    );
+}
+
+/// Contract: the SNGNN-v2 reward of experiment 2 (frames, graphs and the network on the device),
+/// SAME_STEP autoreset, 12-step episodes: the histories fill, wrap and empty at resets.
+#[test]
+fn exp2_sngnn() {
+    check_sngnn("exp2_sngnn", 12, 256, 40, AutoresetMode::SameStep);
+}
+
+/// Contract: the SNGNN-v2 reward of experiment 1, NEXT_STEP autoreset, 12-step episodes, 67
+/// environments (one workgroup and a partial one).
+#[test]
+fn exp1_sngnn() {
+    check_sngnn("exp1_sngnn", 12, 67, 40, AutoresetMode::NextStep);
+}
+
+/// Contract: the SNGNN-v2 reward of experiment 3 (every social event), DISABLED autoreset with
+/// masked resets, 12-step episodes, 67 environments.
+#[test]
+fn exp3_sngnn() {
+    check_sngnn("exp3_sngnn", 12, 67, 40, AutoresetMode::Disabled);
+}
+
+/// Every shipped config is covered above (a new config must get its test). The SNGNN-v2 configs
+/// share every stage's pipeline with their DSRNN twins but `sngnn_graph` and the network's, so
+/// each costs a few seconds of lavapipe here; the device's frames and graphs are also compared
+/// with the CPU's in `tests/gpu_sngnn_graph.rs`, and the network in `tests/gpu_sngnn.rs`.
+#[test]
+fn every_config_is_covered() {
+    let covered = [
+        "corridor_mixed",
+        "exp1",
+        "exp2",
+        "exp3",
+        "lroom_mixed",
+        "stress",
+    ];
+    assert_eq!(common::config_names(), covered);
+    assert_eq!(
+        common::sngnn_config_names(),
+        ["exp1_sngnn", "exp2_sngnn", "exp3_sngnn"]
+    );
+}

@@ -1,0 +1,92 @@
+//! The reset pool's premise (src/backend/reset_pool.rs): a reset is a pure function of the step
+//! constants, the environment's batch index and its episode counter. For every shipped config, a
+//! row generated on a fresh one-environment table equals, word for word, the state and first
+//! observation that an in-place reset gives an environment of a rolled-out batch (whose slots
+//! hold the previous episode's entities, its counters and caches).
+
+use crate::common;
+
+use socnav::backend::reset_pool::{RowScratch, row_words, write_row};
+use socnav::outputs::Outputs;
+use socnav::pipeline::Batch;
+use socnav::state::BatchState;
+use socnav::{Actions, BatchEnv, EnvOptions};
+
+/// The row an in-place reset of environment `e` of `env` produces, in pool layout.
+fn reset_in_place(env: &BatchEnv, e: usize) -> Vec<u32> {
+    let p = *env.params();
+    let mut state = env.state().clone();
+    let mut out = env.outputs().clone();
+    let mut b = Batch {
+        s: state.chunk(),
+        o: out.chunk(),
+        actions: &[],
+        sngnn: None,
+        error: None,
+    };
+    socnav::systems::reset::reset_and_observe(&p, &mut b, e);
+    assert!(b.error.is_none(), "{:?}", b.error);
+    let mut one = BatchState::new(1, *env.caps());
+    one.copy_env_from(0, &state, e);
+    let mut one_out = Outputs::new(1, *env.layout());
+    one_out.copy_env_from(0, &out, e);
+    let (mut f, mut u) = (Vec::new(), Vec::new());
+    one.pack(&mut f, &mut u);
+    let mut row: Vec<u32> = f.iter().map(|v| v.to_bits()).collect();
+    row.extend(u);
+    row.extend(one_out.obs.iter().map(|v| v.to_bits()));
+    for col in [
+        &one_out.obs_count,
+        &one_out.hh_pairs,
+        &one_out.hl_pairs,
+        &one_out.pair_count,
+    ] {
+        row.extend(col.iter().copied());
+    }
+    row
+}
+
+/// Contract: for every config, the generated row of each environment of a batch that has run
+/// episodes (with entities, formations and events left over) equals its in-place reset, and a
+/// scratch table reused across environments leaves no trace in the next row.
+#[test]
+fn rows_equal_in_place_resets() {
+    for name in common::config_names() {
+        let config = common::load_config(&name);
+        let n = 12;
+        let mut env = BatchEnv::new(
+            config,
+            EnvOptions {
+                n_envs: n,
+                seed: 3,
+                ..Default::default()
+            },
+        )
+        .expect("batch");
+        env.reset(None).expect("reset");
+        let holonomic = env.params().holonomic != 0;
+        let mut rng = socnav::rng::RngStream::new(9, 0, 0, 0);
+        for _ in 0..90 {
+            let a: Vec<f32> = (0..3 * n)
+                .map(|k| {
+                    let v = 2.0 * rng.next_f32() - 1.0;
+                    if k % 3 == 1 && !holonomic { 0.0 } else { v }
+                })
+                .collect();
+            env.step(Actions::Continuous(&a)).expect("step");
+        }
+        let p = *env.params();
+        let words = row_words(*env.caps(), *env.layout());
+        // One scratch for all: rows must not depend on what it held before.
+        let mut scratch = RowScratch::new(*env.caps(), *env.layout());
+        for e in 0..n {
+            let mut row = vec![0u32; words];
+            write_row(&p, e, env.state().episode[e], &mut scratch, &mut row).expect("row");
+            let expected = reset_in_place(&env, e);
+            assert_eq!(expected.len(), words, "{name}: row length");
+            if let Some(k) = (0..words).find(|&k| row[k] != expected[k]) {
+                panic!("{name}: env {e}: pool row differs from the in-place reset at word {k}");
+            }
+        }
+    }
+}
