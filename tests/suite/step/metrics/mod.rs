@@ -1,0 +1,4 @@
+//! Stage `metrics` (`src/systems/metrics.rs`, `shaders/metrics.wgsl`): hand-computed metrics
+//! (`cpu`) and CPU/GPU parity (`gpu`).
+
+mod cpu;

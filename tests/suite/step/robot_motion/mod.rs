@@ -1,0 +1,4 @@
+//! Stage `robot_motion` (`src/systems/robot_motion.rs`, `shaders/robot_motion.wgsl`):
+//! hand-computed kinematics (`cpu`) and CPU/GPU parity (`gpu`).
+
+mod cpu;
