@@ -25,11 +25,13 @@ use socnav::spec::N_INFO;
 use socnav::{Actions, BatchEnv, Config};
 
 mod autoreset;
+#[cfg(feature = "gpu")]
+mod begin_step;
 mod contacts;
 #[cfg(feature = "gpu")]
 mod goals;
 #[cfg(feature = "gpu")]
-mod gpu_stages;
+mod group_motion;
 mod human_motion;
 mod metrics;
 mod observation;

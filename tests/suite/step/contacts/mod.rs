@@ -4,4 +4,6 @@
 //! parity (`gpu`, with the polygon64 collisions of `termination`).
 
 mod cpu;
+#[cfg(feature = "gpu")]
+mod gpu;
 mod shape;

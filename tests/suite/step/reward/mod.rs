@@ -3,3 +3,5 @@
 //! clipping of the raw score is checked with the SNGNN-v2 stages (`sngnn_graph`).
 
 mod cpu;
+#[cfg(feature = "gpu")]
+pub(crate) mod gpu;

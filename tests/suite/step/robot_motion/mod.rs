@@ -2,3 +2,5 @@
 //! hand-computed kinematics (`cpu`) and CPU/GPU parity (`gpu`).
 
 mod cpu;
+#[cfg(feature = "gpu")]
+mod gpu;

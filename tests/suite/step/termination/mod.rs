@@ -3,3 +3,5 @@
 //! `metrics` build on).
 
 mod cpu;
+#[cfg(feature = "gpu")]
+pub(crate) mod gpu;

@@ -1,0 +1,23 @@
+//! CPU/GPU parity of stage `autoreset` (DESIGN.md section 4): from the same state, parameters and
+//! actions, `shaders/autoreset.wgsl` must leave the state and the outputs bit-identical to the Rust
+//! stage on lavapipe, in each autoreset mode, on rolled-out states perturbed before each run (the
+//! harness: `tests/common/gpu.rs`).
+
+use crate::common::gpu::*;
+use crate::step::begin_step::scatter_ends;
+use socnav::AutoresetMode;
+
+/// Contract: `autoreset` in each mode: SAME_STEP keeps the final observation, pairs and info
+/// and resets from the pool keeping the step's reward and flags; NEXT_STEP marks the reset.
+#[test]
+fn autoreset() {
+    for mode in [
+        AutoresetMode::SameStep,
+        AutoresetMode::NextStep,
+        AutoresetMode::Disabled,
+    ] {
+        for name in ["exp2", "corridor_mixed"] {
+            check_parity_mode("autoreset", config(name), mode, 256, 10, Some(scatter_ends));
+        }
+    }
+}
