@@ -12,6 +12,9 @@
 //! thousands of seeded random scenes with agents and polygon obstacles, crowded ones included so
 //! that LP3 runs often.
 //!
+//! The capacities of the shipped configs are checked against the library's list limits too
+//! (`shipped_capacities_fit_the_orca_lists`).
+//!
 //! Needs a GPU adapter (lavapipe will do). Without one the tests print why and pass, unless
 //! `REQUIRE_GPU=1`. Bit-identity is the contract on lavapipe; on other adapters the shader may
 //! legally round differently (spec/wgpu-on-cpu.md section 3).
@@ -21,7 +24,7 @@ use std::fmt::Write as _;
 
 use crate::common;
 
-use common::gpu::device;
+use common::gpu::{config, device};
 use common::reference::Table;
 use socnav::backend::gpu::GpuDevice;
 use socnav::backend::wgsl;
@@ -30,6 +33,7 @@ use socnav::orca::{
     compute_new_velocity, process_obstacles,
 };
 use socnav::rng::RngStream;
+use socnav::state::Caps;
 
 // ---------------------------------------------------------------------------------------------
 // The test kernel
@@ -949,3 +953,41 @@ fn list_limits_are_flagged() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// The shipped configs against the list limits
+// ---------------------------------------------------------------------------------------------
+
+/// The shipped configs whose capacities are checked against the ORCA list limits.
+const CONFIGS: [&str; 5] = ["exp1", "exp2", "exp3", "lroom_mixed", "corridor_mixed"];
+
+/// Contract: the capacities of every shipped config keep the agent neighbour list of
+/// `common/orca_world.wgsl` within its limit (every human and group plus the robot fit), so it
+/// never overflows. The obstacle neighbour list is bounded by the edges within the obstacle range
+/// of one agent, not by the capacities: where the vertex capacity exceeds its limit (the configs
+/// listed here) an overflow is possible in principle, and the shaders would then write NaN (a
+/// loud difference from the CPU, never a silent one).
+#[test]
+fn shipped_capacities_fit_the_orca_lists() {
+    const ORCA_MAX_AGENT_NEIGHBORS: usize = 64;
+    const ORCA_MAX_OBSTACLE_NEIGHBORS: usize = 128;
+    let src = socnav::backend::wgsl::source("common/orca.wgsl").expect("embedded");
+    assert!(src.contains("const ORCA_MAX_AGENT_NEIGHBORS: u32 = 64u;"));
+    assert!(src.contains("const ORCA_MAX_OBSTACLE_NEIGHBORS: u32 = 128u;"));
+    let mut unbounded = Vec::new();
+    for name in CONFIGS.iter().chain(&["stress"]) {
+        let caps = Caps::from_config(&config(name));
+        println!("{name}: {caps:?}");
+        assert!(
+            caps.humans + caps.groups < ORCA_MAX_AGENT_NEIGHBORS,
+            "{name}: {caps:?}"
+        );
+        if caps.obstacle_vertices > ORCA_MAX_OBSTACLE_NEIGHBORS {
+            unbounded.push(*name);
+        }
+    }
+    assert_eq!(unbounded, OBSTACLE_LIST_NOT_BOUNDED_BY_CAPS);
+}
+
+/// The shipped configs whose obstacle vertex capacity exceeds ORCA_MAX_OBSTACLE_NEIGHBORS.
+const OBSTACLE_LIST_NOT_BOUNDED_BY_CAPS: &[&str] = &["lroom_mixed", "corridor_mixed", "stress"];

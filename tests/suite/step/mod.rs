@@ -29,9 +29,13 @@ mod autoreset;
 mod begin_step;
 mod contacts;
 #[cfg(feature = "gpu")]
+mod formation;
+#[cfg(feature = "gpu")]
 mod goals;
 #[cfg(feature = "gpu")]
 mod group_motion;
+#[cfg(feature = "gpu")]
+mod group_velocities;
 mod human_motion;
 mod metrics;
 mod observation;

@@ -5,6 +5,10 @@
 //! chained and perturbed (shadow robots, lone humans and groups scattered, shadow outcomes
 //! cleared so the shadows move), with neighbour velocities zero (0.1.1) and actual, diff-drive
 //! and holonomic robots, and a time step other than 1 s. The harness: `tests/common/gpu.rs`.
+//!
+//! This module holds the harness of both and `shadow_robot`'s test; `group_velocities`'s is in
+//! `step/group_velocities.rs`, and the check of the shipped configs' capacities against the ORCA
+//! list limits in `orca/gpu.rs`.
 
 use crate::common;
 
@@ -13,11 +17,8 @@ use socnav::config::{Kinematics, OrcaNeighbourVelocity};
 use socnav::math::PI;
 use socnav::outputs::Outputs;
 use socnav::rng::RngStream;
-use socnav::state::{BatchState, Caps};
+use socnav::state::BatchState;
 use socnav::{Config, StepParams};
-
-/// The shipped configs whose capacities are checked against the ORCA list limits.
-const CONFIGS: [&str; 5] = ["exp1", "exp2", "exp3", "lroom_mixed", "corridor_mixed"];
 
 /// Runs per config (each chained on the last one's state and perturbed).
 const RUNS: usize = 12;
@@ -63,7 +64,7 @@ fn scatter_agents(s: &mut BatchState, _: &mut Outputs, _: &StepParams, rng: &mut
 }
 
 /// `config` with neighbours at their actual velocities and a 0.3 s step.
-fn actual(mut c: Config) -> Config {
+pub(crate) fn actual(mut c: Config) -> Config {
     c.model.orca_neighbour_velocity = OrcaNeighbourVelocity::Actual;
     c.episode.time_step = 0.3;
     c
@@ -76,39 +77,8 @@ fn holonomic(mut c: Config) -> Config {
     c
 }
 
-/// Contract: the capacities of every shipped config keep the agent neighbour list of
-/// `common/orca_world.wgsl` within its limit (every human and group plus the robot fit), so it
-/// never overflows. The obstacle neighbour list is bounded by the edges within the obstacle range
-/// of one agent, not by the capacities: where the vertex capacity exceeds its limit (the configs
-/// listed here) an overflow is possible in principle, and the shaders would then write NaN (a
-/// loud difference from the CPU, never a silent one).
-#[test]
-fn shipped_capacities_fit_the_orca_lists() {
-    const ORCA_MAX_AGENT_NEIGHBORS: usize = 64;
-    const ORCA_MAX_OBSTACLE_NEIGHBORS: usize = 128;
-    let src = socnav::backend::wgsl::source("common/orca.wgsl").expect("embedded");
-    assert!(src.contains("const ORCA_MAX_AGENT_NEIGHBORS: u32 = 64u;"));
-    assert!(src.contains("const ORCA_MAX_OBSTACLE_NEIGHBORS: u32 = 128u;"));
-    let mut unbounded = Vec::new();
-    for name in CONFIGS.iter().chain(&["stress"]) {
-        let caps = Caps::from_config(&config(name));
-        println!("{name}: {caps:?}");
-        assert!(
-            caps.humans + caps.groups < ORCA_MAX_AGENT_NEIGHBORS,
-            "{name}: {caps:?}"
-        );
-        if caps.obstacle_vertices > ORCA_MAX_OBSTACLE_NEIGHBORS {
-            unbounded.push(*name);
-        }
-    }
-    assert_eq!(unbounded, OBSTACLE_LIST_NOT_BOUNDED_BY_CAPS);
-}
-
-/// The shipped configs whose obstacle vertex capacity exceeds ORCA_MAX_OBSTACLE_NEIGHBORS.
-const OBSTACLE_LIST_NOT_BOUNDED_BY_CAPS: &[&str] = &["lroom_mixed", "corridor_mixed", "stress"];
-
 /// `stage` on `c`: [`RUNS`] runs over 256 environments, chained and perturbed.
-fn check(stage: &'static str, c: Config) {
+pub(crate) fn check(stage: &'static str, c: Config) {
     check_parity(stage, c, 256, RUNS, Some(scatter_agents));
 }
 
@@ -123,16 +93,4 @@ fn check(stage: &'static str, c: Config) {
 fn shadow_robot() {
     check("shadow_robot", config("exp1"));
     check("shadow_robot", holonomic(actual(config("corridor_mixed"))));
-}
-
-/// Contract: `group_velocities`: each moving group's ORCA velocity as a super-agent among the
-/// lone humans and the other moving groups, in group order (with actual velocities, earlier
-/// groups' new ones).
-///
-/// Two shaders to compile (see `shadow_robot`): 0.1.1's model with experiment 2's groups, and
-/// actual neighbour velocities at dt = 0.3 s in the L room.
-#[test]
-fn group_velocities() {
-    check("group_velocities", config("exp2"));
-    check("group_velocities", actual(config("lroom_mixed")));
 }

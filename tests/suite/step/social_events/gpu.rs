@@ -10,6 +10,9 @@
 //! overwritten with garbage before each run, so an environment that regroups must rebuild them on
 //! the GPU exactly as on the CPU. The CPU side counts every event kind and the rebuilds that split
 //! edges, and the tests require each to have happened.
+//!
+//! This module holds the harness of both stages and `social_events`'s test; `formation`'s is in
+//! `step/formation.rs`.
 
 use crate::common;
 
@@ -17,24 +20,23 @@ use common::gpu::*;
 use socnav::backend::gpu::GpuStages;
 use socnav::outputs::Outputs;
 use socnav::rng::RngStream;
-use socnav::scenario::place;
 use socnav::spec::{EVENT_KEYS, N_EVENTS, event};
 use socnav::state::{BatchState, forming, role};
-use socnav::systems::{orca_obstacles, social_events};
+use socnav::systems::orca_obstacles;
 use socnav::{Config, StepParams};
 
 /// What the CPU side saw over the runs.
 #[derive(Default, Debug)]
-struct Seen {
-    events: [usize; N_EVENTS],
+pub(crate) struct Seen {
+    pub(crate) events: [usize; N_EVENTS],
     /// Obstacle rebuilds (environments whose `ov_*` columns were rewritten) ...
-    rebuilds: usize,
+    pub(crate) rebuilds: usize,
     /// ... of which produced split vertices.
-    rebuilds_with_splits: usize,
+    pub(crate) rebuilds_with_splits: usize,
 }
 
 /// `name` with every event probability set to `prob` (and its capacities grown to match).
-fn eventful(name: &str, prob: f32) -> Config {
+pub(crate) fn eventful(name: &str, prob: f32) -> Config {
     let mut c = config(name);
     c.events.crowd_dispersal_probability = prob;
     c.events.laptop_dispersal_probability = prob;
@@ -77,7 +79,7 @@ fn clear_formations(s: &mut BatchState, e: usize) {
 }
 
 /// Local slots of the free lone walkers of environment `e`.
-fn free_walkers(s: &BatchState, e: usize) -> Vec<u32> {
+pub(crate) fn free_walkers(s: &BatchState, e: usize) -> Vec<u32> {
     let hb = e * s.strides.humans;
     (0..s.n_humans[e])
         .filter(|&k| {
@@ -89,7 +91,7 @@ fn free_walkers(s: &BatchState, e: usize) -> Vec<u32> {
 
 /// Common part of the perturbations: a new tick (new draws), most environments stepping and not
 /// done, and the obstacle columns scrambled.
-fn next_run(s: &mut BatchState, rng: &mut RngStream) {
+pub(crate) fn next_run(s: &mut BatchState, rng: &mut RngStream) {
     for e in 0..s.n_envs {
         s.tick[e] += 1;
         s.stepping[e] = u32::from(rng.next_f32() < 0.95);
@@ -117,84 +119,10 @@ fn perturb_events(s: &mut BatchState, _: &mut Outputs, _: &StepParams, rng: &mut
     }
 }
 
-/// For `formation`: crowd and laptop-use formations started where none is in progress, then the
-/// walkers brought to their slots (the crowd forms), held together near the centre for the last
-/// step before an approximate crowd, partly arrived, or left walking; laptop walkers brought to
-/// their seats or not.
-fn perturb_formation(s: &mut BatchState, _: &mut Outputs, p: &StepParams, rng: &mut RngStream) {
-    next_run(s, rng);
-    for e in 0..s.n_envs {
-        let walkers = free_walkers(s, e);
-        if s.cf_active[e] == 0 && s.lf_active[e] == 0 && walkers.len() >= 2 && rng.next_f32() < 0.7
-        {
-            let n = walkers
-                .len()
-                .min(s.strides.group_size)
-                .min(2 + rng.below(3) as usize);
-            let chosen: Vec<u32> = walkers[..n].to_vec();
-            let hb = e * s.strides.humans;
-            let (mut cx, mut cy) = (0.0, 0.0);
-            for &h in &chosen {
-                cx += s.h_x[hb + h as usize] / n as f32;
-                cy += s.h_y[hb + h as usize] / n as f32;
-            }
-            let slots: Vec<place::Pose> = (0..n)
-                .map(|k| {
-                    let a = std::f32::consts::TAU * k as f32 / n as f32;
-                    (
-                        cx + p.group_radius * socnav::math::cos(a),
-                        cy + p.group_radius * socnav::math::sin(a),
-                        a - 3.0,
-                    )
-                })
-                .collect();
-            let mut ch = s.env_chunk(e);
-            social_events::start_crowd_formation(&mut ch, 0, &chosen, &slots);
-        }
-        let free_laptop = (0..s.n_laptops[e])
-            .find(|&l| s.l_user[e * s.strides.laptops + l as usize] == socnav::state::NONE);
-        let walkers = free_walkers(s, e);
-        if s.lf_active[e] == 0 && s.cf_active[e] == 0 && rng.next_f32() < 0.7 {
-            if let (Some(l), Some(&h)) = (free_laptop, walkers.first()) {
-                let ll = e * s.strides.laptops + l as usize;
-                let seat = place::seat(p, s.l_x[ll], s.l_y[ll], s.l_theta[ll]);
-                let mut ch = s.env_chunk(e);
-                social_events::start_laptop_formation(&mut ch, 0, h, l, seat);
-            }
-        }
-        let hb = e * s.strides.humans;
-        let sb = e * s.strides.group_size;
-        if s.cf_active[e] != 0 {
-            let n = s.cf_count[e] as usize;
-            let r = rng.next_f32();
-            for k in 0..n {
-                let i = hb + s.cf_human[sb + k] as usize;
-                let arrive = r < 0.4 || (r < 0.6 && k % 2 == 0);
-                if arrive {
-                    s.h_x[i] = s.cf_slot_x[sb + k] + uniform(rng, -0.1, 0.1);
-                    s.h_y[i] = s.cf_slot_y[sb + k] + uniform(rng, -0.1, 0.1);
-                } else if r < 0.85 {
-                    // Together near the centre, away from the slots.
-                    s.h_x[i] = s.cf_x[e] + uniform(rng, -0.2, 0.2);
-                    s.h_y[i] = s.cf_y[e] + uniform(rng, -0.2, 0.2);
-                }
-            }
-            if (0.6..0.85).contains(&r) {
-                s.cf_close_steps[e] = 24 - rng.below(2);
-            }
-        }
-        if s.lf_active[e] != 0 && rng.next_f32() < 0.6 {
-            let i = hb + s.lf_human[e] as usize;
-            s.h_x[i] = s.lf_seat_x[e] + uniform(rng, -0.1, 0.1);
-            s.h_y[i] = s.lf_seat_y[e] + uniform(rng, -0.1, 0.1);
-        }
-    }
-}
-
 /// Run `stage` `runs` times on both backends from the rolled-out state of `config`, perturbing
 /// and uploading the CPU's state before each run, comparing every column after it; what the CPU
 /// side saw, or `None` without a device.
-fn parity(
+pub(crate) fn parity(
     stage: &'static str,
     config: Config,
     n_envs: usize,
@@ -267,11 +195,11 @@ fn parity(
 
 /// Whether config `name` runs: all of them, unless `GPU_SOCIAL_ONLY` names one (for debugging;
 /// the coverage assertions then do not apply).
-fn selected(name: &str) -> bool {
+pub(crate) fn selected(name: &str) -> bool {
     std::env::var("GPU_SOCIAL_ONLY").map_or(true, |only| only == name)
 }
 
-fn add(total: &mut Seen, s: Seen) {
+pub(crate) fn add(total: &mut Seen, s: Seen) {
     for (t, n) in total.events.iter_mut().zip(s.events) {
         *t += n;
     }
@@ -315,47 +243,6 @@ fn social_events_parity() {
         event::CROWD_FORMATION_START,
         event::LAPTOP_FORMATION_START,
         event::LAPTOP_FORMATION_BLOCKED,
-    ] {
-        assert!(total.events[k] > 0, "{} never happened", EVENT_KEYS[k]);
-    }
-    assert!(
-        total.rebuilds > 0 && total.rebuilds_with_splits > 0,
-        "{total:?}"
-    );
-}
-
-/// Contract: `formation` (walkers taking their slot headings, crowds forming standing or moving
-/// with a new group goal, approximate crowds after the walkers stayed together, laptop users
-/// sitting down, the regrouping and obstacle rebuild after each) in square, L-shaped and corridor
-/// rooms, one at dt = 0.3 s.
-#[test]
-fn formation_parity() {
-    let mut total = Seen::default();
-    let mut exp3 = eventful("exp3", 0.3);
-    exp3.episode.time_step = 0.3;
-    let configs = [
-        ("exp3", exp3, 256),
-        ("exp2", eventful("exp2", 0.3), 256),
-        ("lroom_mixed", eventful("lroom_mixed", 0.3), 256),
-        ("corridor_mixed", eventful("corridor_mixed", 0.3), 128),
-    ];
-    for (name, c, n) in configs {
-        if !selected(name) {
-            continue;
-        }
-        let Some(seen) = parity("formation", c, n, 10, perturb_formation) else {
-            return;
-        };
-        add(&mut total, seen);
-    }
-    println!("formation overall: {total:?}");
-    if std::env::var("GPU_SOCIAL_ONLY").is_ok() {
-        return;
-    }
-    for k in [
-        event::CROWD_FORMATION_COMPLETE,
-        event::CROWD_FORMATION_APPROXIMATE,
-        event::LAPTOP_FORMATION_COMPLETE,
     ] {
         assert!(total.events[k] > 0, "{} never happened", EVENT_KEYS[k]);
     }
