@@ -1,7 +1,9 @@
-//! The stages of the step: one module per stage of `socnav::pipeline::STAGES` that has tests,
-//! named as the stage (as are `src/systems/<stage>.rs` and `shaders/<stage>.wgsl`), in the step's
-//! order. A stage with both kinds of test is a directory: `cpu` (and further CPU files where a
-//! stage has more) beside `gpu`; a stage with one kind is a file.
+//! The stages of the step: one module per stage of `socnav::pipeline::STAGES`, named as the stage
+//! (as are `src/systems/<stage>.rs` and `shaders/<stage>.wgsl`). A stage with both kinds of test
+//! is a directory: `cpu` (and further CPU files where a stage has more) beside `gpu`; a stage with
+//! one kind is a file. Five stages have only their GPU parity check (`begin_step`,
+//! `group_velocities`, `group_motion`, `goals`, `formation`); their CPU side is checked through
+//! whole steps (`whole_step/`, the golden replay).
 //!
 //! The hand-computed cases (spec 4-6, 8; most `cpu` modules) run on exact scenes loaded with
 //! `set_state` from small JSON documents written there (the format of `src/document.rs`), with the
