@@ -14,7 +14,8 @@
 //!   here without changing the WGSL in the same commit.
 //! - Constants that are not small exact decimals are given by their bits (`f32::from_bits`), and
 //!   the twin writes the same values as exact hexadecimal floats (`0x1.921fb6p1f`);
-//!   `tests/shaders_validate.rs` checks that both files denote the same set of bit patterns.
+//!   `tests/suite/foundations/shaders_validate.rs` checks that both files denote the same set of
+//!   bit patterns.
 //! - The shader compiler is not neutral. lavapipe runs Mesa's NIR optimiser, which applies
 //!   algebraic rewrites that are not bit-exact to every float operation that SPIR-V does not mark
 //!   exact (naga never does). Among them: cancellations such as `(a + b) - a → b` (so TwoSum /
@@ -31,7 +32,8 @@
 //!   that are neither NaN nor a signed-zero tie, or their result is discarded for NaN inputs.
 //!
 //! Accuracy is given per function as the maximum distance, in units in the last place, from the
-//! correctly rounded result, measured by `tests/math_accuracy.rs` over the domain stated.
+//! correctly rounded result, measured by `tests/suite/foundations/math_accuracy.rs` over the domain
+//! stated.
 
 /// π rounded to f32 (the same value as `std::f32::consts::PI`).
 pub const PI: f32 = f32::from_bits(0x40490fdb);

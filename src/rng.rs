@@ -8,7 +8,7 @@
 //! add, xor, shifts), because WGSL has no u64 and no 32×32→64 multiply.
 //! `shaders/common/rng.wgsl` is the line-by-line twin of this file (`RngStream::next_u32` there
 //! is `rng_next_u32`, and so on); both use the same hexadecimal constants, which
-//! `tests/shaders_validate.rs` checks.
+//! `tests/suite/foundations/shaders_validate.rs` checks.
 //!
 //! # Construction
 //!

@@ -9,13 +9,14 @@
 // Rules kept here: no `fma` and no builtin transcendentals (`sin`, `exp`, ...); `a * b + c` is
 // written out; constants are exact hexadecimal floats of the bits the Rust file gives to
 // `f32::from_bits` (a decimal literal is parsed as an abstract float and could round differently,
-// and naga cannot evaluate `bitcast` in a constant expression); tests/shaders_validate.rs checks
-// that both files denote the same bit patterns. NaN and infinity are made at run time
-// (`math_nan`, `math_inf`), because a non-finite constant expression is a shader-creation error.
-// Float-to-integer conversions only see finite, in-range values. Mesa's NIR optimiser rewrites
-// some float expressions on lavapipe (cancellations, factoring, moving constants through sums):
-// the forms here were chosen to be immune, and checked bit for bit against the Rust twin; keep
-// the exact shape of every expression when editing (src/math.rs, module docs, lists the rules).
+// and naga cannot evaluate `bitcast` in a constant expression);
+// tests/suite/foundations/shaders_validate.rs checks that both files denote the same bit patterns.
+// NaN and infinity are made at run time (`math_nan`, `math_inf`), because a non-finite constant
+// expression is a shader-creation error. Float-to-integer conversions only see finite, in-range
+// values. Mesa's NIR optimiser rewrites some float expressions on lavapipe (cancellations,
+// factoring, moving constants through sums): the forms here were chosen to be immune, and checked
+// bit for bit against the Rust twin; keep the exact shape of every expression when editing
+// (src/math.rs, module docs, lists the rules).
 
 const MATH_PI: f32 = 0x1.921fb6p1f;
 const MATH_TAU: f32 = 0x1.921fb6p2f;

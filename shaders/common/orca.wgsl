@@ -6,7 +6,7 @@
 // `math_inf`) to the shaders that move agents by ORCA. Every function mirrors its Rust twin
 // expression for expression (`lp2` is `orca_lp2`, `Vec2::div_scalar` is `orca_div_scalar`, ...);
 // read the Rust files for the method and change both sides in the same commit.
-// tests/gpu_orca.rs checks this file bit for bit against the Rust core on lavapipe.
+// tests/suite/orca/gpu.rs checks this file bit for bit against the Rust core on lavapipe.
 //
 // Float rules (src/orca/mod.rs): only `+ - * /`, `sqrt`, `abs` and comparisons, in RVO2's order:
 // `v / s` is `inv = 1 / s` then two multiplies (`orca_div_scalar`), `normalize(v)` is

@@ -55,10 +55,11 @@
 // batch.s_ov_x), and `obstacles_dirty` is left at ORCA_OBSTACLES_FAILED (2) instead of 0, so the host
 // can see it. Neither can happen under the shipped capacities (the CPU would have panicked).
 //
-// Loop budget on lavapipe: llvmpipe stops every loop of an invocation after 65535 loop
-// iterations in total (docs/ARCHITECTURE.md). `choose_split` costs up to n² iterations per node
-// (fewer with RVO2's early exit); the shipped configs' rebuilds (tests/gpu_social.rs, stress
-// included) stay within it, but a much larger obstacle set could exceed it there.
+// Loop budget on lavapipe: llvmpipe stops every loop of an invocation after 65535 loop iterations
+// in total (docs/ARCHITECTURE.md). `choose_split` costs up to n² iterations per node (fewer with
+// RVO2's early exit); the shipped configs' rebuilds (tests/suite/step/social_events/gpu.rs and
+// formation.rs, stress included) stay within it, but a much larger obstacle set could exceed it
+// there.
 
 // Sizes of the arrays below: compile-time size classes (backend::wgsl::SizeClasses), at least
 // the batch's capacities, which every count is compared with (`orca_obstacles_cap`,

@@ -8,8 +8,9 @@
 // Change both in the same commit.
 //
 // Loop budget (llvmpipe stops every loop after 65535 iterations per invocation): zeroing the
-// regions costs (batch.sn_u32_stride + batch.sn_f32_stride) / 8 iterations, a frame about 3 x nodes +
-// 2 x people x segments; tests/sngnn_graph.rs bounds the total for every shipped config.
+// regions costs (batch.sn_u32_stride + batch.sn_f32_stride) / 8 iterations, a frame about 3 x nodes
+// + 2 x people x segments; tests/suite/step/sngnn_graph/cpu.rs bounds the total for every shipped
+// config.
 //
 // The SNGNN prelude defines graph.rs's constants from their Rust values: SN_POSITION_SCALE (/10
 // positions), SN_MAX_HUMANS (0.1.1's MAX_HUMANS) and SN_MAX_HUMANS_SQ (its square, as Rust folds

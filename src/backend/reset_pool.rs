@@ -6,8 +6,9 @@
 //!
 //! This works because a reset is a pure function of the step constants, the environment's batch
 //! index and its episode counter: scenario generation clears every slot and writes every
-//! per-environment column (`tests/reset_pool.rs` checks a row against an in-place reset of a
-//! rolled-out environment for every config). Row layout: [`crate::backend::wgsl::pool_row_words`].
+//! per-environment column (`tests/suite/whole_step/reset_pool.rs` checks a row against an in-place
+//! reset of a rolled-out environment for every config). Row layout:
+//! [`crate::backend::wgsl::pool_row_words`].
 
 use rayon::prelude::*;
 

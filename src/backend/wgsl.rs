@@ -403,7 +403,7 @@ fn size_class(n: usize, floor: usize) -> usize {
 /// The part of every shader's head that depends on neither the config nor the batch: the
 /// constants [`prelude`] lists before the size classes (`WORKGROUP_SIZE`, `INFO_*`, `EP_*`,
 /// `EV_*`, the shared codes and f32 constants, `OBS_RECORD`, [`geometry_constants`]). A kernel
-/// built from the shader library outside the step (tests/gpu_orca.rs) starts with it, so the
+/// built from the shader library outside the step (tests/suite/orca/gpu.rs) starts with it, so the
 /// library's files see the same definitions there as in the step.
 pub fn shared_head() -> String {
     let mut out = format!("const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n");
@@ -838,10 +838,10 @@ pub mod sngnn_status {
 /// field, in the same order, with the Rust name (`_pad` is `pad`). The Rust struct's arrays,
 /// two-component ones included, are flat here (`counts[2 * k]` is `counts[k][0]`).
 ///
-/// The shaders bind it read-only as storage (`params`), not as a uniform buffer: a uniform
-/// array needs a 16-byte element stride, and the Rust struct packs its arrays at 4 bytes. In
-/// storage, every member (a 4-byte scalar or an array of them) is 4-byte aligned with a 4-byte
-/// stride, as in the `#[repr(C)]` struct; tests/shaders_validate.rs checks the offsets and size
+/// The shaders bind it read-only as storage (`params`), not as a uniform buffer: a uniform array
+/// needs a 16-byte element stride, and the Rust struct packs its arrays at 4 bytes. In storage,
+/// every member (a 4-byte scalar or an array of them) is 4-byte aligned with a 4-byte stride, as in
+/// the `#[repr(C)]` struct; tests/suite/foundations/shaders_validate.rs checks the offsets and size
 /// naga computes against Rust's.
 pub fn step_params_struct() -> String {
     let mut out = String::from("struct StepParams {\n");

@@ -1,7 +1,7 @@
 //! ORCA (optimal reciprocal collision avoidance) exactly as RVO2 2.0.3 computes it.
 //!
 //! The spec is `spec/orca-sfm.md` §1 in the shared project notes; the reference data
-//! (`rvo2_*` files) is reproduced bit for bit by `tests/orca_reference.rs`.
+//! (`rvo2_*` files) is reproduced bit for bit by `tests/suite/orca/reference.rs`.
 //!
 //! # Two layers
 //! * **Core, non-allocating, one agent at a time** (what the simulator step calls):

@@ -48,7 +48,8 @@ pub struct Caps {
 
 /// Extra obstacle vertices allowed for edges that RVO2's obstacle tree splits, per polygon vertex.
 /// Splits happen where one rectangle's edge line crosses another rectangle (room corners do);
-/// `tests/scenario_props.rs` checks the largest count seen over many scenarios stays below this.
+/// `tests/suite/whole_step/scenario_props.rs` checks the largest count seen over many scenarios
+/// stays below this.
 const SPLIT_VERTICES_PER_VERTEX: usize = 1;
 
 /// The most observed wall segments any room of the config can have: exact for the outer walls

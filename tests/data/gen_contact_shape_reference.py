@@ -5,7 +5,7 @@ SocNavGym 0.1.1 decides every contact with shapely (envs/utils/object.py `collid
 circle, vertices at angles k*pi/32), a table, laptop or wall the polygon of
 `get_coordinates_of_rotated_rectangle`, and the answer `intersects` (touching counts). This file
 pins that verdict for pairs sampled near the contact threshold, where exact discs and 64-gons
-disagree, plus random near and far pairs; tests/contact_shape.rs checks socnav's
+disagree, plus random near and far pairs; tests/suite/step/contacts/shape.rs checks socnav's
 `contact_shape = "polygon64"` against it.
 
 Reference library: PyPI `shapely` 2.x (2.2.0 with GEOS 3.14.1 made the committed file).

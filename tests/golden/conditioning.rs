@@ -97,8 +97,8 @@ pub fn preferred_velocity_error(extent: f64, speed: f64, distance: f64) -> f64 {
 /// Bound (m/s) on the difference, as a vector, between 0.1.1's and socnav's RVO2 velocity of one
 /// agent (a lone ORCA walker, a moving group, the shadow robot).
 ///
-/// socnav's ORCA is bit-exact with RVO2 on equal f32 inputs (`tests/orca_reference.rs`), so the
-/// two velocities differ only through their inputs:
+/// socnav's ORCA is bit-exact with RVO2 on equal f32 inputs (`tests/suite/orca/reference.rs`), so
+/// the two velocities differ only through their inputs:
 /// * relative positions: every position or obstacle vertex is within half an ulp of `extent`
 ///   of its exact value on 0.1.1's side (rounded from f64) and within 1.5 ulp on socnav's (its
 ///   own rounding, plus the f32 motion of a walker moved earlier in the step, or the f32

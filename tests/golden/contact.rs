@@ -23,7 +23,7 @@ pub const CONTACT_FLIP_FRACTION: f64 = 0.0013;
 /// 0.1.1's: socnav tests the same polygons in f32, from positions that agree with 0.1.1's within
 /// the replay's position tolerance (`compare::POS`, 2e-5 m; the largest difference measured on
 /// the published episodes is 2.4e-6 m). The polygon test itself rounds at ~1e-6 m
-/// (`tests/contact_shape.rs` against shapely), inside that.
+/// (`tests/suite/step/contacts/shape.rs` against shapely), inside that.
 pub const POLYGON64_FLIP_DISTANCE: f64 = super::compare::POS;
 
 /// How the replay decides a contact: the shape socnav was configured with, and how far (a

@@ -10,13 +10,13 @@
 //!   reach the shaders at run time in the uniform `batch`, [`crate::backend::wgsl::BatchLayout`]),
 //!   the step parameters, the actions and the reset pool, and one compute pipeline per stage
 //!   shader. It runs any sequence of passes in one submit, single stages included, which is what
-//!   the CPU/GPU parity tests of each stage need (`tests/gpu_stages.rs`,
-//!   `tests/gpu_observation.rs`). [`GpuStages::with_sngnn_graphs`] adds every environment's
-//!   packed SNGNN-v2 graph and the frame gaps (bind group 1) and the stage `sngnn_graph`, which
-//!   records the frame and builds the graph on the device (`tests/gpu_sngnn_graph.rs`);
-//!   [`GpuStages::attach_sngnn_net`] adds SNGNN-v2's network over those graphs as the stage
-//!   `sngnn_score` ([`GpuNet`], [`sngnn_net`]), which writes each scored environment's raw
-//!   score into its `r_discomfort_sngnn` column for the reward stage.
+//!   the CPU/GPU parity tests of each stage need (`tests/suite/step/<stage>/gpu.rs`, or
+//!   `step/<stage>.rs` for a stage with only that test). [`GpuStages::with_sngnn_graphs`] adds
+//!   every environment's packed SNGNN-v2 graph and the frame gaps (bind group 1) and the stage
+//!   `sngnn_graph`, which records the frame and builds the graph on the device
+//!   (`tests/suite/step/sngnn_graph/gpu.rs`); [`GpuStages::attach_sngnn_net`] adds SNGNN-v2's
+//!   network over those graphs as the stage `sngnn_score` ([`GpuNet`], [`sngnn_net`]), which writes
+//!   each scored environment's raw score into its `r_discomfort_sngnn` column for the reward stage.
 //! - [`GpuBackend`]: the whole step in one submit, with one readback of the outputs, and resets
 //!   from a pool of rows the host generates off the step's critical path.
 

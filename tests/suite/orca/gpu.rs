@@ -8,7 +8,7 @@
 //! ways: through the library's building blocks reading storage (as a stage shader will), and
 //! through `orca_compute_new_velocity` over function-scope copies. Scenes: RVO2's reference data
 //! (the one-step cases, the edge-split scenes, crossing4, corridor and every sampled Circle250
-//! state; `SOCNAV_REF_DIR` or `tests/data/ref/orca_sfm`, as in tests/orca_reference.rs) and
+//! state; `SOCNAV_REF_DIR` or `tests/data/ref/orca_sfm`, as in tests/suite/orca/reference.rs) and
 //! thousands of seeded random scenes with agents and polygon obstacles, crowded ones included so
 //! that LP3 runs often.
 //!
@@ -572,7 +572,7 @@ fn check(kernel: &Kernel, name: &str, batch: &Batch) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Reference scenes (RVO2 2.0.3 data, as tests/orca_reference.rs reads them)
+// Reference scenes (RVO2 2.0.3 data, as tests/suite/orca/reference.rs reads them)
 // ---------------------------------------------------------------------------------------------
 
 /// `(pos, vel, pref_vel)` per agent per step of a trajectory file.

@@ -369,9 +369,10 @@ fn exp3_sngnn() {
 }
 
 /// Every shipped config is covered above (a new config must get its test). The SNGNN-v2 configs
-/// share every stage's pipeline with their DSRNN twins but `sngnn_graph` and the network's, so
-/// each costs a few seconds of lavapipe here; the device's frames and graphs are also compared
-/// with the CPU's in `tests/gpu_sngnn_graph.rs`, and the network in `tests/gpu_sngnn.rs`.
+/// share every stage's pipeline with their DSRNN twins but `sngnn_graph` and the network's, so each
+/// costs a few seconds of lavapipe here; the device's frames and graphs are also compared with the
+/// CPU's in `tests/suite/step/sngnn_graph/gpu.rs`, and the network in
+/// `tests/suite/step/sngnn_score/gpu.rs`.
 #[test]
 fn every_config_is_covered() {
     let covered = [

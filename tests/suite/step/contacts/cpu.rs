@@ -51,11 +51,11 @@ fn contact_pushes_a_human_out_of_a_plant() {
     );
 }
 
-/// Regression (found by `tests/golden_perturbed.rs`): a lone static human that touches an object
-/// keeps its position and heading but takes the push's speed, as in 0.1.1, whose
+/// Regression (found by `tests/suite/whole_step/golden_perturbed.rs`): a lone static human that
+/// touches an object keeps its position and heading but takes the push's speed, as in 0.1.1, whose
 /// `handle_collision` assigns `human.speed` while `Human.update_orientation` and `Human.update`
-/// return early for a static human. socnav used to leave it untouched. The speed shows wherever
-/// a human's velocity does: here the observation's relative speed.
+/// return early for a static human. socnav used to leave it untouched. The speed shows wherever a
+/// human's velocity does: here the observation's relative speed.
 #[test]
 fn contact_gives_a_static_human_the_push_speed() {
     let mut doc = scene(false, [-3.0, -3.0, 0.0], [3.0, -3.0]);

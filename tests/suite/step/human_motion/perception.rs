@@ -462,8 +462,8 @@ fn run(name: &str, fov: Option<f32>, threads: usize, steps: usize) -> Vec<u64> {
 
 /// Contract: the configs as shipped (fov 6.2831853, which is 2π in f32), fov = 2π and any fov
 /// within 0.1 of 2π give the same outputs, bit for bit (0.1.1's short-cut; the golden hash of
-/// `tests/determinism.rs` pins them to the behaviour before fields of view existed). 230 steps
-/// cross the 201-step episodes.
+/// `tests/suite/whole_step/determinism.rs` pins them to the behaviour before fields of view
+/// existed). 230 steps cross the 201-step episodes.
 #[test]
 fn a_full_view_changes_nothing() {
     for name in ["exp2", "lroom_mixed"] {
