@@ -5,10 +5,11 @@
 //! allocations of every thread, which tests running beside them would move). The helpers shared
 //! with them are `tests/common/` and `tests/golden/`.
 //!
-//! `step/`: one module per stage of `socnav::pipeline::STAGES` that has tests, named as the stage
-//! (as are `src/systems/<stage>.rs` and `shaders/<stage>.wgsl`): its hand-computed CPU cases
-//! (`cpu`, and further CPU files where a stage has more) beside its CPU/GPU parity check (`gpu`).
-//! `step/mod.rs` holds the scene helpers of the hand-computed cases.
+//! `step/`: one module per stage of `socnav::pipeline::STAGES`, named as the stage (as are
+//! `src/systems/<stage>.rs` and `shaders/<stage>.wgsl`): its hand-computed CPU cases (`cpu`, and
+//! further CPU files where a stage has more) beside its CPU/GPU parity check (`gpu`), or one file
+//! for a stage with one kind of test. `step/mod.rs` holds the scene helpers of the hand-computed
+//! cases.
 //!
 //! `orca/`: ORCA itself (RVO2 2.0.3's algorithm, `src/orca/` and `shaders/common/orca.wgsl`)
 //! against the RVO2 reference data, on the device, and its regression cases.
