@@ -5,6 +5,8 @@ mod api_errors;
 #[cfg(all(feature = "gpu", feature = "cli"))]
 mod cli_backends;
 mod config_validation;
+// The heatmap tests run the `socnav` binary, which needs the `cli` feature.
+#[cfg(feature = "cli")]
 mod heatmap;
 #[cfg(feature = "render")]
 mod render;
