@@ -554,6 +554,17 @@ fn orca_obstacles_store(e: u32, obs: ptr<function, OrcaObstacleSet>) {
         return;
     }
     let n = (*obs).len;
+    // A smaller set than before: its old tail becomes unused slots, which hold zeros.
+    let old = min(su[batch.c_n_obstacle_vertices + e], batch.s_ov_x);
+    for (var k = n; k < old; k++) {
+        sf[batch.c_ov_x + b + k] = 0.0;
+        sf[batch.c_ov_y + b + k] = 0.0;
+        sf[batch.c_ov_dir_x + b + k] = 0.0;
+        sf[batch.c_ov_dir_y + b + k] = 0.0;
+        su[batch.c_ov_next + b + k] = 0u;
+        su[batch.c_ov_prev + b + k] = 0u;
+        su[batch.c_ov_convex + b + k] = 0u;
+    }
     for (var k = 0u; k < n; k++) {
         sf[batch.c_ov_x + b + k] = (*obs).point[k].x;
         sf[batch.c_ov_y + b + k] = (*obs).point[k].y;

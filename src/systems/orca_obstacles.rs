@@ -191,6 +191,19 @@ fn store(s: &mut StateChunk, e: usize, set: &ObstacleSet) {
     let v = set.as_view();
     let b = e * cap;
     let n = set.len();
+    // A smaller set than before (a laptop user stood up): its old tail becomes unused slots,
+    // which hold zeros (crate::state).
+    let old = (s.n_obstacle_vertices[e] as usize).min(cap);
+    if old > n {
+        let tail = b + n..b + old;
+        s.ov_x[tail.clone()].fill(0.0);
+        s.ov_y[tail.clone()].fill(0.0);
+        s.ov_dir_x[tail.clone()].fill(0.0);
+        s.ov_dir_y[tail.clone()].fill(0.0);
+        s.ov_next[tail.clone()].fill(0);
+        s.ov_prev[tail.clone()].fill(0);
+        s.ov_convex[tail].fill(0);
+    }
     s.ov_x[b..b + n].copy_from_slice(v.x);
     s.ov_y[b..b + n].copy_from_slice(v.y);
     s.ov_dir_x[b..b + n].copy_from_slice(v.dir_x);
