@@ -285,10 +285,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (phase == 0u) {
             if (su[batch.c_cf_active + e] != 0u) {
                 var rng = rng_new(
-                    params.seed_lo,
-                    params.seed_hi,
-                    e,
-                    su[batch.c_episode + e],
+                    su[batch.c_seed_lo + e],
+                    su[batch.c_seed_hi + e],
                     rng_stream_id(STREAM_FORMATION, su[batch.c_tick + e]),
                 );
                 let progress = crowd_progress(e, &rng);

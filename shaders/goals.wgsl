@@ -24,10 +24,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
     var rng = rng_new(
-        params.seed_lo,
-        params.seed_hi,
-        e,
-        su[batch.c_episode + e],
+        su[batch.c_seed_lo + e],
+        su[batch.c_seed_hi + e],
         rng_stream_id(STREAM_GOALS, su[batch.c_tick + e]),
     );
     let hb = e * batch.s_h_x;

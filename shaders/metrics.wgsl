@@ -224,5 +224,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (su[batch.c_done + e] != 0u) {
         write_episode(e);
         outu[batch.co_episode_done + e] = 1u;
+        outu[batch.co_episode_seed_lo + e] = su[batch.c_seed_lo + e];
+        outu[batch.co_episode_seed_hi + e] = su[batch.c_seed_hi + e];
     }
 }

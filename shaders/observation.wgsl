@@ -353,10 +353,8 @@ fn obs_capacity(t: u32) -> u32 {
 fn obs_noise(e: u32, row: u32, counts_in: array<u32, 5>) {
     var counts = counts_in;
     let stream = rng_new(
-        params.seed_lo,
-        params.seed_hi,
-        e,
-        su[batch.c_episode + e],
+        su[batch.c_seed_lo + e],
+        su[batch.c_seed_hi + e],
         rng_stream_id(STREAM_OBS_NOISE, su[batch.c_tick + e]),
     );
     let base = stream.base;

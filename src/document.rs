@@ -86,7 +86,8 @@ pub fn export(p: &StepParams, s: &BatchState, e: usize) -> Value {
         "counts": {"total_humans": s.n_humans[e]},
         "state": export_snapshot(p, s, e),
         "socnav": {
-            "episode": s.episode[e], "done": s.done[e] != 0, "pending_reset": s.pending_reset[e] != 0,
+            "episode": s.episode[e], "seed": s.episode_seed(e), "next_seed": s.next_seed(e),
+            "done": s.done[e] != 0, "pending_reset": s.pending_reset[e] != 0,
             "episode_sums": {
                 "return": num(s.ep_return[e]), "min_human_distance": num(s.ep_min_human_dist[e]),
                 "min_obstacle_distance": num(s.ep_min_obstacle_dist[e]),

@@ -17,7 +17,8 @@ use crate::state::{BatchState, Caps};
 pub struct EnvOptions {
     /// Number of environments.
     pub n_envs: usize,
-    /// Seed of the batch: with the same config, seed and actions, every run is identical.
+    /// Seed of the batch: environment i's first episode has the episode seed `seed + i` (DESIGN.md
+    /// section 4); with the same config, seed and actions, every run is identical.
     pub seed: u64,
     /// What happens to finished environments.
     pub autoreset: AutoresetMode,
@@ -89,8 +90,8 @@ impl BatchEnv {
         }
         let caps = Caps::from_config(&config);
         let layout = ObsLayout::new(&caps, &config.observation);
-        let params = StepParams::new(&config, options.seed, options.autoreset);
-        let state = BatchState::new(options.n_envs, caps);
+        let params = StepParams::new(&config, options.autoreset);
+        let state = BatchState::seeded(options.n_envs, caps, options.seed);
         let out = Outputs::new(options.n_envs, layout);
         let sngnn = match config.reward.kind {
             RewardKind::Sngnn => Some(SngnnReward::for_config(&config)?),
@@ -149,16 +150,44 @@ impl BatchEnv {
         self.backend.threads()
     }
 
-    /// Reset every environment; with `Some(seed)` the batch is re-seeded and its episode counters
-    /// restart, so the run from here is a function of that seed alone.
+    /// Reset every environment. With `Some(seed)`, environment i plays the episode of seed
+    /// `seed + i` (wrapping; gymnasium's convention for vector environments), else each plays the
+    /// next episode of its seed sequence (`seeds::next_episode_seed`).
     pub fn reset(&mut self, seed: Option<u64>) -> Result<(), SimError> {
         if let Some(seed) = seed {
-            self.params.seed_lo = seed as u32;
-            self.params.seed_hi = (seed >> 32) as u32;
-            self.backend.set_params(self.params);
-            self.backend.state_mut().episode.fill(0);
+            let seeds: Vec<Option<u64>> = (0..self.n_envs())
+                .map(|e| Some(seed.wrapping_add(e as u64)))
+                .collect();
+            self.set_next_seeds(&seeds)?;
         }
         self.backend.reset(None)
+    }
+
+    /// Name the episode each environment plays at its next reset: entry i, when `Some(seed)`,
+    /// gives environment i's next episode that seed (and restarts its episode count); `None`
+    /// leaves its sequence alone. The episode of seed e is the same in any batch, at any index,
+    /// on any backend, so a single environment reset with seed e replays it.
+    ///
+    /// # Errors
+    /// `SimError::Shape` unless there is one entry per environment.
+    pub fn set_next_seeds(&mut self, seeds: &[Option<u64>]) -> Result<(), SimError> {
+        if seeds.len() != self.n_envs() {
+            return Err(SimError::Shape(format!(
+                "{} seeds given for {} environments (one per environment, None to keep its sequence)",
+                seeds.len(),
+                self.n_envs()
+            )));
+        }
+        if seeds.iter().all(Option::is_none) {
+            return Ok(());
+        }
+        let state = self.backend.state_mut();
+        for (e, seed) in seeds.iter().enumerate() {
+            if let Some(seed) = *seed {
+                state.set_next_seed(e, seed);
+            }
+        }
+        Ok(())
     }
 
     /// Reset the environments whose mask entry is true (the DISABLED autoreset mode's reset).

@@ -5,8 +5,9 @@
 //! robot, group and human motion (ORCA, social force), goal re-sampling, contacts, termination,
 //! reward, metrics, observation, autoreset. The state is a structure of arrays
 //! ([`state::BatchState`]) with fixed capacities taken from the config; randomness comes only
-//! from a counter-based generator keyed by (seed, env, episode, stream, draw), so the same seed
-//! and actions give the same trajectory on any machine and thread count.
+//! from a counter-based generator keyed by (episode seed, stream, draw), so the same seed and
+//! actions give the same trajectory on any machine and thread count, and every episode replays
+//! alone from its 64-bit episode seed.
 //!
 //! See `docs/ARCHITECTURE.md` for the code map and the invariants, `configs/README.md` for
 //! every configuration key and `docs/fidelity.md` for every deviation from SocNavGym 0.1.1.
@@ -36,11 +37,13 @@ pub mod orca;
 pub mod outputs;
 pub mod params;
 pub mod pipeline;
+pub mod policies;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod rng;
 pub mod room;
 pub mod scenario;
+pub mod seeds;
 pub mod sngnn;
 pub mod spec;
 pub mod state;

@@ -93,6 +93,11 @@ soa! {
         env.episode_done: u32,
         /// Statistics of the episode that ended (order of [`crate::spec::EPISODE_KEYS`]).
         episode.episode: f32,
+        /// Low word of the seed of the episode that ended (with `episode_done`): the episode
+        /// replays alone from it.
+        env.episode_seed_lo: u32,
+        /// High word of the seed of the episode that ended.
+        env.episode_seed_hi: u32,
         /// Social events of this step (order of [`crate::spec::EVENT_KEYS`]).
         events.events: u32,
     }

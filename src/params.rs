@@ -290,10 +290,6 @@ step_params! {
         pub dsrnn_pseudo_humans: u32,
         /// Autoreset mode code ([`AutoresetMode::code`]).
         pub autoreset: u32,
-        /// Low word of the batch seed.
-        pub seed_lo: u32,
-        /// High word of the batch seed.
-        pub seed_hi: u32,
         /// 1 in replay mode: the random social events are not drawn (the golden replay applies the
         /// recorded ones by re-synchronising).
         pub replay: u32,
@@ -302,15 +298,16 @@ step_params! {
         pub contact_shape: u32,
         /// Padding to a multiple of 16 bytes; always 0 (the shaders use `pad[0]` as an opaque
         /// zero).
-        pub _pad: [u32; 4],
+        pub _pad: [u32; 2],
     }
 }
 
 const _: () = assert!(std::mem::size_of::<StepParams>().is_multiple_of(16));
 
 impl StepParams {
-    /// Flatten `config` for a batch seeded with `seed`.
-    pub fn new(config: &Config, seed: u64, autoreset: AutoresetMode) -> Self {
+    /// Flatten `config` for a batch in autoreset mode `autoreset` (the seeds are per episode, in
+    /// the state).
+    pub fn new(config: &Config, autoreset: AutoresetMode) -> Self {
         let c = config;
         let counts = c.counts.named().map(|(_, r)| r);
         Self {
@@ -397,20 +394,13 @@ impl StepParams {
             },
             dsrnn_pseudo_humans: u32::from(c.model.dsrnn_pseudo_humans),
             autoreset: autoreset.code(),
-            seed_lo: seed as u32,
-            seed_hi: (seed >> 32) as u32,
             replay: 0,
             contact_shape: match c.model.contact_shape {
                 ContactShape::Exact => contact_shape::EXACT,
                 ContactShape::Polygon64 => contact_shape::POLYGON64,
             },
-            _pad: [0; 4],
+            _pad: [0; 2],
         }
-    }
-
-    /// The batch seed.
-    pub fn seed(&self) -> u64 {
-        u64::from(self.seed_lo) | (u64::from(self.seed_hi) << 32)
     }
 
     /// Count range `i` (order of [`crate::config::Counts::named`]).

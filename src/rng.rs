@@ -1,5 +1,5 @@
 //! Counter-based random numbers: every draw is a pure function of
-//! (seed, env, episode, stream, draw).
+//! (episode seed, stream, draw).
 //!
 //! Why counter-based: the simulation must give the same trajectory for the same seed and actions
 //! on any machine, any thread count and on both backends, bit for bit (DESIGN.md section 4). A
@@ -15,8 +15,8 @@
 //! - The mixer is Chris Wellons' `lowbias32` ([`mix32`]), a bijection on u32 with very low
 //!   avalanche bias: `x ^= x >> 16; x *= 0x7feb352d; x ^= x >> 15; x *= 0x846ca68b; x ^= x >> 16`.
 //! - The stream base chains the mixer over the key words, starting from a fixed non-zero value:
-//!   `h = mix32(h ^ w)` for w = seed_lo, seed_hi, env, episode, stream, in that order (the u64 seed
-//!   is split into its low and high 32-bit words; the GPU receives those two words).
+//!   `h = mix32(h ^ w)` for w = seed_lo, seed_hi, stream, in that order (the u64 episode seed is
+//!   split into its low and high 32-bit words, the two columns the GPU holds it in).
 //! - Draw number d of a stream is `mix32(base ^ mix32(d ^ DRAW_TWEAK))`. Consecutive draws feed
 //!   unrelated words into the outer mixer, and a stream's draws never depend on each other, so
 //!   any draw can be computed directly, in any order, in parallel.
@@ -24,6 +24,13 @@
 //! The only state is [`RngStream`] `{ base, draw }`: eight bytes, copied to and from the GPU as
 //! two u32. Each consumer owns its stream (per env, per purpose) and keeps the draw counter; the
 //! conversions below consume a fixed number of draws each, which is part of the contract.
+//!
+//! # Episode seeds
+//!
+//! Every episode is named by one u64 episode seed, and every draw of the episode (its scenario,
+//! every step's noise and events) is keyed by that seed alone, never by the environment's place
+//! in the batch: an episode replays alone, in a batch of any size, from its seed. An environment's
+//! episodes follow a fixed sequence, host-side ([`crate::seeds`]).
 //!
 //! Conversions: [`RngStream::next_f32`] is `(u >> 8) as f32 * 2^-24` (24 random bits, uniform on
 //! the grid k·2^-24 of [0, 1)); everything else is built from it with the exact expressions
@@ -77,36 +84,27 @@ pub fn stream_id(kind: u32, sub: u32) -> u32 {
 /// the same numbers, which is what determinism means here.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct RngStream {
-    /// Hash of (seed, env, episode, stream); see the module docs.
+    /// Hash of (episode seed, stream); see the module docs.
     pub base: u32,
     /// Index of the next draw.
     pub draw: u32,
 }
 
 impl RngStream {
-    /// The stream for key (seed, env, episode, stream), positioned at draw 0.
+    /// The stream for key (episode seed, stream), positioned at draw 0.
     #[inline]
-    pub fn new(seed: u64, env: u32, episode: u32, stream: u32) -> Self {
-        let seed_lo = seed as u32;
-        let seed_hi = (seed >> 32) as u32;
-        Self::from_seed_words(seed_lo, seed_hi, env, episode, stream)
+    pub fn new(seed: u64, stream: u32) -> Self {
+        let (seed_lo, seed_hi) = crate::seeds::seed_words(seed);
+        Self::from_seed_words(seed_lo, seed_hi, stream)
     }
 
     /// Same as [`RngStream::new`], with the seed given as its low and high 32-bit words, the way
-    /// the GPU receives it (`rng_new` in WGSL).
+    /// the state columns and the GPU hold it (`rng_new` in WGSL).
     #[inline]
-    pub fn from_seed_words(
-        seed_lo: u32,
-        seed_hi: u32,
-        env: u32,
-        episode: u32,
-        stream: u32,
-    ) -> Self {
+    pub fn from_seed_words(seed_lo: u32, seed_hi: u32, stream: u32) -> Self {
         let mut h = KEY_IV;
         h = mix32(h ^ seed_lo);
         h = mix32(h ^ seed_hi);
-        h = mix32(h ^ env);
-        h = mix32(h ^ episode);
         h = mix32(h ^ stream);
         Self { base: h, draw: 0 }
     }

@@ -80,6 +80,8 @@ fn parse_autoreset(name: &str) -> PyResult<AutoresetMode> {
 #[pyclass(module = "socnav._socnav")]
 struct Batch {
     env: BatchEnv,
+    /// The ORCA-driven robot's scratch state, made on its first use.
+    orca: socnav::policies::OrcaRobot,
 }
 
 /// An array over `data` with `shape`, owned by the `Batch` object `owner`.
@@ -143,7 +145,10 @@ impl Batch {
             backend,
         };
         let env = BatchEnv::new(c, options).map_err(py_err)?;
-        Ok(Self { env })
+        Ok(Self {
+            env,
+            orca: socnav::policies::OrcaRobot::new(),
+        })
     }
 
     /// Number of environments.
@@ -162,6 +167,12 @@ impl Batch {
     #[getter]
     fn device(&self) -> String {
         self.env.device()
+    }
+
+    /// The time step (s).
+    #[getter]
+    fn time_step(&self) -> f32 {
+        self.env.params().dt
     }
 
     /// Whether the robot is holonomic (else differential drive: the lateral action must be 0).
@@ -212,11 +223,18 @@ impl Batch {
         Ok(d)
     }
 
-    /// Reset every environment (re-seeding the batch when `seed` is given).
+    /// Reset every environment: with `seed`, environment i plays the episode of seed
+    /// `seed + i`; without, each plays the next episode of its seed sequence.
     #[pyo3(signature = (seed=None))]
     fn reset(&mut self, py: Python<'_>, seed: Option<u64>) -> PyResult<()> {
         let env = &mut self.env;
         py.detach(|| env.reset(seed)).map_err(py_err)
+    }
+
+    /// Name the episode each environment plays at its next reset: one entry per environment, an
+    /// int in 0..2**64 (its episode seed) or None (keep its sequence).
+    fn set_next_seeds(&mut self, seeds: Vec<Option<u64>>) -> PyResult<()> {
+        self.env.set_next_seeds(&seeds).map_err(py_err)
     }
 
     /// Reset the environments where `mask` is true.
@@ -261,7 +279,8 @@ impl Batch {
     /// The output buffers as arrays without copies, by name: `obs` `(n, dim)`, `obs_count`
     /// `(n, 5)`, `reward` `(n,)`, `terminated`, `truncated` (uint32 `(n,)`), `info` `(n, 32)`,
     /// `has_final`, `final_obs`, `final_obs_count`, `final_info` (SAME_STEP), `episode_done`,
-    /// `episode` `(n, 32)`, `events` `(n, 9)`, `hh_pairs`, `hl_pairs`, `pair_count` and their
+    /// `episode` `(n, 32)`, `episode_seed_lo`, `episode_seed_hi` (uint32 `(n,)`: the words of the
+    /// seed of the episode that ended), `events` `(n, 9)`, `hh_pairs`, `hl_pairs`, `pair_count` and their
     /// `final_*` copies. Overwritten in place by every step and reset.
     fn buffers<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
         let py = slf.py();
@@ -300,8 +319,98 @@ impl Batch {
             ("truncated", &o.truncated),
             ("has_final", &o.has_final),
             ("episode_done", &o.episode_done),
+            ("episode_seed_lo", &o.episode_seed_lo),
+            ("episode_seed_hi", &o.episode_seed_hi),
         ] {
             d.set_item(name, borrowed(slf, data, &[n]))?;
+        }
+        Ok(d)
+    }
+
+    /// The actions of a built-in policy for the current step, float32 `(num_envs, 3)`:
+    /// `"goal"` (the go-to-goal controller, from the observations) or `"orca"` (the velocity ORCA
+    /// gives the robot toward its goal, from the state; the GPU backend downloads it).
+    fn policy_actions<'py>(
+        &mut self,
+        py: Python<'py>,
+        policy: &str,
+    ) -> PyResult<Bound<'py, numpy::PyArray2<f32>>> {
+        let n = self.env.n_envs();
+        let mut actions = vec![0.0f32; 3 * n];
+        let (env, orca) = (&self.env, &mut self.orca);
+        match policy {
+            "goal" => socnav::policies::goal_actions(env, &mut actions),
+            "orca" => py.detach(|| orca.actions(env, &mut actions)),
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "policy must be 'goal' or 'orca', got {other:?}"
+                )));
+            }
+        }
+        let array = numpy::ndarray::Array2::from_shape_vec((n, 3), actions)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(numpy::PyArray2::from_owned_array(py, array))
+    }
+
+    /// Environment `env` seen from above (`socnav::render`), `size` px on its longer side, with
+    /// the robot's `trail` (float32 `(k, 2)`, world metres) drawn: uint8 `(H, W, 3)`.
+    #[pyo3(signature = (env, size=400, trail=None))]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        env: usize,
+        size: u32,
+        trail: Option<PyReadonlyArray2<'_, f32>>,
+    ) -> PyResult<Bound<'py, numpy::PyArray3<u8>>> {
+        let trail: Vec<(f32, f32)> = match &trail {
+            Some(t) => {
+                let view = t.as_array();
+                if view.ncols() != 2 {
+                    return Err(PyValueError::new_err(format!(
+                        "trail must have shape (k, 2) (world x, y in m), got {:?}",
+                        view.shape()
+                    )));
+                }
+                view.rows().into_iter().map(|r| (r[0], r[1])).collect()
+            }
+            None => Vec::new(),
+        };
+        let pixmap = socnav::render::draw(self.env.params(), self.env.state(), env, &trail, size)
+            .map_err(py_err)?;
+        let (w, h) = (pixmap.width() as usize, pixmap.height() as usize);
+        // Every pixel is opaque (the background is painted first): premultiplied RGB is RGB.
+        let rgb: Vec<u8> = pixmap
+            .data()
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect();
+        let array = numpy::ndarray::Array3::from_shape_vec((h, w, 3), rgb)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(numpy::PyArray3::from_owned_array(py, array))
+    }
+
+    /// The robot's pose of every environment: float32 `(n, 3)`, x and y (m), heading (rad),
+    /// world frame (read from the state; the GPU backend downloads it).
+    fn robot_poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f32>>> {
+        let s = self.env.state();
+        let poses: Vec<f32> = (0..s.n_envs)
+            .flat_map(|e| [s.robot_x[e], s.robot_y[e], s.robot_theta[e]])
+            .collect();
+        let array = numpy::ndarray::Array2::from_shape_vec((s.n_envs, 3), poses)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(numpy::PyArray2::from_owned_array(py, array))
+    }
+
+    /// Time every stage of the step (two clock reads per stage and chunk; off by default).
+    fn set_stage_timing(&mut self, on: bool) {
+        self.env.set_stage_timing(on);
+    }
+
+    /// Seconds spent per stage while stage timing was on: `{stage name: seconds}`.
+    fn stage_seconds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (name, seconds) in self.env.stage_seconds() {
+            d.set_item(name, seconds)?;
         }
         Ok(d)
     }
@@ -318,6 +427,57 @@ impl Batch {
             .map_err(|e| PyValueError::new_err(format!("state document is not JSON: {e}")))?;
         self.env.set_state(env, &doc).map_err(py_err)
     }
+}
+
+/// Write `frames` (uint8 `(H, W, 3)`, all of one size) to `path` as a looping animated GIF,
+/// `frame_ms` milliseconds per frame (socnav's GIF writer: one palette per frame).
+#[pyfunction]
+fn write_gif(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    frames: Vec<numpy::PyReadonlyArray3<'_, u8>>,
+    frame_ms: u32,
+) -> PyResult<usize> {
+    let Some(first) = frames.first() else {
+        return Err(PyValueError::new_err("write_gif needs at least one frame"));
+    };
+    let shape = first.as_array().shape().to_vec();
+    if shape[2] != 3 {
+        return Err(PyValueError::new_err(format!(
+            "frames must be (H, W, 3) uint8, got {shape:?}"
+        )));
+    }
+    let (h, w) = (shape[0] as u32, shape[1] as u32);
+    let mut pixmaps = Vec::with_capacity(frames.len());
+    for (i, f) in frames.iter().enumerate() {
+        if f.as_array().shape() != shape.as_slice() {
+            return Err(PyValueError::new_err(format!(
+                "frame {i} has shape {:?}, frame 0 {shape:?}: all frames must have one size",
+                f.as_array().shape()
+            )));
+        }
+        let mut pm = socnav::render::Pixmap::new(w, h)
+            .ok_or_else(|| PyValueError::new_err(format!("frames of {w}x{h} px")))?;
+        let rgb = f.as_array();
+        for (px, (y, x)) in pm
+            .data_mut()
+            .chunks_exact_mut(4)
+            .zip((0..h as usize).flat_map(|y| (0..w as usize).map(move |x| (y, x))))
+        {
+            px.copy_from_slice(&[rgb[[y, x, 0]], rgb[[y, x, 1]], rgb[[y, x, 2]], 255]);
+        }
+        pixmaps.push(pm);
+    }
+    py.detach(|| {
+        let mut gif = socnav::render::GifWriter::create(&path, w, h, frame_ms)?;
+        for pm in &pixmaps {
+            gif.push(pm)?;
+        }
+        let n = gif.frames();
+        gif.finish()?;
+        Ok::<usize, SimError>(n)
+    })
+    .map_err(py_err)
 }
 
 /// A SocNavGym 0.1.1 config (its YAML parsed and given as JSON text) as socnav TOML.
@@ -365,6 +525,7 @@ fn _socnav(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(socnavgym_config_toml, m)?)?;
     m.add_function(wrap_pyfunction!(sngnn_paths, m)?)?;
     m.add_function(wrap_pyfunction!(sngnn_install_from_wheel, m)?)?;
+    m.add_function(wrap_pyfunction!(write_gif, m)?)?;
     m.add(
         "DISCRETE_ACTIONS",
         DISCRETE_ACTIONS.map(|a| a.to_vec()).to_vec(),

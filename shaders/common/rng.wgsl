@@ -1,6 +1,6 @@
 // requires: common/math.wgsl
 //
-// Twin of src/rng.rs: the counter-based random streams keyed by (seed, env, episode, stream, draw).
+// Twin of src/rng.rs: the counter-based random streams keyed by (episode seed, stream, draw).
 //
 // Library file (no entry points), prepended, after common/math.wgsl (which `rng_normal` uses), to
 // the stage shaders that draw random numbers. Every function mirrors its Rust twin operation for
@@ -8,7 +8,8 @@
 // so on), with 32-bit integer operations only; read the Rust file for the construction and the
 // exact contract of each conversion, and change both files in the same commit.
 //
-// WGSL has no u64: the seed arrives as its low and high 32-bit words (`rng_new`). A stream lives
+// WGSL has no u64: an episode seed is held as its low and high 32-bit words (state columns
+// `seed_lo`/`seed_hi`, `rng_new`). A stream lives
 // in a function-scope `var` while drawing; a stage copies it in from its column and writes it
 // back so that the draw counter advances exactly as on the CPU.
 
@@ -41,12 +42,10 @@ fn rng_stream_id(kind: u32, sub: u32) -> u32 {
 }
 
 // RngStream::from_seed_words (RngStream::new splits the u64 seed into these two words).
-fn rng_new(seed_lo: u32, seed_hi: u32, env: u32, episode: u32, stream: u32) -> RngStream {
+fn rng_new(seed_lo: u32, seed_hi: u32, stream: u32) -> RngStream {
     var h = RNG_KEY_IV;
     h = rng_mix32(h ^ seed_lo);
     h = rng_mix32(h ^ seed_hi);
-    h = rng_mix32(h ^ env);
-    h = rng_mix32(h ^ episode);
     h = rng_mix32(h ^ stream);
     return RngStream(h, 0u);
 }

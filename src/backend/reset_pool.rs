@@ -4,8 +4,8 @@
 //! keeps the rows on the device; its `begin_step`, `autoreset` and `reset` shaders copy a row
 //! into an environment instead of generating a scenario (`shaders/common/pool_reset.wgsl`).
 //!
-//! This works because a reset is a pure function of the step constants, the environment's batch
-//! index and its episode counter: scenario generation clears every slot and writes every
+//! This works because a reset is a pure function of the step constants, the environment's next
+//! episode seed and its episode counter: scenario generation clears every slot and writes every
 //! per-environment column (`tests/suite/whole_step/reset_pool.rs` checks a row against an in-place
 //! reset of a rolled-out environment for every config). Row layout:
 //! [`crate::backend::wgsl::pool_row_words`].
@@ -47,8 +47,8 @@ pub fn row_words(caps: Caps, layout: ObsLayout) -> usize {
     crate::backend::wgsl::pool_row_words(&s.columns(), &o.columns())
 }
 
-/// Write into `row` the pool row of environment `env` (batch index) starting episode number
-/// `episode` (the environment's episode counter before the reset): the state after
+/// Write into `row` the pool row of environment `env` (batch index) starting the episode of seed
+/// `seed` with episode counter `episode` (the environment's before the reset): the state after
 /// `reset_and_observe`, then its first observation. `row` must hold [`row_words`] words.
 ///
 /// # Errors
@@ -57,6 +57,7 @@ pub fn write_row(
     p: &StepParams,
     env: usize,
     episode: u32,
+    seed: u64,
     scratch: &mut RowScratch,
     row: &mut [u32],
 ) -> Result<(), SimError> {
@@ -66,6 +67,7 @@ pub fn write_row(
         f32s,
         u32s,
     } = scratch;
+    state.set_next_seed(0, seed);
     state.episode[0] = episode;
     let mut s = state.chunk();
     s.first_env = env;
@@ -138,13 +140,15 @@ impl Scratches {
 }
 
 /// Fill `rows` (one [`row_words`]-word row per entry of `envs`, in order) with the rows of
-/// environments `envs` starting episodes `episodes[env]`, on `pool`'s threads with `scratches`
+/// environments `envs` starting the episodes of seeds `seeds[env]` with counters
+/// `episodes[env]`, on `pool`'s threads with `scratches`
 /// made for that pool. Returns the environments whose scenario could not be generated, with the
 /// error (allocating only then).
 pub fn write_rows(
     p: &StepParams,
     envs: &[usize],
     episodes: &[u32],
+    seeds: &[u64],
     rows: &mut [u32],
     pool: Option<&rayon::ThreadPool>,
     scratches: &Scratches,
@@ -156,7 +160,7 @@ pub fn write_rows(
         rows.par_chunks_mut(words)
             .zip(envs.par_iter())
             .filter_map(|(row, &env)| {
-                write_row(p, env, episodes[env], &mut scratches.get(), row)
+                write_row(p, env, episodes[env], seeds[env], &mut scratches.get(), row)
                     .err()
                     .map(|err| (env, err))
             })

@@ -918,7 +918,7 @@ mod tests {
             "    size_x_min: i32,\n",
             "    counts: array<i32, 24>,\n",
             "    obs_noise: array<f32, 12>,\n",
-            "    pad: array<u32, 4>,\n",
+            "    pad: array<u32, 2>,\n",
         ] {
             assert!(src.contains(member), "{member:?} missing from:\n{src}");
         }

@@ -100,6 +100,15 @@ impl<'a> Reader<'a> {
         self.at(key)?.as_u32()
     }
 
+    fn as_u64(&self) -> Result<u64, SimError> {
+        self.value.as_u64().ok_or_else(|| {
+            err(
+                &self.path,
+                format!("must be an integer in 0..2^64, got {}", self.value),
+            )
+        })
+    }
+
     fn as_u32(&self) -> Result<u32, SimError> {
         match self.value {
             Value::Bool(b) => Ok(u32::from(*b)),
@@ -707,6 +716,13 @@ fn reward_state(r: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimE
 }
 
 pub(super) fn extras(x: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimError> {
+    // Documents written before episode seeds existed lack them: the environment keeps its own.
+    if let Some(seed) = x.opt("next_seed") {
+        s.set_next_seed(e, seed.as_u64()?);
+    }
+    if let Some(seed) = x.opt("seed") {
+        (s.seed_lo[e], s.seed_hi[e]) = crate::seeds::seed_words(seed.as_u64()?);
+    }
     s.episode[e] = x.u("episode")?;
     s.done[e] = x.flag("done")?;
     s.pending_reset[e] = x.flag("pending_reset")?;

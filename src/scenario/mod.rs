@@ -1,5 +1,5 @@
-//! Scenario generation (spec 3.3-3.4): a deterministic function of (seed, env, episode) that
-//! writes a fresh episode into one environment's slots of the batch state.
+//! Scenario generation (spec 3.3-3.4): a deterministic function of the episode seed that writes a
+//! fresh episode into one environment's slots of the batch state.
 //!
 //! The spawn order is 0.1.1's (it fixes the entity ids): robot, walking humans, static humans,
 //! plants, tables, laptops, moving groups, standing groups, laptop users, then the walls' ids and
@@ -13,6 +13,7 @@ use crate::math;
 use crate::params::{StepParams, count, shape_code};
 use crate::rng::{RngStream, stream_id};
 use crate::room::{self, RoomLayout};
+use crate::seeds;
 use crate::state::{NONE, StateChunk, blocker_kind, group_kind, policy, role, room_shape};
 use place::{Kind, SamplingBox, SpawnList};
 
@@ -25,35 +26,37 @@ pub const MAX_SCENARIO_ATTEMPTS: u32 = 16;
 /// Why one attempt failed: the entity that found no free spot.
 type Attempt = Result<(), &'static str>;
 
-/// Generate a new episode for environment `e` of the chunk (batch index `env_index`), then count
-/// the episode. Errors when no attempt could place everything. What the scenario does not draw
-/// (counters, caches, obstacles) is then initialised by `systems::reset::init_episode`.
+/// Generate the episode of seed `next_seed[e]` in environment `e` of the chunk (batch index
+/// `env_index`, named in errors only): it becomes the episode seed (`seed_*`), the next seed
+/// advances along [`seeds::next_episode_seed`], and the episode is counted. Errors when no
+/// attempt could place everything (nothing is then changed but the slots). What the scenario
+/// does not draw (counters, caches, obstacles) is then initialised by
+/// `systems::reset::init_episode`.
 pub fn reset_env(
     p: &StepParams,
     s: &mut StateChunk,
     e: usize,
     env_index: u32,
 ) -> Result<(), SimError> {
-    let episode = s.episode[e];
+    let seed = seeds::seed_from_words(s.next_seed_lo[e], s.next_seed_hi[e]);
     let mut last = "";
     for attempt in 0..MAX_SCENARIO_ATTEMPTS {
-        let mut rng = RngStream::new(
-            p.seed(),
-            env_index,
-            episode,
-            stream_id(STREAM_SCENARIO, attempt),
-        );
+        let mut rng = RngStream::new(seed, stream_id(STREAM_SCENARIO, attempt));
         match generate(p, s, e, &mut rng) {
             Ok(()) => {
-                s.episode[e] = episode.wrapping_add(1);
+                (s.seed_lo[e], s.seed_hi[e]) = seeds::seed_words(seed);
+                (s.next_seed_lo[e], s.next_seed_hi[e]) =
+                    seeds::seed_words(seeds::next_episode_seed(seed));
+                s.episode[e] = s.episode[e].wrapping_add(1);
                 return Ok(());
             }
             Err(what) => last = what,
         }
     }
     Err(SimError::Scenario(format!(
-        "environment {env_index}, episode {episode}: found no free spot for {last} in {MAX_SCENARIO_ATTEMPTS} \
-         attempts of {} tries each; the room is too crowded for the configured counts and sizes",
+        "environment {env_index}, episode seed {seed}: found no free spot for {last} in \
+         {MAX_SCENARIO_ATTEMPTS} attempts of {} tries each; the room is too crowded for the \
+         configured counts and sizes",
         place::MAX_TRIES
     )))
 }

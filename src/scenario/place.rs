@@ -1,6 +1,6 @@
 //! Rejection sampling of entity poses against the spawn list (spec 3.4). 0.1.1 retries until a
 //! 30 s wall-clock timeout; socnav bounds the number of attempts instead, so a scenario depends
-//! only on (seed, env, episode).
+//! only on the episode seed.
 
 use crate::fixed::Fixed;
 use crate::geometry::{Disc, Rect, Shape};
@@ -254,7 +254,7 @@ mod tests {
         // lroom_mixed seed 1: table (4.512035648, -3.411652980, θ -1.356166696); its laptop user's
         // laptop on edge 3 at (4.767618335, -4.584119393, θ 0.214629631) and the user at
         // (4.916708235, -5.268058134, θ 1.785425958).
-        let p = StepParams::new(&crate::config::Config::default(), 0, Default::default());
+        let p = StepParams::new(&crate::config::Config::default(), Default::default());
         let (x, y, t) = laptop_on_table(&p, 4.512_035_6, -3.411_653, -1.356_166_7, 3);
         // 1e-5: the golden values are f64, ours f32.
         assert!(

@@ -78,7 +78,7 @@ fn max_wall_segments(c: &Config) -> usize {
 /// L location, corridors left out) and its size (m): what capacities that depend on the walls
 /// take their maximum over.
 pub(crate) fn for_each_room(c: &Config, mut visit: impl FnMut(&RoomLayout, f32, f32)) {
-    let mut p = StepParams::new(c, 0, Default::default());
+    let mut p = StepParams::new(c, Default::default());
     p.corridors = 0;
     let shapes: &[u32] = match c.room.shape {
         Shape::Square => &[room_shape::SQUARE],
@@ -87,7 +87,7 @@ pub(crate) fn for_each_room(c: &Config, mut visit: impl FnMut(&RoomLayout, f32, 
         Shape::NoWalls => return,
         Shape::Random => &[room_shape::RECTANGLE, room_shape::SQUARE, room_shape::L],
     };
-    let mut rng = crate::rng::RngStream::new(0, 0, 0, 0);
+    let mut rng = crate::rng::RngStream::new(0, 0);
     let mut layout = RoomLayout::default();
     for &shape in shapes {
         let square = shape != room_shape::RECTANGLE;

@@ -70,8 +70,17 @@ soa! {
     /// The state of a batch of environments (see the module docs for the layout and invariants).
     pub struct BatchState / StateChunk over Caps {
         // ---- episode bookkeeping ----
-        /// Episodes started so far by this environment (keys the RNG of the next reset).
+        /// Episodes started since the environment was last seeded (a count; keys nothing).
         env.episode: u32,
+        /// Low word of the episode seed: every draw of the episode is keyed by it
+        /// (`crate::rng`, DESIGN.md section 4).
+        env.seed_lo: u32,
+        /// High word of the episode seed.
+        env.seed_hi: u32,
+        /// Low word of the seed the environment's next episode will have (the next reset's).
+        env.next_seed_lo: u32,
+        /// High word of the next episode's seed.
+        env.next_seed_hi: u32,
         /// Steps taken in the current episode (0 after reset).
         env.tick: u32,
         /// 1 once the episode has terminated or been truncated.
@@ -520,6 +529,33 @@ impl BatchState {
     /// A zeroed state for `n_envs` environments with capacities `caps`.
     pub fn new(n_envs: usize, caps: Caps) -> Self {
         Self::zeroed(n_envs, caps)
+    }
+
+    /// A zeroed state whose environment i will start its first episode with seed `seed` + i
+    /// (wrapping), gymnasium's convention for vector environments.
+    pub fn seeded(n_envs: usize, caps: Caps, seed: u64) -> Self {
+        let mut s = Self::new(n_envs, caps);
+        for e in 0..n_envs {
+            s.set_next_seed(e, seed.wrapping_add(e as u64));
+        }
+        s
+    }
+
+    /// Give environment `e`'s next episode (the one its next reset starts) the seed `seed`, and
+    /// restart its episode count.
+    pub fn set_next_seed(&mut self, e: usize, seed: u64) {
+        (self.next_seed_lo[e], self.next_seed_hi[e]) = crate::seeds::seed_words(seed);
+        self.episode[e] = 0;
+    }
+
+    /// The seed of environment `e`'s current episode.
+    pub fn episode_seed(&self, e: usize) -> u64 {
+        crate::seeds::seed_from_words(self.seed_lo[e], self.seed_hi[e])
+    }
+
+    /// The seed environment `e`'s next episode will have.
+    pub fn next_seed(&self, e: usize) -> u64 {
+        crate::seeds::seed_from_words(self.next_seed_lo[e], self.next_seed_hi[e])
     }
 
     /// Deterministic fingerprint of the whole batch (every column, every environment).

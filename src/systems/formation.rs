@@ -33,12 +33,11 @@ pub fn formation(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     if b.s.stepping[e] == 0 {
         return;
     }
-    let env = b.env_index(e);
     let events = b.o.strides.events();
     let counts = &mut b.o.events[e * events..(e + 1) * events];
     let s = &mut b.s;
     if s.cf_active[e] != 0 {
-        let mut rng = super::step_stream(p, s, e, env, STREAM_FORMATION);
+        let mut rng = super::step_stream(s, e, STREAM_FORMATION);
         match crowd_progress(p, s, e, &mut rng) {
             Progress::Formed => counts[event::CROWD_FORMATION_COMPLETE] += 1,
             Progress::Approximate => counts[event::CROWD_FORMATION_APPROXIMATE] += 1,

@@ -21,9 +21,8 @@ pub fn goals(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     if b.s.stepping[e] == 0 {
         return;
     }
-    let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = super::LazyStream::new(p, s, e, env, STREAM_GOALS);
+    let mut rng = super::LazyStream::new(s, e, STREAM_GOALS);
     let hb = e * s.strides.humans;
     let first = hb + s.n_static[e] as usize;
     for i in first..first + s.n_dynamic[e] as usize {

@@ -17,9 +17,8 @@ pub fn group_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     if b.s.stepping[e] == 0 {
         return;
     }
-    let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = super::LazyStream::new(p, s, e, env, STREAM_GROUP_NOISE);
+    let mut rng = super::LazyStream::new(s, e, STREAM_GROUP_NOISE);
     let hb = e * s.strides.humans;
     let gb = e * s.strides.groups;
     for g in gb..gb + s.n_groups[e] as usize {

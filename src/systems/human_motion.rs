@@ -21,9 +21,8 @@ pub fn human_motion(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     if b.s.stepping[e] == 0 {
         return;
     }
-    let env = b.env_index(e);
     let s = &mut b.s;
-    let mut rng = super::LazyStream::new(p, s, e, env, STREAM_AVOID_ROBOT);
+    let mut rng = super::LazyStream::new(s, e, STREAM_AVOID_ROBOT);
     let first = e * s.strides.humans + s.n_static[e] as usize;
     for i in first..first + s.n_dynamic[e] as usize {
         // Nothing to draw when no walker avoids the robot (every paper config).

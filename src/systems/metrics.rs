@@ -42,6 +42,8 @@ pub fn metrics(p: &StepParams, b: &mut Batch<'_>, e: usize) {
         let stats = &mut b.o.episode[e * b.o.strides.episode()..(e + 1) * b.o.strides.episode()];
         write_episode(p, s, e, row, stats);
         b.o.episode_done[e] = 1;
+        b.o.episode_seed_lo[e] = s.seed_lo[e];
+        b.o.episode_seed_hi[e] = s.seed_hi[e];
     }
 }
 

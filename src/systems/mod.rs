@@ -4,8 +4,8 @@
 
 use crate::error::SimError;
 use crate::outputs::OutChunk;
-use crate::params::StepParams;
 use crate::rng::{RngStream, stream_id};
+use crate::seeds;
 use crate::sngnn::Scorer;
 use crate::state::StateChunk;
 
@@ -59,31 +59,36 @@ impl<'a> Batch<'a> {
         self.s.n_envs
     }
 
-    /// Batch index of local environment `e` (keys the RNG).
+    /// Batch index of local environment `e` (names it in errors; nothing random depends on it).
     pub fn env_index(&self, e: usize) -> u32 {
         (self.s.first_env + e) as u32
     }
 }
 
-/// The random stream of kind `kind` for this step of environment `e` (batch index `env`): keyed by
-/// the batch seed, the environment, its episode and the tick, so draws never depend on other
-/// environments, other stages or the order of work.
-pub fn step_stream(p: &StepParams, s: &StateChunk, e: usize, env: u32, kind: u32) -> RngStream {
-    RngStream::new(p.seed(), env, s.episode[e], stream_id(kind, s.tick[e]))
+/// The episode seed of environment `e` (every draw of its episode is keyed by it).
+pub fn episode_seed(s: &StateChunk, e: usize) -> u64 {
+    seeds::seed_from_words(s.seed_lo[e], s.seed_hi[e])
+}
+
+/// The random stream of kind `kind` for this step of environment `e`: keyed by the episode seed
+/// and the tick, so draws never depend on other environments, on the environment's place in the
+/// batch, on other stages or on the order of work.
+pub fn step_stream(s: &StateChunk, e: usize, kind: u32) -> RngStream {
+    RngStream::new(episode_seed(s, e), stream_id(kind, s.tick[e]))
 }
 
 /// [`step_stream`], keyed only when first drawn from: stages that draw only on rare occasions
 /// (a goal reached, an event) skip hashing the key on every other step. The draws are the same.
 pub struct LazyStream {
-    key: (u64, u32, u32, u32),
+    key: (u64, u32),
     rng: Option<RngStream>,
 }
 
 impl LazyStream {
-    /// The stream of kind `kind` for this step of environment `e` (batch index `env`).
-    pub fn new(p: &StepParams, s: &StateChunk, e: usize, env: u32, kind: u32) -> Self {
+    /// The stream of kind `kind` for this step of environment `e`.
+    pub fn new(s: &StateChunk, e: usize, kind: u32) -> Self {
         Self {
-            key: (p.seed(), env, s.episode[e], stream_id(kind, s.tick[e])),
+            key: (episode_seed(s, e), stream_id(kind, s.tick[e])),
             rng: None,
         }
     }
@@ -91,9 +96,8 @@ impl LazyStream {
     /// The stream, keyed on the first call.
     #[inline]
     pub fn get(&mut self) -> &mut RngStream {
-        let (seed, env, episode, stream) = self.key;
-        self.rng
-            .get_or_insert_with(|| RngStream::new(seed, env, episode, stream))
+        let (seed, stream) = self.key;
+        self.rng.get_or_insert_with(|| RngStream::new(seed, stream))
     }
 }
 

@@ -72,7 +72,7 @@ pub fn shadow_outcome(p: &StepParams, s: &mut StateChunk, e: usize) {
 /// A world-frame velocity (m/s) as a robot command: diff-drive drives at |v| and turns by the
 /// (unwrapped) heading error per step; holonomic drives v rotated into the robot frame. Each
 /// component is clipped to its maximum.
-fn command_from_velocity(p: &StepParams, theta: f32, vx: f32, vy: f32) -> (f32, f32, f32) {
+pub fn command_from_velocity(p: &StepParams, theta: f32, vx: f32, vy: f32) -> (f32, f32, f32) {
     let v = p.robot_max_speed;
     let wmax = p.robot_max_rotation;
     let w = ((math::atan2(vy, vx) - theta) / p.dt).clamp(-wmax, wmax);

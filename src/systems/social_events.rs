@@ -27,11 +27,10 @@ pub fn social_events(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     if b.s.stepping[e] == 0 || b.s.done[e] != 0 || p.replay != 0 {
         return;
     }
-    let env = b.env_index(e);
     let events = b.o.strides.events();
     let counts = &mut b.o.events[e * events..(e + 1) * events];
     let s = &mut b.s;
-    let mut rng = super::LazyStream::new(p, s, e, env, STREAM_SOCIAL);
+    let mut rng = super::LazyStream::new(s, e, STREAM_SOCIAL);
     if p.p_crowd_dispersal > 0.0
         && rng.get().chance(p.p_crowd_dispersal)
         && crowd_dispersal(p, s, e, rng.get())

@@ -37,11 +37,11 @@ impl SngnnRollout {
     pub fn new(config: &Config, n_envs: usize, seed: u64) -> Self {
         let caps = Caps::from_config(config);
         assert!(caps.frames > 0, "the config's reward is not SNGNN-v2");
-        let p = StepParams::new(config, seed, AutoresetMode::NextStep);
+        let p = StepParams::new(config, AutoresetMode::NextStep);
         let graphs = graph::capacity(config);
         let mut this = Self {
             p,
-            s: BatchState::new(n_envs, caps),
+            s: BatchState::seeded(n_envs, caps, seed),
             o: Outputs::new(n_envs, ObsLayout::new(&caps, &config.observation)),
             packed_u32: vec![0; n_envs * graphs.u32_stride()],
             packed_f32: vec![0.0; n_envs * graphs.f32_stride()],

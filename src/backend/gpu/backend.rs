@@ -11,8 +11,10 @@
 //! status words are read back with the outputs.
 //!
 //! Resets copy rows of the reset pool (`src/backend/reset_pool.rs`): an environment whose episode
-//! counter moved on the device has consumed its row, and the host generates its next one (on its
-//! worker threads, for all such environments at once) before the next device work. The state
+//! counter moved on the device has consumed its row (and its next episode seed moved one step
+//! along the sequence, which the host follows without reading it back), and the host generates
+//! its next one (on its worker threads, for all such environments at once) before the next
+//! device work. The state
 //! stays on the device; [`Backend::state`] downloads a host copy when asked and keeps it until the
 //! next step, and [`Backend::state_mut`] edits that copy, which is uploaded before the next device
 //! work.
@@ -48,8 +50,12 @@ pub struct GpuBackend {
     outputs_edited: bool,
     /// Each environment's episode counter on the device, as last read back.
     episode: Vec<u32>,
+    /// Each environment's next episode seed on the device.
+    next_seed: Vec<u64>,
     /// The episode counter each pool row was generated for ([`NO_ROW`]: none).
     row_episode: Vec<u32>,
+    /// The episode seed each pool row was generated for.
+    row_seed: Vec<u64>,
     /// Rows whose scenario could not be generated: the error, raised when the row is consumed
     /// (the step at which the CPU backend's reset would fail).
     row_errors: Vec<Option<SimError>>,
@@ -112,6 +118,7 @@ impl GpuBackend {
         let caps = state.strides;
         let layout = out.strides.layout;
         let episode = state.episode.clone();
+        let next_seed = (0..n).map(|e| state.next_seed(e)).collect();
         Ok(Self {
             params,
             gpu,
@@ -121,7 +128,9 @@ impl GpuBackend {
             state_edited: false,
             outputs_edited: false,
             episode,
+            next_seed,
             row_episode: vec![NO_ROW; n],
+            row_seed: vec![0; n],
             row_errors: (0..n).map(|_| None).collect(),
             read_episode: vec![0; n],
             stale: Vec::new(),
@@ -147,6 +156,9 @@ impl GpuBackend {
             let s = self.state.get().expect("an edited state is present");
             self.gpu.upload_state(s);
             self.episode.copy_from_slice(&s.episode);
+            for (e, seed) in self.next_seed.iter_mut().enumerate() {
+                *seed = s.next_seed(e);
+            }
             self.state_edited = false;
         }
         if self.outputs_edited {
@@ -156,12 +168,14 @@ impl GpuBackend {
         self.refill()
     }
 
-    /// Generate the pool rows of the environments whose row is not for their current episode,
-    /// and write them to the device (consecutive environments in one write).
+    /// Generate the pool rows of the environments whose row is not for their current episode
+    /// counter and next seed, and write them to the device (consecutive environments in one
+    /// write).
     fn refill(&mut self) -> Result<(), SimError> {
         self.stale.clear();
-        self.stale
-            .extend((0..self.episode.len()).filter(|&e| self.row_episode[e] != self.episode[e]));
+        self.stale.extend((0..self.episode.len()).filter(|&e| {
+            self.row_episode[e] != self.episode[e] || self.row_seed[e] != self.next_seed[e]
+        }));
         if self.stale.is_empty() {
             return Ok(());
         }
@@ -172,12 +186,14 @@ impl GpuBackend {
             &self.params,
             &self.stale,
             &self.episode,
+            &self.next_seed,
             &mut self.rows,
             self.pool.as_ref(),
             &self.scratches,
         );
         for &e in &self.stale {
             self.row_episode[e] = self.episode[e];
+            self.row_seed[e] = self.next_seed[e];
             self.row_errors[e] = None;
         }
         for (e, err) in failed {
@@ -225,6 +241,8 @@ impl GpuBackend {
                     error.get_or_insert(err);
                 }
                 self.episode[e] = self.read_episode[e];
+                // The row set the next seed one step along (scenario::reset_env).
+                self.next_seed[e] = crate::seeds::next_episode_seed(self.row_seed[e]);
             }
         }
         if let Some(e) = self.gpu.sngnn_failure() {
@@ -340,7 +358,7 @@ impl Backend for GpuBackend {
     fn set_params(&mut self, params: StepParams) {
         self.params = params;
         self.gpu.upload_params(&params);
-        // Every row depends on the constants (the seed above all).
+        // Every row depends on the constants.
         self.row_episode.fill(NO_ROW);
     }
 

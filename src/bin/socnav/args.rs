@@ -89,6 +89,9 @@ pub enum PolicyChoice {
     Random,
     /// Turn towards the goal, drive when roughly aligned.
     Goal,
+    /// The velocity ORCA gives the robot toward its goal, mapped to its drive (reads the state:
+    /// slow on the GPU backend, which downloads it every step).
+    Orca,
 }
 
 #[derive(Debug, Args)]

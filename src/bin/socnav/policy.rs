@@ -1,10 +1,11 @@
-//! Scripted policies for rollouts: uniform random actions, or a go-to-goal controller that reads
-//! the goal from the observation's robot record (robot frame).
+//! Scripted policies for rollouts: uniform random actions, the go-to-goal controller or the
+//! ORCA-driven robot (`socnav::policies`).
 
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
+use socnav::BatchEnv;
 use socnav::config::Kinematics;
-use socnav::{BatchEnv, math};
+use socnav::policies::{self, OrcaRobot};
 
 use crate::args::PolicyChoice;
 
@@ -13,6 +14,7 @@ pub struct Policy {
     choice: PolicyChoice,
     rng: StdRng,
     holonomic: bool,
+    orca: OrcaRobot,
 }
 
 impl Policy {
@@ -23,6 +25,7 @@ impl Policy {
             choice,
             rng: StdRng::seed_from_u64(seed ^ 0x5eed_0f90_11c7),
             holonomic,
+            orca: OrcaRobot::new(),
         }
     }
 
@@ -40,19 +43,8 @@ impl Policy {
                     a[2] = self.rng.random_range(-1.0..=1.0);
                 }
             }
-            PolicyChoice::Goal => {
-                let out = env.outputs();
-                let dim = env.layout().dim;
-                let p = env.params();
-                for (e, a) in actions.chunks_exact_mut(3).enumerate() {
-                    let (gx, gy) = (out.obs[e * dim + 6], out.obs[e * dim + 7]);
-                    let bearing = math::atan2(gy, gx);
-                    // Turn by the bearing within one step, drive when within ~17° of it.
-                    a[2] = (bearing / (p.robot_max_rotation * p.dt)).clamp(-1.0, 1.0);
-                    a[0] = if bearing.abs() < 0.3 { 1.0 } else { 0.0 };
-                    a[1] = 0.0;
-                }
-            }
+            PolicyChoice::Goal => policies::goal_actions(env, actions),
+            PolicyChoice::Orca => self.orca.actions(env, actions),
         }
     }
 }

@@ -187,8 +187,7 @@ fn write<const WORLD: bool, const PARTIAL: bool>(
         }
     }
     if p.obs_noise_on != 0 {
-        let env = (s.first_env + e) as u32;
-        noise::add_noise(p, s, e, env, &layout, &counts, row);
+        noise::add_noise(p, s, e, &layout, &counts, row);
     }
     o.obs_count[e * 5..e * 5 + 5].copy_from_slice(&counts);
     let (hh, hl) = (o.strides.hh(), o.strides.hl());

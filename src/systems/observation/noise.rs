@@ -23,18 +23,17 @@ use crate::state::StateChunk;
 /// avoid-robot, group-noise, formation and social-event streams.
 pub const STREAM_OBS_NOISE: u32 = 7;
 
-/// Add the configured noise to the observation `row` of environment `e` (batch index `env`)
-/// whose per-type record counts are `counts`.
+/// Add the configured noise to the observation `row` of environment `e` whose per-type record
+/// counts are `counts`.
 pub(super) fn add_noise(
     p: &StepParams,
     s: &StateChunk,
     e: usize,
-    env: u32,
     layout: &ObsLayout,
     counts: &[u32; 5],
     row: &mut [f32],
 ) {
-    let base = super::super::step_stream(p, s, e, env, STREAM_OBS_NOISE).base;
+    let base = super::super::step_stream(s, e, STREAM_OBS_NOISE).base;
     let [mean, std] = p.obs_noise[NOISE_ROBOT];
     if mean != 0.0 || std != 0.0 {
         perturb(&mut row[6..8], 6, base, mean, std);

@@ -4,6 +4,7 @@
 //! generator is deterministic, so these tests never flake: a failure means the generator changed.
 
 use socnav::rng::{RngStream, mix32, stream_id};
+use socnav::seeds::{EPISODE_SEED_STEP, next_episode_seed, seed_from_words, seed_words};
 
 const N: usize = 1_000_000;
 
@@ -33,44 +34,44 @@ fn floats(s: &mut RngStream, n: usize) -> Vec<f64> {
 /// value also pins `math::ln` and `math::cos`, which Box–Muller uses.
 #[test]
 fn golden_first_draws() {
-    let mut s = RngStream::new(42, 0, 0, 0);
+    let mut s = RngStream::new(42, 0);
     let u: Vec<u32> = (0..4).map(|_| s.next_u32()).collect();
     assert_eq!(
         u,
-        [0x388726ef, 0x41ea02b7, 0x5c7dc348, 0xa31c8eb8],
+        [0xf6e4ff10, 0xf317e035, 0xf05bd435, 0x4a0a5d48],
         "next_u32"
     );
-    let mut s = RngStream::new(0x0123_4567_89ab_cdef, 7, 3, stream_id(1, 2));
-    assert_eq!(s.next_f32().to_bits(), 0x3f283e1b, "next_f32"); // 0.65719765
-    assert_eq!(s.uniform(-2.0, 5.0).to_bits(), 0x3ff01bf8, "uniform"); // 1.8758535
-    assert_eq!(s.normal().to_bits(), 0xbe84a1c4, "normal"); // -0.25904667
-    assert_eq!(s.below(10), 3, "below");
-    assert_eq!(s.randint(-3, 3), -1, "randint");
-    assert!(s.chance(0.5), "chance");
+    let mut s = RngStream::new(0x0123_4567_89ab_cdef, stream_id(1, 2));
+    assert_eq!(s.next_f32().to_bits(), 0x3d1dc970, "next_f32"); // 0.038522184
+    assert_eq!(s.uniform(-2.0, 5.0).to_bits(), 0x403b2dd8, "uniform"); // 2.924673
+    assert_eq!(s.normal().to_bits(), 0x3d9bca26, "normal"); // 0.07606916
+    assert_eq!(s.below(10), 7, "below");
+    assert_eq!(s.randint(-3, 3), 1, "randint");
+    assert!(!s.chance(0.5), "chance");
     assert_eq!(s.draw, 7, "draws consumed");
     assert_eq!(stream_id(1, 2), 0xa66197ad, "stream_id");
 }
 
 #[test]
 fn same_key_same_sequence() {
-    let mut a = RngStream::new(12345, 17, 4, 9);
-    let mut b = RngStream::new(12345, 17, 4, 9);
+    let mut a = RngStream::new(12345, 9);
+    let mut b = RngStream::new(12345, 9);
     for _ in 0..1000 {
         assert_eq!(a.next_u32(), b.next_u32());
     }
     // The seed as two words, as the GPU gets it, is the same stream.
     let seed: u64 = 0xdead_beef_0bad_f00d;
-    let a = RngStream::new(seed, 1, 2, 3);
-    let b = RngStream::from_seed_words(seed as u32, (seed >> 32) as u32, 1, 2, 3);
+    let a = RngStream::new(seed, 3);
+    let b = RngStream::from_seed_words(seed as u32, (seed >> 32) as u32, 3);
     assert_eq!(a, b);
     // Any draw can be computed directly from (base, draw).
-    let mut s = RngStream::new(7, 0, 0, 0);
+    let mut s = RngStream::new(7, 0);
     let base = s.base;
     for d in 0..100 {
         assert_eq!(s.next_u32(), RngStream::u32_at(base, d));
     }
     // A copy repeats its draws: the stream is a value.
-    let mut s = RngStream::new(7, 1, 1, 1);
+    let mut s = RngStream::new(7, 1);
     s.next_u32();
     let mut t = s;
     assert_eq!(s.next_f32(), t.next_f32());
@@ -78,29 +79,69 @@ fn same_key_same_sequence() {
 
 #[test]
 fn every_key_word_changes_the_stream() {
-    let key = (5u64, 6u32, 7u32, 8u32);
-    let base = RngStream::new(key.0, key.1, key.2, key.3).base;
+    let key = (5u64, 8u32);
+    let base = RngStream::new(key.0, key.1).base;
     let variants = [
-        RngStream::new(key.0 + 1, key.1, key.2, key.3),
-        RngStream::new(key.0 | (1 << 32), key.1, key.2, key.3),
-        RngStream::new(key.0, key.1 + 1, key.2, key.3),
-        RngStream::new(key.0, key.1, key.2 + 1, key.3),
-        RngStream::new(key.0, key.1, key.2, key.3 + 1),
-        // Swapped env and episode.
-        RngStream::new(key.0, key.2, key.1, key.3),
+        RngStream::new(key.0 + 1, key.1),
+        RngStream::new(key.0 | (1 << 32), key.1),
+        RngStream::new(key.0, key.1 + 1),
+        RngStream::new(next_episode_seed(key.0), key.1),
+        // Seed words swapped.
+        RngStream::new(key.0.rotate_right(32), key.1),
     ];
     for v in variants {
         assert_ne!(v.base, base);
     }
     // The all-zero key is not degenerate.
-    let mut z = RngStream::new(0, 0, 0, 0);
+    let mut z = RngStream::new(0, 0);
     assert_ne!(z.base, 0);
     assert_ne!(z.next_u32(), 0);
 }
 
+/// The episode-seed sequence (DESIGN.md section 4): environment i of a batch seeded with s plays
+/// seeds s + i + k·G in its k-th episode. Hand-computed steps, the wrap at 2^64, the words, and
+/// no seed repeated over a grid of 4096 environments × 4096 episodes of neighbouring batch seeds.
+#[test]
+fn episode_seed_sequence() {
+    assert_eq!(EPISODE_SEED_STEP, 0x9e37_79b9_7f4a_7c15);
+    assert_eq!(EPISODE_SEED_STEP % 2, 1, "odd: period 2^64");
+    assert_eq!(next_episode_seed(0), 0x9e37_79b9_7f4a_7c15);
+    assert_eq!(next_episode_seed(1), 0x9e37_79b9_7f4a_7c16);
+    // Wraps: u64::MAX + G = G - 1.
+    assert_eq!(next_episode_seed(u64::MAX), 0x9e37_79b9_7f4a_7c14);
+    // A carry from the low word into the high one.
+    assert_eq!(
+        seed_words(next_episode_seed(0xffff_ffff)),
+        (0x7f4a_7c14, 0x9e37_79ba)
+    );
+    assert_eq!(
+        seed_from_words(0x89ab_cdef, 0x0123_4567),
+        0x0123_4567_89ab_cdef
+    );
+    assert_eq!(
+        seed_words(0x0123_4567_89ab_cdef),
+        (0x89ab_cdef, 0x0123_4567)
+    );
+    let mut seen = std::collections::HashSet::new();
+    for batch_seed in [0u64, 1, 4096] {
+        for env in 0..4096u64 {
+            let mut seed = batch_seed + env;
+            for _ in 0..64 {
+                // Batches seeded 0, 1 and 4096 share environments' first seeds by design
+                // (s + i); count each seed once.
+                seen.insert(seed);
+                seed = next_episode_seed(seed);
+            }
+        }
+    }
+    // 4096 + 1 + 4096 distinct start seeds (0..8192 as i ranges over the three batches), each
+    // followed by 63 distinct later seeds.
+    assert_eq!(seen.len(), 8192 * 64, "a seed repeated within the grid");
+}
+
 #[test]
 fn uniform_mean_variance_and_chi_square() {
-    let mut s = RngStream::new(1, 2, 3, 4);
+    let mut s = RngStream::new(1, 4);
     let mut bins = [0u64; 64];
     let (mut sum, mut sum2) = (0.0f64, 0.0f64);
     for _ in 0..N {
@@ -129,7 +170,7 @@ fn uniform_mean_variance_and_chi_square() {
 
 #[test]
 fn every_output_bit_is_balanced() {
-    let mut s = RngStream::new(99, 0, 0, 0);
+    let mut s = RngStream::new(99, 0);
     let mut ones = [0u32; 32];
     for _ in 0..N {
         let u = s.next_u32();
@@ -148,39 +189,35 @@ fn every_output_bit_is_balanced() {
 fn no_correlation_between_neighbours() {
     const LIMIT: f64 = 0.01; // 10 standard errors at N = 1e6
     // Consecutive draws of one stream.
-    let mut s = RngStream::new(3, 0, 0, 0);
+    let mut s = RngStream::new(3, 0);
     let v = floats(&mut s, N + 1);
     let r = correlation(&v[..N], &v[1..]);
     println!("consecutive draws: r = {r:.5}");
     assert!(r.abs() < LIMIT, "consecutive draws: r = {r}");
 
-    // The same draw of neighbouring keys: env, episode, stream, seed (low and high word).
+    // The same draw of neighbouring keys: stream, seed (low and high word), the next episode's
+    // seed.
     type KeyFn = fn(u32) -> RngStream;
-    let neighbours: [(&str, KeyFn, KeyFn); 5] = [
-        (
-            "env",
-            |i| RngStream::new(3, i, 0, 0),
-            |i| RngStream::new(3, i + 1, 0, 0),
-        ),
-        (
-            "episode",
-            |i| RngStream::new(3, 0, i, 0),
-            |i| RngStream::new(3, 0, i + 1, 0),
-        ),
+    let neighbours: [(&str, KeyFn, KeyFn); 4] = [
         (
             "stream",
-            |i| RngStream::new(3, 0, 0, i),
-            |i| RngStream::new(3, 0, 0, i + 1),
+            |i| RngStream::new(3, i),
+            |i| RngStream::new(3, i + 1),
         ),
         (
             "seed",
-            |i| RngStream::new(u64::from(i), 0, 0, 0),
-            |i| RngStream::new(u64::from(i) + 1, 0, 0, 0),
+            |i| RngStream::new(u64::from(i), 0),
+            |i| RngStream::new(u64::from(i) + 1, 0),
         ),
         (
             "seed high word",
-            |i| RngStream::new(u64::from(i) << 32, 0, 0, 0),
-            |i| RngStream::new((u64::from(i) + 1) << 32, 0, 0, 0),
+            |i| RngStream::new(u64::from(i) << 32, 0),
+            |i| RngStream::new((u64::from(i) + 1) << 32, 0),
+        ),
+        (
+            "next episode",
+            |i| RngStream::new(u64::from(i), 0),
+            |i| RngStream::new(next_episode_seed(u64::from(i)), 0),
         ),
     ];
     for (name, fa, fb) in neighbours {
@@ -198,11 +235,8 @@ fn no_correlation_between_neighbours() {
     // Neighbouring purpose streams from stream_id.
     let (mut a, mut b) = (Vec::with_capacity(N), Vec::with_capacity(N));
     for i in 0..(N / 10) as u32 {
-        a.extend(floats(&mut RngStream::new(3, 0, 0, stream_id(1, i)), 10));
-        b.extend(floats(
-            &mut RngStream::new(3, 0, 0, stream_id(1, i + 1)),
-            10,
-        ));
+        a.extend(floats(&mut RngStream::new(3, stream_id(1, i)), 10));
+        b.extend(floats(&mut RngStream::new(3, stream_id(1, i + 1)), 10));
     }
     let r = correlation(&a, &b);
     println!("neighbouring stream_id sub: r = {r:.5}");
@@ -211,7 +245,7 @@ fn no_correlation_between_neighbours() {
 
 #[test]
 fn normal_moments() {
-    let mut s = RngStream::new(11, 0, 0, 0);
+    let mut s = RngStream::new(11, 0);
     let (mut sum, mut sum2, mut sum4, mut within1) = (0.0f64, 0.0f64, 0.0f64, 0usize);
     for _ in 0..N {
         let z = s.normal();
@@ -234,14 +268,14 @@ fn normal_moments() {
     assert!((kurt - 3.0).abs() < 0.06, "fourth moment {kurt}");
     assert!((p1 - 0.682_689).abs() < 0.003, "P(|z|<1) {p1}");
     assert_eq!(s.draw, 2 * N as u32, "two draws per normal");
-    let mut g = RngStream::new(11, 0, 0, 0);
-    let mut h = RngStream::new(11, 0, 0, 0);
+    let mut g = RngStream::new(11, 0);
+    let mut h = RngStream::new(11, 0);
     assert_eq!(g.gauss(2.0, 0.5), 2.0 + 0.5 * h.normal());
 }
 
 #[test]
 fn below_randint_chance_uniform() {
-    let mut s = RngStream::new(21, 0, 0, 0);
+    let mut s = RngStream::new(21, 0);
     // below: uniform over [0, n).
     let mut counts = [0u64; 10];
     for _ in 0..N {
@@ -307,7 +341,7 @@ fn stream_ids_are_distinct() {
 #[test]
 fn mixer_avalanche() {
     // Flipping any one input bit flips each output bit with probability close to 1/2.
-    let mut s = RngStream::new(77, 0, 0, 0);
+    let mut s = RngStream::new(77, 0);
     let mut flips = [[0u32; 32]; 32];
     const M: u32 = 20_000;
     for _ in 0..M {

@@ -886,7 +886,7 @@ fn lattice_scene(rng: &mut RngStream) -> (Vec<OrcaAgent>, Vec<Polygon>, f32) {
 fn random_scenes_bit_identical() {
     let Some(dev) = device() else { return };
     let kernel = Kernel::new(dev);
-    let mut rng = RngStream::new(2024, 0, 0, 7);
+    let mut rng = RngStream::new(2024, 7);
     let mut batch = Batch::default();
     for k in 0..20000 {
         let (agents, polygons, dt) = random_scene(&mut rng, k);

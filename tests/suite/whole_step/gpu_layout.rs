@@ -36,7 +36,7 @@ fn same_on_both(name: &str, n_envs: usize, steps: usize) -> usize {
     let mut cpu = batch(name, n_envs, BackendChoice::Cpu);
     let mut gpu = batch(name, n_envs, BackendChoice::Gpu);
     let holonomic = cpu.params().holonomic != 0;
-    let mut rng = RngStream::new(3, 0, 0, 0);
+    let mut rng = RngStream::new(3, 0);
     for step in 0..steps {
         let a = common::gpu::random_actions(&mut rng, n_envs, holonomic);
         cpu.step(Actions::Continuous(&a)).expect("CPU step");

@@ -34,11 +34,11 @@ use socnav::{BatchEnv, Config};
 fn the_option_reaches_the_step_params() {
     let exp1 = Config::from_name_or_path("exp1").unwrap();
     assert_eq!(exp1.model.contact_shape, ContactShape::Exact);
-    let p = socnav::StepParams::new(&exp1, 0, Default::default());
+    let p = socnav::StepParams::new(&exp1, Default::default());
     assert_eq!(p.contact_shape, contact_shape::EXACT);
     let c = Config::from_toml_str("[model]\ncontact_shape = \"polygon64\"\n").unwrap();
     assert_eq!(c.model.contact_shape, ContactShape::Polygon64);
-    let p = socnav::StepParams::new(&c, 0, Default::default());
+    let p = socnav::StepParams::new(&c, Default::default());
     assert_eq!(p.contact_shape, contact_shape::POLYGON64);
     // Serialised under its name, and read back.
     assert!(c.to_toml_string().contains("contact_shape = \"polygon64\""));

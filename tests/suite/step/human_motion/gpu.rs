@@ -71,9 +71,7 @@ fn count(s: &mut BatchState, p: &StepParams) {
             continue;
         }
         let mut rng = RngStream::new(
-            p.seed(),
-            e as u32,
-            chunk.episode[e],
+            socnav::systems::episode_seed(&chunk, e),
             stream_id(STREAM_AVOID_ROBOT, chunk.tick[e]),
         );
         let first = e * chunk.strides.humans + chunk.n_static[e] as usize;

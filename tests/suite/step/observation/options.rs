@@ -725,9 +725,9 @@ fn noise_after_visibility() {
     );
 }
 
-/// Contract (determinism): the noise is a function of (seed, environment, episode, tick, value):
-/// the same seed gives the same noise whatever the thread count; another seed, another step or
-/// another environment gives different noise.
+/// Contract (determinism): the noise is a function of (episode seed, tick, value):
+/// the same seed gives the same noise whatever the thread count and the environment's index;
+/// another seed or another step gives different noise.
 #[test]
 fn noise_is_deterministic() {
     let mut config = Config::from_name_or_path("exp2").unwrap();
@@ -748,12 +748,22 @@ fn noise_is_deterministic() {
         assert_eq!(one.outputs().hh_pairs, two.outputs().hh_pairs);
         assert_ne!(one.outputs().obs, other.outputs().obs, "step {t}: seeds");
     }
-    // Two environments in the same state get different noise: environment 0 loaded into 1.
+    // The noise belongs to the episode, not to the index: environment 0 loaded into 1 (its
+    // episode seed included) gets the same noise; under another episode seed, other noise.
     let doc = one.get_state(0).unwrap();
     one.set_state(1, &doc).unwrap();
     let dim = one.layout().dim;
     let o = &one.outputs().obs;
-    assert_ne!(o[..dim], o[dim..2 * dim], "environments 0 and 1");
+    assert_eq!(
+        o[..dim],
+        o[dim..2 * dim],
+        "environment 0's episode at index 1"
+    );
+    let mut reseeded = doc.clone();
+    reseeded["socnav"]["seed"] = json!(doc["socnav"]["seed"].as_u64().unwrap() ^ 1);
+    one.set_state(1, &reseeded).unwrap();
+    let o = &one.outputs().obs;
+    assert_ne!(o[..dim], o[dim..2 * dim], "another episode seed");
     // The same state at another tick gets different noise.
     let before = o[..dim].to_vec();
     let mut later = doc.clone();

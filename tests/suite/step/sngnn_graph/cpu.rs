@@ -136,7 +136,7 @@ struct Sim {
 impl Sim {
     fn new(config: &Config) -> Self {
         let caps = Caps::from_config(config);
-        let mut p = StepParams::new(config, 0, AutoresetMode::NextStep);
+        let mut p = StepParams::new(config, AutoresetMode::NextStep);
         // The recorded social events are applied by loading the next reference state.
         p.replay = 1;
         Self {
@@ -604,7 +604,7 @@ fn rolled_out_graphs_fit_the_capacity() {
             let mut config = Config::from_name_or_path(name).expect(name);
             config.episode.time_step = dt;
             let mut r = SngnnRollout::new(&config, 32, 3);
-            let mut rng = socnav::rng::RngStream::new(5, 0, 0, 0);
+            let mut rng = socnav::rng::RngStream::new(5, 0);
             let mut scored = 0;
             for _ in 0..80 {
                 let actions = r.random_actions(&mut rng);
@@ -667,7 +667,7 @@ fn history_of_ticks(dt: f32, ticks: u32) -> (StepParams, BatchState) {
     config.reward.kind = RewardKind::Sngnn;
     config.episode.time_step = dt;
     let caps = Caps::from_config(&config);
-    let p = StepParams::new(&config, 0, AutoresetMode::NextStep);
+    let p = StepParams::new(&config, AutoresetMode::NextStep);
     let mut s = BatchState::new(1, caps);
     let mut chunk = s.chunk();
     for tick in 1..=ticks {
@@ -919,7 +919,7 @@ fn sngnn_stages_record_exactly_the_scored_steps() {
             .expect("reward");
         STAGES.iter().position(|s| s.name == name).expect("a stage") < reward
     };
-    let mut rng = socnav::rng::RngStream::new(11, 0, 0, 0);
+    let mut rng = socnav::rng::RngStream::new(11, 0);
     let mut scored = 0;
     for step in 0..40 {
         let actions = a.random_actions(&mut rng);

@@ -39,7 +39,7 @@ fn check(name: &str, dt: f32, steps: usize, every_relation: bool) {
     let mut gpu = GpuStages::with_sngnn_graphs(dev, &r.p, &r.s, &r.o, &["sngnn_graph"], r.graphs)
         .expect("the SNGNN graph pass");
     let mut from_gpu = r.s.clone();
-    let mut rng = RngStream::new(5, 0, 0, 2);
+    let mut rng = RngStream::new(5, 2);
     let mut scored = 0;
     for step in 0..steps {
         let actions = r.random_actions(&mut rng);

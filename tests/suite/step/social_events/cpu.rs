@@ -97,7 +97,7 @@ fn apply_recorded(ep: &Episode, step: &Step<'_>, events: &[&Value], at: &str) ->
     let p = *env.params();
     let mut state: BatchState = env.state().clone();
     // New walkers' goals come from this stream; their values are not compared.
-    let mut rng = RngStream::new(0, 0, 0, 0);
+    let mut rng = RngStream::new(0, 0);
     let mut new_walkers = Vec::new();
     for ev in events {
         // Indices refer to the lists as they are when the event happens.
@@ -427,7 +427,7 @@ fn event_rates_match_the_configured_probabilities() {
     )
     .unwrap();
     // Random actions: the robot wanders, episodes end and restart now and then.
-    let mut rng = RngStream::new(99, 0, 0, 0);
+    let mut rng = RngStream::new(99, 0);
     let mut tallies: [Tally; 4] = Default::default();
     for t in 0..600 {
         let before: Vec<Chances> = (0..n)

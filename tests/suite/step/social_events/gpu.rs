@@ -137,7 +137,7 @@ pub(crate) fn parity(
     let mut gpu = GpuStages::new(dev, &p, &cpu, &cpu_out, &[stage]).expect("GPU stages");
     let mut from_gpu = cpu.clone();
     let mut from_gpu_out = cpu_out.clone();
-    let mut rng = RngStream::new(9, 0, 0, 2);
+    let mut rng = RngStream::new(9, 2);
     let mut seen = Seen::default();
     for run in 0..runs {
         perturb(&mut cpu, &mut cpu_out, &p, &mut rng);
