@@ -43,7 +43,7 @@ def build_batch(
         raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
     check_choice("backend", backend, BACKENDS)
     return Batch(
-        base, int(num_envs), 0 if seed is None else int(seed), autoreset_mode, threads, text, None, backend
+        base, int(num_envs), 0 if seed is None else check_seed(seed), autoreset_mode, threads, text, None, backend
     )
 
 
@@ -94,12 +94,42 @@ def split_obs(flat: np.ndarray, layout: dict) -> dict[str, np.ndarray]:
 
 
 def reset_single(batch: Batch, seed: int | None) -> None:
-    """Reset a batch of one environment: re-seeded when ``seed`` is given, else into its next
-    episode."""
+    """Reset a batch of one environment into the episode of seed ``seed``, else into the next
+    episode of its sequence."""
     if seed is not None:
-        batch.reset(int(seed))
-    else:
-        batch.reset_envs(np.ones(1, dtype=bool))
+        batch.set_next_seeds([check_seed(seed)])
+    batch.reset_envs(np.ones(1, dtype=bool))
+
+
+_SEED_LIMIT = 1 << 64
+
+
+def check_seed(seed: Any) -> int:
+    """``seed`` as an int in 0..2**64, or a ValueError naming it."""
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
+        raise TypeError(f"a seed must be an int, got {seed!r} ({type(seed).__name__})")
+    if not 0 <= int(seed) < _SEED_LIMIT:
+        raise ValueError(f"a seed must be in 0..2**64, got {seed}")
+    return int(seed)
+
+
+def episode_seeds(seed: Any, num_envs: int) -> list[int | None] | None:
+    """The next-episode seeds a vector ``reset(seed=...)`` names: ``None`` for none, ``s + i``
+    (wrapping at 2**64) for an int ``s``, or a list's own (one per environment)."""
+    if seed is None:
+        return None
+    if isinstance(seed, (list, tuple, np.ndarray)):
+        seeds = list(seed)
+        if len(seeds) != num_envs:
+            raise ValueError(f"{len(seeds)} seeds given for {num_envs} environments (one per environment)")
+        return [None if s is None else check_seed(s) for s in seeds]
+    first = check_seed(seed)
+    return [(first + i) % _SEED_LIMIT for i in range(num_envs)]
+
+
+def seeds_of(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """uint64 seeds from their low and high uint32 words."""
+    return lo.astype(np.uint64) | (hi.astype(np.uint64) << np.uint64(32))
 
 
 def check_running(ended: bool) -> None:

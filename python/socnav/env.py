@@ -13,12 +13,13 @@ import gymnasium as gym
 
 from socnav import _batch
 from socnav._socnav import Batch
+from socnav.render import Trails
 
 
 class SocNavEnv(gym.Env):
     """One environment of ``config`` (see ``make``)."""
 
-    metadata = {"render_modes": []}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
 
     def __init__(
         self,
@@ -27,7 +28,13 @@ class SocNavEnv(gym.Env):
         obs_mode: str = "dict",
         action_type: str = "continuous",
         threads: int | None = 1,
+        render_mode: str | None = None,
+        render_size: int = 400,
     ) -> None:
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.render_mode = render_mode
+        self.render_size = int(render_size)
         self.obs_mode = _batch.check_choice("obs_mode", obs_mode, _batch.OBS_MODES)
         self.action_type = _batch.check_choice("action_type", action_type, _batch.ACTION_TYPES)
         self._batch: Batch = _batch.build_batch(config, 1, None, "disabled", threads)
@@ -37,11 +44,17 @@ class SocNavEnv(gym.Env):
         self.action_space = _batch.action_space(self._batch, action_type)
         self._buf = self._batch.buffers()
         self._ended = True  # until the first reset
+        # One frame per simulated step plays an episode in real time.
+        self.metadata = {**self.metadata, "render_fps": 1.0 / self._batch.time_step}
+        self._trails = Trails(1)
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
         _batch.reset_single(self._batch, seed)
         self._ended = False
+        if self.render_mode is not None:
+            self._trails.restart()
+            self._trails.add(self._batch.robot_poses())
         # SocNavGym's reset reports no metrics.
         return self._obs(), {}
 
@@ -61,7 +74,16 @@ class SocNavEnv(gym.Env):
         b = self._buf
         terminated, truncated = bool(b["terminated"][0]), bool(b["truncated"][0])
         self._ended = terminated or truncated
+        if self.render_mode is not None:
+            self._trails.add(self._batch.robot_poses())
         return self._obs(), float(b["reward"][0]), terminated, truncated, self._info()
+
+    def render(self) -> np.ndarray | None:
+        """The environment from above, uint8 ``(H, W, 3)`` (``render_mode="rgb_array"``), with
+        the robot's path since the reset; None without a render mode."""
+        if self.render_mode is None:
+            return None
+        return self._batch.render(0, self.render_size, self._trails.of(0))
 
     def _obs(self) -> Any:
         flat = self._buf["obs"].copy()
@@ -85,6 +107,16 @@ def make(
     obs_mode: str = "dict",
     action_type: str = "continuous",
     threads: int | None = 1,
+    render_mode: str | None = None,
+    render_size: int = 400,
 ) -> SocNavEnv:
-    """One environment of ``config`` (a shipped name, a TOML path or a dict of overrides)."""
-    return SocNavEnv(config, obs_mode=obs_mode, action_type=action_type, threads=threads)
+    """One environment of ``config`` (a shipped name, a TOML path or a dict of overrides);
+    ``render_mode="rgb_array"`` makes ``render()`` return frames (``socnav.render``)."""
+    return SocNavEnv(
+        config,
+        obs_mode=obs_mode,
+        action_type=action_type,
+        threads=threads,
+        render_mode=render_mode,
+        render_size=render_size,
+    )

@@ -135,19 +135,21 @@ class SocNavSB3VecEnv(VecEnv):
             )
             observation_space = spaces.Dict({k: observation_space[k] for k in self._keys})
         super().__init__(self.venv.num_envs, observation_space, self.venv.single_action_space)
-        # The seed the first reset uses: the constructor's, as make_vec's reset would.
-        self._seeds = [seed] * self.num_envs
+        # The seeds the first reset uses: the constructor's, as make_vec's reset would.
+        self._seeds: list[int | None] = (
+            [None] * self.num_envs if seed is None else [(int(seed) + i) % (1 << 64) for i in range(self.num_envs)]
+        )
         self._actions: np.ndarray | None = None
         self._t0 = time.perf_counter()
 
     # -- the VecEnv protocol ------------------------------------------------------------------
 
     def reset(self) -> VecEnvObs:
-        """Reset every environment; re-seeds the batch with the seed set by :meth:`seed` (or the
-        constructor's, on the first reset), else continues its random stream. Returns the
-        observations (copies) only, as SB3 does."""
-        seed = self._seeds[0]
-        obs, _ = self.venv.reset(seed=seed)
+        """Reset every environment; environment i plays the episode of seed ``seed + i`` for the
+        seed set by :meth:`seed` (or the constructor's, on the first reset), else the next
+        episode of its seed sequence. Returns the observations (copies) only, as SB3 does."""
+        seeds = None if self._seeds[0] is None else list(self._seeds)
+        obs, _ = self.venv.reset(seed=seeds)
         self._reset_seeds()
         self._reset_options()
         self.reset_infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
@@ -212,6 +214,7 @@ class SocNavSB3VecEnv(VecEnv):
             row = stats[i]
             episode: dict[str, Any] = {"r": float(row[_RETURN]), "l": int(row[_LENGTH]), "t": t}
             episode.update((k, float(v)) for k, v in zip(EPISODE_KEYS, row))
+            episode["seed"] = int(info["episode"]["seed"][i])
             if self._keys is not None:
                 terminal = {k: final_obs[k][i].copy() for k in self._keys}
             else:
@@ -235,14 +238,12 @@ class SocNavSB3VecEnv(VecEnv):
         self.venv.close()
 
     def seed(self, seed: int | None = None) -> Sequence[int | None]:
-        """Set the seed of the next :meth:`reset`.
-
-        The batch has one seed, from which every environment's random stream derives (SB3's
-        default of ``seed + index`` per environment does not apply), so the returned list
-        repeats it. ``None`` draws a seed from numpy's global generator, as SB3 does."""
+        """Set the seed of the next :meth:`reset`: environment i plays the episode of seed
+        ``seed + i``, SB3's convention, and the list of those seeds is returned. ``None`` draws a
+        seed from numpy's global generator, as SB3 does."""
         if seed is None:
             seed = int(np.random.randint(0, np.iinfo(np.uint32).max, dtype=np.uint32))
-        self._seeds = [int(seed)] * self.num_envs
+        self._seeds = [(int(seed) + i) % (1 << 64) for i in range(self.num_envs)]
         return list(self._seeds)
 
     def set_options(self, options: list[dict[str, Any]] | dict[str, Any] | None = None) -> None:

@@ -7,7 +7,7 @@ at every ``step`` and ``reset`` (``np.shares_memory`` holds between two steps' r
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import gymnasium as gym
@@ -16,6 +16,7 @@ from gymnasium.vector.utils import batch_space
 
 from socnav import _batch
 from socnav._socnav import Batch
+from socnav.render import Trails
 
 _AUTORESET = {
     "next_step": AutoresetMode.NEXT_STEP,
@@ -40,7 +41,12 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         threads: int | None = None,
         copy: bool = False,
         reward_fn: _batch.RewardFn | None = None,
+        render_mode: str | None = None,
+        render_envs: Sequence[int] | None = None,
+        render_size: int = 400,
     ) -> None:
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         mode = autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else autoreset_mode
         _batch.check_choice("autoreset_mode", mode, tuple(_AUTORESET))
         self.obs_mode = _batch.check_choice("obs_mode", obs_mode, _batch.OBS_MODES)
@@ -48,7 +54,20 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self.copy = copy
         self._batch: Batch = _batch.build_batch(config, num_envs, seed, mode, threads, backend)
         self.num_envs = self._batch.num_envs
-        self.metadata = {"autoreset_mode": _AUTORESET[mode], "render_modes": []}
+        self.metadata = {
+            "autoreset_mode": _AUTORESET[mode],
+            "render_modes": ["rgb_array"],
+            "render_fps": 1.0 / self._batch.time_step,
+        }
+        self.render_mode = render_mode
+        self.render_size = int(render_size)
+        self.render_envs = list(range(min(self.num_envs, 4))) if render_envs is None else [int(e) for e in render_envs]
+        bad = [e for e in self.render_envs if not 0 <= e < self.num_envs]
+        if bad:
+            raise ValueError(f"render_envs {bad} out of range 0..{self.num_envs}")
+        self._trails = Trails(self.num_envs)
+        # Environments whose next step starts a new episode (NEXT_STEP autoreset).
+        self._restart_trail = np.zeros(self.num_envs, dtype=bool)
         self._layout = self._batch.layout()
         self._keys = Batch.keys()
         self.single_observation_space = _batch.observation_space(self._batch, obs_mode)
@@ -76,13 +95,20 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         return self._batch.device
 
     def reset(
-        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+        self,
+        *,
+        seed: int | list[int | None] | None = None,
+        options: dict[str, Any] | None = None,
     ) -> tuple[Any, dict[str, Any]]:
         """Reset every environment, or with ``options={"reset_mask": mask}`` only those where
-        the boolean ``mask`` is true (the DISABLED autoreset mode's way to restart them). The
-        batch has one seed: of a list of seeds, the first one seeds it."""
-        if isinstance(seed, (list, tuple)):
-            seed = seed[0] if seed else None
+        the boolean ``mask`` is true (the DISABLED autoreset mode's way to restart them).
+
+        Every episode has one 64-bit episode seed, and the episode of seed ``e`` is the same in
+        any batch, at any index, on any backend. ``seed=s`` gives environment ``i`` the episode
+        of seed ``s + i`` (gymnasium's convention); a list gives each environment its own
+        (``None``: its next one); without a seed each environment plays the next episode of
+        its sequence. With a mask, only the masked environments' seeds are used.
+        ``info["episode"]["seed"]`` reports the seed of every episode that ends."""
         mask = (options or {}).get("reset_mask")
         if mask is not None:
             mask = np.asarray(mask)
@@ -91,13 +117,21 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
                     f"reset_mask must be a bool array of shape ({self.num_envs},), "
                     f"got {mask.dtype} {mask.shape}"
                 )
+        seeds = _batch.episode_seeds(seed, self.num_envs)
+        if mask is not None:
+            if seeds is not None:
+                self._batch.set_next_seeds([s if m else None for s, m in zip(seeds, mask)])
             self._batch.reset_envs(np.ascontiguousarray(mask))
             self._finished[mask] = False
             self._returns[mask] = 0.0
+            self._track(restart=mask)
         else:
-            self._batch.reset(None if seed is None else int(seed))
+            if seeds is not None:
+                self._batch.set_next_seeds(seeds)
+            self._batch.reset(None)
             self._finished[:] = False
             self._returns[:] = 0.0
+            self._track(restart=self._all)
         return self._obs(self._buf["obs"], self.copy), self._info(final=False)
 
     def step(self, actions: Any):
@@ -105,12 +139,34 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         b = self._buf
         terminated = b["terminated"].astype(bool)
         truncated = b["truncated"].astype(bool)
+        if self.render_mode is not None:
+            ended = terminated | truncated
+            if self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP:
+                self._track(restart=ended)
+            else:
+                self._track(restart=self._restart_trail)
+                self._restart_trail = ended & (self.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP)
         info = self._info(final=True)
         if self._reward_fn is None:
             reward = b["reward"].copy() if self.copy else b["reward"]
         else:
             reward = self._custom_reward(self._reward_fn, actions, terminated, truncated, info)
         return self._obs(b["obs"], self.copy), reward, terminated, truncated, info
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """Frames of the environments ``render_envs`` (uint8 ``(H, W, 3)`` each, with the robot's
+        path since its episode began) when ``render_mode="rgb_array"``; ``socnav.render.tile``
+        puts them in one image."""
+        if self.render_mode is None:
+            return None
+        return tuple(self._batch.render(e, self.render_size, self._trails.of(e)) for e in self.render_envs)
+
+    def _track(self, restart: np.ndarray) -> None:
+        """Record the robot poses for drawing (restarting the paths of ``restart``)."""
+        if self.render_mode is None:
+            return
+        self._trails.restart(restart)
+        self._trails.add(self._batch.robot_poses())
 
     def _custom_reward(
         self,
@@ -170,6 +226,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             if done.any():
                 stats = b["episode"].copy()
                 info["episode"] = {key: stats[:, k] for k, key in enumerate(self._keys["episode"])}
+                info["episode"]["seed"] = _batch.seeds_of(b["episode_seed_lo"], b["episode_seed_hi"])
                 info["_episode"] = done
             if self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP:
                 has_final = b["has_final"].astype(bool)
@@ -197,13 +254,17 @@ def make_vec(
     threads: int | None = None,
     copy: bool = False,
     reward_fn: _batch.RewardFn | None = None,
+    render_mode: str | None = None,
+    render_envs: Sequence[int] | None = None,
+    render_size: int = 400,
 ) -> SocNavVectorEnv:
     """A vector environment of ``num_envs`` environments.
 
     Args:
         config: a shipped config name (``socnav.shipped_configs()``), a TOML path, or a dict of
             overrides in the TOML layout with an optional ``"base"`` name.
-        seed: seed of the batch (0 when ``None``); ``reset(seed=...)`` re-seeds it.
+        seed: environment i's first episode has the episode seed ``seed + i`` (``seed`` 0 when
+            ``None``); ``reset(seed=...)`` names other episodes.
         obs_mode: ``"dict"`` (SocNavGym's blocks, zero-padded) or ``"flat"`` (one row).
         action_type: ``"continuous"`` (``Box(-1, 1, (3,))``) or ``"discrete"`` (``Discrete(7)``).
         autoreset_mode: ``"next_step"`` (default), ``"same_step"`` or ``"disabled"``.
@@ -219,6 +280,10 @@ def make_vec(
             (``socnav.RewardInputs``), it returns one reward per environment, which replaces
             the built-in one (also in the episode returns of ``info["episode"]``). Plain numpy
             over the batch costs microseconds; a Python loop over environments does not.
+        render_mode: ``"rgb_array"``: ``render()`` returns frames (``socnav.render``); the
+            robot's path is then read from the state at every step.
+        render_envs: the environments ``render()`` draws (default: the first four).
+        render_size: the longer side of a frame (px).
     """
     return SocNavVectorEnv(
         config,
@@ -231,4 +296,7 @@ def make_vec(
         threads=threads,
         copy=copy,
         reward_fn=reward_fn,
+        render_mode=render_mode,
+        render_envs=render_envs,
+        render_size=render_size,
     )

@@ -222,8 +222,8 @@ def test_attributes_methods_seeding_and_monitor():
     assert env.env_is_wrapped(gym.Wrapper) == [True] * 4
     assert env.env_is_wrapped(gym.wrappers.TimeLimit, indices=[0]) == [False]
 
-    # One seed for the batch: seed(s) then reset reproduces a fresh adapter seeded with s.
-    assert env.seed(5) == [5] * 4
+    # seed(s) names the episodes s + i: then reset reproduces a fresh adapter seeded with s.
+    assert env.seed(5) == [5, 6, 7, 8]
     a = env.reset()
     b = make_sb3("exp1", num_envs=4, seed=5).reset()
     assert_obs_equal(a, b)

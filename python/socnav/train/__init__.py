@@ -1,0 +1,129 @@
+"""Baseline agents trained over the batch, and the agents that ship with socnav.
+
+Needs the ``train`` extra (``pip install './python[train]'``, which brings torch); ``import
+socnav`` never imports this module.
+
+- ``python -m socnav.train dqn --config exp2_sngnn --steps 2000000 --out runs/dqn-exp2-sngnn``
+  trains the paper's Dueling DQN (:mod:`socnav.train.dqn`); ``ppo`` trains PPO
+  (:mod:`socnav.train.ppo`, ``--action-type discrete|continuous``). A run logs to
+  ``progress.csv`` (and TensorBoard when installed), checkpoints every ``--checkpoint-minutes``
+  and resumes when run again with the same ``--out``; ``--max-minutes`` ends a chunk in time.
+- ``python -m socnav.train export runs/dqn-exp2-sngnn/checkpoint.pt agents/dqn-exp2-sngnn.pt``
+  writes the agent alone (float16 weights and the observation normalisation, a plain
+  ``torch.save`` dict of tensors: ``format``, ``kind``, ``config``, ``obs_dim``, ``action_type``,
+  ``state_dict``, optional ``obs_mean``/``obs_var``).
+- :func:`load` gives a policy for :func:`socnav.evaluate` and :mod:`socnav.policies` users:
+  ``socnav.train.load("dqn-exp2-sngnn")`` (a shipped agent, :func:`shipped`) or a path.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+__all__ = ["Agent", "export", "load", "shipped"]
+
+FORMAT = "socnav-agent/1"
+#: Where the shipped agents live (``<name>.pt``).
+AGENTS_DIR = Path(__file__).with_name("agents")
+
+
+class Agent:
+    """A trained agent as a batched policy: ``agent(obs, env) -> actions`` (greedy: the best Q
+    value for DQN, the mode of the action distribution for PPO). ``obs_mode`` is ``"flat"``;
+    ``action_type`` says which actions it gives; ``config`` names what it was trained on."""
+
+    obs_mode = "flat"
+
+    def __init__(self, saved: dict[str, Any], name: str) -> None:
+        if saved.get("format") != FORMAT:
+            raise ValueError(f"{name}: not a socnav agent (format {saved.get('format')!r}, expected {FORMAT!r})")
+        self.name = name
+        self.kind: str = saved["kind"]
+        self.config: str = saved.get("config", "")
+        self.obs_dim = int(saved["obs_dim"])
+        self.action_type: str = saved.get("action_type", "discrete")
+        state = {k: v.float() for k, v in saved["state_dict"].items()}
+        if self.kind == "dqn":
+            from socnav.train.dqn import DuelingQ
+
+            self.net: torch.nn.Module = DuelingQ(self.obs_dim)
+            self.net.load_state_dict(state)
+        elif self.kind == "ppo":
+            from socnav.train.ppo import _mlp
+
+            self.net = _mlp(self.obs_dim, 7 if self.action_type == "discrete" else 3, 0.01)
+            state.pop("log_std", None)
+            self.net.load_state_dict(state)
+        else:
+            raise ValueError(f"{name}: unknown agent kind {self.kind!r}")
+        self.net.eval()
+        self.obs_mean = saved.get("obs_mean")
+        self.obs_var = saved.get("obs_var")
+
+    def __call__(self, obs: Any, env: Any = None) -> np.ndarray:
+        x = np.asarray(obs, dtype=np.float32)
+        if x.ndim != 2 or x.shape[1] != self.obs_dim:
+            raise ValueError(
+                f"{self.name} takes flat observations of {self.obs_dim} floats (obs_mode='flat'), got shape {x.shape}"
+            )
+        if self.obs_mean is not None and self.obs_var is not None:
+            x = np.clip((x - self.obs_mean.numpy()) / np.sqrt(self.obs_var.numpy() + 1e-8), -10.0, 10.0).astype(np.float32)
+        with torch.no_grad():
+            out = self.net(torch.from_numpy(x)).numpy()
+        if self.action_type == "discrete":
+            return out.argmax(axis=1).astype(np.uint32)
+        a = np.clip(out, -1.0, 1.0).astype(np.float32)
+        holonomic = env is not None and getattr(getattr(env, "unwrapped", env), "_batch").holonomic
+        if not holonomic:
+            a[:, 1] = 0.0
+        return a
+
+    def __repr__(self) -> str:
+        return f"Agent({self.name!r}, {self.kind}, {self.action_type}, trained on {self.config!r})"
+
+
+def shipped() -> list[str]:
+    """Names of the agents that ship with socnav."""
+    return sorted(p.stem for p in AGENTS_DIR.glob("*.pt"))
+
+
+def load(name_or_path: str | Path) -> Agent:
+    """A shipped agent by name (``"dqn-exp2-sngnn"``) or an agent file by path (see
+    :func:`export`)."""
+    path = Path(name_or_path)
+    if not path.exists():
+        candidate = AGENTS_DIR / f"{name_or_path}.pt"
+        if not candidate.exists():
+            raise ValueError(
+                f"no agent {str(name_or_path)!r}: not a file, and not a shipped agent "
+                f"({', '.join(shipped()) or 'none shipped'})"
+            )
+        path = candidate
+    saved = torch.load(path, weights_only=True, map_location="cpu")
+    return Agent(saved, path.stem)
+
+
+def export(checkpoint: str | Path, out: str | Path) -> Path:
+    """Write the agent of a training checkpoint alone, float16, to ``out``."""
+    saved = torch.load(checkpoint, weights_only=False, map_location="cpu")
+    algo = saved.get("algo")
+    if algo == "dqn":
+        from socnav.train.dqn import policy_state
+    elif algo == "ppo":
+        from socnav.train.ppo import policy_state
+    else:
+        raise ValueError(f"{checkpoint}: not a socnav.train checkpoint (algo {algo!r})")
+    agent = policy_state(saved)
+    agent["state_dict"] = {k: v.detach().half() for k, v in agent["state_dict"].items()}
+    agent["format"] = FORMAT
+    agent["config"] = saved["args"]["config"]
+    agent["steps"] = int(saved["step"])
+    agent.setdefault("action_type", "discrete")
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    torch.save(agent, out)
+    return out

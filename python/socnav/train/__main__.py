@@ -1,0 +1,40 @@
+"""``python -m socnav.train {dqn,ppo,export}``: see :mod:`socnav.train`."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from typing import Any, Sequence
+
+
+def _add_args(parser: argparse.ArgumentParser, defaults: Any) -> None:
+    for f in dataclasses.fields(defaults):
+        flag = "--" + f.name.replace("_", "-")
+        value = getattr(defaults, f.name)
+        kind = type(value) if value is not None else float
+        parser.add_argument(flag, type=kind, default=value, help=f"default: {value}")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    from socnav.train import dqn, export, ppo
+
+    parser = argparse.ArgumentParser(prog="python -m socnav.train", description="Train baseline agents over a socnav batch.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    _add_args(sub.add_parser("dqn", help="the paper's Dueling DQN (socnav.train.dqn)"), dqn.Args())
+    _add_args(sub.add_parser("ppo", help="PPO, discrete or continuous actions (socnav.train.ppo)"), ppo.Args())
+    ex = sub.add_parser("export", help="write the agent of a checkpoint alone (float16)")
+    ex.add_argument("checkpoint")
+    ex.add_argument("out")
+    args = parser.parse_args(argv)
+    if args.command == "export":
+        print(export(args.checkpoint, args.out))
+        return 0
+    module = dqn if args.command == "dqn" else ppo
+    values = {f.name: getattr(args, f.name) for f in dataclasses.fields(module.Args)}
+    module.train(module.Args(**values))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,123 @@
+"""socnav.train: the baselines run, log, checkpoint, resume where they stopped, export agents that
+load and act, and PPO learns exp1 within minutes.
+
+Skipped when torch is not importable, unless REQUIRE_TORCH=1 (then it fails); scripts/test-sb3
+runs it in the torch environment it shares with the SB3 tests."""
+
+import csv
+import os
+
+import numpy as np
+import pytest
+
+if os.environ.get("REQUIRE_TORCH") == "1":
+    import torch  # noqa: F401  (REQUIRE_TORCH=1: a missing torch is a failure)
+else:
+    pytest.importorskip("torch", reason="torch is not installed (pip install './python[train]')")
+
+import torch
+
+import socnav
+from socnav.train import dqn, export, load, ppo
+
+SHORT = "exp1"
+
+
+def _rows(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def test_dqn_runs_logs_resumes_and_exports(tmp_path):
+    out = tmp_path / "dqn"
+    args = dqn.Args(config=SHORT, steps=1024, out=str(out), num_envs=16, threads=1, learning_starts=256,
+                    batch_size=32, buffer_size=4096, log_every=512, target_update=512)
+    dqn.train(args)
+    rows = _rows(out / "progress.csv")
+    assert [int(r["step"]) for r in rows] == [512, 1024]
+    for key in ("loss", "epsilon", "time_env_s", "time_learn_s", "time_sim_s", "time_reward_s"):
+        assert key in rows[0]
+    assert float(rows[-1]["time_reward_s"]) > 0.0 and float(rows[-1]["time_sim_s"]) >= float(rows[-1]["time_reward_s"])
+    saved = torch.load(out / "checkpoint.pt", weights_only=False)
+    assert saved["step"] == 1024 and saved["replay"]["obs"].shape == (1024, 597)
+    # Run again with more steps: it resumes at 1024 and appends to the same log (the epsilon
+    # schedule follows the new total).
+    args.steps = 2048
+    dqn.train(args)
+    rows = _rows(out / "progress.csv")
+    assert [int(r["step"]) for r in rows] == [512, 1024, 1536, 2048]
+    agent_file = export(out / "checkpoint.pt", tmp_path / "agent.pt")
+    assert agent_file.stat().st_size < 2_000_000, "float16 weights"
+    agent = load(agent_file)
+    assert agent.kind == "dqn" and agent.action_type == "discrete" and agent.config == SHORT
+    env = socnav.make_vec(SHORT, num_envs=4, obs_mode="flat", action_type="discrete")
+    obs, _ = env.reset(seed=0)
+    a = agent(obs, env)
+    assert a.shape == (4,) and a.dtype == np.uint32 and a.max() < 7
+    result = socnav.evaluate(str(agent_file), {"base": SHORT, "episode": {"length": 20}}, episodes=4, seed=9)
+    assert result.episodes == 4
+
+
+def test_a_resumed_run_equals_an_uninterrupted_one(tmp_path):
+    base = dict(config=SHORT, num_envs=8, threads=1, learning_starts=128, batch_size=16, buffer_size=2048,
+                log_every=256, target_update=256)
+    dqn.train(dqn.Args(steps=768, out=str(tmp_path / "whole"), **base))
+    dqn.train(dqn.Args(steps=768, chunk_steps=384, out=str(tmp_path / "parts"), **base))
+    dqn.train(dqn.Args(steps=768, out=str(tmp_path / "parts"), **base))
+    whole = torch.load(tmp_path / "whole" / "checkpoint.pt", weights_only=False)
+    parts = torch.load(tmp_path / "parts" / "checkpoint.pt", weights_only=False)
+    for k, v in whole["q"].items():
+        torch.testing.assert_close(parts["q"][k], v, rtol=0, atol=0, msg=f"q.{k}")
+    np.testing.assert_array_equal(parts["replay"]["obs"], whole["replay"]["obs"])
+
+
+@pytest.mark.parametrize("action_type", ["discrete", "continuous"])
+def test_ppo_runs_and_exports(tmp_path, action_type):
+    out = tmp_path / action_type
+    ppo.train(ppo.Args(config=SHORT, steps=1024, out=str(out), num_envs=8, threads=1, rollout_steps=64,
+                       action_type=action_type, log_every=512))
+    assert [int(r["step"]) for r in _rows(out / "progress.csv")] == [512, 1024]
+    agent = load(export(out / "checkpoint.pt", tmp_path / f"ppo-{action_type}.pt"))
+    env = socnav.make_vec(SHORT, num_envs=3, obs_mode="flat", action_type=action_type)
+    obs, _ = env.reset(seed=1)
+    a = agent(obs, env)
+    assert a.shape == ((3,) if action_type == "discrete" else (3, 3))
+    if action_type == "continuous":
+        assert np.all(np.abs(a) <= 1.0) and np.all(a[:, 1] == 0.0)
+
+
+def test_errors_name_the_problem(tmp_path):
+    with pytest.raises(ValueError, match="no agent 'nope'"):
+        load("nope")
+    with pytest.raises(ValueError, match="action_type must be"):
+        ppo.train(ppo.Args(out=str(tmp_path / "x"), action_type="both", steps=10))
+    agent = load(export_tiny(tmp_path))
+    with pytest.raises(ValueError, match="flat observations of 597 floats"):
+        agent(np.zeros((2, 5), np.float32))
+
+
+def export_tiny(tmp_path):
+    out = tmp_path / "tiny"
+    dqn.train(dqn.Args(config=SHORT, steps=64, out=str(out), num_envs=8, threads=1, learning_starts=10**9, log_every=64))
+    return export(out / "checkpoint.pt", tmp_path / "tiny.pt")
+
+
+# Success rates of PPO after 300,000 steps of exp1 (64 environments, 2 threads), greedy on the 200
+# episodes of seeds 10000.. (measured on the 2-core machine, with other work beside it): seed 0 0.520,
+# seed 1 0.630, seed 2 0.620; the random policy 0.030. The threshold is the lowest, less a margin
+# for other CPUs' floating point (torch's kernels differ across instruction sets).
+PPO_SUCCESS_THRESHOLD = 0.40
+
+
+def test_ppo_learns_exp1_within_minutes(tmp_path):
+    """Done-when of the training issue: PPO trains on exp1 in well under 5 minutes (about 25 s of
+    the 2-core machine) to a success rate at least 3 times the random policy's and at least
+    PPO_SUCCESS_THRESHOLD."""
+    out = tmp_path / "ppo"
+    ppo.train(ppo.Args(config="exp1", steps=300_000, out=str(out), seed=0, num_envs=64, threads=2, log_every=100_000))
+    agent = load(export(out / "checkpoint.pt", tmp_path / "agent.pt"))
+    trained = socnav.evaluate(agent, "exp1", episodes=200, seed=10_000).summary()["success"]
+    random = socnav.evaluate("random", "exp1", episodes=200, seed=10_000).summary()["success"]
+    print(f"PPO success {trained:.3f}, random {random:.3f}")
+    assert trained >= 3 * random, (trained, random)
+    assert trained >= PPO_SUCCESS_THRESHOLD, trained
