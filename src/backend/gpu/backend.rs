@@ -14,10 +14,9 @@
 //! counter moved on the device has consumed its row (and its next episode seed moved one step
 //! along the sequence, which the host follows without reading it back), and the host generates
 //! its next one (on its worker threads, for all such environments at once) before the next
-//! device work. The state
-//! stays on the device; [`Backend::state`] downloads a host copy when asked and keeps it until the
-//! next step, and [`Backend::state_mut`] edits that copy, which is uploaded before the next device
-//! work.
+//! device work. The state stays on the device; [`Backend::state`] downloads a host copy when
+//! asked and keeps it until the next step, and [`Backend::state_mut`] edits that copy, which is
+//! uploaded before the next device work.
 
 use std::sync::OnceLock;
 use std::time::Instant;
