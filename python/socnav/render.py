@@ -39,10 +39,10 @@ class Trails:
         for e in range(len(self._points)) if envs is None else np.flatnonzero(envs):
             self._points[e].clear()
 
-    def add(self, poses: np.ndarray) -> None:
-        """Append every environment's (x, y) from ``poses`` (``(n, 3)``)."""
-        for e, pts in enumerate(self._points):
-            pts.append((float(poses[e, 0]), float(poses[e, 1])))
+    def add(self, poses: np.ndarray, envs: Sequence[int] | None = None) -> None:
+        """Append the (x, y) of ``envs`` (all when None) from ``poses`` (``(n, 3)``)."""
+        for e in range(len(self._points)) if envs is None else envs:
+            self._points[e].append((float(poses[e, 0]), float(poses[e, 1])))
 
     def of(self, env: int) -> np.ndarray:
         return np.asarray(self._points[env], dtype=np.float32).reshape(-1, 2)

@@ -166,7 +166,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         if self.render_mode is None:
             return
         self._trails.restart(restart)
-        self._trails.add(self._batch.robot_poses())
+        self._trails.add(self._batch.robot_poses(), self.render_envs)
 
     def _custom_reward(
         self,
