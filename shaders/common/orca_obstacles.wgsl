@@ -10,8 +10,9 @@
 // `orca_normalize`, ...), which mirror src/orca/vector.rs.
 //
 // Public functions (kept stable for the stages that build on them):
+// Public functions (kept stable for the stages that build on them):
 // * `orca_obstacles_rebuild_if_dirty(e: u32)`: Rust `rebuild_if_dirty`: when `obstacles_dirty`
-//   is obs, every polygon of environment e processed into the `ov_*` columns and
+//   is set, every polygon of environment e processed into the `ov_*` columns and
 //   `n_obstacle_vertices`, and the flag cleared.
 // * `orca_obstacles_raw_count(e: u32) -> u32` and `orca_obstacles_polygon(e: u32, k: u32) ->
 //   OrcaObstaclePolygon`: Rust `for_each_polygon` as an indexed walk. For k in
@@ -20,52 +21,58 @@
 //   users, standing groups); `seen_as_rect` says whether a field of view tests it as `rect` (a
 //   table, laptop or wall) or as `disc` (a plant, laptop use or standing group), `v` holds its
 //   four corners counter-clockwise.
-// * `orca_obstacles_push(list: ptr<function, OrcaObstaclePolygons>, v: array<vec2<f32>, 4>)`:
-//   appends one polygon to a list (a fresh `var` is empty).
-// * `orca_obstacles_process(polygons: ptr<function, OrcaObstaclePolygons>,
-//   obs: ptr<function, OrcaObstacleSet>)`: Rust `process_obstacles` of any polygon list into a
-//   function-scope obs: `len` processed vertices (input vertices, then split vertices in RVO2's
-//   order) in `point`, `dir`, `next`, `prev`, `convex` (the `ov_*` layout, local indices), and
-//   `overflow` (0: the CPU's result; see below). A walker with a restricted field of view
-//   (Rust `with_visible`) pushes the polygons it sees and processes them with this.
-// * `orca_obstacles_set_vertex(obs: ptr<function, OrcaObstacleSet>, i: u32) -> OrcaVertex`:
-//   what an ORCA obstacle line reads of vertex i of such a obs (common/orca.wgsl's building
-//   blocks: `orca_obstacle_neighbor_candidate` takes `point[i]` and `point[next[i]]`,
-//   `orca_push_obstacle_line` two of these).
+// * `orca_obstacles_list(e: u32) -> u32`: environment e's polygon list, emptied (a handle: the
+//   list's first word in `scratch`); `orca_obstacles_push(list: u32, v: array<vec2<f32>, 4>)`
+//   appends one polygon, `orca_obstacles_list_len(list)` and `orca_obstacles_list_overflow(list)`
+//   read it.
+// * `orca_obstacles_process(e: u32)`: Rust `process_obstacles` of environment e's polygon list
+//   into its processed set: `len` vertices (input vertices, then split vertices in RVO2's order)
+//   with `point`, `dir`, `next`, `prev`, `convex` (the `ov_*` layout, local indices), and
+//   `overflow` (0: the CPU's result; see below). A walker with a restricted field of view (Rust
+//   `with_visible`) pushes the polygons it sees and processes them with this.
+// * `orca_obstacles_set(e: u32) -> u32`: the handle of that set, read with
+//   `orca_obstacles_set_len(set)`, `orca_obstacles_set_overflow(set)`,
+//   `orca_obstacles_set_point(set, i)`, `orca_obstacles_set_next(set, i)` and
+//   `orca_obstacles_set_vertex(set, i) -> OrcaVertex` (what an ORCA obstacle line reads of vertex
+//   i: common/orca.wgsl's `orca_obstacle_neighbor_candidate` takes `point[i]` and
+//   `point[next[i]]`, `orca_push_obstacle_line` two vertices).
 // * `orca_obstacles_box_distance_sq(pos: vec2<f32>, v: array<vec2<f32>, 4>) -> f32`: Rust
 //   `box_distance_sq` (squared distance to the polygon's bounding box, 0 inside).
 //
-// Capacities and overflow. The processed obs holds orca_obstacles_cap() = batch.s_ov_x vertices, the
-// per-environment capacity of the `ov_*` columns (Rust `store` asserts the same bound); a list
-// holds batch.s_ov_x / 8 polygons (`Caps` gives every polygon room for 8 processed vertices: its 4
-// and as many split vertices, so an environment never has more). Large private arrays make
-// llvmpipe's compile time grow quickly: keep one call site of `orca_obstacles_process` per
-// shader where possible (Mesa inlines every call). The tree
-// build keeps its edge lists on an explicit stack: a node's list is popped, split into its left
-// and right lists, and those are pushed (right first), so the left subtree is built completely
-// before the right one, as in the recursive Rust. The lists on the stack hold distinct vertex
-// ids (each edge goes to one side; a split edge's two pieces have two ids), so the stack never
-// holds more than `len` <= batch.s_ov_x ids or lists: its arrays of batch.s_ov_x cannot overflow unless the
-// vertex obs does. Where Rust panics (a processed obs larger than batch.s_ov_x; a degenerate or
-// non-finite polygon, which `validate_polygons` rejects), the obs gets a non-zero `overflow`
+// Working memory. The polygon list, the processed set and the tree build's stack live in
+// environment e's region of the `scratch` buffer (binding 8: `batch.s_scratch` words per
+// environment, laid out by Rust `backend::wgsl::ObstacleScratch`; f32 values as their bits), not
+// in function-scope arrays: llvmpipe's compile time grows quickly with a shader's private memory
+// (a few minutes for each of these shaders at 512 vertices), and arrays sized by a capacity made
+// every capacity class a shader of its own; with the scratch buffer one compiled shader serves
+// every config. One invocation steps one environment and uses one list and one set at a time
+// (the environment's rebuild, or one walker's visible subset), so one region per environment
+// suffices; nothing in it outlives the call that fills it.
+//
+// Capacities and overflow. The processed set holds orca_obstacles_cap() = batch.s_ov_x vertices,
+// the per-environment capacity of the `ov_*` columns (Rust `store` asserts the same bound); a
+// list holds batch.s_ov_x / 8 polygons (`Caps` gives every polygon room for 8 processed
+// vertices: its 4 and as many split vertices, so an environment never has more). The tree build
+// keeps its edge lists on an explicit stack: a node's list is popped, split into its left and
+// right lists, and those are pushed (right first), so the left subtree is built completely
+// before the right one, as in the recursive Rust. The lists on the stack hold distinct vertex ids
+// (each edge goes to one side; a split edge's two pieces have two ids), so the stack never holds
+// more than `len` <= batch.s_ov_x ids or lists: its arrays of batch.s_ov_x cannot overflow unless
+// the vertex set does. Where Rust panics (a processed set larger than batch.s_ov_x; a degenerate
+// or non-finite polygon, which `validate_polygons` rejects), the set gets a non-zero `overflow`
 // (ORCA_OVERFLOW_OBSTACLE_VERTICES, ORCA_OBSTACLES_INVALID) and processing stops; a caller of
 // `orca_obstacles_process` must treat it as an error (an ORCA result that ORs it in is NaN by
 // common/orca.wgsl's convention). `orca_obstacles_rebuild_if_dirty` then poisons the columns:
-// every one of the batch.s_ov_x vertices gets NaN coordinates and directions (`n_obstacle_vertices` =
-// batch.s_ov_x), and `obstacles_dirty` is left at ORCA_OBSTACLES_FAILED (2) instead of 0, so the host
-// can see it. Neither can happen under the shipped capacities (the CPU would have panicked).
+// every one of the batch.s_ov_x vertices gets NaN coordinates and directions
+// (`n_obstacle_vertices` = batch.s_ov_x), and `obstacles_dirty` is left at
+// ORCA_OBSTACLES_FAILED (2) instead of 0, so the host can see it. Neither can happen under the
+// shipped capacities (the CPU would have panicked).
 //
 // Loop budget on lavapipe: llvmpipe stops every loop of an invocation after 65535 loop iterations
 // in total (docs/ARCHITECTURE.md). `choose_split` costs up to n² iterations per node (fewer with
 // RVO2's early exit); the shipped configs' rebuilds (tests/suite/step/social_events/gpu.rs and
 // formation.rs, stress included) stay within it, but a much larger obstacle set could exceed it
 // there.
-
-// Sizes of the arrays below: compile-time size classes (backend::wgsl::SizeClasses), at least
-// the batch's capacities, which every count is compared with (`orca_obstacles_cap`,
-// `orca_obstacles_max_polygons`).
-const ORCA_OBSTACLES_ARRAY: u32 = ARRAY_OBSTACLE_VERTICES;
-const ORCA_OBSTACLES_POLYGONS_ARRAY: u32 = ARRAY_OBSTACLE_VERTICES / 8u;
 
 // Obstacle vertices of one environment (at least 1).
 fn orca_obstacles_cap() -> u32 {
@@ -91,22 +98,104 @@ struct OrcaObstaclePolygon {
     v: array<vec2<f32>, 4>,
 }
 
-// Input polygons (quadrilaterals, counter-clockwise) of `orca_obstacles_process`.
-struct OrcaObstaclePolygons {
-    len: u32,
-    overflow: u32,
-    v: array<array<vec2<f32>, 4>, ORCA_OBSTACLES_POLYGONS_ARRAY>,
+// ---- the working memory (see the header) --------------------------------------------------------
+
+// A polygon list at handle l: [len, overflow, then 8 words a polygon: its 4 corners' x, y].
+// A processed set at handle s: [len, overflow, then the columns point.x, point.y, dir.x, dir.y,
+// next, prev, convex of orca_obstacles_cap() words each] (Rust `ObstacleSet`'s vertex columns;
+// the tree itself is not kept: nothing reads it). The stack at handle k: arena, lens, tmp, of
+// orca_obstacles_cap() words each.
+const ORCA_OBSTACLES_POINT_X: u32 = 0u;
+const ORCA_OBSTACLES_POINT_Y: u32 = 1u;
+const ORCA_OBSTACLES_DIR_X: u32 = 2u;
+const ORCA_OBSTACLES_DIR_Y: u32 = 3u;
+const ORCA_OBSTACLES_NEXT: u32 = 4u;
+const ORCA_OBSTACLES_PREV: u32 = 5u;
+const ORCA_OBSTACLES_CONVEX: u32 = 6u;
+const ORCA_OBSTACLES_ARENA: u32 = 0u;
+const ORCA_OBSTACLES_LENS: u32 = 1u;
+const ORCA_OBSTACLES_TMP: u32 = 2u;
+
+fn orca_obstacles_region(e: u32) -> u32 {
+    return e * batch.s_scratch;
 }
 
-// Rust `ObstacleSet`'s vertex columns (the tree itself is not kept: nothing reads it).
-struct OrcaObstacleSet {
-    len: u32,
-    overflow: u32,
-    point: array<vec2<f32>, ORCA_OBSTACLES_ARRAY>,
-    dir: array<vec2<f32>, ORCA_OBSTACLES_ARRAY>,
-    next: array<u32, ORCA_OBSTACLES_ARRAY>,
-    prev: array<u32, ORCA_OBSTACLES_ARRAY>,
-    convex: array<u32, ORCA_OBSTACLES_ARRAY>,
+fn orca_obstacles_list(e: u32) -> u32 {
+    let l = orca_obstacles_region(e) + batch.x_obstacle_list;
+    scratch[l] = 0u;
+    scratch[l + 1u] = 0u;
+    return l;
+}
+
+fn orca_obstacles_list_len(l: u32) -> u32 {
+    return scratch[l];
+}
+
+fn orca_obstacles_list_overflow(l: u32) -> u32 {
+    return scratch[l + 1u];
+}
+
+// Corner k of polygon p of list l.
+fn orca_obstacles_list_corner(l: u32, p: u32, k: u32) -> vec2<f32> {
+    let w = l + 2u + p * 8u + k * 2u;
+    return vec2<f32>(bitcast<f32>(scratch[w]), bitcast<f32>(scratch[w + 1u]));
+}
+
+fn orca_obstacles_list_polygon(l: u32, p: u32) -> array<vec2<f32>, 4> {
+    return array<vec2<f32>, 4>(
+        orca_obstacles_list_corner(l, p, 0u),
+        orca_obstacles_list_corner(l, p, 1u),
+        orca_obstacles_list_corner(l, p, 2u),
+        orca_obstacles_list_corner(l, p, 3u),
+    );
+}
+
+fn orca_obstacles_set(e: u32) -> u32 {
+    return orca_obstacles_region(e) + batch.x_obstacle_set;
+}
+
+fn orca_obstacles_set_len(s: u32) -> u32 {
+    return scratch[s];
+}
+
+fn orca_obstacles_set_overflow(s: u32) -> u32 {
+    return scratch[s + 1u];
+}
+
+// The word of column `column` of vertex i of set s.
+fn orca_obstacles_at(s: u32, column: u32, i: u32) -> u32 {
+    return s + 2u + column * orca_obstacles_cap() + i;
+}
+
+fn orca_obstacles_set_point(s: u32, i: u32) -> vec2<f32> {
+    return vec2<f32>(
+        bitcast<f32>(scratch[orca_obstacles_at(s, ORCA_OBSTACLES_POINT_X, i)]),
+        bitcast<f32>(scratch[orca_obstacles_at(s, ORCA_OBSTACLES_POINT_Y, i)]),
+    );
+}
+
+fn orca_obstacles_set_dir(s: u32, i: u32) -> vec2<f32> {
+    return vec2<f32>(
+        bitcast<f32>(scratch[orca_obstacles_at(s, ORCA_OBSTACLES_DIR_X, i)]),
+        bitcast<f32>(scratch[orca_obstacles_at(s, ORCA_OBSTACLES_DIR_Y, i)]),
+    );
+}
+
+fn orca_obstacles_set_next(s: u32, i: u32) -> u32 {
+    return scratch[orca_obstacles_at(s, ORCA_OBSTACLES_NEXT, i)];
+}
+
+fn orca_obstacles_set_prev(s: u32, i: u32) -> u32 {
+    return scratch[orca_obstacles_at(s, ORCA_OBSTACLES_PREV, i)];
+}
+
+fn orca_obstacles_set_convex(s: u32, i: u32) -> u32 {
+    return scratch[orca_obstacles_at(s, ORCA_OBSTACLES_CONVEX, i)];
+}
+
+// Word i of stack array `which` (ORCA_OBSTACLES_ARENA, _LENS, _TMP) of environment e.
+fn orca_obstacles_stack(e: u32, which: u32, i: u32) -> u32 {
+    return orca_obstacles_region(e) + batch.x_obstacle_stack + which * orca_obstacles_cap() + i;
 }
 
 // ---- orca_obstacles.rs: the polygons ------------------------------------------------------------
@@ -226,14 +315,19 @@ fn orca_obstacles_polygon(e: u32, k_in: u32) -> OrcaObstaclePolygon {
     return none;
 }
 
-// Appends polygon `v` to `list`; past `orca_obstacles_max_polygons()` it flags the overflow.
-fn orca_obstacles_push(list: ptr<function, OrcaObstaclePolygons>, v: array<vec2<f32>, 4>) {
-    if ((*list).len == orca_obstacles_max_polygons()) {
-        (*list).overflow |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
+// Appends polygon `v` to list l; past `orca_obstacles_max_polygons()` it flags the overflow.
+fn orca_obstacles_push(l: u32, v: array<vec2<f32>, 4>) {
+    let len = scratch[l];
+    if (len == orca_obstacles_max_polygons()) {
+        scratch[l + 1u] |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
         return;
     }
-    (*list).v[(*list).len] = v;
-    (*list).len += 1u;
+    for (var k = 0u; k < 4u; k++) {
+        let w = l + 2u + len * 8u + k * 2u;
+        scratch[w] = bitcast<u32>(v[k].x);
+        scratch[w + 1u] = bitcast<u32>(v[k].y);
+    }
+    scratch[l] = len + 1u;
 }
 
 // Rust `box_distance_sq`: squared distance (m²) from `pos` to the bounding box of `v` (0 inside).
@@ -257,17 +351,18 @@ fn orca_obstacles_finite(x: f32) -> bool {
 
 // Rust `validate_polygons` for quadrilaterals: true if every vertex is finite and every edge's
 // squared length a positive finite f32.
-fn orca_obstacles_valid(polygons: ptr<function, OrcaObstaclePolygons>) -> bool {
-    for (var p = 0u; p < (*polygons).len; p++) {
+fn orca_obstacles_valid(l: u32) -> bool {
+    for (var p = 0u; p < orca_obstacles_list_len(l); p++) {
+        let v = orca_obstacles_list_polygon(l, p);
         for (var k = 0u; k < 4u; k++) {
-            let a = (*polygons).v[p][k];
+            let a = v[k];
             if (!orca_obstacles_finite(a.x) || !orca_obstacles_finite(a.y)) {
                 return false;
             }
         }
         for (var k = 0u; k < 4u; k++) {
-            let a = (*polygons).v[p][k];
-            let b = (*polygons).v[p][(k + 1u) % 4u];
+            let a = v[k];
+            let b = v[(k + 1u) % 4u];
             let len_sq = orca_abs_sq(b - a);
             if (!(len_sq > 0.0 && orca_obstacles_finite(len_sq))) {
                 return false;
@@ -277,33 +372,28 @@ fn orca_obstacles_valid(polygons: ptr<function, OrcaObstaclePolygons>) -> bool {
     return true;
 }
 
-// Rust `ObstacleSet::push_vertex`; false (and the overflow flagged) when the obs is full.
-fn orca_obstacles_push_vertex(
-    obs: ptr<function, OrcaObstacleSet>,
-    p: vec2<f32>,
-    dir: vec2<f32>,
-    next: u32,
-    prev: u32,
-    convex: u32,
-) -> bool {
-    let i = (*obs).len;
+// Rust `ObstacleSet::push_vertex`; false (and the overflow flagged) when the set is full.
+fn orca_obstacles_push_vertex(s: u32, p: vec2<f32>, dir: vec2<f32>, next: u32, prev: u32, convex: u32) -> bool {
+    let i = scratch[s];
     if (i == orca_obstacles_cap()) {
-        (*obs).overflow |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
+        scratch[s + 1u] |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
         return false;
     }
-    (*obs).point[i] = p;
-    (*obs).dir[i] = dir;
-    (*obs).next[i] = next;
-    (*obs).prev[i] = prev;
-    (*obs).convex[i] = convex;
-    (*obs).len = i + 1u;
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_POINT_X, i)] = bitcast<u32>(p.x);
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_POINT_Y, i)] = bitcast<u32>(p.y);
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_DIR_X, i)] = bitcast<u32>(dir.x);
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_DIR_Y, i)] = bitcast<u32>(dir.y);
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_NEXT, i)] = next;
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_PREV, i)] = prev;
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_CONVEX, i)] = convex;
+    scratch[s] = i + 1u;
     return true;
 }
 
 // Rust `add_polygon` (RVO2's `addObstacle`) for one quadrilateral.
-fn orca_obstacles_add_polygon(obs: ptr<function, OrcaObstacleSet>, v: array<vec2<f32>, 4>) {
+fn orca_obstacles_add_polygon(s: u32, v: array<vec2<f32>, 4>) {
     let n = 4u;
-    let first = (*obs).len;
+    let first = scratch[s];
     for (var i = 0u; i < n; i++) {
         var prev_i = i - 1u;
         if (i == 0u) {
@@ -321,7 +411,7 @@ fn orca_obstacles_add_polygon(obs: ptr<function, OrcaObstacleSet>, v: array<vec2
         if (orca_left_of(p_prev, p, p_next) >= 0.0) {
             convex = 1u;
         }
-        if (!orca_obstacles_push_vertex(obs, p, dir, first + next_i, first + prev_i, convex)) {
+        if (!orca_obstacles_push_vertex(s, p, dir, first + next_i, first + prev_i, convex)) {
             return;
         }
     }
@@ -338,11 +428,11 @@ fn orca_obstacles_classify(s1: f32, s2: f32) -> u32 {
 }
 
 // Rust `edge_sides`: edge j1 against the line of edge i1.
-fn orca_obstacles_edge_sides(obs: ptr<function, OrcaObstacleSet>, i1: u32, j1: u32) -> vec2<f32> {
-    let a = (*obs).point[i1];
-    let b = (*obs).point[(*obs).next[i1]];
-    let s1 = orca_left_of(a, b, (*obs).point[j1]);
-    let s2 = orca_left_of(a, b, (*obs).point[(*obs).next[j1]]);
+fn orca_obstacles_edge_sides(s: u32, i1: u32, j1: u32) -> vec2<f32> {
+    let a = orca_obstacles_set_point(s, i1);
+    let b = orca_obstacles_set_point(s, orca_obstacles_set_next(s, i1));
+    let s1 = orca_left_of(a, b, orca_obstacles_set_point(s, j1));
+    let s2 = orca_left_of(a, b, orca_obstacles_set_point(s, orca_obstacles_set_next(s, j1)));
     return vec2<f32>(s1, s2);
 }
 
@@ -351,18 +441,13 @@ fn orca_obstacles_key_less(a0: u32, a1: u32, b0: u32, b1: u32) -> bool {
     return a0 < b0 || (a0 == b0 && a1 < b1);
 }
 
-// Rust `choose_split` over the list `arena[start..start + n]`: (position, L, R).
-fn orca_obstacles_choose_split(
-    obs: ptr<function, OrcaObstacleSet>,
-    arena: ptr<function, array<u32, ORCA_OBSTACLES_ARRAY>>,
-    start: u32,
-    n: u32,
-) -> vec3<u32> {
+// Rust `choose_split` over the list `arena[start..start + n]` of environment e: (position, L, R).
+fn orca_obstacles_choose_split(e: u32, s: u32, start: u32, n: u32) -> vec3<u32> {
     var best = 0u;
     var min_left = n;
     var min_right = n;
     for (var i = 0u; i < n; i++) {
-        let i1 = (*arena)[start + i];
+        let i1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + i)];
         let best0 = max(min_left, min_right);
         let best1 = min(min_left, min_right);
         var left = 0u;
@@ -371,8 +456,8 @@ fn orca_obstacles_choose_split(
             if (i == j) {
                 continue;
             }
-            let s = orca_obstacles_edge_sides(obs, i1, (*arena)[start + j]);
-            let side = orca_obstacles_classify(s.x, s.y);
+            let sides = orca_obstacles_edge_sides(s, i1, scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + j)]);
+            let side = orca_obstacles_classify(sides.x, sides.y);
             if (side == 0u) {
                 left += 1u;
             } else if (side == 1u) {
@@ -395,66 +480,65 @@ fn orca_obstacles_choose_split(
 }
 
 // Rust `split_edge`: splits edge j1 -> next(j1) where it crosses the line of edge i1 -> next(i1);
-// the fresh vertex's id, or NONE when the obs is full (overflow flagged).
-fn orca_obstacles_split_edge(obs: ptr<function, OrcaObstacleSet>, i1: u32, j1: u32) -> u32 {
-    let j2 = (*obs).next[j1];
-    let a = (*obs).point[i1];
-    let b = (*obs).point[(*obs).next[i1]];
-    let pj1 = (*obs).point[j1];
-    let pj2 = (*obs).point[j2];
+// the fresh vertex's id, or NONE when the set is full (overflow flagged).
+fn orca_obstacles_split_edge(s: u32, i1: u32, j1: u32) -> u32 {
+    let j2 = orca_obstacles_set_next(s, j1);
+    let a = orca_obstacles_set_point(s, i1);
+    let b = orca_obstacles_set_point(s, orca_obstacles_set_next(s, i1));
+    let pj1 = orca_obstacles_set_point(s, j1);
+    let pj2 = orca_obstacles_set_point(s, j2);
     let t = orca_det(b - a, pj1 - a) / orca_det(b - a, pj1 - pj2);
     let split_point = pj1 + t * (pj2 - pj1);
-    let fresh = (*obs).len;
-    let dir = (*obs).dir[j1];
-    if (!orca_obstacles_push_vertex(obs, split_point, dir, j2, j1, 1u)) {
+    let fresh = scratch[s];
+    let dir = orca_obstacles_set_dir(s, j1);
+    if (!orca_obstacles_push_vertex(s, split_point, dir, j2, j1, 1u)) {
         return NONE;
     }
-    (*obs).next[j1] = fresh;
-    (*obs).prev[j2] = fresh;
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_NEXT, j1)] = fresh;
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_PREV, j2)] = fresh;
     return fresh;
 }
 
-// Rust `process_obstacles` (see the header).
-fn orca_obstacles_process(polygons: ptr<function, OrcaObstaclePolygons>, obs: ptr<function, OrcaObstacleSet>) {
-    (*obs).len = 0u;
-    (*obs).overflow = (*polygons).overflow;
-    if (!orca_obstacles_valid(polygons)) {
-        (*obs).overflow |= ORCA_OBSTACLES_INVALID;
+// Rust `process_obstacles` of environment e's list into its set (see the header).
+fn orca_obstacles_process(e: u32) {
+    let l = orca_obstacles_region(e) + batch.x_obstacle_list;
+    let s = orca_obstacles_set(e);
+    scratch[s] = 0u;
+    scratch[s + 1u] = orca_obstacles_list_overflow(l);
+    if (!orca_obstacles_valid(l)) {
+        scratch[s + 1u] |= ORCA_OBSTACLES_INVALID;
     }
-    if ((*obs).overflow != 0u) {
+    if (scratch[s + 1u] != 0u) {
         return;
     }
-    for (var p = 0u; p < (*polygons).len; p++) {
-        orca_obstacles_add_polygon(obs, (*polygons).v[p]);
+    for (var p = 0u; p < orca_obstacles_list_len(l); p++) {
+        orca_obstacles_add_polygon(s, orca_obstacles_list_polygon(l, p));
     }
-    if ((*obs).overflow != 0u) {
+    if (scratch[s + 1u] != 0u) {
         return;
     }
 
     // `build_node` from the root list of every vertex, with an explicit stack of edge lists
     // (`arena[..end]`, list lengths in `lens[..depth]`, the top list last).
-    var arena: array<u32, ORCA_OBSTACLES_ARRAY>;
-    var lens: array<u32, ORCA_OBSTACLES_ARRAY>;
-    var tmp: array<u32, ORCA_OBSTACLES_ARRAY>;
-    let n = (*obs).len;
+    let n = scratch[s];
     for (var i = 0u; i < n; i++) {
-        arena[i] = i;
+        scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, i)] = i;
     }
     var end = n;
     var depth = 0u;
     if (n > 0u) {
-        lens[0] = n;
+        scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, 0u)] = n;
         depth = 1u;
     }
     while (depth > 0u) {
         depth -= 1u;
-        let len = lens[depth];
+        let len = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, depth)];
         let start = end - len;
-        let chosen = orca_obstacles_choose_split(obs, &arena, start, len);
+        let chosen = orca_obstacles_choose_split(e, s, start, len);
         let split = chosen.x;
         let n_left = chosen.y;
         let n_right = chosen.z;
-        let i1 = arena[start + split];
+        let i1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + split)];
         // Child lists into `tmp`: left at 0.., right at n_left...
         var lc = 0u;
         var rc = 0u;
@@ -462,9 +546,9 @@ fn orca_obstacles_process(polygons: ptr<function, OrcaObstaclePolygons>, obs: pt
             if (j == split) {
                 continue;
             }
-            let j1 = arena[start + j];
-            let s = orca_obstacles_edge_sides(obs, i1, j1);
-            let side = orca_obstacles_classify(s.x, s.y);
+            let j1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + j)];
+            let sides = orca_obstacles_edge_sides(s, i1, j1);
+            let side = orca_obstacles_classify(sides.x, sides.y);
             var to_left = NONE;
             var to_right = NONE;
             if (side == 0u) {
@@ -472,11 +556,11 @@ fn orca_obstacles_process(polygons: ptr<function, OrcaObstaclePolygons>, obs: pt
             } else if (side == 1u) {
                 to_right = j1;
             } else {
-                let fresh = orca_obstacles_split_edge(obs, i1, j1);
+                let fresh = orca_obstacles_split_edge(s, i1, j1);
                 if (fresh == NONE) {
                     return;
                 }
-                if (s.x > 0.0) {
+                if (sides.x > 0.0) {
                     to_left = j1;
                     to_right = fresh;
                 } else {
@@ -485,62 +569,72 @@ fn orca_obstacles_process(polygons: ptr<function, OrcaObstaclePolygons>, obs: pt
                 }
             }
             if (to_left != NONE) {
-                tmp[lc] = to_left;
+                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, lc)] = to_left;
                 lc += 1u;
             }
             if (to_right != NONE) {
-                tmp[n_left + rc] = to_right;
+                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, n_left + rc)] = to_right;
                 rc += 1u;
             }
         }
         // Pop this list, push the right list, then the left one (built next, completely).
         // Cannot overflow (see the header); checked all the same.
         if (lc != n_left || rc != n_right || start + n_left + n_right > orca_obstacles_cap()) {
-            (*obs).overflow |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
+            scratch[s + 1u] |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
             return;
         }
         end = start;
         if (n_right > 0u) {
             for (var k = 0u; k < n_right; k++) {
-                arena[end + k] = tmp[n_left + k];
+                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, end + k)] =
+                    scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, n_left + k)];
             }
             end += n_right;
-            lens[depth] = n_right;
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, depth)] = n_right;
             depth += 1u;
         }
         if (n_left > 0u) {
             for (var k = 0u; k < n_left; k++) {
-                arena[end + k] = tmp[k];
+                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, end + k)] =
+                    scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, k)];
             }
             end += n_left;
-            lens[depth] = n_left;
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, depth)] = n_left;
             depth += 1u;
         }
     }
 }
 
-// What `orca_obstacle_line` reads of vertex i of a processed obs.
-fn orca_obstacles_set_vertex(obs: ptr<function, OrcaObstacleSet>, i: u32) -> OrcaVertex {
-    return orca_vertex(i, (*obs).point[i], (*obs).dir[i], (*obs).dir[(*obs).prev[i]], (*obs).convex[i]);
+// What `orca_obstacle_line` reads of vertex i of a processed set.
+fn orca_obstacles_set_vertex(s: u32, i: u32) -> OrcaVertex {
+    return orca_vertex(
+        i,
+        orca_obstacles_set_point(s, i),
+        orca_obstacles_set_dir(s, i),
+        orca_obstacles_set_dir(s, orca_obstacles_set_prev(s, i)),
+        orca_obstacles_set_convex(s, i),
+    );
 }
 
-// ---- orca_obstacles.rs: the environment's obs ----------------------------------------------------
+// ---- orca_obstacles.rs: the environment's set ---------------------------------------------------
 
-// Every polygon of `for_each_polygon` for environment e into `list`.
-fn orca_obstacles_gather(e: u32, list: ptr<function, OrcaObstaclePolygons>) {
+// Every polygon of `for_each_polygon` for environment e into list l.
+fn orca_obstacles_gather(e: u32, l: u32) {
     let raw = orca_obstacles_raw_count(e);
     for (var k = 0u; k < raw; k++) {
         let poly = orca_obstacles_polygon(e, k);
         if (poly.present) {
-            orca_obstacles_push(list, poly.v);
+            orca_obstacles_push(l, poly.v);
         }
     }
 }
 
-// Rust `store` (a obs with an overflow poisons the columns instead; see the header).
-fn orca_obstacles_store(e: u32, obs: ptr<function, OrcaObstacleSet>) {
+// Rust `store` of environment e's processed set (a set with an overflow poisons the columns
+// instead; see the header).
+fn orca_obstacles_store(e: u32) {
+    let s = orca_obstacles_set(e);
     let b = e * batch.s_ov_x;
-    if ((*obs).overflow != 0u) {
+    if (orca_obstacles_set_overflow(s) != 0u) {
         for (var k = 0u; k < batch.s_ov_x; k++) {
             sf[batch.c_ov_x + b + k] = math_nan();
             sf[batch.c_ov_y + b + k] = math_nan();
@@ -553,7 +647,7 @@ fn orca_obstacles_store(e: u32, obs: ptr<function, OrcaObstacleSet>) {
         su[batch.c_n_obstacle_vertices + e] = batch.s_ov_x;
         return;
     }
-    let n = (*obs).len;
+    let n = orca_obstacles_set_len(s);
     // A smaller set than before: its old tail becomes unused slots, which hold zeros.
     let old = min(su[batch.c_n_obstacle_vertices + e], batch.s_ov_x);
     for (var k = n; k < old; k++) {
@@ -566,13 +660,15 @@ fn orca_obstacles_store(e: u32, obs: ptr<function, OrcaObstacleSet>) {
         su[batch.c_ov_convex + b + k] = 0u;
     }
     for (var k = 0u; k < n; k++) {
-        sf[batch.c_ov_x + b + k] = (*obs).point[k].x;
-        sf[batch.c_ov_y + b + k] = (*obs).point[k].y;
-        sf[batch.c_ov_dir_x + b + k] = (*obs).dir[k].x;
-        sf[batch.c_ov_dir_y + b + k] = (*obs).dir[k].y;
-        su[batch.c_ov_next + b + k] = (*obs).next[k];
-        su[batch.c_ov_prev + b + k] = (*obs).prev[k];
-        su[batch.c_ov_convex + b + k] = (*obs).convex[k];
+        let p = orca_obstacles_set_point(s, k);
+        let d = orca_obstacles_set_dir(s, k);
+        sf[batch.c_ov_x + b + k] = p.x;
+        sf[batch.c_ov_y + b + k] = p.y;
+        sf[batch.c_ov_dir_x + b + k] = d.x;
+        sf[batch.c_ov_dir_y + b + k] = d.y;
+        su[batch.c_ov_next + b + k] = orca_obstacles_set_next(s, k);
+        su[batch.c_ov_prev + b + k] = orca_obstacles_set_prev(s, k);
+        su[batch.c_ov_convex + b + k] = orca_obstacles_set_convex(s, k);
     }
     su[batch.c_n_obstacle_vertices + e] = n;
 }
@@ -582,12 +678,10 @@ fn orca_obstacles_rebuild_if_dirty(e: u32) {
     if (su[batch.c_obstacles_dirty + e] == 0u) {
         return;
     }
-    var polygons: OrcaObstaclePolygons;
-    orca_obstacles_gather(e, &polygons);
-    var obs: OrcaObstacleSet;
-    orca_obstacles_process(&polygons, &obs);
-    orca_obstacles_store(e, &obs);
-    if (obs.overflow != 0u) {
+    orca_obstacles_gather(e, orca_obstacles_list(e));
+    orca_obstacles_process(e);
+    orca_obstacles_store(e);
+    if (orca_obstacles_set_overflow(orca_obstacles_set(e)) != 0u) {
         su[batch.c_obstacles_dirty + e] = ORCA_OBSTACLES_FAILED;
     } else {
         su[batch.c_obstacles_dirty + e] = 0u;

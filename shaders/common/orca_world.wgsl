@@ -170,8 +170,8 @@ const ORCA_WORLD_OBSTACLES_SUBSET: u32 = 2u;
 
 // Rust `with_visible`'s choice for `agent` with view `v` in environment e: the polygons of Rust
 // `for_each_polygon` (common/orca_obstacles.wgsl's indexed walk, in its order), each tested as
-// the shape 0.1.1 sees; those seen are appended to `seen` (empty on entry), in order.
-fn orca_world_visible(e: u32, v: View, agent: OrcaAgent, seen: ptr<function, OrcaObstaclePolygons>) -> u32 {
+// the shape 0.1.1 sees; those seen are appended to list `seen` (empty on entry), in order.
+fn orca_world_visible(e: u32, v: View, agent: OrcaAgent, seen: u32) -> u32 {
     // As RVO2's neighbour search, with Rust's margin `range_sq * (1.0 + 1e-3)`.
     let range_sq = orca_obstacle_range_sq(agent.time_horizon_obst, agent.max_speed, agent.radius);
     let reject_sq = range_sq * ORCA_OBSTACLE_REJECT_FACTOR;
@@ -195,7 +195,7 @@ fn orca_world_visible(e: u32, v: View, agent: OrcaAgent, seen: ptr<function, Orc
             orca_obstacles_push(seen, poly.v);
         }
     }
-    if ((*seen).len == all && (*seen).overflow == 0u) {
+    if (orca_obstacles_list_len(seen) == all && orca_obstacles_list_overflow(seen) == 0u) {
         return ORCA_WORLD_OBSTACLES_CACHED;
     }
     if (!near) {
@@ -212,9 +212,8 @@ fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> Orc
     orca_world_select(e, first, others, &nb);
 
     var obstacles = ORCA_WORLD_OBSTACLES_CACHED;
-    var seen: OrcaObstaclePolygons;
     if (others.view.some) {
-        obstacles = orca_world_visible(e, others.view.view, first, &seen);
+        obstacles = orca_world_visible(e, others.view.view, first, orca_obstacles_list(e));
     }
     var lines: OrcaLines;
     var proj: OrcaLines;
@@ -240,16 +239,18 @@ fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> Orc
     } else if (obstacles == ORCA_WORLD_OBSTACLES_SUBSET) {
         // The visible polygons processed afresh (Rust `with_processed`), then the same as above
         // over that set.
-        var visible: OrcaObstacleSet;
-        orca_obstacles_process(&seen, &visible);
-        set_overflow = visible.overflow;
-        for (var v = 0u; v < visible.len; v++) {
-            orca_obstacle_neighbor_candidate(&onb, first.pos, range_sq, v, visible.point[v], visible.point[visible.next[v]]);
+        orca_obstacles_process(e);
+        let visible = orca_obstacles_set(e);
+        set_overflow = orca_obstacles_set_overflow(visible);
+        for (var v = 0u; v < orca_obstacles_set_len(visible); v++) {
+            let a = orca_obstacles_set_point(visible, v);
+            let b = orca_obstacles_set_point(visible, orca_obstacles_set_next(visible, v));
+            orca_obstacle_neighbor_candidate(&onb, first.pos, range_sq, v, a, b);
         }
         for (var k = 0u; k < onb.len; k++) {
             let o1 = onb.items[k].index;
-            let o2 = visible.next[o1];
-            orca_push_obstacle_line(first, orca_obstacles_set_vertex(&visible, o1), orca_obstacles_set_vertex(&visible, o2), &lines);
+            let o2 = orca_obstacles_set_next(visible, o1);
+            orca_push_obstacle_line(first, orca_obstacles_set_vertex(visible, o1), orca_obstacles_set_vertex(visible, o2), &lines);
         }
     }
     lines.num_obstacle_lines = lines.len;

@@ -222,8 +222,8 @@ pub type Columns<'a> = &'a [(&'static str, Elem, usize)];
 /// `co_<name>`/`so_<name>` in `outf`/`outu`; the observation layout (`obs_dim`, `obs_robot`, and
 /// per entity type `obs_offset_<type>`, `obs_capacity_<type>`, per interaction kind
 /// `pairs_<kind>`); the reset pool's `pool_row` (words per row) and `pool_observation` (the
-/// observation's first word in a row); and the SNGNN-v2 sizes (`sn_*`, 0 without the
-/// SNGNN graphs). None of it is compiled into a shader, so one compiled pipeline serves every
+/// observation's first word in a row); the `scratch` region of an environment
+/// ([`ObstacleScratch`]); and the SNGNN-v2 sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one compiled pipeline serves every
 /// batch size and every config of the same [`SizeClasses`]. The field names are the same for
 /// every batch (the column list is fixed), so the WGSL struct is too.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -277,6 +277,11 @@ impl BatchLayout {
         fields.push(("pool_row".into(), pool_row_words(state, outputs)));
         // Where a pool row's first observation starts: after the state's words.
         fields.push(("pool_observation".into(), state.iter().map(|c| c.2).sum()));
+        let scratch = ObstacleScratch::of(state);
+        fields.push(("s_scratch".into(), scratch.words));
+        fields.push(("x_obstacle_list".into(), scratch.list));
+        fields.push(("x_obstacle_set".into(), scratch.set));
+        fields.push(("x_obstacle_stack".into(), scratch.stack));
         fields.extend(sngnn_sizes(sngnn));
         let fields = fields
             .into_iter()
@@ -305,6 +310,46 @@ impl BatchLayout {
         }
         out.push_str("}\n");
         out
+    }
+}
+
+/// One environment's region of the `scratch` buffer (binding 8 of [`prelude`]), the working
+/// memory of ORCA's obstacle processing (`shaders/common/orca_obstacles.wgsl`), in words: a
+/// polygon list (2 words and 8 a polygon, for a polygon per 8 obstacle vertices), a processed
+/// vertex set (2 words and 7 columns of the vertex capacity) and the tree build's stack (3
+/// columns of the vertex capacity). In [`BatchLayout`] as `s_scratch` (the words an environment)
+/// and `x_obstacle_list`, `x_obstacle_set`, `x_obstacle_stack` (where each part starts).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ObstacleScratch {
+    /// Words of one environment's region.
+    pub words: usize,
+    /// First word of the polygon list.
+    pub list: usize,
+    /// First word of the processed set.
+    pub set: usize,
+    /// First word of the stack.
+    pub stack: usize,
+}
+
+impl ObstacleScratch {
+    /// The region for a state table's obstacle vertex capacity (the stride of `ov_x`), with the
+    /// shader's rounding (`orca_obstacles_cap`, `orca_obstacles_max_polygons`: at least 1 each).
+    pub fn of(state: Columns<'_>) -> Self {
+        let vertices = state
+            .iter()
+            .find(|c| c.0 == "ov_x")
+            .map_or(0, |c| c.2)
+            .max(1);
+        let polygons = (vertices / 8).max(1);
+        let list = 0;
+        let set = list + 2 + 8 * polygons;
+        let stack = set + 2 + 7 * vertices;
+        Self {
+            words: stack + 3 * vertices,
+            list,
+            set,
+            stack,
+        }
     }
 }
 
@@ -347,15 +392,13 @@ fn sngnn_sizes(sngnn: Option<SngnnSizes<'_>>) -> Vec<(String, usize)> {
 }
 
 /// The sizes of the shaders' function-scope arrays, the only config-dependent values compiled
-/// into a shader: each the next power of two of a capacity, at least a floor that most shipped
-/// configs' capacities fit, so that they share compiled pipelines (every shipped config but
-/// `stress`, whose 304 obstacle vertices take the next class, shares one prelude; a higher
-/// floor would cost every invocation of the obstacle rebuild that much more private memory).
-/// The shaders compare counts with the batch's own capacities (`batch.s_*`), never with these.
+/// into a shader: each the next power of two of a capacity, at least a floor that every shipped
+/// config's capacities fit, so that they share compiled pipelines. The shaders compare counts
+/// with the batch's own capacities (`batch.s_*`), never with these. (ORCA's obstacle processing,
+/// whose arrays grow with the obstacle vertices, works in the `scratch` buffer instead: see
+/// [`ObstacleScratch`].)
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct SizeClasses {
-    /// `ARRAY_OBSTACLE_VERTICES`: ORCA obstacle vertices of one environment (stride of `ov_x`).
-    pub obstacle_vertices: usize,
     /// `ARRAY_CROWD_MEMBERS`: members of one forming crowd (stride of `cf_human`).
     pub crowd_members: usize,
     /// `PERMUTE_CAP`: slots of the kinds the social events reorder (the largest stride).
@@ -365,29 +408,18 @@ pub struct SizeClasses {
 }
 
 /// The WGSL names of the [`SizeClasses`], in [`SizeClasses::values`] order.
-pub const SIZE_CLASS_NAMES: [&str; 4] = [
-    "ARRAY_OBSTACLE_VERTICES",
-    "ARRAY_CROWD_MEMBERS",
-    "PERMUTE_CAP",
-    "ARRAY_SN_WALLS",
-];
+pub const SIZE_CLASS_NAMES: [&str; 3] = ["ARRAY_CROWD_MEMBERS", "PERMUTE_CAP", "ARRAY_SN_WALLS"];
 
 impl SizeClasses {
     /// The classes in [`SIZE_CLASS_NAMES`] order.
-    pub fn values(&self) -> [usize; 4] {
-        [
-            self.obstacle_vertices,
-            self.crowd_members,
-            self.permute,
-            self.walls,
-        ]
+    pub fn values(&self) -> [usize; 3] {
+        [self.crowd_members, self.permute, self.walls]
     }
 
     /// The classes of a state table's strides.
     pub fn of(state: Columns<'_>) -> Self {
         let stride = |col: &str| state.iter().find(|c| c.0 == col).map_or(0, |c| c.2);
         Self {
-            obstacle_vertices: size_class(stride("ov_x"), 256),
             crowd_members: size_class(stride("cf_human"), 8),
             permute: size_class(permuted_cap(state), 64),
             walls: size_class(stride("w_x"), 16),
@@ -458,7 +490,8 @@ pub fn prelude(state: Columns<'_>, outputs: Columns<'_>, classes: &SizeClasses) 
          @group(0) @binding(4) var<storage, read_write> outf: array<f32>;\n\
          @group(0) @binding(5) var<storage, read_write> outu: array<u32>;\n\
          @group(0) @binding(6) var<storage, read> pool: array<u32>;\n\
-         @group(0) @binding(7) var<uniform> batch: BatchLayout;\n",
+         @group(0) @binding(7) var<uniform> batch: BatchLayout;\n\
+         @group(0) @binding(8) var<storage, read_write> scratch: array<u32>;\n",
     );
     out.push_str(&permute_functions(state));
     out.push_str(&pool_functions(state, outputs));
@@ -752,8 +785,7 @@ fn shared_f32_constants() -> Vec<(&'static str, f32)> {
 /// follow their dependencies for the reader.) Stage `s` is `s.wgsl`.
 ///
 /// A size class's constant is left out of a shader that does not use it, so that configs
-/// differing in that class alone share the shader (`stress` differs from the others in
-/// `ARRAY_OBSTACLE_VERTICES` only, which only the shaders with ORCA's obstacle processing use).
+/// differing in that class alone share the shader.
 pub fn assemble(path: &str, prelude: &str) -> Result<String, String> {
     let body = concatenate(String::new(), &resolve(path)?);
     Ok(format!("{}{body}", used_size_classes_only(prelude, &body)))

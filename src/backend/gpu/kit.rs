@@ -2,7 +2,7 @@
 //! compiled pipelines a device keeps for the whole process ([`PipelineCache`]).
 //!
 //! A shader's text holds no batch size and, through `backend::wgsl::SizeClasses`, the same text
-//! serves most configs; a pipeline is therefore compiled once per device and source, and every
+//! serves every shipped config; a pipeline is therefore compiled once per device and source, and every
 //! later batch on that device (another size, another config of the same size classes) reuses it.
 //! Across processes, wgpu's pipeline cache keeps what the driver compiled where the backend
 //! offers one (Vulkan: [`DiskCache`], a file per adapter in socnav's cache directory), and so do

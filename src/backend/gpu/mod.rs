@@ -114,8 +114,8 @@ fn sngnn_buffers(
     n_envs: usize,
     layout: PackedLayout,
 ) -> Result<(PackedLayout, wgpu::Buffer, wgpu::Buffer), SimError> {
-    // The prelude's 7 storage bindings, the two graph regions and the frame gaps.
-    const BINDINGS: u32 = 10;
+    // The prelude's 8 storage bindings, the two graph regions and the frame gaps.
+    const BINDINGS: u32 = 11;
     if dev.limits.max_storage_buffers_per_shader_stage < BINDINGS {
         return Err(SimError::BackendUnavailable(format!(
             "{} allows {} storage buffers per shader stage; the SNGNN graph pass needs {BINDINGS}",
@@ -139,6 +139,25 @@ fn sngnn_buffers(
         storage_buffer(dev, "sngnn graphs u32", u_bytes),
         storage_buffer(dev, "sngnn graphs f32", f_bytes),
     ))
+}
+
+/// The stages' working memory of `n_envs` environments (`wgsl::ObstacleScratch`), or why the
+/// adapter cannot bind it.
+fn scratch_buffer(
+    dev: &GpuDevice,
+    n_envs: usize,
+    state: wgsl::Columns<'_>,
+) -> Result<wgpu::Buffer, SimError> {
+    let bytes = bytes_of::<u32>(n_envs * wgsl::ObstacleScratch::of(state).words);
+    let max = dev.limits.max_storage_buffer_binding_size;
+    if bytes > max {
+        return Err(SimError::BackendUnavailable(format!(
+            "{n_envs} environments need {bytes} bytes of working memory for ORCA's obstacles, \
+             more than {} allows in one binding ({max} bytes): use fewer environments",
+            dev.adapter.name
+        )));
+    }
+    Ok(storage_buffer(dev, "scratch", bytes))
 }
 
 impl DeviceTable {
@@ -253,6 +272,7 @@ impl GpuStages {
             )));
         }
         let pool = storage_buffer(&dev, "reset pool", pool_bytes);
+        let scratch = scratch_buffer(&dev, n_envs, &state.columns())?;
         let layout = wgsl::BatchLayout::new(
             n_envs,
             &state.columns(),
@@ -303,7 +323,7 @@ impl GpuStages {
             mapped_at_creation: false,
         });
         // Group 0, the bindings of the prelude (`backend::wgsl::prelude`): params, sf, su,
-        // actions, outf, outu, pool, the batch layout. With the SNGNN graphs, group 1: the packed
+        // actions, outf, outu, pool, the batch layout, scratch. With the SNGNN graphs, group 1: the packed
         // graphs and the frame gaps (`backend::wgsl::sngnn_prelude`), bound only by the shaders
         // that use them, so that every other shader is the same pipeline as without them.
         let batch = uniform_buffer(&dev, "batch layout", &layout.words());
@@ -317,6 +337,7 @@ impl GpuStages {
             (&outputs_table.u32s, storage(false)),
             (&pool, storage(true)),
             (&batch, Binding::Uniform),
+            (&scratch, storage(false)),
         ]];
         let gaps = sngnn.as_ref().map(|b| {
             let gaps = storage_buffer(

@@ -534,10 +534,12 @@ fn wgsl_twins_define_every_public_item() {
 }
 
 /// The preludes are the only config-dependent shader text, and the size classes put every
-/// shipped config but `stress` into one prelude, so that a process (or CI) that runs them all
-/// compiles each stage shader twice, not once per config (or batch size).
+/// shipped config into one prelude (`stress`'s 304 obstacle vertices included: ORCA's obstacle
+/// processing works in the `scratch` buffer, not in arrays sized by a capacity), so that a
+/// process (or CI) that runs them all compiles each stage shader once, not once per config (or
+/// batch size).
 #[test]
-fn shipped_configs_share_preludes() {
+fn shipped_configs_share_one_prelude() {
     let mut preludes = std::collections::BTreeMap::<String, Vec<String>>::new();
     for name in socnav::Config::shipped_names() {
         let config = socnav::Config::from_name_or_path(name).expect("a shipped config");
@@ -550,47 +552,22 @@ fn shipped_configs_share_preludes() {
         let prelude = wgsl::prelude(&columns, &outputs.columns(), &classes);
         preludes.entry(prelude).or_default().push(name.to_owned());
     }
-    let mut groups: Vec<Vec<String>> = preludes.into_values().collect();
-    groups.sort_by_key(Vec::len);
-    assert_eq!(groups.len(), 2, "configs by prelude: {groups:?}");
-    assert_eq!(groups[0], ["stress"], "configs by prelude: {groups:?}");
+    let groups: Vec<Vec<String>> = preludes.into_values().collect();
+    assert_eq!(groups.len(), 1, "configs by prelude: {groups:?}");
 }
 
-/// A size class's constant is only in the shaders that use it: `stress`, whose only other class
-/// is `ARRAY_OBSTACLE_VERTICES`, shares every stage shader with experiment 1 but those holding
-/// ORCA's obstacle processing (`common/orca_obstacles.wgsl`), so its batches compile only those.
+/// One environment's working memory for ORCA's obstacles, by hand for `stress`'s 304 vertices:
+/// a list of 38 polygons (2 + 38 * 8 words), a set of 304 vertices (2 + 7 * 304) and a stack of
+/// 3 * 304; and at least a word of each with no obstacle capacity at all.
 #[test]
-fn stress_recompiles_only_the_obstacle_shaders() {
-    let prelude_of = |name: &str| {
-        let config = socnav::Config::from_name_or_path(name).expect("a shipped config");
-        let caps = socnav::state::Caps::from_config(&config);
-        let state = socnav::state::BatchState::new(1, caps);
-        let layout = socnav::spec::ObsLayout::new(&caps, &config.observation);
-        let outputs = socnav::outputs::Outputs::new(1, layout);
-        let columns = state.columns();
-        wgsl::prelude(
-            &columns,
-            &outputs.columns(),
-            &wgsl::SizeClasses::of(&columns),
-        )
-    };
-    let (exp1, stress) = (prelude_of("exp1"), prelude_of("stress"));
-    let mut differing = Vec::new();
-    let mut holding_obstacles = Vec::new();
-    for stage in &socnav::pipeline::STAGES {
-        let file = stage.shader_file();
-        if wgsl::is_standalone(&file) {
-            continue;
-        }
-        let files = wgsl::resolve(&file).expect("resolved");
-        if files.contains(&"common/orca_obstacles.wgsl") {
-            holding_obstacles.push(stage.name);
-        }
-        let assembled = |prelude: &str| wgsl::assemble(&file, prelude).expect("assembled");
-        if assembled(&exp1) != assembled(&stress) {
-            differing.push(stage.name);
-        }
-    }
-    assert!(!holding_obstacles.is_empty());
-    assert_eq!(differing, holding_obstacles);
+fn obstacle_scratch_layout() {
+    let columns = [("ov_x", socnav::state::columns::Elem::F32, 304)];
+    let s = wgsl::ObstacleScratch::of(&columns);
+    assert_eq!((s.list, s.set, s.stack), (0, 306, 306 + 2 + 2128));
+    assert_eq!(s.words, 2436 + 912);
+    let none = wgsl::ObstacleScratch::of(&[]);
+    assert_eq!(
+        (none.list, none.set, none.stack, none.words),
+        (0, 10, 19, 22)
+    );
 }

@@ -335,10 +335,9 @@ fn corridor_mixed() {
     check("corridor_mixed", ENVS, STEPS, AutoresetMode::SameStep);
 }
 
-/// Contract: the stress config (34 humans, the larger obstacle size class), few environments,
-/// 15-step episodes, 40 steps: lavapipe runs a dispatch on one thread, and this config's
-/// invocations are by far the slowest (at 67 environments and 60 steps it took 16 minutes of CI
-/// with `GALLIVM_PERF=nopt`, compiles included).
+/// Contract: the stress config (34 humans, 304 obstacle vertices), few environments, 15-step
+/// episodes, 40 steps: lavapipe runs a dispatch on one thread, and this config's invocations are
+/// by far the slowest.
 #[test]
 fn stress() {
     let mut config = common::load_config("stress");

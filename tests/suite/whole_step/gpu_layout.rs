@@ -1,5 +1,5 @@
 //! The batch layout is data (issue 14): a shader's text holds no batch size and, through the size
-//! classes (`backend::wgsl::SizeClasses`), the same text serves most configs, so a second batch
+//! classes (`backend::wgsl::SizeClasses`), the same text serves every shipped config, so a second batch
 //! on a device compiles no pipeline, whatever its size; and batches whose size is 1 or not a
 //! multiple of the workgroup step bit for bit like the CPU.
 //!
