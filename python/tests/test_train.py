@@ -121,3 +121,43 @@ def test_ppo_learns_exp1_within_minutes(tmp_path):
     print(f"PPO success {trained:.3f}, random {random:.3f}")
     assert trained >= 3 * random, (trained, random)
     assert trained >= PPO_SUCCESS_THRESHOLD, trained
+
+
+def _fake_run(directory, name, config, success):
+    run = directory / name
+    run.mkdir()
+    (run / "args.json").write_text('{"config": "%s"}' % config)
+    with open(run / "progress.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["step", "success", "collision"])
+        for k, s in enumerate(success):
+            w.writerow([(k + 1) * 1000, s, 1 - s])
+    return run
+
+
+def test_plot_draws_learning_curves_by_world(tmp_path):
+    from socnav.train.__main__ import main
+    from socnav.train.plot import load_run, plot_runs
+
+    a = _fake_run(tmp_path, "ppo-exp2-dsrnn", "exp2", [0.1, 0.5, 0.7])
+    b = _fake_run(tmp_path, "ppo-exp2-sngnn", "exp2_sngnn", [0.2, 0.6, 0.8])
+    c = _fake_run(tmp_path, "dqn-exp3-dsrnn", "exp3", [0.0, 0.3])
+    runs = [load_run(p) for p in (a, b, c)]
+    # Both rewards of one experiment share a panel; a run's colour key drops its world.
+    assert [r.world for r in runs] == ["exp2", "exp2", "exp3"]
+    assert [r.series for r in runs] == ["ppo-dsrnn", "ppo-sngnn", "dqn-dsrnn"]
+    assert runs[1].columns["success"] == [0.2, 0.6, 0.8] and runs[1].columns["step"] == [1000, 2000, 3000]
+    out = plot_runs([a, b, c], tmp_path / "curves.png", metrics=["success", "collision"])
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # A progress CSV outside its run directory, with its arguments beside it (docs/results/).
+    (tmp_path / "ppo-exp2-dsrnn.progress.csv").write_bytes((a / "progress.csv").read_bytes())
+    (tmp_path / "ppo-exp2-dsrnn.args.json").write_bytes((a / "args.json").read_bytes())
+    alone = load_run(tmp_path / "ppo-exp2-dsrnn.progress.csv")
+    assert (alone.name, alone.world) == ("ppo-exp2-dsrnn", "exp2")
+    with pytest.raises(ValueError, match="'nope'"):
+        plot_runs([a], tmp_path / "x.png", metrics=["nope"])
+    with pytest.raises(FileNotFoundError, match="no progress CSV"):
+        load_run(tmp_path / "missing")
+    assert main(["plot", str(a), "--metric", "nope", "--out", str(tmp_path / "y.png")]) == 2
+    assert main(["plot", str(a), str(b), "--metric", "success", "--out", str(tmp_path / "z.svg")]) == 0
+    assert (tmp_path / "z.svg").read_text().lstrip().startswith("<?xml")

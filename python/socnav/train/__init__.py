@@ -1,6 +1,6 @@
 """Baseline agents trained over the batch, and the agents that ship with socnav.
 
-Needs the ``train`` extra (``pip install './python[train]'``, which brings torch); ``import
+Needs the ``train`` extra (``pip install './python[train]'``, which brings torch and matplotlib); ``import
 socnav`` never imports this module.
 
 - ``python -m socnav.train dqn --config exp2_sngnn --steps 2000000 --out runs/dqn-exp2-sngnn``
@@ -12,6 +12,8 @@ socnav`` never imports this module.
   writes the agent alone (float16 weights and the observation normalisation, a plain
   ``torch.save`` dict of tensors: ``format``, ``kind``, ``config``, ``obs_dim``, ``action_type``,
   ``state_dict``, optional ``obs_mean``/``obs_var``).
+- ``python -m socnav.train plot runs/ppo-exp1-dsrnn runs/dqn-exp1-dsrnn --out curves.png`` draws
+  learning curves (:mod:`socnav.train.plot`, matplotlib): a panel per metric and experiment.
 - :func:`load` gives a policy for :func:`socnav.evaluate` and :mod:`socnav.policies` users:
   ``socnav.train.load("dqn-exp2-sngnn")`` (a shipped agent, :func:`shipped`) or a path.
 """

@@ -1,4 +1,4 @@
-"""``python -m socnav.train {dqn,ppo,export}``: see :mod:`socnav.train`."""
+"""``python -m socnav.train {dqn,ppo,export,plot}``: see :mod:`socnav.train`."""
 
 from __future__ import annotations
 
@@ -26,9 +26,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     ex = sub.add_parser("export", help="write the agent of a checkpoint alone (float16)")
     ex.add_argument("checkpoint")
     ex.add_argument("out")
+    pl = sub.add_parser("plot", help="learning curves of runs (socnav.train.plot; needs matplotlib)")
+    pl.add_argument("runs", nargs="+", help="run directories or NAME.progress.csv files")
+    pl.add_argument("--out", required=True, help="image file (.png, .svg, .pdf)")
+    pl.add_argument("--metric", action="append", help="a logged column (repeat); default: success, "
+                    "collision, timeout, DISCOMFORT_DSRNN")
+    pl.add_argument("--title")
     args = parser.parse_args(argv)
     if args.command == "export":
         print(export(args.checkpoint, args.out))
+        return 0
+    if args.command == "plot":
+        from socnav.train.plot import DEFAULT_METRICS, plot_runs
+
+        try:
+            print(plot_runs(args.runs, args.out, args.metric or DEFAULT_METRICS, args.title))
+        except (OSError, ValueError) as e:
+            print(f"python -m socnav.train plot: {e}", file=sys.stderr)
+            return 2
         return 0
     module = dqn if args.command == "dqn" else ppo
     values = {f.name: getattr(args, f.name) for f in dataclasses.fields(module.Args)}
