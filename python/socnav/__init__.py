@@ -3,10 +3,12 @@
 ``make_vec`` gives a ``gymnasium.vector.VectorEnv`` over a whole batch stepped in Rust;
 ``make`` a single ``gymnasium.Env``; ``socnav.socnavgym`` SocNavGym 0.1.1's own interface,
 ``socnav.metrics`` the paper's metric table, ``socnav.policies`` the built-in batched policies
-(goal controller, ORCA-driven robot, random), ``socnav.orca`` RVO2's ORCA over numpy, and
+(goal controller, ORCA-driven robot, random), ``socnav.datasets`` recorded episodes as Minari
+datasets and SocNavGym JSON, ``socnav.orca`` RVO2's ORCA over numpy, and
 ``socnav.sb3`` (imported on its own: it needs Stable-Baselines3) an SB3 ``VecEnv``, and
 ``socnav.sngnn.install_weights()`` fetches the SNGNN-v2 weights the ``*_sngnn`` configs need. Configs are
-the shipped names (``"exp1"``, ``"exp2"``, ...), TOML paths, or either with a dict of overrides.
+the shipped names (``"exp1"``, ``"exp2"``, ...), TOML paths, or either with a dict of overrides;
+the shipped ones are also gymnasium ids (``gymnasium.make("socnav/Exp2-v0")``, ``socnav.registration``).
 """
 
 from socnav._socnav import (
@@ -21,8 +23,10 @@ from socnav._batch import RewardInputs
 from socnav.env import SocNavEnv, make
 from socnav.vector import SocNavVectorEnv, make_vec
 from socnav.evaluation import Evaluation, evaluate
-from socnav import metrics, orca, policies, render, sngnn, socnavgym
+from socnav import datasets, metrics, orca, policies, registration, render, sngnn, socnavgym
 from socnav.render import record
+
+registration.register_envs()
 
 __version__ = "0.1.0"
 

@@ -83,7 +83,7 @@ def action_space(batch: Batch, action_type: str) -> spaces.Space:
     return spaces.Box(low, -low, (3,), np.float32)
 
 
-def split_obs(flat: np.ndarray, layout: dict) -> dict[str, np.ndarray]:
+def split_obs(flat: np.ndarray, layout: Mapping[str, Any]) -> dict[str, np.ndarray]:
     """Views of a ``(n, dim)`` observation as the dict blocks (no copy)."""
     n = flat.shape[0]
     out = {"robot": flat[:, : layout["robot"]]}

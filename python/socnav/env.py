@@ -33,6 +33,7 @@ class SocNavEnv(gym.Env):
     ) -> None:
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.config = config
         self.render_mode = render_mode
         self.render_size = int(render_size)
         self.obs_mode = _batch.check_choice("obs_mode", obs_mode, _batch.OBS_MODES)

@@ -52,6 +52,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self.obs_mode = _batch.check_choice("obs_mode", obs_mode, _batch.OBS_MODES)
         self.action_type = _batch.check_choice("action_type", action_type, _batch.ACTION_TYPES)
         self.copy = copy
+        self.config = config
         self._batch: Batch = _batch.build_batch(config, num_envs, seed, mode, threads, backend)
         self.num_envs = self._batch.num_envs
         self.metadata = {
