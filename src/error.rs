@@ -21,6 +21,9 @@ pub enum SimError {
     /// The requested backend cannot run here.
     #[error("backend unavailable: {0}")]
     BackendUnavailable(String),
+    /// No window can be opened (no display, or the display refused it).
+    #[error("cannot open a window: {0}")]
+    Display(String),
     /// Reading or writing a file failed.
     #[error("{0}")]
     Io(String),

@@ -38,6 +38,7 @@ pub mod outputs;
 pub mod params;
 pub mod pipeline;
 pub mod policies;
+pub mod recording;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod rng;
@@ -48,6 +49,8 @@ pub mod sngnn;
 pub mod spec;
 pub mod state;
 pub mod systems;
+#[cfg(feature = "viewer")]
+pub mod viewer;
 
 pub use config::Config;
 pub use env::{Actions, BatchEnv, EnvOptions};

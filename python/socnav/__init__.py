@@ -14,6 +14,7 @@ the shipped ones are also gymnasium ids (``gymnasium.make("socnav/Exp2-v0")``, `
 from socnav._socnav import (
     BackendUnavailableError,
     ConfigError,
+    DisplayError,
     ScenarioError,
     SngnnError,
     SocNavError,
@@ -33,6 +34,7 @@ __version__ = "0.1.0"
 __all__ = [
     "BackendUnavailableError",
     "ConfigError",
+    "DisplayError",
     "Evaluation",
     "RewardInputs",
     "ScenarioError",

@@ -1,4 +1,4 @@
-"""Type stubs of the compiled extension ``socnav._socnav`` (python/src/lib.rs, python/src/orca.rs).
+"""Type stubs of the compiled extension ``socnav._socnav`` (python/src/lib.rs, python/src/orca.rs, python/src/viewer.rs).
 
 ``mypy.stubtest`` checks them against the built module in CI (scripts/test-all)."""
 
@@ -12,15 +12,18 @@ __all__ = [
     "BackendUnavailableError",
     "Batch",
     "ConfigError",
+    "DisplayError",
     "ScenarioError",
     "SngnnError",
     "SocNavError",
+    "Viewer",
     "orca_compute_velocities",
     "orca_compute_velocities_batch",
     "shipped_configs",
     "sngnn_install_from_wheel",
     "sngnn_paths",
     "socnavgym_config_toml",
+    "socnavgym_episode_json",
     "write_gif",
 ]
 
@@ -31,6 +34,7 @@ class ConfigError(SocNavError): ...
 class ScenarioError(SocNavError): ...
 class BackendUnavailableError(SocNavError): ...
 class SngnnError(SocNavError): ...
+class DisplayError(SocNavError): ...
 
 @final
 class Batch:
@@ -105,3 +109,21 @@ def orca_compute_velocities_batch(
 ) -> list[npt.NDArray[np.float32]]: ...
 
 def write_gif(path: str, frames: list[np.ndarray], frame_ms: int) -> int: ...
+
+@final
+class Viewer:
+    def __new__(cls, title: str = "socnav") -> Viewer: ...
+    def show(self, frame: npt.NDArray[np.uint8], lines: list[str] = ...) -> None: ...
+    def is_open(self) -> bool: ...
+    def poll(self) -> tuple[list[str], list[str]]: ...
+    def close(self) -> None: ...
+
+def socnavgym_episode_json(
+    obs: npt.NDArray[np.float32],
+    actions: npt.NDArray[np.float32],
+    rewards: npt.NDArray[np.float32],
+    robot: int,
+    offsets: list[int] | tuple[int, int, int, int, int],
+    capacities: list[int] | tuple[int, int, int, int, int],
+    dim: int,
+) -> str: ...

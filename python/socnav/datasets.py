@@ -10,6 +10,8 @@
 - :class:`RecordEpisodes` records the episodes of one ``socnav.make`` environment as they are
   played (a person at the viewer, a script).
 - :class:`MinariWriter` and :class:`JsonWriter` are the two sinks.
+- :func:`played_episodes` rebuilds the episodes ``socnav play --record DIR`` recorded (from their
+  seeds and actions), e.g. to write them as a Minari dataset.
 
 An :class:`Episode` holds everything needed to replay it: its episode seed and config (a fresh
 environment reset with that seed and stepped with its actions reproduces its observations
@@ -40,7 +42,7 @@ import gymnasium as gym
 import numpy as np
 
 from socnav import _batch
-from socnav._socnav import Batch
+from socnav._socnav import DISCRETE_ACTIONS, Batch, socnavgym_episode_json
 
 _SEED_LIMIT = 1 << 64
 
@@ -242,7 +244,8 @@ def _episode_steps(toml_text: str) -> int:
 
 
 class JsonWriter:
-    """SocNavGym 0.1.1's ``manual_control_js.py -r`` recordings (spec section 9.2): one file
+    """SocNavGym 0.1.1's ``manual_control_js.py -r`` recordings (spec section 9.2; written by
+    socnav's Rust writer, the one ``socnav play --record`` uses): one file
     ``NNNNNNNN.json`` per episode in ``directory``, numbered on from the largest file already
     there; each a dict from the step index (``"0"`` for the observation the first step returned)
     to ``{observation key: list, ..., "action": [a0, a1, a2], "reward": [r]}``. Observation keys
@@ -262,26 +265,20 @@ class JsonWriter:
         flat = episode.observations
         if isinstance(flat, dict):
             raise ValueError("JsonWriter takes flat observations (obs_mode='flat')")
-        blocks = _batch.split_obs(flat[1:], self._layout)
-        record = self._layout["record"]
-        actions = _continuous(episode.actions)
-        doc: dict[str, Any] = {}
-        for t in range(len(episode)):
-            step: dict[str, Any] = {}
-            for key, block in blocks.items():
-                rows = block[t]
-                if key == "robot":
-                    step[key] = rows.tolist()
-                else:
-                    present = rows.reshape(-1, record)
-                    present = present[np.any(present != 0.0, axis=1)]
-                    step[key] = present.reshape(-1).tolist()
-            step["action"] = actions[t].tolist()
-            step["reward"] = [float(episode.rewards[t])]
-            doc[str(t)] = step
+        lay = self._layout
+        keys = ("humans", "laptops", "tables", "plants", "walls")
+        doc = socnavgym_episode_json(
+            np.ascontiguousarray(flat[1:], dtype=np.float32),
+            np.ascontiguousarray(_continuous(episode.actions), dtype=np.float32),
+            np.ascontiguousarray(episode.rewards, dtype=np.float32),
+            int(lay["robot"]),
+            [int(lay["entities"][k][0]) for k in keys],
+            [int(lay["entities"][k][1]) for k in keys],
+            int(lay["dim"]),
+        )
         path = self.directory / f"{self._next:08d}.json"
         tmp = path.with_suffix(".json.part")
-        tmp.write_text(json.dumps(doc))
+        tmp.write_text(doc)
         tmp.replace(path)  # a file is either whole or absent
         self._next += 1
         self.written.append(path)
@@ -291,10 +288,8 @@ class JsonWriter:
         pass
 
 
-# 0.1.1's DiscreteActions table (spec 9.1), the continuous action of each discrete one.
-_DISCRETE_TO_CONTINUOUS = np.array(
-    [[0, 0, 1], [0, 0, -1], [1, 0, 1], [1, 0, -1], [1, 0, 0], [-1, 0, 0], [0, 0, 0]], dtype=np.float32
-)
+# 0.1.1's DiscreteActions table (spec 9.1): the continuous action of each discrete one.
+_DISCRETE_TO_CONTINUOUS = np.array(DISCRETE_ACTIONS, dtype=np.float32)
 
 
 def _continuous(actions: np.ndarray) -> np.ndarray:
@@ -555,3 +550,43 @@ class RecordEpisodes(gym.Wrapper):  # type: ignore[type-arg]
         for sink in self._sinks:
             sink.close()
         super().close()
+
+
+class _Keep:
+    """A sink that keeps the last episode it was given."""
+
+    def __init__(self) -> None:
+        self.episode: Episode | None = None
+
+    def add(self, episode: Episode) -> None:
+        self.episode = episode
+
+    def close(self) -> None:
+        pass
+
+
+def played_episodes(directory: str | os.PathLike[str], *, obs_mode: str = "flat") -> Iterator[Episode]:
+    """The episodes ``socnav play --record directory`` recorded, in file order, rebuilt whole
+    (observations, infos) by replaying each one's actions from its seed in its config (the
+    sidecar ``NNNNNNNN.socnav.json`` holds them); a sidecar whose replay ends elsewhere than it
+    did raises ``ValueError``."""
+    import socnav
+
+    paths = sorted(Path(directory).glob("*.socnav.json"))
+    if not paths:
+        raise FileNotFoundError(f"{directory}: no socnav play recordings (NNNNNNNN.socnav.json)")
+    for path in paths:
+        side = json.loads(path.read_text())
+        if side.get("format") != "socnav-played/1":
+            raise ValueError(f"{path}: not a socnav play recording (format {side.get('format')!r})")
+        keep = _Keep()
+        env = RecordEpisodes(socnav.make(side["config"], obs_mode=obs_mode, action_type=side["action_type"]), [keep])
+        env.reset(seed=int(side["seed"]))
+        dtype = np.uint32 if side["action_type"] == "discrete" else np.float32
+        for action in side["actions"]:
+            env.step(np.asarray(action, dtype=dtype))
+        env.close()
+        if keep.episode is None or len(keep.episode) != int(side["steps"]):
+            raise ValueError(f"{path}: the replay did not end after {side['steps']} steps as the recording did")
+        yield keep.episode
+

@@ -13,13 +13,13 @@ import gymnasium as gym
 
 from socnav import _batch
 from socnav._socnav import Batch
-from socnav.render import Trails
+from socnav.render import HumanView, Trails, check_render_mode
 
 
 class SocNavEnv(gym.Env):
     """One environment of ``config`` (see ``make``)."""
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 1}
 
     def __init__(
         self,
@@ -31,10 +31,8 @@ class SocNavEnv(gym.Env):
         render_mode: str | None = None,
         render_size: int = 400,
     ) -> None:
-        if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.config = config
-        self.render_mode = render_mode
+        self.render_mode = check_render_mode(render_mode)
         self.render_size = int(render_size)
         self.obs_mode = _batch.check_choice("obs_mode", obs_mode, _batch.OBS_MODES)
         self.action_type = _batch.check_choice("action_type", action_type, _batch.ACTION_TYPES)
@@ -48,6 +46,10 @@ class SocNavEnv(gym.Env):
         # One frame per simulated step plays an episode in real time.
         self.metadata = {**self.metadata, "render_fps": 1.0 / self._batch.time_step}
         self._trails = Trails(1)
+        self._human: HumanView | None = None
+        self._steps = 0
+        self._return = 0.0
+        self._reward = 0.0
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
@@ -56,6 +58,9 @@ class SocNavEnv(gym.Env):
         if self.render_mode is not None:
             self._trails.restart()
             self._trails.add(self._batch.robot_poses())
+        self._steps, self._return, self._reward = 0, 0.0, 0.0
+        if self.render_mode == "human":
+            self.render()
         # SocNavGym's reset reports no metrics.
         return self._obs(), {}
 
@@ -75,16 +80,43 @@ class SocNavEnv(gym.Env):
         b = self._buf
         terminated, truncated = bool(b["terminated"][0]), bool(b["truncated"][0])
         self._ended = terminated or truncated
+        reward = float(b["reward"][0])
+        self._steps += 1
+        self._reward = reward
+        self._return += reward
         if self.render_mode is not None:
             self._trails.add(self._batch.robot_poses())
-        return self._obs(), float(b["reward"][0]), terminated, truncated, self._info()
+        if self.render_mode == "human":
+            self.render()
+        return self._obs(), reward, terminated, truncated, self._info()
 
     def render(self) -> np.ndarray | None:
         """The environment from above, uint8 ``(H, W, 3)`` (``render_mode="rgb_array"``), with
-        the robot's path since the reset; None without a render mode."""
+        the robot's path since the reset; with ``"human"`` the same frame shown in a window
+        (``socnav.render``), and None; None without a render mode."""
         if self.render_mode is None:
             return None
-        return self._batch.render(0, self.render_size, self._trails.of(0))
+        frame = self._batch.render(0, self.render_size, self._trails.of(0))
+        if self.render_mode == "rgb_array":
+            return frame
+        if self._human is None:
+            self._human = HumanView("socnav", self.metadata["render_fps"])
+        lines = [
+            f"socnav {self.config if isinstance(self.config, str) else 'custom config'}",
+            f"step {self._steps}",
+            f"reward {self._reward:+.4f}",
+            f"return {self._return:+.3f}",
+        ]
+        if self._ended:
+            lines.append("!episode over")
+        self._human.show(frame, lines)
+        return None
+
+    def close(self) -> None:
+        if self._human is not None:
+            self._human.close()
+            self._human = None
+        super().close()
 
     def _obs(self) -> Any:
         flat = self._buf["obs"].copy()

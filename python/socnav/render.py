@@ -5,6 +5,9 @@ draw environments from above with socnav's renderer (the one of ``socnav render`
 groups, laptops, tables, plants, walls, the robot with its trail and goal, the ORCA shadow robot);
 ``render()`` returns uint8 ``(H, W, 3)`` frames. ``metadata["render_fps"]`` is one frame per
 simulated time step, so ``gymnasium.wrappers.RecordVideo`` plays episodes in real time.
+``render_mode="human"`` shows the same frames in a window (socnav's viewer, the one of
+``socnav play``) as the environment steps, paced at ``render_fps``, with a panel of the step,
+reward and return beside them; without a display the first frame raises ``socnav.DisplayError``.
 
 :func:`record` writes a GIF (or an MP4 when ``imageio`` with its ffmpeg plugin is installed) of
 one or several policies playing the same episodes, side by side::
@@ -15,6 +18,7 @@ one or several policies playing the same episodes, side by side::
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -22,7 +26,40 @@ import numpy as np
 
 from socnav import _socnav
 
-__all__ = ["Trails", "record", "tile"]
+__all__ = ["HumanView", "Trails", "record", "tile"]
+
+#: The render modes of socnav's environments.
+RENDER_MODES = ("human", "rgb_array")
+
+
+def check_render_mode(mode: str | None) -> str | None:
+    if mode not in (None, *RENDER_MODES):
+        raise ValueError(f"render_mode must be None, 'human' or 'rgb_array', got {mode!r}")
+    return mode
+
+
+class HumanView:
+    """A window that shows frames as an environment steps (``render_mode="human"``), no faster
+    than ``fps`` frames per second of wall time."""
+
+    def __init__(self, title: str, fps: float) -> None:
+        self._viewer = _socnav.Viewer(title)
+        self._period = 1.0 / fps if fps > 0 else 0.0
+        self._next = 0.0
+
+    def show(self, frame: np.ndarray, lines: Sequence[str]) -> None:
+        wait = self._next - time.perf_counter()
+        if wait > 0:
+            time.sleep(wait)
+        self._viewer.show(np.ascontiguousarray(frame), list(lines))
+        self._next = max(time.perf_counter(), self._next) + self._period
+
+    def poll(self) -> tuple[list[str], list[str]]:
+        """The keys held and the commands pressed since the last call (``Viewer.poll``)."""
+        return self._viewer.poll()
+
+    def close(self) -> None:
+        self._viewer.close()
 
 #: Default longer side of a frame (px).
 DEFAULT_SIZE = 400

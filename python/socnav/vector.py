@@ -16,7 +16,7 @@ from gymnasium.vector.utils import batch_space
 
 from socnav import _batch
 from socnav._socnav import Batch
-from socnav.render import Trails
+from socnav.render import RENDER_MODES, HumanView, Trails, check_render_mode, tile
 
 _AUTORESET = {
     "next_step": AutoresetMode.NEXT_STEP,
@@ -45,8 +45,6 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         render_envs: Sequence[int] | None = None,
         render_size: int = 400,
     ) -> None:
-        if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         mode = autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else autoreset_mode
         _batch.check_choice("autoreset_mode", mode, tuple(_AUTORESET))
         self.obs_mode = _batch.check_choice("obs_mode", obs_mode, _batch.OBS_MODES)
@@ -57,10 +55,12 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self.num_envs = self._batch.num_envs
         self.metadata = {
             "autoreset_mode": _AUTORESET[mode],
-            "render_modes": ["rgb_array"],
+            "render_modes": list(RENDER_MODES),
             "render_fps": 1.0 / self._batch.time_step,
         }
-        self.render_mode = render_mode
+        self.render_mode = check_render_mode(render_mode)
+        self._human: HumanView | None = None
+        self._steps = 0
         self.render_size = int(render_size)
         self.render_envs = list(range(min(self.num_envs, 4))) if render_envs is None else [int(e) for e in render_envs]
         bad = [e for e in self.render_envs if not 0 <= e < self.num_envs]
@@ -133,6 +133,9 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             self._finished[:] = False
             self._returns[:] = 0.0
             self._track(restart=self._all)
+            self._steps = 0
+        if self.render_mode == "human":
+            self._show(np.zeros(self.num_envs, dtype=np.float32))
         return self._obs(self._buf["obs"], self.copy), self._info(final=False)
 
     def step(self, actions: Any):
@@ -152,15 +155,33 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             reward = b["reward"].copy() if self.copy else b["reward"]
         else:
             reward = self._custom_reward(self._reward_fn, actions, terminated, truncated, info)
+        self._steps += 1
+        if self.render_mode == "human":
+            self._show(reward)
         return self._obs(b["obs"], self.copy), reward, terminated, truncated, info
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         """Frames of the environments ``render_envs`` (uint8 ``(H, W, 3)`` each, with the robot's
         path since its episode began) when ``render_mode="rgb_array"``; ``socnav.render.tile``
-        puts them in one image."""
+        puts them in one image. With ``"human"`` they are shown tiled in a window as the batch
+        steps, paced at ``render_fps``."""
         if self.render_mode is None:
             return None
-        return tuple(self._batch.render(e, self.render_size, self._trails.of(e)) for e in self.render_envs)
+        frames = tuple(self._batch.render(e, self.render_size, self._trails.of(e)) for e in self.render_envs)
+        return frames if self.render_mode == "rgb_array" else None
+
+    def _show(self, reward: np.ndarray) -> None:
+        frames = tuple(self._batch.render(e, self.render_size, self._trails.of(e)) for e in self.render_envs)
+        if self._human is None:
+            self._human = HumanView("socnav", self.metadata["render_fps"])
+        lines = [f"socnav: environments {self.render_envs}", f"step {self._steps}"]
+        lines += [f"env {e}: reward {float(reward[e]):+.4f}" for e in self.render_envs]
+        self._human.show(tile(frames), lines)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        if self._human is not None:
+            self._human.close()
+            self._human = None
 
     def _track(self, restart: np.ndarray) -> None:
         """Record the robot poses for drawing (restarting the paths of ``restart``)."""

@@ -7,6 +7,7 @@
 //! `spec` module, so no shape is written twice.
 
 mod orca;
+mod viewer;
 
 use ndarray::{ArrayView, IxDyn};
 use numpy::{Element, PyArray, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2};
@@ -47,13 +48,19 @@ create_exception!(
 );
 create_exception!(
     _socnav,
+    DisplayError,
+    SocNavError,
+    "No window can be opened here (no display, or the display refused it)."
+);
+create_exception!(
+    _socnav,
     SngnnError,
     SocNavError,
     "The SNGNN-v2 weights are missing or invalid; the message says how to install them."
 );
 
 /// The Python exception for a core error.
-fn py_err(e: SimError) -> PyErr {
+pub(crate) fn py_err(e: SimError) -> PyErr {
     let msg = e.to_string();
     match e {
         SimError::Config(_) => ConfigError::new_err(msg),
@@ -62,6 +69,7 @@ fn py_err(e: SimError) -> PyErr {
         SimError::Shape(_) | SimError::Action(_) => PyValueError::new_err(msg),
         SimError::Io(_) => PyFileNotFoundError::new_err(msg),
         SimError::Sngnn(_) => SngnnError::new_err(msg),
+        SimError::Display(_) => DisplayError::new_err(msg),
     }
 }
 
@@ -531,6 +539,7 @@ fn _socnav(m: &Bound<'_, PyModule>) -> PyResult<()> {
         DISCRETE_ACTIONS.map(|a| a.to_vec()).to_vec(),
     )?;
     orca::register(m)?;
+    viewer::register(m)?;
     m.add("SocNavError", py.get_type::<SocNavError>())?;
     m.add("ConfigError", py.get_type::<ConfigError>())?;
     m.add("ScenarioError", py.get_type::<ScenarioError>())?;
@@ -539,5 +548,6 @@ fn _socnav(m: &Bound<'_, PyModule>) -> PyResult<()> {
         py.get_type::<BackendUnavailableError>(),
     )?;
     m.add("SngnnError", py.get_type::<SngnnError>())?;
+    m.add("DisplayError", py.get_type::<DisplayError>())?;
     Ok(())
 }

@@ -27,8 +27,8 @@ def test_single_env_frames_pass_the_env_checker():
         env.step(np.array([1.0, 0.0, 0.0], np.float32))
     assert not np.array_equal(env.render(), first), "the robot moved and left a trail"
     assert socnav.make("exp1").render() is None
-    with pytest.raises(ValueError, match="render_mode must be None or 'rgb_array', got 'human'"):
-        socnav.make("exp1", render_mode="human")
+    with pytest.raises(ValueError, match="got 'rgb'"):
+        socnav.make_vec("exp1", render_mode="rgb")
 
 
 def test_vector_frames_and_tiles():
@@ -71,3 +71,15 @@ def test_record_video_writes_a_video(tmp_path):
     env.close()
     videos = list(tmp_path.glob("*.mp4"))
     assert videos and videos[0].stat().st_size > 0
+
+
+def test_human_mode_without_a_display_raises_display_error(monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    env = socnav.make("exp1", render_mode="human")
+    assert env.metadata["render_modes"] == ["human", "rgb_array"]
+    with pytest.raises(socnav.DisplayError, match="no display"):
+        env.reset(seed=0)
+    with pytest.raises(ValueError, match="render_mode must be None, 'human' or 'rgb_array', got 'ansi'"):
+        socnav.make("exp1", render_mode="ansi")
+

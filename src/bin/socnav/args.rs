@@ -25,6 +25,9 @@ pub enum Command {
     /// Draw the discomfort around people in one scene: SNGNN-v2 and DSRNN with the robot placed
     /// at every point of a grid (PNG).
     Heatmap(HeatmapArgs),
+    /// Drive the robot by hand in a live window (keyboard; gamepad with the `gamepad` feature),
+    /// optionally recording every episode.
+    Play(PlayArgs),
     /// List the GPU adapters wgpu finds and which one each backend choice would take.
     Devices,
     /// The SNGNN-v2 reward's weights (GPL-3.0, not shipped): install them, show where they are.
@@ -175,6 +178,32 @@ pub struct RenderArgs {
     /// Most steps to draw (default: the whole episode).
     #[arg(long)]
     pub steps: Option<usize>,
+}
+
+#[derive(Debug, Args)]
+pub struct PlayArgs {
+    /// Config name or path.
+    #[arg(long, default_value = "exp2")]
+    pub config: String,
+    /// Seed of the first episode (R plays the next of its sequence).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Record every finished episode into this directory: SocNavGym 0.1.1's `NNNNNNNN.json`
+    /// and socnav's `NNNNNNNN.socnav.json` (seed, config, actions).
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+    /// Drive with the 7 discrete actions (0.1.1's `DiscreteActions`) instead of continuous ones.
+    #[arg(long)]
+    pub discrete: bool,
+    /// Longest side of the scene in pixels (default: the config's `render.resolution`).
+    #[arg(long)]
+    pub size: Option<u32>,
+    /// Playback speed relative to real time (1/16 to 16; +/- change it while playing).
+    #[arg(long, default_value_t = 1.0)]
+    pub speed: f32,
+    /// Quit after this many episodes have ended (default: play until the window closes).
+    #[arg(long)]
+    pub episodes: Option<usize>,
 }
 
 #[derive(Debug, Args)]

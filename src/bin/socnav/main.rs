@@ -1,7 +1,8 @@
 //! `socnav`: the command-line tool. `run` rolls out a batch and prints outcome rates, the paper's
 //! metrics and throughput; `bench` measures env-steps/s per stage over batch sizes;
 //! `check-config` validates a config and prints it resolved; `render` draws an episode; `heatmap`
-//! draws the discomfort around people in one scene; `devices`
+//! draws the discomfort around people in one scene; `play` drives the robot by hand in a live
+//! window; `devices`
 //! lists the GPU adapters; `sngnn` installs the SNGNN-v2 weights and shows where they are.
 
 mod args;
@@ -9,6 +10,8 @@ mod bench;
 mod check;
 mod devices;
 mod heatmap;
+mod outcome;
+mod play;
 mod policy;
 mod render;
 mod run;
@@ -27,6 +30,7 @@ fn main() -> ExitCode {
         args::Command::CheckConfig(a) => check::check(&a),
         args::Command::Render(a) => render::render(&a),
         args::Command::Heatmap(a) => heatmap::heatmap(&a),
+        args::Command::Play(a) => play::play(&a),
         args::Command::Devices => devices::devices(),
         // Its own exit statuses: CI tells a failed download from a broken install.
         args::Command::Sngnn(c) => return sngnn::sngnn(&c),

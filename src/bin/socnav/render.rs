@@ -5,10 +5,11 @@
 use std::path::Path;
 
 use socnav::render::{self, GifWriter};
-use socnav::spec::{N_INFO, info};
+use socnav::spec::N_INFO;
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions};
 
 use crate::args::RenderArgs;
+use crate::outcome::outcome;
 use crate::policy::Policy;
 
 /// What to write, from the output file's extension.
@@ -33,24 +34,6 @@ fn output_kind(path: &Path) -> Result<Output, String> {
             "--out {}: no extension (use .gif or .png)",
             path.display()
         )),
-    }
-}
-
-/// How a finished episode ended, from the info row of its last step (a truncation is a timeout).
-fn outcome(row: &[f32]) -> &'static str {
-    let on = |k: usize| row[k] != 0.0;
-    if on(info::SUCCESS) {
-        "success"
-    } else if on(info::COLLISION_HUMAN) {
-        "collision (human)"
-    } else if on(info::COLLISION_WALL) {
-        "collision (object: wall)"
-    } else if on(info::COLLISION_OBJECT) {
-        "collision (object)"
-    } else if on(info::OUT_OF_MAP) {
-        "out of map"
-    } else {
-        "timeout"
     }
 }
 

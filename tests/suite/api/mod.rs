@@ -1,5 +1,5 @@
 //! What users touch: the public API's errors, config validation, the command-line tool's
-//! backends, the built-in policies, rendering, the heatmap figure and the SNGNN-v2 weight file.
+//! backends, the built-in policies, rendering, the heatmap figure, the SNGNN-v2 weight file, and the live viewer and its recordings.
 
 mod api_errors;
 #[cfg(all(feature = "gpu", feature = "cli"))]
@@ -12,3 +12,6 @@ mod policies;
 #[cfg(feature = "render")]
 mod render;
 mod sngnn_weights;
+// `socnav play` and the recordings; the binary needs the `cli` feature.
+#[cfg(feature = "cli")]
+mod viewer;

@@ -2,8 +2,8 @@
 //!
 //! Lower layers never name upper ones. Today's layering, bottom up: `math`, `fixed`, `error`,
 //! `limits`, `orca` → `geometry`, `rng` → `config` → `params` → `room` → `state` → `spec`,
-//! `outputs` → `scenario` → `sngnn` → `systems` → `pipeline` → `backend` → `document` → `env` →
-//! `heatmap` → `render` (and the CLI, a crate of its own under `src/bin/`, left out). This test
+//! `outputs` → `recording`, `scenario` → `sngnn` → `systems` → `pipeline` → `backend` → `document`
+//! → `env` → `heatmap` → `render` → `viewer` (and the CLI, a crate of its own under `src/bin/`, left out). This test
 //! does not pin that order, only what makes an order possible: it reads `src/` as text, builds the
 //! graph of which module names which, and fails naming every cycle, with a line behind each
 //! dependency.
