@@ -366,8 +366,9 @@ class MinariWriter:
         if self._dataset is None:
             obs_space, act_space = self._spaces
             with warnings.catch_warnings():
-                # Minari asks for a contact address; a collection run has none to give.
-                warnings.filterwarnings("ignore", message=".*author_email.*")
+                # Minari asks for a contact address and a link to versioned code; a collection
+                # run has neither to give (the dataset's description names policy, config, seeds).
+                warnings.filterwarnings("ignore", message=".*(author_email|code_permalink).*")
                 self._dataset = self._minari.create_dataset_from_buffers(
                     dataset_id=self.dataset_id,
                     buffer=chunk,
