@@ -117,7 +117,7 @@ class _Builder:
             rewards=np.asarray(self.rewards, dtype=np.float32),
             terminations=np.asarray(self.terminated, dtype=bool),
             truncations=np.asarray(self.truncated, dtype=bool),
-            infos={key: info[:, k].copy() for k, key in enumerate(info_keys)},
+            infos={key: info[:, k].copy() for k, key in enumerate(Batch.keys()["info"]) if key in info_keys},
         )
 
 
@@ -137,12 +137,15 @@ def iter_episodes(
     obs_mode: str = "flat",
     backend: str = "cpu",
     threads: int | None = None,
+    info_keys: Sequence[str] | None = None,
 ) -> Iterator[Episode]:
     """The episodes of seeds ``seed .. seed + episodes - 1`` of ``config`` played by ``policy``,
     as each finishes (in finishing order; ``Episode.seed`` names each). ``num_envs`` (default
     ``min(episodes, 64)``) changes the speed and the memory, not the episodes. A policy acts on
     ``obs_mode`` observations unless it says otherwise (``policy.obs_mode``, as trained agents
-    do); the episodes hold ``obs_mode`` observations either way."""
+    do); the episodes hold ``obs_mode`` observations either way. ``info_keys`` picks the info
+    arrays kept (default: every one; each is a dataset of its own in a Minari file, so fewer
+    make writing faster)."""
     import socnav
 
     episodes = int(episodes)
@@ -167,7 +170,11 @@ def iter_episodes(
     try:
         inner: Any = env.unwrapped
         layout = inner._layout
-        info_keys = list(Batch.keys()["info"])
+        known = list(Batch.keys()["info"])
+        info_keys = known if info_keys is None else list(info_keys)
+        unknown = [k for k in info_keys if k not in known]
+        if unknown:
+            raise ValueError(f"unknown info keys {unknown}; the info has {known}")
         buf = inner._buf
         obs, _ = env.reset(seed=[(seed + k) % _SEED_LIMIT for k in range(n)])
         building: list[_Builder | None] = [
@@ -428,13 +435,14 @@ def collect(
     root: str | os.PathLike[str] | None = None,
     flush_every: int = 32,
     progress: bool = True,
+    info_keys: Sequence[str] | None = None,
 ) -> Collection:
     """Play ``episodes`` episodes (seeds ``seed ..``) of ``config`` with ``policy`` and stream them
     to a Minari dataset ``dataset_id`` and/or 0.1.1's JSON files in ``json_dir`` (module docs).
 
     Before it starts it says (``progress``) how much the request needs at most and how much disk
     is free; a full disk or an interruption ends it with what was flushed intact (Minari: every
-    ``flush_every`` episodes; JSON: every episode)."""
+    ``flush_every`` episodes; JSON: every episode). ``info_keys`` as :func:`iter_episodes`."""
     import socnav
     from socnav.registration import env_spec
 
@@ -475,7 +483,7 @@ def collect(
     report = max(1, int(episodes) // 10)
     try:
         for ep in iter_episodes(act, config, episodes=episodes, seed=seed, num_envs=num_envs,
-                                obs_mode=obs_mode, backend=backend, threads=threads):
+                                obs_mode=obs_mode, backend=backend, threads=threads, info_keys=info_keys):
             for sink in sinks:
                 sink.add(ep)
             count += 1

@@ -147,6 +147,10 @@ def test_errors_name_the_problem(tmp_path):
         collect("goal", "exp1", episodes=2)
     with pytest.raises(ValueError, match="episodes must be at least 1, got 0"):
         next(iter_episodes("goal", "exp1", episodes=0))
+    with pytest.raises(ValueError, match=r"unknown info keys \['NOPE'\]"):
+        next(iter_episodes("goal", "exp1", episodes=1, info_keys=["SUCCESS", "NOPE"]))
+    (ep,) = iter_episodes("goal", SHORT, episodes=1, info_keys=["SUCCESS", "TIMEOUT"])
+    assert set(ep.infos) == {"SUCCESS", "TIMEOUT"} and ep.outcome != "unfinished"
     with pytest.raises(ValueError, match="obs_mode"):
         next(iter_episodes("goal", "exp1", episodes=1, obs_mode="pixels"))
     with pytest.raises(ValueError, match="json_dir needs obs_mode='flat'"):
