@@ -109,10 +109,11 @@ def plot_runs(
             if row == len(metrics) - 1:
                 ax.set_xlabel("environment steps (millions)")
     handles = [plt.Line2D([], [], color=colours[s], linewidth=2) for s in series]
-    fig.legend(handles, series, loc="upper center", ncol=min(len(series), 6), frameon=False)
+    top = 0.93 if title else 0.95
+    fig.tight_layout(rect=(0, 0, 1, top))
+    fig.legend(handles, series, loc="lower center", bbox_to_anchor=(0.5, top), ncol=min(len(series), 6), frameon=False)
     if title:
-        fig.suptitle(title, y=1.0)
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
+        fig.suptitle(title, y=0.995)
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110)
