@@ -121,6 +121,16 @@ class _Builder:
         )
 
 
+def _plain_config(config: Any) -> Any:
+    """``config`` as a dataset stores it: a name or path as text, overrides as plain JSON data."""
+    if isinstance(config, os.PathLike):
+        return os.fspath(config)
+    try:
+        return json.loads(json.dumps(config))
+    except TypeError as e:
+        raise ValueError(f"a recorded config must be a name, a path or JSON-like overrides: {e}") from e
+
+
 def _resolve_policy(policy: Any, seed: int) -> tuple[Callable[[Any, Any], Any], str]:
     from socnav.evaluation import resolve_policy
 
@@ -151,6 +161,7 @@ def iter_episodes(
     episodes = int(episodes)
     if episodes < 1:
         raise ValueError(f"episodes must be at least 1, got {episodes}")
+    config = _plain_config(config)
     obs_mode = _batch.check_choice("obs_mode", obs_mode, _batch.OBS_MODES)
     seed = _batch.check_seed(seed)
     act, _ = _resolve_policy(policy, seed)
@@ -525,7 +536,7 @@ class RecordEpisodes(gym.Wrapper):  # type: ignore[type-arg]
         super().__init__(env)
         inner: Any = env.unwrapped
         self._batch = inner._batch
-        self._config = json.loads(json.dumps(getattr(inner, "config", None)))
+        self._config = _plain_config(getattr(inner, "config", None))
         self._layout = inner._layout
         self._obs_mode = inner.obs_mode
         self._keys = list(Batch.keys()["info"])

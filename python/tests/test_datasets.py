@@ -134,6 +134,14 @@ def test_record_one_environment_as_it_is_played(tmp_path):
     _replay(ep, obs_mode="flat")
 
 
+def test_a_config_path_is_recorded_as_text(tmp_path):
+    path = tmp_path / "short.toml"
+    path.write_text("[episode]\nlength = 5\n")
+    (ep,) = iter_episodes("goal", path, episodes=1, seed=2)
+    assert ep.config == str(path) and len(ep) <= 6
+    _replay(ep, obs_mode="flat")
+
+
 def test_estimate_bounds_what_is_collected():
     eps = list(iter_episodes("random", SHORT, episodes=5, seed=0))
     bound = estimate_bytes(SHORT, episodes=5)
