@@ -16,6 +16,7 @@
 
 pub mod caps;
 pub mod columns;
+pub mod invariants;
 
 pub use crate::room::{blocker_kind, room_shape};
 pub use caps::Caps;

@@ -25,6 +25,9 @@ pub enum Command {
     /// Draw the discomfort around people in one scene: SNGNN-v2 and DSRNN with the robot placed
     /// at every point of a grid (PNG).
     Heatmap(HeatmapArgs),
+    /// Step configs for a long time with adversarial actions, checking every output and the
+    /// state's invariants after every step, and sampling memory; resumable.
+    Soak(SoakArgs),
     /// Drive the robot by hand in a live window (keyboard; gamepad with the `gamepad` feature),
     /// optionally recording every episode.
     Play(PlayArgs),
@@ -178,6 +181,37 @@ pub struct RenderArgs {
     /// Most steps to draw (default: the whole episode).
     #[arg(long)]
     pub steps: Option<usize>,
+}
+
+#[derive(Debug, Args)]
+pub struct SoakArgs {
+    /// Configs, comma-separated (names or TOML paths).
+    #[arg(long, default_value = "exp1,exp2,exp3")]
+    pub configs: String,
+    /// Environment steps per config (the whole run; a resumed run counts what is recorded).
+    #[arg(long, default_value_t = 10_000_000)]
+    pub steps: u64,
+    /// Environments per batch.
+    #[arg(long, default_value_t = 1024)]
+    pub envs: usize,
+    /// Seed of the batches and of the random actions.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Backend.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Cpu)]
+    pub backend: BackendChoice,
+    /// CPU threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Environment steps per config between progress records.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub chunk: u64,
+    /// Check the state's invariants every this many batch steps (outputs are checked every step).
+    #[arg(long, default_value_t = 1)]
+    pub check_every: u64,
+    /// Progress record (JSON): written after every chunk, resumed from when it exists.
+    #[arg(long, default_value = "soak.json")]
+    pub record: PathBuf,
 }
 
 #[derive(Debug, Args)]

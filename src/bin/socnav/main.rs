@@ -2,7 +2,7 @@
 //! metrics and throughput; `bench` measures env-steps/s per stage over batch sizes;
 //! `check-config` validates a config and prints it resolved; `render` draws an episode; `heatmap`
 //! draws the discomfort around people in one scene; `play` drives the robot by hand in a live
-//! window; `devices`
+//! window; `soak` steps configs with adversarial actions for a long time, checking everything; `devices`
 //! lists the GPU adapters; `sngnn` installs the SNGNN-v2 weights and shows where they are.
 
 mod args;
@@ -16,6 +16,7 @@ mod policy;
 mod render;
 mod run;
 mod sngnn;
+mod soak;
 
 use std::process::ExitCode;
 
@@ -31,6 +32,7 @@ fn main() -> ExitCode {
         args::Command::Render(a) => render::render(&a),
         args::Command::Heatmap(a) => heatmap::heatmap(&a),
         args::Command::Play(a) => play::play(&a),
+        args::Command::Soak(a) => soak::soak(&a),
         args::Command::Devices => devices::devices(),
         // Its own exit statuses: CI tells a failed download from a broken install.
         args::Command::Sngnn(c) => return sngnn::sngnn(&c),

@@ -16,5 +16,6 @@ mod golden_perturbed;
 mod gpu_backend;
 #[cfg(feature = "gpu")]
 mod gpu_layout;
+mod invariants;
 mod reset_pool;
 mod scenario_props;

@@ -1,0 +1,121 @@
+//! What every step must leave true of an environment's state, checked by `socnav soak` over
+//! billions of steps with adversarial actions (and usable by any test): positions finite and in
+//! the room, counts within the capacities, and every human in exactly the place its role says.
+
+use super::{BatchState, NONE, group_kind, role};
+
+/// How far outside the room's bounding rectangle (m) a robot or human may be: a robot that
+/// leaves the map ends its episode on that step (0.1.1's OUT_OF_MAP), a step moves at most a
+/// few tenths of a metre, and an L room's removed block is inside the rectangle.
+pub const ROOM_SLACK_M: f32 = 2.0;
+
+/// Every broken invariant of environment `e` (empty when none), each naming the environment,
+/// the entity and the values.
+pub fn violations(s: &BatchState, e: usize) -> Vec<String> {
+    let caps = s.strides;
+    let counts = [
+        ("humans", s.n_humans[e], caps.humans),
+        ("groups", s.n_groups[e], caps.groups),
+        ("laptop users", s.n_laptop_users[e], caps.laptop_users),
+        ("laptops", s.n_laptops[e], caps.laptops),
+        ("tables", s.n_tables[e], caps.tables),
+        ("plants", s.n_plants[e], caps.plants),
+        ("walls", s.n_walls[e], caps.walls),
+    ];
+    let over: Vec<String> = counts
+        .iter()
+        .filter(|&&(_, n, cap)| n as usize > cap)
+        .map(|(what, n, cap)| format!("environment {e}: {n} {what}, more than the capacity {cap}"))
+        .collect();
+    if !over.is_empty() {
+        return over;
+    }
+    let mut out = Vec::new();
+    let mut fail = |msg: String| out.push(format!("environment {e}: {msg}"));
+    let (hx, hy) = (
+        s.map_x[e] / 2.0 + ROOM_SLACK_M,
+        s.map_y[e] / 2.0 + ROOM_SLACK_M,
+    );
+    let mut place = |what: &str, x: f32, y: f32| {
+        if !(x.is_finite() && y.is_finite()) {
+            fail(format!("{what} at non-finite ({x}, {y})"));
+        } else if x.abs() > hx || y.abs() > hy {
+            fail(format!(
+                "{what} at ({x}, {y}), outside the room of {} x {} m",
+                s.map_x[e], s.map_y[e]
+            ));
+        }
+    };
+    place("the robot", s.robot_x[e], s.robot_y[e]);
+    let n_humans = s.n_humans[e] as usize;
+    for k in 0..n_humans {
+        let h = e * caps.humans + k;
+        place(&format!("human slot {k}"), s.h_x[h], s.h_y[h]);
+    }
+    humans_in_their_places(s, e, &mut fail);
+    out
+}
+
+/// Each human's role agrees with its group or laptop, and the groups and laptop users list
+/// exactly those humans.
+fn humans_in_their_places(s: &BatchState, e: usize, fail: &mut impl FnMut(String)) {
+    let caps = s.strides;
+    let n_humans = s.n_humans[e] as usize;
+    let (n_groups, n_users) = (s.n_groups[e] as usize, s.n_laptop_users[e] as usize);
+    let mut grouped = 0;
+    for k in 0..n_humans {
+        let h = e * caps.humans + k;
+        let (r, g, u) = (s.h_role[h], s.h_group[h], s.h_laptop_user[h]);
+        match r {
+            role::STATIC | role::DYNAMIC if g == NONE && u == NONE => {}
+            role::MOVING_GROUP | role::STANDING_GROUP if (g as usize) < n_groups && u == NONE => {
+                let gi = e * caps.groups + g as usize;
+                let (first, count) = (s.g_first[gi] as usize, s.g_count[gi] as usize);
+                if !(first..first + count).contains(&k) {
+                    fail(format!(
+                        "human slot {k} in group {g}, whose members are slots {first}..{}",
+                        first + count
+                    ));
+                }
+                grouped += 1;
+            }
+            role::LAPTOP_USER if (u as usize) < n_users && g == NONE => {
+                let ui = e * caps.laptop_users + u as usize;
+                if s.lu_human[ui] as usize != k {
+                    fail(format!(
+                        "human slot {k} says laptop user {u}, who is slot {}",
+                        s.lu_human[ui]
+                    ));
+                }
+            }
+            _ => fail(format!(
+                "human slot {k}: role {r}, group {g}, laptop user {u} disagree"
+            )),
+        }
+    }
+    let members: usize = (0..n_groups)
+        .map(|g| e * caps.groups + g)
+        .filter(|&gi| s.g_kind[gi] != group_kind::DISSOLVED)
+        .map(|gi| s.g_count[gi] as usize)
+        .sum();
+    if members != grouped {
+        fail(format!(
+            "the groups list {members} members, {grouped} humans have a group role"
+        ));
+    }
+    for u in 0..n_users {
+        let ui = e * caps.laptop_users + u;
+        let laptop = s.lu_laptop[ui];
+        if laptop as usize >= s.n_laptops[e] as usize {
+            fail(format!(
+                "laptop user {u} at laptop {laptop} of {}",
+                s.n_laptops[e]
+            ));
+        } else if s.l_user[e * caps.laptops + laptop as usize] as usize != u {
+            fail(format!(
+                "laptop user {u} at laptop {laptop}, whose user is {}",
+                s.l_user[e * caps.laptops + laptop as usize]
+            ));
+        }
+    }
+}
