@@ -139,8 +139,19 @@ pub fn soak(a: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
         .iter()
         .map(|c| Tally::from_json(&record["configs"][c]))
         .collect();
+    // Memory samples as [env-steps so far, MB, run]: each run (process) is numbered, since
+    // growth only means something within one process.
     let mut rss: Vec<Value> = record["rss_mb"].as_array().cloned().unwrap_or_default();
+    let run = rss
+        .iter()
+        .filter_map(|v| v[2].as_u64())
+        .max()
+        .map_or(0, |r| r + 1);
     let wall_before = record["wall_s"].as_f64().unwrap_or(0.0);
+    let steps_before: u64 = tallies.iter().map(|t| t.steps).sum();
+    // Configs of the record that this run does not step keep their tallies.
+    let mut others = record["configs"].as_object().cloned().unwrap_or_default();
+    others.retain(|name, _| !configs.contains(name));
     let mut envs = Vec::with_capacity(configs.len());
     for (k, name) in configs.iter().enumerate() {
         let config = Config::from_name_or_path(name)?;
@@ -192,7 +203,7 @@ pub fn soak(a: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
         chunk += 1;
         let total: u64 = tallies.iter().map(|t| t.steps).sum();
         if let Some(mb) = rss_mb() {
-            rss.push(json!([total, mb]));
+            rss.push(json!([total, mb, run]));
         }
         let wall = wall_before + start.elapsed().as_secs_f64();
         record = json!({
@@ -200,7 +211,11 @@ pub fn soak(a: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
             "envs": a.envs,
             "backend": format!("{:?}", a.backend).to_lowercase(),
             "steps_per_config": per_config,
-            "configs": configs.iter().zip(&tallies).map(|(c, t)| (c.clone(), t.to_json())).collect::<serde_json::Map<_, _>>(),
+            "configs": others
+                .clone()
+                .into_iter()
+                .chain(configs.iter().zip(&tallies).map(|(c, t)| (c.clone(), t.to_json())))
+                .collect::<serde_json::Map<_, _>>(),
             "rss_mb": rss,
             "wall_s": wall,
         });
@@ -209,15 +224,15 @@ pub fn soak(a: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
             .iter()
             .map(|t| t.non_finite + t.broken + t.panics)
             .sum();
+        let this_run = start.elapsed().as_secs_f64();
         eprintln!(
-            "socnav soak: {:.3e} env-steps in {:.0} s ({:.0} env-steps/s this run), {bad} problems, RSS {:.0} MB",
+            "socnav soak: {:.3e} env-steps in {wall:.0} s ({:.0} env-steps/s in this run), {bad} problems, RSS {:.0} MB",
             total as f64,
-            wall,
-            tallies.iter().map(|t| t.steps).sum::<u64>() as f64 / wall.max(1e-9),
+            (total - steps_before) as f64 / this_run.max(1e-9),
             rss_mb().unwrap_or(f64::NAN)
         );
     }
-    summary(&configs, &tallies, &rss);
+    summary(&configs, &tallies, &rss, run);
     let bad: u64 = tallies
         .iter()
         .map(|t| t.non_finite + t.broken + t.panics)
@@ -232,15 +247,19 @@ pub fn soak(a: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-fn summary(configs: &[String], tallies: &[Tally], rss: &[Value]) {
+fn summary(configs: &[String], tallies: &[Tally], rss: &[Value], run: u64) {
     for (c, t) in configs.iter().zip(tallies) {
         println!(
             "{c:<16} {:>14} env-steps  non-finite {}  broken invariants {}  panics {}",
             t.steps, t.non_finite, t.broken, t.panics
         );
     }
-    // Memory growth after warm-up: from the first tenth of the samples to the last.
-    let mb: Vec<f64> = rss.iter().filter_map(|v| v[1].as_f64()).collect();
+    // Memory growth after warm-up in this run: from the first tenth of its samples to the last.
+    let mb: Vec<f64> = rss
+        .iter()
+        .filter(|v| v[2].as_u64() == Some(run))
+        .filter_map(|v| v[1].as_f64())
+        .collect();
     if mb.len() >= 2 {
         let warm = mb[mb.len() / 10];
         let last = mb[mb.len() - 1];
