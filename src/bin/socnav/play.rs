@@ -139,7 +139,7 @@ impl Player<'_> {
         };
         let sidecar = serde_json::json!({
             "format": "socnav-played/1",
-            "config": self.args.config,
+            "config": recorded_config(&self.args.config),
             "seed": ep.seed,
             "action_type": if self.args.discrete { "discrete" } else { "continuous" },
             "actions": actions,
@@ -245,6 +245,12 @@ impl Gamepads {
     }
 }
 
+/// The config as a recording names it: a file by its absolute path (so the recording replays
+/// from anywhere), a shipped config by its name.
+fn recorded_config(config: &str) -> String {
+    std::fs::canonicalize(config).map_or_else(|_| config.to_owned(), |p| p.display().to_string())
+}
+
 fn speed_text(speed: f32) -> String {
     if speed >= 1.0 {
         format!("{speed}")
@@ -254,6 +260,13 @@ fn speed_text(speed: f32) -> String {
 }
 
 pub fn play(a: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
+    if !(a.speed.is_finite() && a.speed > 0.0) {
+        return Err(format!(
+            "--speed {}: give a positive number (1 is real time)",
+            a.speed
+        )
+        .into());
+    }
     let config = Config::from_name_or_path(&a.config)?;
     let size = a.size.unwrap_or(config.render.resolution);
     let options = EnvOptions {

@@ -23,6 +23,12 @@ fn play_without_a_display_says_so_and_fails() {
         err.contains("no display") && err.contains("xvfb-run"),
         "{err}"
     );
+    let o = Command::new(env!("CARGO_BIN_EXE_socnav"))
+        .args(["play", "--speed", "NaN"])
+        .output()
+        .expect("socnav runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--speed NaN"), "{err}");
 }
 
 /// A few steps of lroom_mixed (every entity kind; fewer humans than the observation's capacity,
