@@ -14,6 +14,7 @@ const MAX_FILL_FRACTION: f32 = 0.55;
 pub fn validate(config: &Config) -> Vec<String> {
     let mut v = Problems::default();
     check_scalars(config, &mut v);
+    check_step_displacement(config, &mut v);
     check_observation(config, &mut v);
     check_counts(config, &mut v);
     // The room checks run alongside the others, so that a room too small for what it must hold
@@ -73,6 +74,36 @@ impl Problems {
             self.0.push(format!(
                 "`{key}` minimum {} is greater than its maximum {}",
                 r[0], r[1]
+            ));
+        }
+    }
+}
+
+/// An agent that moves farther than its own diameter in one step can pass through a wall or a
+/// person between two steps (contacts are checked once a step) and leave the room: found by
+/// fuzzing (`tests/suite/fuzz/configs.rs`), refused here.
+fn check_step_displacement(c: &Config, v: &mut Problems) {
+    let dt = c.episode.time_step;
+    for (key, who, speed, diameter) in [
+        (
+            "robot.max_speed",
+            "robot",
+            c.robot.max_speed,
+            2.0 * c.robot.radius,
+        ),
+        (
+            "human.max_speed",
+            "human",
+            c.human.max_speed,
+            c.human.diameter,
+        ),
+    ] {
+        let step = speed * dt;
+        if step.is_finite() && diameter.is_finite() && step > diameter {
+            v.0.push(format!(
+                "`{key}` {speed} m/s over `episode.time_step` {dt} s moves the {who} {step} m a \
+                 step, more than its diameter ({diameter} m): contacts are checked once a step, so \
+                 it would pass through walls and people (lower the speed or the time step)"
             ));
         }
     }

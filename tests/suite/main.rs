@@ -22,6 +22,8 @@
 //! `api/`: what users touch: error reporting of the public API, config validation, the
 //! command-line tool's backends, rendering, the heatmap figure and the SNGNN-v2 weight file.
 //!
+//! `fuzz/`: property-based fuzzing (proptest) of what users feed in: configs so far.
+//!
 //! `foundations/`: the pieces under everything: the counter-based random streams, the accuracy of
 //! `socnav::math`, the shaders' validation and generated parts, and the module graph.
 //!
@@ -35,6 +37,7 @@ mod golden;
 
 mod api;
 mod foundations;
+mod fuzz;
 mod orca;
 mod step;
 mod whole_step;

@@ -1,0 +1,214 @@
+//! Configs drawn inside and just outside every bound: experiment 3's config (every key) with some
+//! values replaced (scaled, negated, zeroed, huge, non-finite, swapped ranges, unknown enum
+//! values, keys dropped or unknown keys added). Each must be refused with `SimError::Config`
+//! listing its problems, or load; a config that loads must build a batch (or fail to place its
+//! scenario with `SimError::Scenario`), reset, and step with extreme actions keeping every output
+//! finite (the info fields documented as NaN excepted) and the state's invariants.
+
+use proptest::prelude::*;
+use socnav::spec::{N_INFO, info};
+use socnav::state::invariants::violations;
+use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
+use toml::Value;
+
+/// Every leaf of exp3's config as (section, key).
+fn leaves(base: &toml::Table) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    for (section, table) in base {
+        if let Some(t) = table.as_table() {
+            for key in t.keys() {
+                out.push((section.clone(), key.clone()));
+            }
+        }
+    }
+    out
+}
+
+/// A new value for `old` by mutation `kind` with the random number `x` in [0, 1).
+fn mutate(old: &Value, kind: u8, x: f64) -> Option<Value> {
+    let scale = [0.0, 0.01, 0.5, 2.0, 10.0, 1e6, -1.0, f64::NAN][usize::from(kind % 8)];
+    Some(match old {
+        Value::Float(f) => Value::Float(if kind % 11 == 10 {
+            f64::INFINITY
+        } else {
+            f * scale + x * 1e-3
+        }),
+        Value::Integer(i) => Value::Integer(match kind % 5 {
+            0 => 0,
+            1 => -1,
+            2 => i.saturating_mul(3),
+            3 => (x * 50.0) as i64,
+            _ => i64::MAX,
+        }),
+        Value::Array(a) if a.len() == 2 => {
+            let lo = (x * 12.0) as i64;
+            let hi = match kind % 4 {
+                0 => lo - 1, // swapped range
+                1 => lo,
+                _ => lo + i64::from(kind % 6),
+            };
+            let as_float = a.iter().any(Value::is_float);
+            if as_float {
+                Value::Array(vec![
+                    Value::Float(lo as f64 * scale.abs().min(3.0)),
+                    Value::Float(hi as f64),
+                ])
+            } else {
+                Value::Array(vec![Value::Integer(lo), Value::Integer(hi)])
+            }
+        }
+        Value::Boolean(b) => Value::Boolean(!b),
+        Value::String(s) => {
+            let options = [
+                "square",
+                "rectangle",
+                "L",
+                "random",
+                "orca",
+                "sfm",
+                "dsrnn",
+                "sngnn",
+                "holonomic",
+                "diff-drive",
+                "",
+            ];
+            Value::String(if kind.is_multiple_of(3) {
+                format!("{s}-bogus")
+            } else {
+                options[(x * options.len() as f64) as usize].to_owned()
+            })
+        }
+        _ => return None,
+    })
+}
+
+/// What a mutated config must do (see the module docs).
+fn check(text: &str) {
+    let config = match Config::from_toml_str(text) {
+        Ok(c) => c,
+        Err(SimError::Config(problems)) => {
+            assert!(!problems.is_empty(), "a refusal lists its problems");
+            return;
+        }
+        Err(e) => panic!("a config is refused with SimError::Config, got {e:?}\n{text}"),
+    };
+    let options = EnvOptions {
+        n_envs: 3,
+        seed: 5,
+        autoreset: AutoresetMode::SameStep,
+        threads: Some(1),
+        ..Default::default()
+    };
+    let mut env = match BatchEnv::new(config, options) {
+        Ok(env) => env,
+        Err(SimError::Scenario(_) | SimError::Sngnn(_)) => return,
+        Err(e) => panic!("a valid config builds a batch, got {e:?}\n{text}"),
+    };
+    match env.reset(Some(5)) {
+        Ok(()) => {}
+        Err(SimError::Scenario(_)) => return,
+        Err(e) => panic!("reset: {e:?}\n{text}"),
+    }
+    let holonomic = env.params().holonomic != 0;
+    let lateral = if holonomic { 1.0 } else { 0.0 };
+    for t in 0..12 {
+        let a = if t % 2 == 0 {
+            [1.0, lateral, -1.0]
+        } else {
+            [-1.0, -lateral, 1.0]
+        };
+        let actions: Vec<f32> = (0..3).flat_map(|_| a).collect();
+        match env.step(Actions::Continuous(&actions)) {
+            Ok(()) => {}
+            Err(SimError::Scenario(_)) => return, // an autoreset could not place the next scenario
+            Err(e) => panic!("step {t}: {e:?}\n{text}"),
+        }
+        let out = env.outputs();
+        assert!(
+            out.obs.iter().all(|v| v.is_finite()),
+            "step {t}: a non-finite observation\n{text}"
+        );
+        assert!(
+            out.reward.iter().all(|v| v.is_finite()),
+            "step {t}: a non-finite reward\n{text}"
+        );
+        for (k, v) in out.info.iter().enumerate() {
+            let key = k % N_INFO;
+            let nan_ok = key == info::TIME_TO_REACH_GOAL || key == info::AVERAGE_OBSTACLE_DISTANCE;
+            assert!(
+                v.is_finite() || (v.is_nan() && nan_ok),
+                "step {t}: info {key} is {v}\n{text}"
+            );
+        }
+        for e in 0..3 {
+            let broken = violations(env.state(), e);
+            assert!(broken.is_empty(), "step {t}: {broken:?}\n{text}");
+        }
+    }
+}
+
+fn base() -> toml::Table {
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/exp3.toml")).unwrap();
+    text.parse().unwrap()
+}
+
+proptest! {
+    #![proptest_config(super::config(48))]
+
+    #[test]
+    fn mutated_configs_are_refused_clearly_or_run_cleanly(
+        edits in prop::collection::vec((0usize..1000, 0u8..64, 0.0f64..1.0), 1..6),
+        drop in prop::option::of(0usize..1000),
+        unknown in any::<bool>(),
+    ) {
+        let mut doc = base();
+        let keys = leaves(&doc);
+        for (pick, kind, x) in edits {
+            let (section, key) = &keys[pick % keys.len()];
+            let table = doc[section.as_str()].as_table_mut().unwrap();
+            if let Some(new) = mutate(&table[key.as_str()], kind, x) {
+                table.insert(key.clone(), new);
+            }
+        }
+        if let Some(pick) = drop {
+            let (section, key) = &keys[pick % keys.len()];
+            doc[section.as_str()].as_table_mut().unwrap().remove(key.as_str());
+        }
+        if unknown {
+            doc["room"].as_table_mut().unwrap().insert("sise_x".into(), Value::Integer(3));
+        }
+        check(&toml::to_string(&doc).unwrap());
+    }
+}
+
+/// Found by this target: `human.max_speed` 1e5 m/s (exp3 with the speed scaled by 1e6) flew a
+/// walker 58 km out of the room in one step. Such a speed is refused now: a step may move an agent
+/// at most its diameter.
+#[test]
+fn regression_a_walker_faster_than_its_diameter_a_step_is_refused() {
+    let mut doc = base();
+    doc["human"]
+        .as_table_mut()
+        .unwrap()
+        .insert("max_speed".into(), Value::Float(100000.0));
+    let err = Config::from_toml_str(&toml::to_string(&doc).unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("`human.max_speed` 100000 m/s")
+            && err.contains("more than its diameter (0.72 m)"),
+        "{err}"
+    );
+    doc["human"]
+        .as_table_mut()
+        .unwrap()
+        .insert("max_speed".into(), Value::Float(0.7));
+    check(&toml::to_string(&doc).unwrap());
+}
+
+/// The unmutated config passes the same check (the harness itself is sound).
+#[test]
+fn the_base_config_runs_cleanly() {
+    check(&toml::to_string(&base()).unwrap());
+}
