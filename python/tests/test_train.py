@@ -71,6 +71,29 @@ def test_a_resumed_run_equals_an_uninterrupted_one(tmp_path):
     np.testing.assert_array_equal(parts["replay"]["obs"], whole["replay"]["obs"])
 
 
+def test_the_progress_log_follows_the_checkpoint(tmp_path):
+    """A run killed between checkpoints logged rows its resumption logs again; a run killed before
+    its first checkpoint left a log of a run that starts over. Neither may show twice."""
+    base = dict(config=SHORT, num_envs=8, threads=1, learning_starts=128, batch_size=16, buffer_size=2048,
+                log_every=128, target_update=256)
+    dqn.train(dqn.Args(steps=512, out=str(tmp_path / "whole"), **base))
+    expected = [int(r["step"]) for r in _rows(tmp_path / "whole" / "progress.csv")]
+    assert expected == [128, 256, 384, 512]
+
+    parts = tmp_path / "parts"
+    dqn.train(dqn.Args(steps=512, chunk_steps=256, out=str(parts), **base))
+    with open(parts / "progress.csv", "a") as f:  # what a kill after step 256's checkpoint leaves
+        f.write("384,1,1\n")
+    dqn.train(dqn.Args(steps=512, out=str(parts), **base))
+    assert [int(r["step"]) for r in _rows(parts / "progress.csv")] == expected
+
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    (fresh / "progress.csv").write_text("step,x\n128,1\n256,1\n")  # no checkpoint.pt beside it
+    dqn.train(dqn.Args(steps=512, out=str(fresh), **base))
+    assert [int(r["step"]) for r in _rows(fresh / "progress.csv")] == expected
+
+
 @pytest.mark.parametrize("action_type", ["discrete", "continuous"])
 def test_ppo_runs_and_exports(tmp_path, action_type):
     out = tmp_path / action_type

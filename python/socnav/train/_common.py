@@ -193,9 +193,27 @@ class RunDir:
         os.replace(tmp, self.checkpoint)
 
     def load(self) -> dict[str, Any] | None:
-        if not self.checkpoint.exists():
-            return None
-        return torch.load(self.checkpoint, weights_only=False)
+        """The checkpoint to resume from, or None for a fresh run. The progress log is cut back to
+        match: rows a stopped run logged after its last checkpoint (or before its first) would
+        otherwise appear twice on the learning curve, once from each pass over those steps."""
+        saved = torch.load(self.checkpoint, weights_only=False) if self.checkpoint.exists() else None
+        self._truncate_progress(after_step=int(saved["step"]) if saved is not None else -1)
+        return saved
+
+    def _truncate_progress(self, after_step: int) -> None:
+        path = self.path / "progress.csv"
+        self._csv_fields = None
+        if not path.exists():
+            return
+        if after_step < 0:
+            path.unlink()
+            return
+        with path.open(newline="") as f:
+            rows = list(csv.reader(f))
+        kept = rows[:1] + [r for r in rows[1:] if r and int(float(r[0])) <= after_step]
+        if len(kept) != len(rows):
+            with path.open("w", newline="") as f:
+                csv.writer(f).writerows(kept)
 
     def close(self) -> None:
         if self._tb is not None:
