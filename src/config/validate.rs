@@ -15,11 +15,13 @@ pub fn validate(config: &Config) -> Vec<String> {
     let mut v = Problems::default();
     check_scalars(config, &mut v);
     check_step_displacement(config, &mut v);
+    check_laptops(config, &mut v);
     check_observation(config, &mut v);
     check_counts(config, &mut v);
     // The room checks run alongside the others, so that a room too small for what it must hold
     // is reported together with every other problem; they only need usable room sizes.
     if room_sizes_usable(config) {
+        check_sizes_resolvable(config, &mut v);
         let other_problems = !v.0.is_empty();
         check_room_fits(config, other_problems, &mut v);
     }
@@ -104,6 +106,88 @@ fn check_step_displacement(c: &Config, v: &mut Problems) {
                 "`{key}` {speed} m/s over `episode.time_step` {dt} s moves the {who} {step} m a \
                  step, more than its diameter ({diameter} m): contacts are checked once a step, so \
                  it would pass through walls and people (lower the speed or the time step)"
+            ));
+        }
+    }
+}
+
+/// The farthest a laptop's user may sit from the laptop's centre (m): within reach of it. The
+/// laptop lies on a table, inside the walls, and 0.1.1 checks the seat only against what it
+/// overlaps, so a farther seat can land beyond the wall, outside the room (found by fuzzing:
+/// `human_distance` 3 m seated users 2.6 m outside a 10 m room).
+pub const MAX_SEAT_DISTANCE_M: f32 = 1.5;
+
+/// Laptops lie on tables when a table exists (0.1.1), at an edge offset by half the difference of
+/// the two sizes: a laptop larger than the table would hang outside it, and its user's seat with
+/// it. Their users sit `laptop_width + human_distance` from them (see [`MAX_SEAT_DISTANCE_M`]).
+fn check_laptops(c: &Config, v: &mut Problems) {
+    if c.counts.max_laptops() <= 0 {
+        return;
+    }
+    let o = &c.objects;
+    if c.counts.tables[1] > 0 {
+        for (key, laptop, table_key, table) in [
+            (
+                "objects.laptop_length",
+                o.laptop_length,
+                "objects.table_length",
+                o.table_length,
+            ),
+            (
+                "objects.laptop_width",
+                o.laptop_width,
+                "objects.table_width",
+                o.table_width,
+            ),
+        ] {
+            if laptop > table {
+                v.0.push(format!(
+                    "`{key}` {laptop} m is more than `{table_key}` {table} m: laptops lie on tables"
+                ));
+            }
+        }
+    }
+    let seat = o.laptop_width + c.laptop_use.human_distance;
+    if seat > MAX_SEAT_DISTANCE_M {
+        v.0.push(format!(
+            "`objects.laptop_width` {} m + `laptop_use.human_distance` {} m seats a laptop's user \
+             {seat} m from it, more than {MAX_SEAT_DISTANCE_M} m: out of reach, and possibly beyond \
+             the wall",
+            o.laptop_width, c.laptop_use.human_distance
+        ));
+    }
+}
+
+/// f32 coordinates resolve about 1.2e-7 of their magnitude; a size below this fraction of the
+/// room's extent (under about 80 such steps at the room's far corner) collapses an obstacle's
+/// edge to a point there (found by fuzzing: a laptop 0.2 mm wide, 300 km from the origin).
+const MIN_SIZE_PER_EXTENT: f32 = 1e-5;
+
+/// Every size must be resolvable at the room's largest extent (see [`MIN_SIZE_PER_EXTENT`]).
+fn check_sizes_resolvable(c: &Config, v: &mut Problems) {
+    let extent = c.room.size_x[1].max(if uses_independent_y(c.room.shape) {
+        c.room.size_y[1]
+    } else {
+        0
+    }) as f32;
+    let smallest = extent * MIN_SIZE_PER_EXTENT;
+    let o = &c.objects;
+    for (key, size) in [
+        ("robot.radius", c.robot.radius),
+        ("human.diameter", c.human.diameter),
+        ("objects.laptop_width", o.laptop_width),
+        ("objects.laptop_length", o.laptop_length),
+        ("objects.plant_radius", o.plant_radius),
+        ("objects.table_width", o.table_width),
+        ("objects.table_length", o.table_length),
+        ("objects.wall_thickness", o.wall_thickness),
+        ("objects.wall_segment_size", o.wall_segment_size),
+    ] {
+        // A size that is not a positive number is reported by the scalar checks.
+        if size > 0.0 && size < smallest {
+            v.0.push(format!(
+                "`{key}` {size} m is too small for a room up to {extent} m across: 32-bit \
+                 coordinates there cannot resolve it (at least {smallest} m)"
             ));
         }
     }
@@ -332,6 +416,8 @@ fn check_room_fits(c: &Config, other_problems: bool, v: &mut Problems) {
     let o = &c.objects;
     let table_circumradius =
         (0.25 * o.table_length * o.table_length + 0.25 * o.table_width * o.table_width).sqrt();
+    let laptop_circumradius =
+        (0.25 * o.laptop_length * o.laptop_length + 0.25 * o.laptop_width * o.laptop_width).sqrt();
     let group_radius = c.group.radius + 0.5 * c.human.diameter;
     let side = box_x.min(box_y);
     for (what, radius, asked) in [
@@ -339,6 +425,7 @@ fn check_room_fits(c: &Config, other_problems: bool, v: &mut Problems) {
         ("a table", table_circumradius, c.counts.tables[1] > 0),
         ("a group", group_radius, c.counts.max_groups() > 0),
         ("a plant", o.plant_radius, c.counts.plants[1] > 0),
+        ("a laptop", laptop_circumradius, c.counts.max_laptops() > 0),
     ] {
         // A size that is not a positive number is reported by the scalar checks.
         let usable = radius.is_finite() && radius > 0.0;

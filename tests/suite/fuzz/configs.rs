@@ -212,3 +212,66 @@ fn regression_a_walker_faster_than_its_diameter_a_step_is_refused() {
 fn the_base_config_runs_cleanly() {
     check(&toml::to_string(&base()).unwrap());
 }
+
+/// The problems `doc` is refused with, one string.
+fn refusal(doc: &toml::Table) -> String {
+    match Config::from_toml_str(&toml::to_string(doc).unwrap()) {
+        Err(SimError::Config(problems)) => problems.join("\n"),
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+}
+
+fn set(doc: &mut toml::Table, section: &str, key: &str, value: f64) {
+    doc[section]
+        .as_table_mut()
+        .unwrap()
+        .insert(key.into(), Value::Float(value));
+}
+
+/// Found by this target (seed 3): `objects.laptop_length` 6e5 m with `laptop_width` 0.2 mm put a
+/// laptop's corners 300 km out, where 32-bit coordinates merged two of them, and ORCA's obstacle
+/// processing panicked on the zero-length edge. Both sizes are refused now: a laptop must fit the
+/// room and its table, and every size must be resolvable at the room's extent.
+#[test]
+fn regression_a_laptop_larger_than_the_room_or_too_thin_to_resolve_is_refused() {
+    let mut doc = base();
+    set(&mut doc, "objects", "laptop_length", 600000.0);
+    set(&mut doc, "objects", "laptop_width", 0.000_215);
+    let err = refusal(&doc);
+    assert!(err.contains("room too small: a laptop"), "{err}");
+    assert!(
+        err.contains("`objects.laptop_length` 600000 m is more than `objects.table_length` 3 m"),
+        "{err}"
+    );
+    let mut doc = base();
+    set(&mut doc, "objects", "laptop_width", 0.000_05);
+    let err = refusal(&doc);
+    assert!(
+        err.contains("`objects.laptop_width` 0.00005 m is too small for a room up to 10 m across"),
+        "{err}"
+    );
+    set(&mut doc, "objects", "laptop_width", 0.001);
+    check(&toml::to_string(&doc).unwrap());
+}
+
+/// Found by this target (seed 2): `laptop_use.human_distance` 3 m (exp3's 0.3 m times ten) with
+/// three laptop users seated one 2.6 m outside the 10 m room, beyond the wall it jumped. A seat
+/// out of reach of its laptop is refused now.
+#[test]
+fn regression_a_laptop_user_seated_out_of_reach_is_refused() {
+    let mut doc = base();
+    set(&mut doc, "laptop_use", "human_distance", 3.0);
+    let err = refusal(&doc);
+    assert!(
+        err.contains(
+            "`laptop_use.human_distance` 3 m seats a laptop's user 3.4 m from it, more than 1.5 m"
+        ),
+        "{err}"
+    );
+    set(&mut doc, "laptop_use", "human_distance", 1.1);
+    doc["counts"]
+        .as_table_mut()
+        .unwrap()
+        .insert("laptop_users".into(), Value::try_from([3, 3]).unwrap());
+    check(&toml::to_string(&doc).unwrap());
+}
