@@ -36,21 +36,28 @@ pub fn violations(s: &BatchState, e: usize) -> Vec<String> {
         s.map_x[e] / 2.0 + ROOM_SLACK_M,
         s.map_y[e] / 2.0 + ROOM_SLACK_M,
     );
-    let mut place = |what: &str, x: f32, y: f32| {
+    // `human`: a human's slot, or None for the robot; named only on failure (this runs every
+    // step of a soak, for every environment).
+    let mut place = |human: Option<usize>, x: f32, y: f32| {
+        let inside = x.is_finite() && y.is_finite() && x.abs() <= hx && y.abs() <= hy;
+        if inside {
+            return;
+        }
+        let what = human.map_or_else(|| "the robot".to_owned(), |k| format!("human slot {k}"));
         if !(x.is_finite() && y.is_finite()) {
             fail(format!("{what} at non-finite ({x}, {y})"));
-        } else if x.abs() > hx || y.abs() > hy {
+        } else {
             fail(format!(
                 "{what} at ({x}, {y}), outside the room of {} x {} m",
                 s.map_x[e], s.map_y[e]
             ));
         }
     };
-    place("the robot", s.robot_x[e], s.robot_y[e]);
+    place(None, s.robot_x[e], s.robot_y[e]);
     let n_humans = s.n_humans[e] as usize;
     for k in 0..n_humans {
         let h = e * caps.humans + k;
-        place(&format!("human slot {k}"), s.h_x[h], s.h_y[h]);
+        place(Some(k), s.h_x[h], s.h_y[h]);
     }
     humans_in_their_places(s, e, &mut fail);
     out
