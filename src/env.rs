@@ -76,16 +76,18 @@ impl BatchEnv {
     pub fn new(config: Config, options: EnvOptions) -> Result<Self, SimError> {
         let problems = crate::config::validate(&config);
         if !problems.is_empty() {
-            return Err(SimError::Config(problems));
+            return Err(SimError::config(problems));
         }
         if options.n_envs == 0 {
-            return Err(SimError::Shape(
-                "a batch needs at least one environment, got n_envs = 0".into(),
+            return Err(SimError::shape(
+                "n_envs",
+                "a batch needs at least one environment, got n_envs = 0",
             ));
         }
         if options.threads == Some(0) {
-            return Err(SimError::Shape(
-                "`threads` must be at least 1, got 0".into(),
+            return Err(SimError::shape(
+                "threads",
+                "`threads` must be at least 1, got 0",
             ));
         }
         let caps = Caps::from_config(&config);
@@ -172,16 +174,19 @@ impl BatchEnv {
     /// `SimError::Shape` unless there is one entry per environment.
     pub fn set_next_seeds(&mut self, seeds: &[Option<u64>]) -> Result<(), SimError> {
         if seeds.len() != self.n_envs() {
-            return Err(SimError::Shape(format!(
-                "{} seeds given for {} environments (one per environment, None to keep its sequence)",
-                seeds.len(),
-                self.n_envs()
-            )));
+            return Err(SimError::shape(
+                "seeds",
+                format!(
+                    "{} seeds given for {} environments (one per environment, None to keep its sequence)",
+                    seeds.len(),
+                    self.n_envs()
+                ),
+            ));
         }
         if seeds.iter().all(Option::is_none) {
             return Ok(());
         }
-        let state = self.backend.state_mut();
+        let state = self.backend.state_mut()?;
         for (e, seed) in seeds.iter().enumerate() {
             if let Some(seed) = *seed {
                 state.set_next_seed(e, seed);
@@ -193,11 +198,14 @@ impl BatchEnv {
     /// Reset the environments whose mask entry is true (the DISABLED autoreset mode's reset).
     pub fn reset_envs(&mut self, mask: &[bool]) -> Result<(), SimError> {
         if mask.len() != self.n_envs() {
-            return Err(SimError::Shape(format!(
-                "reset mask has {} entries, expected one per environment ({})",
-                mask.len(),
-                self.n_envs()
-            )));
+            return Err(SimError::shape(
+                "reset mask",
+                format!(
+                    "reset mask has {} entries, expected one per environment ({})",
+                    mask.len(),
+                    self.n_envs()
+                ),
+            ));
         }
         self.backend.reset(Some(mask))
     }
@@ -215,7 +223,7 @@ impl BatchEnv {
     /// but its trajectory is no longer the one `step` would have given.
     ///
     /// # Errors
-    /// As [`BatchEnv::step`] for bad actions; `BackendUnavailable` if the device fails.
+    /// As [`BatchEnv::step`] for bad actions; `Device` if the device fails.
     pub fn time_device_steps(
         &mut self,
         actions: Actions<'_>,
@@ -231,43 +239,58 @@ impl BatchEnv {
         match actions {
             Actions::Continuous(a) => {
                 if a.len() != 3 * n {
-                    return Err(SimError::Action(format!(
-                        "expected {} floats (3 per environment for {n} environments), got {}",
-                        3 * n,
-                        a.len()
-                    )));
+                    return Err(SimError::action(
+                        None,
+                        format!(
+                            "expected {} floats (3 per environment for {n} environments), got {}",
+                            3 * n,
+                            a.len()
+                        ),
+                    ));
                 }
                 if let Some(i) = a.iter().position(|v| !v.is_finite()) {
-                    return Err(SimError::Action(format!(
-                        "environment {}: component {} is {} (actions must be finite)",
-                        i / 3,
-                        i % 3,
-                        a[i]
-                    )));
+                    return Err(SimError::action(
+                        Some(i / 3),
+                        format!(
+                            "environment {}: component {} is {} (actions must be finite)",
+                            i / 3,
+                            i % 3,
+                            a[i]
+                        ),
+                    ));
                 }
                 if self.config.robot.kinematics == Kinematics::DiffDrive {
                     if let Some(e) = (0..n).find(|e| a[3 * e + 1] != 0.0) {
-                        return Err(SimError::Action(format!(
-                            "environment {e}: lateral component {} must be 0 for a diff-drive robot",
-                            a[3 * e + 1]
-                        )));
+                        return Err(SimError::action(
+                            Some(e),
+                            format!(
+                                "environment {e}: lateral component {} must be 0 for a diff-drive robot",
+                                a[3 * e + 1]
+                            ),
+                        ));
                     }
                 }
                 self.actions.copy_from_slice(a);
             }
             Actions::Discrete(a) => {
                 if a.len() != n {
-                    return Err(SimError::Action(format!(
-                        "expected {n} discrete actions (one per environment), got {}",
-                        a.len()
-                    )));
+                    return Err(SimError::action(
+                        None,
+                        format!(
+                            "expected {n} discrete actions (one per environment), got {}",
+                            a.len()
+                        ),
+                    ));
                 }
                 if let Some(e) = a.iter().position(|&k| k as usize >= DISCRETE_ACTIONS.len()) {
-                    return Err(SimError::Action(format!(
-                        "environment {e}: discrete action {} is not in 0..{}",
-                        a[e],
-                        DISCRETE_ACTIONS.len()
-                    )));
+                    return Err(SimError::action(
+                        Some(e),
+                        format!(
+                            "environment {e}: discrete action {} is not in 0..{}",
+                            a[e],
+                            DISCRETE_ACTIONS.len()
+                        ),
+                    ));
                 }
                 for (chunk, &k) in self.actions.chunks_exact_mut(3).zip(a) {
                     chunk.copy_from_slice(&DISCRETE_ACTIONS[k as usize]);
@@ -283,7 +306,11 @@ impl BatchEnv {
     }
 
     /// The batch state (read-only).
-    pub fn state(&self) -> &BatchState {
+    ///
+    /// # Errors
+    /// `SimError::Device` when the GPU backend cannot download it (a lost device); never on the
+    /// CPU backend.
+    pub fn state(&self) -> Result<&BatchState, SimError> {
         self.backend.state()
     }
 
@@ -318,7 +345,7 @@ impl BatchEnv {
     /// Environment `env` as a self-contained JSON document (DESIGN.md section 5).
     pub fn get_state(&self, env: usize) -> Result<serde_json::Value, SimError> {
         self.check_env(env)?;
-        Ok(document::export(&self.params, self.backend.state(), env))
+        Ok(document::export(&self.params, self.backend.state()?, env))
     }
 
     /// Load environment `env` from a JSON document as [`BatchEnv::get_state`] writes it (or a
@@ -327,7 +354,7 @@ impl BatchEnv {
     pub fn set_state(&mut self, env: usize, doc: &serde_json::Value) -> Result<(), SimError> {
         self.check_env(env)?;
         let params = self.params;
-        let state = self.backend.state_mut();
+        let state = self.backend.state_mut()?;
         // A document can fail half-way through (a missing key, a capacity): keep a copy to
         // restore, so that a failed load changes nothing.
         let mut backup = BatchState::new(1, self.caps);
@@ -336,8 +363,7 @@ impl BatchEnv {
             state.copy_env_from(env, &backup, 0);
             return Err(err);
         }
-        self.backend.state_changed(env);
-        Ok(())
+        self.backend.state_changed(env)
     }
 
     /// Replace the whole batch state with `other`'s (a batch of the same config and size,
@@ -348,24 +374,27 @@ impl BatchEnv {
     /// `SimError::Shape` when the batches differ in size or capacities.
     pub fn copy_state_from(&mut self, other: &BatchEnv) -> Result<(), SimError> {
         if other.n_envs() != self.n_envs() || other.caps != self.caps {
-            return Err(SimError::Shape(format!(
-                "cannot copy the state of a batch of {} environments with capacities {:?} into one of {} with {:?}",
-                other.n_envs(),
-                other.caps,
-                self.n_envs(),
-                self.caps
-            )));
+            return Err(SimError::shape(
+                "state",
+                format!(
+                    "cannot copy the state of a batch of {} environments with capacities {:?} into one of {} with {:?}",
+                    other.n_envs(),
+                    other.caps,
+                    self.n_envs(),
+                    self.caps
+                ),
+            ));
         }
-        self.backend.state_mut().clone_from(other.state());
+        self.backend.state_mut()?.clone_from(other.state()?);
         Ok(())
     }
 
     fn check_env(&self, env: usize) -> Result<(), SimError> {
         if env >= self.n_envs() {
-            return Err(SimError::Shape(format!(
-                "environment index {env} out of range 0..{}",
-                self.n_envs()
-            )));
+            return Err(SimError::EnvIndex {
+                env,
+                n_envs: self.n_envs(),
+            });
         }
         Ok(())
     }

@@ -92,22 +92,23 @@ impl Aggregate {
         self.episodes
     }
 
-    /// Mean of statistic `key` over the episodes where it is finite (NaN if none).
-    pub fn mean(&self, key: &str) -> f64 {
-        let k = EPISODE_KEYS
-            .iter()
-            .position(|k| *k == key)
-            .unwrap_or_else(|| panic!("unknown episode statistic {key}"));
-        if self.finite[k] == 0 {
+    /// Mean of statistic `key` over the episodes where it is finite (NaN if none); `None` when
+    /// `key` is none of [`EPISODE_KEYS`].
+    pub fn mean(&self, key: &str) -> Option<f64> {
+        let k = EPISODE_KEYS.iter().position(|k| *k == key)?;
+        Some(if self.finite[k] == 0 {
             f64::NAN
         } else {
             self.sums[k] / self.finite[k] as f64
-        }
+        })
     }
 
     /// Every statistic's mean, in [`EPISODE_KEYS`] order.
     pub fn means(&self) -> Vec<(&'static str, f64)> {
-        EPISODE_KEYS.iter().map(|k| (*k, self.mean(k))).collect()
+        EPISODE_KEYS
+            .iter()
+            .map(|k| (*k, self.mean(k).unwrap_or(f64::NAN)))
+            .collect()
     }
 }
 
@@ -126,7 +127,8 @@ mod tests {
         row[26] = 2.0;
         a.add(&row);
         assert_eq!(a.episodes(), 2);
-        assert_eq!(a.mean("success"), 0.5);
-        assert_eq!(a.mean("MINIMUM_DISTANCE_TO_HUMAN"), 2.0);
+        assert_eq!(a.mean("success"), Some(0.5));
+        assert_eq!(a.mean("nope"), None);
+        assert_eq!(a.mean("MINIMUM_DISTANCE_TO_HUMAN"), Some(2.0));
     }
 }

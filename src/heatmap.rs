@@ -173,9 +173,10 @@ impl Scene {
     ) -> Result<Heatmap, SimError> {
         check_grid(n)?;
         if !heading.is_finite() {
-            return Err(SimError::Shape(format!(
-                "heatmap: heading {heading} rad is not finite"
-            )));
+            return Err(SimError::shape(
+                "heatmap",
+                format!("heatmap: heading {heading} rad is not finite"),
+            ));
         }
         let map = (self.after.map_x[0], self.after.map_y[0]);
         let mut scene = self.after.clone();
@@ -285,9 +286,10 @@ pub fn check_grid(n: usize) -> Result<(), SimError> {
     if (MIN_GRID..=MAX_GRID).contains(&n) {
         Ok(())
     } else {
-        Err(SimError::Shape(format!(
-            "heatmap: grid size {n} is outside {MIN_GRID}..={MAX_GRID}"
-        )))
+        Err(SimError::shape(
+            "heatmap",
+            format!("heatmap: grid size {n} is outside {MIN_GRID}..={MAX_GRID}"),
+        ))
     }
 }
 
@@ -300,7 +302,7 @@ pub fn require_sngnn(config: &Config, name: &str) -> Result<(), SimError> {
     if config.reward.kind == RewardKind::Sngnn {
         return Ok(());
     }
-    Err(SimError::Config(vec![format!(
+    Err(SimError::config([format!(
         "{name}: the heatmap compares SNGNN-v2 with DSRNN, but this config's reward is DSRNN; \
          set `reward.kind = \"sngnn\"` in it, or use a shipped SNGNN config (exp1_sngnn, \
          exp2_sngnn, exp3_sngnn)"

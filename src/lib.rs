@@ -22,6 +22,10 @@
 //! assert_eq!(env.outputs().reward.len(), 8);
 //! ```
 
+// A user's input never panics: every internal invariant that would is marked with
+// `#[expect(clippy::..., reason = "...")]` saying why it holds (clippy.toml lets unit tests).
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
 pub mod backend;
 pub mod config;
 pub mod document;

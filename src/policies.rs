@@ -4,6 +4,7 @@
 //! current step; random actions are the caller's (a host RNG, outside the simulation).
 
 use crate::config::ObsFrame;
+use crate::error::SimError;
 use crate::state::BatchState;
 use crate::systems::orca_world::{self, Others};
 use crate::systems::robot_motion;
@@ -60,13 +61,16 @@ impl OrcaRobot {
     }
 
     /// The actions of every environment of `env` at its current step.
-    pub fn actions(&mut self, env: &BatchEnv, actions: &mut [f32]) {
+    ///
+    /// # Errors
+    /// `SimError::Device` when a GPU batch's state cannot be downloaded.
+    pub fn actions(&mut self, env: &BatchEnv, actions: &mut [f32]) -> Result<(), SimError> {
         let p = *env.params();
         let scratch = match &mut self.scratch {
             Some(s) if s.n_envs == env.n_envs() && s.strides == *env.caps() => s,
             slot => slot.insert(BatchState::new(env.n_envs(), *env.caps())),
         };
-        scratch.clone_from(env.state());
+        scratch.clone_from(env.state()?);
         let s = scratch.chunk();
         let others = Others {
             skip_human: None,
@@ -85,5 +89,6 @@ impl OrcaRobot {
             a[1] = vy / p.robot_max_speed;
             a[2] = w / p.robot_max_rotation;
         }
+        Ok(())
     }
 }

@@ -56,11 +56,14 @@ pub fn episode_json(layout: &ObsLayout, steps: &[Step<'_>]) -> Result<String, Si
     let mut doc = String::from("{");
     for (t, step) in steps.iter().enumerate() {
         if step.obs.len() != layout.dim {
-            return Err(SimError::Shape(format!(
-                "recording: step {t} has an observation of {} floats, the layout {}",
-                step.obs.len(),
-                layout.dim
-            )));
+            return Err(SimError::shape(
+                "recording",
+                format!(
+                    "recording: step {t} has an observation of {} floats, the layout {}",
+                    step.obs.len(),
+                    layout.dim
+                ),
+            ));
         }
         let mut entry = Map::new();
         observation(layout, step.obs, &mut entry);
@@ -88,8 +91,7 @@ impl RecordingDir {
     /// # Errors
     /// [`SimError::Io`] naming the directory when it cannot be created or read.
     pub fn open(dir: &Path) -> Result<Self, SimError> {
-        let io =
-            |e: std::io::Error| SimError::Io(format!("recording directory {}: {e}", dir.display()));
+        let io = |e: std::io::Error| SimError::io("recording directory", dir, &e);
         fs::create_dir_all(dir).map_err(io)?;
         let mut next = 0;
         for entry in fs::read_dir(dir).map_err(io)? {
@@ -130,7 +132,7 @@ impl RecordingDir {
 
 fn write_whole(path: &Path, text: &str) -> Result<(), SimError> {
     let part = path.with_extension("part");
-    let io = |e: std::io::Error| SimError::Io(format!("cannot write {}: {e}", path.display()));
+    let io = |e: std::io::Error| SimError::io("cannot write", path, &e);
     fs::write(&part, text).map_err(io)?;
     fs::rename(&part, path).map_err(io)
 }

@@ -12,12 +12,18 @@ the shipped ones are also gymnasium ids (``gymnasium.make("socnav/Exp2-v0")``, `
 """
 
 from socnav._socnav import (
+    ActionError,
     BackendUnavailableError,
     ConfigError,
+    DeviceError,
     DisplayError,
+    EnvIndexError,
+    InternalError,
     ScenarioError,
+    ShapeError,
     SngnnError,
     SocNavError,
+    UsageError,
     shipped_configs,
 )
 from socnav._batch import RewardInputs
@@ -32,16 +38,22 @@ registration.register_envs()
 __version__ = "0.1.0"
 
 __all__ = [
+    "ActionError",
     "BackendUnavailableError",
     "ConfigError",
+    "DeviceError",
     "DisplayError",
+    "EnvIndexError",
     "Evaluation",
+    "InternalError",
     "RewardInputs",
     "ScenarioError",
+    "ShapeError",
     "SngnnError",
     "SocNavEnv",
     "SocNavError",
     "SocNavVectorEnv",
+    "UsageError",
     "evaluate",
     "make",
     "make_vec",

@@ -33,7 +33,10 @@ def build_batch(
         base = overrides.pop("base", "exp1")
         bad = list(_non_finite(overrides, ""))
         if bad:
-            raise ConfigError("; ".join(f"`{key}` must be finite, got {value}" for key, value in bad))
+            problems = [(key, f"`{key}` must be finite, got {value}") for key, value in bad]
+            err = ConfigError("invalid configuration:\n  - " + "\n  - ".join(m for _, m in problems))
+            err.problems = problems  # as the core's ConfigError carries them
+            raise err
         text = json.dumps(overrides)
     elif isinstance(config, str):
         base, text = config, None

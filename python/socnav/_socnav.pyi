@@ -11,11 +11,17 @@ __all__ = [
     "DISCRETE_ACTIONS",
     "BackendUnavailableError",
     "Batch",
+    "ActionError",
     "ConfigError",
+    "DeviceError",
     "DisplayError",
+    "EnvIndexError",
+    "InternalError",
     "ScenarioError",
+    "ShapeError",
     "SngnnError",
     "SocNavError",
+    "UsageError",
     "Viewer",
     "orca_compute_velocities",
     "orca_compute_velocities_batch",
@@ -30,11 +36,29 @@ __all__ = [
 DISCRETE_ACTIONS: list[list[float]]
 
 class SocNavError(Exception): ...
-class ConfigError(SocNavError): ...
-class ScenarioError(SocNavError): ...
+class ConfigError(SocNavError):
+    problems: list[tuple[str | None, str]]
+
+class ScenarioError(SocNavError):
+    env: int
+    entity: str
+
 class BackendUnavailableError(SocNavError): ...
 class SngnnError(SocNavError): ...
 class DisplayError(SocNavError): ...
+class DeviceError(SocNavError): ...
+class UsageError(SocNavError): ...
+class InternalError(SocNavError): ...
+
+class ShapeError(SocNavError, ValueError):
+    what: str
+
+class ActionError(SocNavError, ValueError):
+    env: int | None
+
+class EnvIndexError(SocNavError, IndexError, ValueError):
+    env: int
+    n_envs: int
 
 @final
 class Batch:

@@ -6,15 +6,20 @@
 //! of this class; everything about shapes comes from here, which takes it from the core's
 //! `spec` module, so no shape is written twice.
 
+// A user's input never panics: every internal invariant that would is marked with
+// `#[expect(clippy::..., reason = "...")]` saying why it holds (clippy.toml lets unit tests).
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
 mod orca;
 mod viewer;
 
 use ndarray::{ArrayView, IxDyn};
 use numpy::{Element, PyArray, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::create_exception;
-use pyo3::exceptions::{PyException, PyFileNotFoundError, PyValueError};
+use pyo3::exceptions::{PyException, PyIndexError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyDict, PyTuple, PyType};
 use socnav::config::Kinematics;
 use socnav::episodes::TABLE_KEYS;
 use socnav::spec::{
@@ -59,18 +64,144 @@ create_exception!(
     "The SNGNN-v2 weights are missing or invalid; the message says how to install them."
 );
 
-/// The Python exception for a core error.
+create_exception!(
+    _socnav,
+    DeviceError,
+    SocNavError,
+    "The GPU failed during a run (lost, out of memory, a failed transfer); make a new batch."
+);
+create_exception!(
+    _socnav,
+    InternalError,
+    SocNavError,
+    "A bug in socnav (a broken internal invariant, caught); drop the batch and report the message."
+);
+create_exception!(
+    _socnav,
+    UsageError,
+    SocNavError,
+    "A call that does not fit the object it was made on (out of order, or missing what it needs)."
+);
+
+/// Exceptions that are socnav errors and also the builtin a Python caller expects (numpy's
+/// `AxisError` is a `ValueError` and an `IndexError` the same way): made once, on first use.
+struct DualErrors {
+    shape: Py<PyType>,
+    action: Py<PyType>,
+    env_index: Py<PyType>,
+}
+
+static DUAL: PyOnceLock<DualErrors> = PyOnceLock::new();
+
+fn dual_errors(py: Python<'_>) -> PyResult<&DualErrors> {
+    DUAL.get_or_try_init(py, || {
+        let base = py.get_type::<SocNavError>();
+        let make =
+            |name: &str, builtins: &[Bound<'_, PyType>], doc: &str| -> PyResult<Py<PyType>> {
+                let mut bases = vec![base.clone()];
+                bases.extend(builtins.iter().cloned());
+                let dict = PyDict::new(py);
+                dict.set_item("__doc__", doc)?;
+                dict.set_item("__module__", "socnav._socnav")?;
+                let ty = py
+                    .get_type::<PyType>()
+                    .call1((name, PyTuple::new(py, bases)?, dict))?;
+                Ok(ty.cast_into::<PyType>()?.unbind())
+            };
+        let value = py.get_type::<PyValueError>();
+        let index = py.get_type::<PyIndexError>();
+        Ok(DualErrors {
+            shape: make(
+                "ShapeError",
+                std::slice::from_ref(&value),
+                "An argument, array or state document has the wrong shape, size or content \
+                 (`what` names it). Also a ValueError.",
+            )?,
+            action: make(
+                "ActionError",
+                std::slice::from_ref(&value),
+                "An invalid action (`env` names the environment, None for the array as a whole). \
+                 Also a ValueError.",
+            )?,
+            env_index: make(
+                "EnvIndexError",
+                &[index, value],
+                "An environment index outside the batch (`env`, `n_envs`). Also an IndexError \
+                 and a ValueError.",
+            )?,
+        })
+    })
+}
+
+/// The Python exception for a core error, with the error's fields as attributes: `problems` (a
+/// list of `(key, message)`, key None when the problem names none) on `ConfigError`, `env` and
+/// `entity` on `ScenarioError`, `what` on `ShapeError`, `env` on `ActionError`, `env` and
+/// `n_envs` on `EnvIndexError`; I/O errors are the `OSError` subclass of their kind
+/// (`FileNotFoundError`, `PermissionError`, ...), with `filename`.
 pub(crate) fn py_err(e: SimError) -> PyErr {
+    Python::attach(|py| py_err_attached(py, e).unwrap_or_else(|failure| failure))
+}
+
+fn py_err_attached(py: Python<'_>, e: SimError) -> Result<PyErr, PyErr> {
     let msg = e.to_string();
-    match e {
-        SimError::Config(_) => ConfigError::new_err(msg),
-        SimError::Scenario(_) => ScenarioError::new_err(msg),
+    let with = |err: PyErr, attrs: &[(&str, Bound<'_, PyAny>)]| -> Result<PyErr, PyErr> {
+        let value = err.value(py);
+        for (name, v) in attrs {
+            value.setattr(*name, v)?;
+        }
+        Ok(err)
+    };
+    let dual = |ty: &Py<PyType>| PyErr::from_type(ty.bind(py).clone(), msg.clone());
+    Ok(match e {
+        SimError::Config(problems) => {
+            let list: Vec<(Option<String>, String)> =
+                problems.into_iter().map(|p| (p.key, p.message)).collect();
+            with(
+                ConfigError::new_err(msg.clone()),
+                &[("problems", list.into_pyobject(py)?.into_any())],
+            )?
+        }
+        SimError::Scenario { env, entity, .. } => with(
+            ScenarioError::new_err(msg.clone()),
+            &[
+                ("env", env.into_pyobject(py)?.into_any()),
+                ("entity", entity.into_pyobject(py)?.into_any()),
+            ],
+        )?,
+        SimError::Shape { what, .. } => with(
+            dual(&dual_errors(py)?.shape),
+            &[("what", what.into_pyobject(py)?.into_any())],
+        )?,
+        SimError::Action { env, .. } => with(
+            dual(&dual_errors(py)?.action),
+            &[("env", env.into_pyobject(py)?.into_any())],
+        )?,
+        SimError::EnvIndex { env, n_envs } => with(
+            dual(&dual_errors(py)?.env_index),
+            &[
+                ("env", env.into_pyobject(py)?.into_any()),
+                ("n_envs", n_envs.into_pyobject(py)?.into_any()),
+            ],
+        )?,
+        SimError::Io {
+            path,
+            kind,
+            message,
+        } => {
+            let err = PyErr::from(std::io::Error::new(kind, message));
+            if let Some(path) = path {
+                err.value(py).setattr("filename", path)?;
+            }
+            err
+        }
         SimError::BackendUnavailable(_) => BackendUnavailableError::new_err(msg),
-        SimError::Shape(_) | SimError::Action(_) => PyValueError::new_err(msg),
-        SimError::Io(_) => PyFileNotFoundError::new_err(msg),
+        SimError::Device(_) => DeviceError::new_err(msg),
+        SimError::Usage(_) => UsageError::new_err(msg),
+        SimError::Internal(_) => InternalError::new_err(msg),
         SimError::Sngnn(_) => SngnnError::new_err(msg),
         SimError::Display(_) => DisplayError::new_err(msg),
-    }
+        other => SocNavError::new_err(other.to_string()),
+    })
 }
 
 fn parse_autoreset(name: &str) -> PyResult<AutoresetMode> {
@@ -93,6 +224,10 @@ struct Batch {
 }
 
 /// An array over `data` with `shape`, owned by the `Batch` object `owner`.
+#[expect(
+    clippy::expect_used,
+    reason = "the output buffers are allocated with the shapes the spec gives them"
+)]
 fn borrowed<'py, T: Element>(
     owner: &Bound<'py, Batch>,
     data: &[T],
@@ -348,7 +483,9 @@ impl Batch {
         let (env, orca) = (&self.env, &mut self.orca);
         match policy {
             "goal" => socnav::policies::goal_actions(env, &mut actions),
-            "orca" => py.detach(|| orca.actions(env, &mut actions)),
+            "orca" => py
+                .detach(|| orca.actions(env, &mut actions))
+                .map_err(py_err)?,
             other => {
                 return Err(PyValueError::new_err(format!(
                     "policy must be 'goal' or 'orca', got {other:?}"
@@ -383,8 +520,14 @@ impl Batch {
             }
             None => Vec::new(),
         };
-        let pixmap = socnav::render::draw(self.env.params(), self.env.state(), env, &trail, size)
-            .map_err(py_err)?;
+        let pixmap = socnav::render::draw(
+            self.env.params(),
+            self.env.state().map_err(py_err)?,
+            env,
+            &trail,
+            size,
+        )
+        .map_err(py_err)?;
         let (w, h) = (pixmap.width() as usize, pixmap.height() as usize);
         // Every pixel is opaque (the background is painted first): premultiplied RGB is RGB.
         let rgb: Vec<u8> = pixmap
@@ -400,7 +543,7 @@ impl Batch {
     /// The robot's pose of every environment: float32 `(n, 3)`, x and y (m), heading (rad),
     /// world frame (read from the state; the GPU backend downloads it).
     fn robot_poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f32>>> {
-        let s = self.env.state();
+        let s = self.env.state().map_err(py_err)?;
         let poses: Vec<f32> = (0..s.n_envs)
             .flat_map(|e| [s.robot_x[e], s.robot_y[e], s.robot_theta[e]])
             .collect();
@@ -549,5 +692,12 @@ fn _socnav(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     m.add("SngnnError", py.get_type::<SngnnError>())?;
     m.add("DisplayError", py.get_type::<DisplayError>())?;
+    m.add("DeviceError", py.get_type::<DeviceError>())?;
+    m.add("UsageError", py.get_type::<UsageError>())?;
+    m.add("InternalError", py.get_type::<InternalError>())?;
+    let dual = dual_errors(py)?;
+    m.add("ShapeError", dual.shape.bind(py))?;
+    m.add("ActionError", dual.action.bind(py))?;
+    m.add("EnvIndexError", dual.env_index.bind(py))?;
     Ok(())
 }

@@ -78,18 +78,20 @@ impl Viewer {
         }
         let pm = pixmap_of(&frame)?;
         let size = (pm.width() as usize, pm.height() as usize);
-        if self.window.is_none() {
-            let (w, h) = hud::size(size.0, size.1, lines.len().max(24));
-            self.window = Some(Window::open(&self.title, w, h).map_err(py_err)?);
-            self.frame = size;
-        }
+        let window = match &mut self.window {
+            Some(window) => window,
+            empty => {
+                let (w, h) = hud::size(size.0, size.1, lines.len().max(24));
+                self.frame = size;
+                empty.insert(Window::open(&self.title, w, h).map_err(py_err)?)
+            }
+        };
         if size != self.frame {
             return Err(PyValueError::new_err(format!(
                 "the viewer shows {}x{} frames, got {}x{}",
                 self.frame.0, self.frame.1, size.0, size.1
             )));
         }
-        let window = self.window.as_mut().expect("opened above");
         hud::compose(&pm, &lines, window.size(), &mut self.pixels);
         window.show(&self.pixels).map_err(py_err)?;
         if !window.is_open() {

@@ -125,6 +125,37 @@ def test_config_errors_name_every_problem():
         socnav.make_vec("exp1", num_envs=1, backend="tpu")
 
 
+def test_errors_carry_their_fields_and_keep_python_conventions(tmp_path):
+    """Every core error is a SocNavError with what a caller branches on as attributes, and also
+    the builtin exception Python code expects (ValueError, IndexError, the OSError of its kind)."""
+    with pytest.raises(socnav.ConfigError) as err:
+        socnav.make_vec({"base": "exp1", "robot": {"radius": -1.0}, "events": {"crowd_formation_probability": 2.0}})
+    keys = {key for key, _ in err.value.problems}
+    assert {"robot.radius", "events.crowd_formation_probability"} <= keys, err.value.problems
+    batch = socnav.make_vec("exp1", num_envs=3)._batch
+    with pytest.raises(socnav.EnvIndexError) as err:
+        batch.get_state(5)
+    assert isinstance(err.value, IndexError) and isinstance(err.value, ValueError)
+    assert isinstance(err.value, socnav.SocNavError)
+    assert (err.value.env, err.value.n_envs) == (5, 3)
+    with pytest.raises(socnav.ShapeError) as err:
+        batch.reset_envs(np.array([True, False]))
+    assert isinstance(err.value, ValueError) and err.value.what == "reset mask"
+    with pytest.raises(socnav.ShapeError) as err:
+        batch.set_state(0, '{"format": "nope"}')
+    assert err.value.what == "state document"
+    with pytest.raises(socnav.ActionError) as err:
+        batch.step_discrete(np.array([0, 9, 0], np.uint32))
+    assert isinstance(err.value, ValueError) and err.value.env == 1
+    # An I/O error keeps its kind: a directory where a file should be is IsADirectoryError (or
+    # PermissionError), not FileNotFoundError; a missing one is FileNotFoundError.
+    with pytest.raises(FileNotFoundError) as err:
+        socnav.make_vec(str(tmp_path / "missing.toml"))
+    with pytest.raises(OSError) as err:
+        socnav.make_vec(str(tmp_path))
+    assert not isinstance(err.value, FileNotFoundError), type(err.value)
+
+
 @pytest.mark.parametrize("config, obs_mode, action_type", [("exp1", "dict", "continuous"), ("exp3", "flat", "discrete")])
 def test_single_env_passes_check_env(config, obs_mode, action_type):
     env = socnav.make(config, obs_mode=obs_mode, action_type=action_type)

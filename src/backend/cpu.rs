@@ -8,8 +8,9 @@
 //! woken at the end of every step, which on virtual machines cost up to a third of a 1 ms step;
 //! a fixed share per thread would leave threads idle behind one slowed by resets.
 
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
 
 use crate::error::SimError;
@@ -149,10 +150,8 @@ impl<'a> ChunkQueue<'a> {
 
     /// The next chunk of at most [`CHUNK_ENVS`] environments, if any is left.
     fn pull(&self) -> Option<Batch<'a>> {
-        let mut rest = self
-            .rest
-            .lock()
-            .expect("a thread stepping the batch panicked");
+        // A worker's panic is caught in `drain`, so a poisoned lock holds consistent data.
+        let mut rest = self.rest.lock().unwrap_or_else(PoisonError::into_inner);
         let batch = rest.take()?;
         if batch.n_envs() == 0 {
             return None;
@@ -171,11 +170,17 @@ impl<'a> ChunkQueue<'a> {
         work: &(dyn Fn(&StepParams, &mut Batch<'_>, &[AtomicU64]) + Sync),
     ) {
         while let Some(mut chunk) = self.pull() {
-            work(p, &mut chunk, nanos);
-            if let Some(e) = chunk.error {
+            // A panic is a bug; caught here it becomes the call's error instead of unwinding
+            // through the thread pool (and aborting a Python interpreter).
+            let ran = catch_unwind(AssertUnwindSafe(|| work(p, &mut chunk, nanos)));
+            let error = match ran {
+                Ok(()) => chunk.error.take(),
+                Err(payload) => Some(SimError::Internal(panic_message(payload.as_ref()))),
+            };
+            if let Some(e) = error {
                 self.error
                     .lock()
-                    .expect("a thread stepping the batch panicked")
+                    .unwrap_or_else(PoisonError::into_inner)
                     .get_or_insert(e);
             }
         }
@@ -185,12 +190,21 @@ impl<'a> ChunkQueue<'a> {
         match self
             .error
             .into_inner()
-            .expect("a thread stepping the batch panicked")
+            .unwrap_or_else(PoisonError::into_inner)
         {
             Some(e) => Err(e),
             None => Ok(()),
         }
     }
+}
+
+/// The message a panic was raised with.
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| (*s).to_owned())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a worker thread panicked".to_owned())
 }
 
 /// Every stage in order over the chunk's environments.
@@ -218,11 +232,14 @@ impl Backend for CpuBackend {
     fn reset(&mut self, mask: Option<&[bool]>) -> Result<(), SimError> {
         if let Some(m) = mask {
             if m.len() != self.state.n_envs {
-                return Err(SimError::Shape(format!(
-                    "reset mask has {} entries for {} environments",
-                    m.len(),
-                    self.state.n_envs
-                )));
+                return Err(SimError::shape(
+                    "reset mask",
+                    format!(
+                        "reset mask has {} entries for {} environments",
+                        m.len(),
+                        self.state.n_envs
+                    ),
+                ));
             }
         }
         self.run(&[], &|p, b, _| {
@@ -255,20 +272,21 @@ impl Backend for CpuBackend {
         &self.out
     }
 
-    fn state(&self) -> &BatchState {
-        &self.state
+    fn state(&self) -> Result<&BatchState, SimError> {
+        Ok(&self.state)
     }
 
-    fn state_mut(&mut self) -> &mut BatchState {
-        &mut self.state
+    fn state_mut(&mut self) -> Result<&mut BatchState, SimError> {
+        Ok(&mut self.state)
     }
 
-    fn state_changed(&mut self, env: usize) {
+    fn state_changed(&mut self, env: usize) -> Result<(), SimError> {
         let p = self.params;
         let mut s = self.state.env_chunk(env);
         crate::systems::orca_obstacles::rebuild_if_dirty(&p, &mut s, 0);
         let mut o = self.out.env_chunk(env);
         crate::systems::observation::write_observation(&p, &mut s, &mut o, 0);
+        Ok(())
     }
 
     fn set_params(&mut self, params: StepParams) {

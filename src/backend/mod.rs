@@ -110,13 +110,13 @@ pub trait Backend: Send + Sync {
     fn step(&mut self, actions: &[f32]) -> Result<(), SimError>;
     /// The outputs of the last step or reset.
     fn outputs(&self) -> &Outputs;
-    /// The batch state.
-    fn state(&self) -> &BatchState;
+    /// The batch state (`SimError::Device` when the GPU backend's download of it fails).
+    fn state(&self) -> Result<&BatchState, SimError>;
     /// The batch state, for loading a snapshot; call [`Backend::state_changed`] afterwards.
-    fn state_mut(&mut self) -> &mut BatchState;
+    fn state_mut(&mut self) -> Result<&mut BatchState, SimError>;
     /// Re-derive what depends on a state edited through [`Backend::state_mut`] for environment
     /// `env` (ORCA obstacles, observation) without stepping.
-    fn state_changed(&mut self, env: usize);
+    fn state_changed(&mut self, env: usize) -> Result<(), SimError>;
     /// Replace the step constants (same config; e.g. a new seed or replay mode).
     fn set_params(&mut self, params: StepParams);
     /// Host threads the backend works with, the caller included.

@@ -693,8 +693,8 @@ impl Config {
         let mut problems = Vec::new();
         let config = loop {
             let mut unknown = Vec::new();
-            let de = toml::Deserializer::parse(&text)
-                .map_err(|e| SimError::Config(vec![e.to_string()]))?;
+            let de =
+                toml::Deserializer::parse(&text).map_err(|e| SimError::config([e.to_string()]))?;
             match serde_ignored::deserialize(de, |path| unknown.push(path.to_string())) {
                 Ok(config) => {
                     problems.extend(unknown.into_iter().map(|k| format!("unknown key `{k}`")));
@@ -709,7 +709,7 @@ impl Config {
                     }
                     None => {
                         problems.push(e.to_string());
-                        return Err(SimError::Config(problems));
+                        return Err(SimError::config(problems));
                     }
                 },
             }
@@ -718,7 +718,7 @@ impl Config {
         if problems.is_empty() {
             Ok(config)
         } else {
-            Err(SimError::Config(problems))
+            Err(SimError::config(problems))
         }
     }
 
@@ -726,7 +726,7 @@ impl Config {
     pub fn from_file(path: impl AsRef<Path>) -> Result<Self, SimError> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path)
-            .map_err(|e| SimError::Io(format!("cannot read config {}: {e}", path.display())))?;
+            .map_err(|e| SimError::io("cannot read config", path, &e))?;
         Self::from_toml_str(&text).map_err(|e| e.in_file(path))
     }
 
@@ -741,10 +741,14 @@ impl Config {
                 .map_err(|e| e.in_file(Path::new(&format!("configs/{n}.toml")))),
             None => {
                 let names: Vec<&str> = SHIPPED.iter().map(|(n, _)| *n).collect();
-                Err(SimError::Io(format!(
-                    "no config named `{name}`: neither a file nor one of the shipped configs ({})",
-                    names.join(", ")
-                )))
+                Err(SimError::Io {
+                    path: Some(path.to_owned()),
+                    kind: std::io::ErrorKind::NotFound,
+                    message: format!(
+                        "no config named `{name}`: neither a file nor one of the shipped configs ({})",
+                        names.join(", ")
+                    ),
+                })
             }
         }
     }
@@ -760,21 +764,27 @@ impl Config {
     /// and bad values are all reported at once.
     pub fn with_overrides(&self, overrides: &serde_json::Value) -> Result<Self, SimError> {
         let mut table: toml::Table = toml::from_str(&self.to_toml_string())
-            .expect("a serialised Config parses back as TOML");
+            .map_err(|e| SimError::Internal(format!("a config does not parse back: {e}")))?;
         let serde_json::Value::Object(sections) = overrides else {
-            return Err(SimError::Config(vec![format!(
+            return Err(SimError::config([format!(
                 "overrides must be a table of sections, got {overrides}"
             )]));
         };
         let mut problems = Vec::new();
         merge_json(&mut table, sections, "", &mut problems);
         if !problems.is_empty() {
-            return Err(SimError::Config(problems));
+            return Err(SimError::config(problems));
         }
-        Self::from_toml_str(&toml::to_string(&table).expect("a TOML table serialises"))
+        let text = toml::to_string(&table)
+            .map_err(|e| SimError::config([format!("the overridden config: {e}")]))?;
+        Self::from_toml_str(&text)
     }
 
     /// Serialise to TOML (every key, resolved defaults included).
+    #[expect(
+        clippy::expect_used,
+        reason = "every field is a number, string, bool or array of them, which TOML holds"
+    )]
     pub fn to_toml_string(&self) -> String {
         toml::to_string_pretty(self).expect("a Config always serialises to TOML")
     }
@@ -787,7 +797,7 @@ impl Config {
         if problems.is_empty() {
             Ok(config)
         } else {
-            Err(SimError::Config(problems))
+            Err(SimError::config(problems))
         }
     }
 }

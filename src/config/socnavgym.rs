@@ -183,6 +183,6 @@ pub(super) fn convert(yaml: &Value) -> Result<Config, SimError> {
     if r.problems.is_empty() {
         Ok(c)
     } else {
-        Err(SimError::Config(r.problems))
+        Err(SimError::config(r.problems))
     }
 }

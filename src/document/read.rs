@@ -16,7 +16,7 @@ pub(super) struct Reader<'a> {
 }
 
 pub(super) fn err(path: &str, what: impl std::fmt::Display) -> SimError {
-    SimError::Shape(format!("state document: `{path}` {what}"))
+    SimError::shape("state document", format!("state document: `{path}` {what}"))
 }
 
 impl<'a> Reader<'a> {
@@ -176,9 +176,12 @@ impl<'a> Reader<'a> {
 
 pub(super) fn capacity(what: &str, n: usize, cap: usize, why: &str) -> Result<(), SimError> {
     if n > cap {
-        return Err(SimError::Shape(format!(
-            "state document has {n} {what} but the batch's capacity is {cap} ({why}); make the batch from a config whose maximum counts cover it"
-        )));
+        return Err(SimError::shape(
+            "state document",
+            format!(
+                "state document has {n} {what} but the batch's capacity is {cap} ({why}); make the batch from a config whose maximum counts cover it"
+            ),
+        ));
     }
     Ok(())
 }

@@ -122,10 +122,10 @@ fn panel(
     let h = f.heatmap;
     let view = View::new(h.map.0, h.map.1, f.panel_px);
     let mut c = Canvas::new(view, palette::OUTSIDE).ok_or_else(|| {
-        SimError::Shape(format!(
-            "heatmap: cannot allocate a {} px panel",
-            f.panel_px
-        ))
+        SimError::shape(
+            "heatmap figure",
+            format!("heatmap: cannot allocate a {} px panel", f.panel_px),
+        )
     })?;
     let sc = Scene {
         p: f.params,
@@ -193,17 +193,21 @@ fn layout(pw: f32, ph: f32) -> (f32, f32) {
 pub fn draw(f: &Figure<'_>) -> Result<Pixmap, SimError> {
     let h = f.heatmap;
     if h.sngnn.len() != h.n * h.n {
-        return Err(SimError::Shape(
-            "heatmap figure: the heatmap has no SNGNN-v2 field (compute it with a scorer)".into(),
+        return Err(SimError::shape(
+            "heatmap figure",
+            "heatmap figure: the heatmap has no SNGNN-v2 field (compute it with a scorer)",
         ));
     }
     if !(super::MIN_SIZE_PX..=super::MAX_SIZE_PX).contains(&f.panel_px) {
-        return Err(SimError::Shape(format!(
-            "heatmap figure: panel size {} px is outside {}..={}",
-            f.panel_px,
-            super::MIN_SIZE_PX,
-            super::MAX_SIZE_PX
-        )));
+        return Err(SimError::shape(
+            "heatmap figure",
+            format!(
+                "heatmap figure: panel size {} px is outside {}..={}",
+                f.panel_px,
+                super::MIN_SIZE_PX,
+                super::MAX_SIZE_PX
+            ),
+        ));
     }
     let floor = dsrnn_floor(f.params);
     let left = panel(f, &h.sngnn, &|q| 1.0 - q)?;
@@ -220,7 +224,12 @@ pub fn draw(f: &Figure<'_>) -> Result<Pixmap, SimError> {
         },
         PAPER,
     )
-    .ok_or_else(|| SimError::Shape("heatmap figure: cannot allocate the image".into()))?;
+    .ok_or_else(|| {
+        SimError::shape(
+            "heatmap figure",
+            "heatmap figure: cannot allocate the image",
+        )
+    })?;
     let line_w = width - 2.0 * pad;
     let scale = fit_scale(&[f.caption, MASK_NOTE], line_w);
     text(&mut c, (pad, pad), f.caption, scale, line_w);

@@ -32,7 +32,7 @@
 //! use socnav::{BatchEnv, Config, EnvOptions, render};
 //! let mut env = BatchEnv::new(Config::default(), EnvOptions::default()).unwrap();
 //! env.reset(Some(3)).unwrap();
-//! let frame = render::draw(env.params(), env.state(), 0, &[], 200).unwrap();
+//! let frame = render::draw(env.params(), env.state().unwrap(), 0, &[], 200).unwrap();
 //! assert_eq!((frame.width(), frame.height()), (200, 200)); // exp1's room is square
 //! ```
 
@@ -78,23 +78,29 @@ impl Frame<'_> {
     pub fn view(&self) -> Result<View, SimError> {
         let s = self.state;
         if self.env >= s.n_envs {
-            return Err(SimError::Shape(format!(
-                "render: environment {} out of range 0..{}",
-                self.env, s.n_envs
-            )));
+            return Err(SimError::EnvIndex {
+                env: self.env,
+                n_envs: s.n_envs,
+            });
         }
         if !(MIN_SIZE_PX..=MAX_SIZE_PX).contains(&self.size_px) {
-            return Err(SimError::Shape(format!(
-                "render: image size {} px is outside {MIN_SIZE_PX}..={MAX_SIZE_PX}",
-                self.size_px
-            )));
+            return Err(SimError::shape(
+                "render",
+                format!(
+                    "render: image size {} px is outside {MIN_SIZE_PX}..={MAX_SIZE_PX}",
+                    self.size_px
+                ),
+            ));
         }
         let (mx, my) = (s.map_x[self.env], s.map_y[self.env]);
         if !(mx.is_finite() && my.is_finite() && mx > 0.0 && my > 0.0) {
-            return Err(SimError::Shape(format!(
-                "render: environment {} has room size {mx} x {my} m (reset it before drawing)",
-                self.env
-            )));
+            return Err(SimError::shape(
+                "render",
+                format!(
+                    "render: environment {} has room size {mx} x {my} m (reset it before drawing)",
+                    self.env
+                ),
+            ));
         }
         Ok(View::new(mx, my, self.size_px))
     }
@@ -103,10 +109,13 @@ impl Frame<'_> {
     pub fn draw(&self) -> Result<Pixmap, SimError> {
         let view = self.view()?;
         let mut canvas = canvas::Canvas::new(view, palette::OUTSIDE).ok_or_else(|| {
-            SimError::Shape(format!(
-                "render: cannot allocate a {}x{} px image",
-                view.width, view.height
-            ))
+            SimError::shape(
+                "render",
+                format!(
+                    "render: cannot allocate a {}x{} px image",
+                    view.width, view.height
+                ),
+            )
         })?;
         let scene = scene::Scene {
             p: self.params,

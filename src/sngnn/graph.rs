@@ -430,6 +430,10 @@ struct Endpoint {
 
 impl Endpoint {
     /// The person or object `id` of `frame` (0.1.1 raises on an id that is neither).
+    #[expect(
+        clippy::panic,
+        reason = "socnav builds the frames, every interaction between its own entities"
+    )]
     fn of(frame: &Frame<'_>, id: u32) -> Self {
         let found = frame
             .people()
@@ -449,6 +453,7 @@ impl Endpoint {
 }
 
 /// The relation of an interaction edge by the types of its ends (0.1.1 raises on o_o).
+#[expect(clippy::panic, reason = "an interaction always involves a person")]
 fn relation(src_person: bool, dst_person: bool) -> u8 {
     match (src_person, dst_person) {
         (true, true) => rel::P_P,

@@ -124,6 +124,10 @@ impl TickGaps {
     ///
     /// # Panics
     /// If the table covers more than `u32::MAX` ticks (the GPU backend bounds it far below).
+    #[expect(
+        clippy::expect_used,
+        reason = "the GPU backend bounds the table far below u32::MAX ticks"
+    )]
     pub fn words(&self) -> Vec<u32> {
         let ticks = u32::try_from(self.ticks()).expect("a tick count fits a u32");
         let mut words = vec![self.base, ticks];

@@ -58,6 +58,10 @@ pub struct Weights {
 impl Weights {
     /// The tensor called `name`; the names are checked when the weights are loaded, so a
     /// missing one here is a bug.
+    #[expect(
+        clippy::panic,
+        reason = "tensor names are checked when the weights load"
+    )]
     pub fn get(&self, name: &str) -> &Tensor {
         self.tensors
             .get(name)

@@ -66,19 +66,25 @@ impl PackedLayout {
     pub fn pack(&self, g: &Graph, u32s: &mut [u32], f32s: &mut [f32]) -> Result<(), SimError> {
         let edges = g.src.len();
         if g.nodes > self.max_nodes || edges > self.max_edges {
-            return Err(SimError::Shape(format!(
-                "an SNGNN graph of {} nodes and {edges} edges exceeds the packed layout ({} nodes, {} edges)",
-                g.nodes, self.max_nodes, self.max_edges
-            )));
+            return Err(SimError::shape(
+                "SNGNN graphs",
+                format!(
+                    "an SNGNN graph of {} nodes and {edges} edges exceeds the packed layout ({} nodes, {} edges)",
+                    g.nodes, self.max_nodes, self.max_edges
+                ),
+            ));
         }
         if u32s.len() != self.u32_stride() || f32s.len() != self.f32_stride() {
-            return Err(SimError::Shape(format!(
-                "packed SNGNN graph regions of {} u32 and {} f32 values, expected {} and {}",
-                u32s.len(),
-                f32s.len(),
-                self.u32_stride(),
-                self.f32_stride()
-            )));
+            return Err(SimError::shape(
+                "SNGNN graphs",
+                format!(
+                    "packed SNGNN graph regions of {} u32 and {} f32 values, expected {} and {}",
+                    u32s.len(),
+                    f32s.len(),
+                    self.u32_stride(),
+                    self.f32_stride()
+                ),
+            ));
         }
         u32s.fill(0);
         f32s.fill(0.0);

@@ -124,6 +124,10 @@ impl Vm<'_> {
     }
 
     /// STOP: exactly one object must be left, and nothing may follow.
+    #[expect(
+        clippy::expect_used,
+        reason = "the stack's length is checked just above"
+    )]
     fn finish(&mut self) -> Result<Value, String> {
         if self.pos != self.bytes.len() {
             return Err(format!("{} bytes after STOP", self.bytes.len() - self.pos));
@@ -370,6 +374,7 @@ impl Vm<'_> {
     }
 
     /// Pop one value, never below the innermost mark.
+    #[expect(clippy::expect_used, reason = "pop_n(1) returns one value or an error")]
     fn pop(&mut self) -> Result<Value, String> {
         Ok(self.pop_n(1)?.pop().expect("one value"))
     }
@@ -404,6 +409,7 @@ impl Vm<'_> {
         Ok(self.take(1)?[0])
     }
 
+    #[expect(clippy::expect_used, reason = "take(N) returns N bytes or an error")]
     fn array<const N: usize>(&mut self) -> Result<[u8; N], String> {
         Ok(self.take(N)?.try_into().expect("N bytes"))
     }

@@ -173,6 +173,10 @@ impl Tables {
     /// Layer `layer`'s tables flattened: the 18 matrices at distance 0 first, then each
     /// spatial relation's knot distances and knot matrices. The values are the very floats the
     /// CPU reads, so a device that interpolates them the same way gets the same bits.
+    #[expect(
+        clippy::expect_used,
+        reason = "a layer's tables stay far below 2^32 floats"
+    )]
     pub fn flat_layer(&self, layer: usize) -> FlatLayer {
         let table = &self.layers[layer];
         let word = |n: usize| u32::try_from(n).expect("a layer's tables stay below 2^32 floats");
@@ -242,6 +246,10 @@ struct Mlp64<'a> {
 }
 
 impl<'a> Mlp64<'a> {
+    #[expect(
+        clippy::expect_used,
+        reason = "weight shapes are validated when the weights load"
+    )]
     fn new(mlp: &'a EdgeMlp) -> Self {
         let widen = |v: &[f32]| v.iter().map(|&x| f64::from(x)).collect::<Vec<f64>>();
         let matrix = |v: &[f32], rows: usize, cols: usize| {
@@ -315,6 +323,10 @@ fn hidden2(m: &Mlp64<'_>, alpha1: &[f64], beta1: &[f64], d: f64) -> ndarray::Arr
 }
 
 impl Knots {
+    #[expect(
+        clippy::expect_used,
+        reason = "the rows are built as at.len() x b just above"
+    )]
     fn new(m: &Mlp64<'_>, rel: u8, max_dist: f64) -> Self {
         let (c, g) = m.first_layer(rel);
         let bounds = first_layer_bounds(&c, &g, max_dist);

@@ -252,6 +252,7 @@ fn same_shape(expected: &[usize], size: &[u64]) -> bool {
 }
 
 /// The values of one contiguous tensor from its storage blob.
+#[expect(clippy::expect_used, reason = "chunks_exact(4) yields 4 bytes")]
 fn read_tensor<R: Read + Seek>(
     zip: &mut ZipArchive<R>,
     prefix: &str,

@@ -16,6 +16,10 @@ use super::Batch;
 use super::reward::{REWARD_SNGNN, clip_sngnn, scores_terms};
 
 /// Score the step of environment `e` with SNGNN-v2.
+#[expect(
+    clippy::expect_used,
+    reason = "BatchEnv gives a batch with the SNGNN-v2 reward its scorer"
+)]
 pub fn sngnn_score(p: &StepParams, b: &mut Batch<'_>, e: usize) {
     if p.reward_kind != REWARD_SNGNN || !scores_terms(b, e) {
         return;

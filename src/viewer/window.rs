@@ -83,10 +83,13 @@ impl Window {
     pub fn show(&mut self, pixels: &[u32]) -> Result<(), SimError> {
         let (w, h) = self.size;
         if pixels.len() != w * h {
-            return Err(SimError::Shape(format!(
-                "viewer: a frame of {} pixels for a {w}x{h} window",
-                pixels.len()
-            )));
+            return Err(SimError::shape(
+                "viewer frame",
+                format!(
+                    "viewer: a frame of {} pixels for a {w}x{h} window",
+                    pixels.len()
+                ),
+            ));
         }
         self.inner
             .update_with_buffer(pixels, w, h)

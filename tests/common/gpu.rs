@@ -187,7 +187,7 @@ pub fn check_parity_mode(
     let mut raised = [0usize; 7];
     let env = rolled_out_mode(config, mode, n_envs, 40);
     let p = *env.params();
-    let mut cpu = env.state().clone();
+    let mut cpu = env.state().unwrap().clone();
     let mut cpu_out = env.outputs().clone();
     let mut gpu = GpuStages::new(dev, &p, &cpu, &cpu_out, &[stage]).expect("GPU stages");
     let layout = *env.layout();

@@ -151,8 +151,7 @@ impl GpuBackend {
 
     /// Upload what the host edited and refill the pool rows that are stale.
     fn prepare(&mut self) -> Result<(), SimError> {
-        if self.state_edited {
-            let s = self.state.get().expect("an edited state is present");
+        if let Some(s) = self.state.get().filter(|_| self.state_edited) {
             self.gpu.upload_state(s);
             self.episode.copy_from_slice(&s.episode);
             for (e, seed) in self.next_seed.iter_mut().enumerate() {
@@ -250,17 +249,22 @@ impl GpuBackend {
         error.map_or(Ok(()), Err)
     }
 
-    /// The host copy of the state, downloaded if there is none.
-    fn host_state(&self) -> &BatchState {
-        self.state.get_or_init(|| {
-            let mut s = BatchState::new(self.episode.len(), self.caps);
-            // A failed readback means a lost device, which wgpu treats as fatal too.
-            self.gpu
-                .download_state(&mut s)
-                .unwrap_or_else(|e| panic!("{e}"));
-            s
-        })
+    /// The host copy of the state, downloaded if there is none (`SimError::Device` when the
+    /// download fails: a lost device).
+    fn host_state(&self) -> Result<&BatchState, SimError> {
+        if let Some(s) = self.state.get() {
+            return Ok(s);
+        }
+        let mut s = BatchState::new(self.episode.len(), self.caps);
+        self.gpu.download_state(&mut s)?;
+        Ok(self.state.get_or_init(|| s))
     }
+}
+
+/// The host state of `cell`, which [`GpuBackend::host_state`] has just filled.
+fn downloaded(cell: &mut OnceLock<BatchState>) -> Result<&mut BatchState, SimError> {
+    cell.get_mut()
+        .ok_or_else(|| SimError::Usage("the host state was not downloaded first".into()))
 }
 
 /// The passes of a step: the stages of `STAGES`, in order, those only the SNGNN-v2 reward runs
@@ -274,6 +278,10 @@ fn step_passes(sngnn: bool) -> Vec<&'static str> {
 }
 
 /// The index in `STAGES` of a pass of the step, for its time.
+#[expect(
+    clippy::expect_used,
+    reason = "the passes are taken from STAGES (step_passes)"
+)]
 fn stage_of(pass: &str) -> usize {
     STAGES
         .iter()
@@ -286,10 +294,10 @@ impl Backend for GpuBackend {
         let n = self.episode.len();
         if let Some(m) = mask {
             if m.len() != n {
-                return Err(SimError::Shape(format!(
-                    "reset mask has {} entries for {n} environments",
-                    m.len()
-                )));
+                return Err(SimError::shape(
+                    "reset mask",
+                    format!("reset mask has {} entries for {n} environments", m.len()),
+                ));
             }
         }
         self.prepare()?;
@@ -332,26 +340,26 @@ impl Backend for GpuBackend {
         &self.out
     }
 
-    fn state(&self) -> &BatchState {
+    fn state(&self) -> Result<&BatchState, SimError> {
         self.host_state()
     }
 
-    fn state_mut(&mut self) -> &mut BatchState {
-        self.host_state();
+    fn state_mut(&mut self) -> Result<&mut BatchState, SimError> {
+        self.host_state()?;
         self.state_edited = true;
-        self.state.get_mut().expect("downloaded above")
+        downloaded(&mut self.state)
     }
 
-    fn state_changed(&mut self, env: usize) {
-        self.host_state();
+    fn state_changed(&mut self, env: usize) -> Result<(), SimError> {
         let p = self.params;
-        let state = self.state.get_mut().expect("downloaded above");
-        let mut s = state.env_chunk(env);
+        self.host_state()?;
+        let mut s = downloaded(&mut self.state)?.env_chunk(env);
         crate::systems::orca_obstacles::rebuild_if_dirty(&p, &mut s, 0);
         let mut o = self.out.env_chunk(env);
         crate::systems::observation::write_observation(&p, &mut s, &mut o, 0);
         self.state_edited = true;
         self.outputs_edited = true;
+        Ok(())
     }
 
     fn set_params(&mut self, params: StepParams) {

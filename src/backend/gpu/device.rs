@@ -224,9 +224,7 @@ impl GpuDevice {
         }
         let msg = errors.join("; ");
         errors.clear();
-        Err(SimError::BackendUnavailable(format!(
-            "the GPU device reported: {msg}"
-        )))
+        Err(SimError::Device(format!("the GPU device reported: {msg}")))
     }
 }
 

@@ -313,9 +313,7 @@ pub(crate) fn map_and_read(
     bytes: u64,
     read: impl FnOnce(&[u32]),
 ) -> Result<(), SimError> {
-    let failed = |e: &dyn std::fmt::Display| {
-        SimError::BackendUnavailable(format!("GPU readback failed: {e}"))
-    };
+    let failed = |e: &dyn std::fmt::Display| SimError::Device(format!("GPU readback failed: {e}"));
     let slice = buffer.slice(..bytes);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {

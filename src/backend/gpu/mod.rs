@@ -214,9 +214,10 @@ impl GpuStages {
     /// `stages`. `graphs` is normally `sngnn::graph::capacity(config)`.
     ///
     /// # Errors
-    /// `SimError::BackendUnavailable` when the state has no SNGNN history, the time step has no
-    /// frame gaps ([`TickGaps`]), the adapter allows fewer than 10 storage buffers per shader
-    /// stage or the graphs exceed a binding, or anything [`GpuStages::new`] reports.
+    /// `SimError::Usage` when the state has no SNGNN history or the time step has no frame gaps
+    /// ([`TickGaps`]); `SimError::BackendUnavailable` when the adapter allows fewer than 10
+    /// storage buffers per shader stage or the graphs exceed a binding; anything
+    /// [`GpuStages::new`] reports.
     pub fn with_sngnn_graphs(
         dev: GpuDevice,
         params: &StepParams,
@@ -226,12 +227,12 @@ impl GpuStages {
         graphs: PackedLayout,
     ) -> Result<Self, SimError> {
         if state.strides.frames == 0 {
-            return Err(SimError::BackendUnavailable(
+            return Err(SimError::Usage(
                 "the SNGNN graph passes need a state with the SNGNN frame history (reward.kind = \"sngnn\")".into(),
             ));
         }
         let gaps = TickGaps::new(params.dt, params.episode_length).ok_or_else(|| {
-            SimError::BackendUnavailable(format!(
+            SimError::Usage(format!(
                 "the SNGNN frame selection has no frame gaps at a time step of {} s",
                 params.dt
             ))
@@ -243,6 +244,10 @@ impl GpuStages {
         Self::build(dev, params, state, outputs, stages, Some(binding))
     }
 
+    #[expect(
+        clippy::expect_used,
+        reason = "the layout is generated from the very columns it is asked for"
+    )]
     fn build(
         dev: GpuDevice,
         params: &StepParams,
@@ -419,11 +424,11 @@ impl GpuStages {
     /// `sngnn_graph` pass empties the graphs of the environments the reward does not score).
     ///
     /// # Errors
-    /// `SimError::BackendUnavailable` without the graph buffers
-    /// ([`GpuStages::with_sngnn_graphs`]) or when the network does not fit the adapter.
+    /// `SimError::Usage` without the graph buffers ([`GpuStages::with_sngnn_graphs`]);
+    /// `SimError::BackendUnavailable` when the network does not fit the adapter.
     pub fn attach_sngnn_net(&mut self, model: &Model, tables: &Tables) -> Result<(), SimError> {
         let Some((layout, gu, gf)) = &self.sngnn_graphs else {
-            return Err(SimError::BackendUnavailable(
+            return Err(SimError::Usage(
                 "SNGNN-v2's network needs the SNGNN graph buffers (GpuStages::with_sngnn_graphs)"
                     .into(),
             ));
@@ -546,13 +551,13 @@ impl GpuStages {
             self.bind(&mut pass);
             for &stage in stages {
                 let Some((_, pipeline)) = self.pipelines.iter().find(|(s, _)| *s == stage) else {
-                    return Err(SimError::BackendUnavailable(format!(
+                    return Err(SimError::Usage(format!(
                         "stage {stage:?} was not built for this batch"
                     )));
                 };
                 let Some(pipeline) = pipeline else {
                     let Some(net) = &self.sngnn_net else {
-                        return Err(SimError::BackendUnavailable(format!(
+                        return Err(SimError::Usage(format!(
                             "stage {stage:?} needs SNGNN-v2's network (GpuStages::attach_sngnn_net)"
                         )));
                     };
@@ -612,7 +617,7 @@ impl GpuStages {
         self.dev
             .device
             .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| SimError::BackendUnavailable(format!("GPU wait failed: {e}")))?;
+            .map_err(|e| SimError::Device(format!("GPU wait failed: {e}")))?;
         self.dev.take_errors()
     }
 
@@ -692,13 +697,13 @@ fn build_pass(
 ) -> Result<Built, SimError> {
     let has_sngnn = groups.len() > 1;
     let missing_graphs = || {
-        SimError::BackendUnavailable(format!(
+        SimError::Usage(format!(
             "stage {stage:?} needs the SNGNN graph buffers (GpuStages::with_sngnn_graphs)"
         ))
     };
     if stage != wgsl::RESET_PASS {
         let Some(s) = crate::pipeline::stage(stage) else {
-            return Err(SimError::BackendUnavailable(format!(
+            return Err(SimError::Usage(format!(
                 "{stage:?} is neither a stage of the step nor the reset pass"
             )));
         };
@@ -710,7 +715,7 @@ fn build_pass(
         }
     }
     let file = format!("{stage}.wgsl");
-    let files = wgsl::resolve(&file).map_err(SimError::BackendUnavailable)?;
+    let files = wgsl::resolve(&file).map_err(SimError::Usage)?;
     let needs_sngnn = files.iter().any(|f| wgsl::needs_sngnn(f));
     if needs_sngnn && !has_sngnn {
         return Err(missing_graphs());
@@ -720,7 +725,7 @@ fn build_pass(
     } else {
         (prelude.to_owned(), &groups[..1])
     };
-    let src = wgsl::assemble(&file, &prelude).map_err(SimError::BackendUnavailable)?;
+    let src = wgsl::assemble(&file, &prelude).map_err(SimError::Usage)?;
     dev.pipelines
         .pipeline(dev, stage, groups, &src, "main")
         .map(Some)

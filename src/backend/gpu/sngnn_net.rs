@@ -161,6 +161,10 @@ fn empty_buffer<T>(dev: &GpuDevice, what: &str, n: usize) -> Result<wgpu::Buffer
     Ok(storage_buffer(dev, what, bytes))
 }
 
+#[expect(
+    clippy::expect_used,
+    reason = "sizes are checked against the adapter's binding limits, which are u32"
+)]
 fn word(n: usize) -> u32 {
     u32::try_from(n).expect("SNGNN-v2 sizes fit in 32 bits (checked against the buffer limits)")
 }
@@ -347,11 +351,14 @@ impl GpuNet {
             self.n_envs * self.layout.f32_stride(),
         );
         if u32s.len() != wu || f32s.len() != wf {
-            return Err(SimError::Shape(format!(
-                "packed SNGNN graphs of {} u32 and {} f32 values, expected {wu} and {wf}",
-                u32s.len(),
-                f32s.len()
-            )));
+            return Err(SimError::shape(
+                "SNGNN graphs",
+                format!(
+                    "packed SNGNN graphs of {} u32 and {} f32 values, expected {wu} and {wf}",
+                    u32s.len(),
+                    f32s.len()
+                ),
+            ));
         }
         let q = &self.dev.queue;
         q.write_buffer(&self.graph_u32, 0, bytemuck::cast_slice(u32s));
@@ -365,17 +372,16 @@ impl GpuNet {
     /// # Errors
     /// `SimError::Shape` when `out` has the wrong length or the net writes into a step's state
     /// (`GpuNet::in_step`); `SimError::Sngnn` when a graph does not fit its layout or has an
-    /// edge outside the tables; `BackendUnavailable` when the device fails.
+    /// edge outside the tables; `Device` when the device fails.
     pub fn forward(&mut self, out: &mut [Output]) -> Result<(), SimError> {
         if out.len() != self.n_envs {
-            return Err(SimError::Shape(format!(
-                "{} SNGNN outputs for a batch of {}",
-                out.len(),
-                self.n_envs
-            )));
+            return Err(SimError::shape(
+                "SNGNN graphs",
+                format!("{} SNGNN outputs for a batch of {}", out.len(), self.n_envs),
+            ));
         }
         if self.target != OWN_OUTPUTS {
-            return Err(SimError::Shape(
+            return Err(SimError::Usage(
                 "this SNGNN net writes into a GPU step's state; it has no outputs to read".into(),
             ));
         }
@@ -511,8 +517,7 @@ type Built = (wgpu::ComputePipeline, bool);
 
 /// The `sort` and `layer` pipelines of `shaders/sngnn_score.wgsl` (compiled once per device).
 fn pipelines(dev: &GpuDevice, groups: &[Vec<Binding>]) -> Result<(Built, Built), SimError> {
-    let src =
-        wgsl::assemble_standalone("sngnn_score.wgsl").map_err(SimError::BackendUnavailable)?;
+    let src = wgsl::assemble_standalone("sngnn_score.wgsl").map_err(SimError::Usage)?;
     let sort = dev
         .pipelines
         .pipeline(dev, "sngnn sort", groups, &src, "sort")?;

@@ -52,15 +52,15 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             "seconds": secs,
             "env_steps_per_s": (n * steps) as f64 / secs,
             "device_only_env_steps_per_s": device_only,
-            "state_bytes_per_env": env.state().bytes_per_env(),
+            "state_bytes_per_env": env.state()?.bytes_per_env(),
             "obs_floats_per_env": env.layout().dim,
             // CPU stage time is summed over threads: each stage's share of the step's CPU time.
             // GPU stages are timed one submit each, in wall time.
             "stage_share": stages.iter().map(|(k, s)| (k.to_string(), json!(s / stage_total))).collect::<serde_json::Map<_, _>>(),
             "stage_env_steps_per_s": stages.iter().map(|(k, s)| (k.to_string(), json!((n * timed) as f64 / s * stage_parallelism(&env) as f64))).collect::<serde_json::Map<_, _>>(),
         }));
-        if !a.json {
-            print_row(rows.last().expect("row just pushed"), i == 0, &env);
+        if let Some(row) = rows.last().filter(|_| !a.json) {
+            print_row(row, i == 0, &env);
         }
         device = env.device();
         backend = env.backend_name();

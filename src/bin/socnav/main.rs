@@ -5,6 +5,10 @@
 //! window; `soak` steps configs with adversarial actions for a long time, checking everything; `devices`
 //! lists the GPU adapters; `sngnn` installs the SNGNN-v2 weights and shows where they are.
 
+// A user's input never panics: every internal invariant that would is marked with
+// `#[expect(clippy::..., reason = "...")]` saying why it holds (clippy.toml lets unit tests).
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
 mod args;
 mod bench;
 mod check;

@@ -10,7 +10,7 @@ use socnav::recording::{RecordingDir, Step, episode_json};
 use socnav::spec::{N_INFO, info};
 use socnav::viewer::controls::{self, Held};
 use socnav::viewer::{Command, Window, hud};
-use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions};
+use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
 
 use crate::args::PlayArgs;
 use crate::outcome::outcome;
@@ -44,9 +44,9 @@ struct Episode {
 }
 
 impl Episode {
-    fn start(env: &BatchEnv) -> Self {
-        let s = env.state();
-        Self {
+    fn start(env: &BatchEnv) -> Result<Self, SimError> {
+        let s = env.state()?;
+        Ok(Self {
             seed: s.episode_seed(0),
             obs: Vec::new(),
             actions: Vec::new(),
@@ -55,7 +55,7 @@ impl Episode {
             trail: vec![(s.robot_x[0], s.robot_y[0])],
             ret: 0.0,
             outcome: None,
-        }
+        })
     }
 }
 
@@ -103,7 +103,7 @@ impl Player<'_> {
         ep.discrete.extend(discrete);
         ep.rewards.push(out.reward[0]);
         ep.ret += f64::from(out.reward[0]);
-        let s = self.env.state();
+        let s = self.env.state()?;
         ep.trail.push((s.robot_x[0], s.robot_y[0]));
         if out.terminated[0] != 0 || out.truncated[0] != 0 {
             let ended = outcome(&out.info[..N_INFO]);
@@ -292,8 +292,8 @@ pub fn play(a: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
         record,
         written: 0,
     };
-    let mut ep = Episode::start(&player.env);
-    let first = socnav::render::draw(player.env.params(), player.env.state(), 0, &ep.trail, size)?;
+    let mut ep = Episode::start(&player.env)?;
+    let first = socnav::render::draw(player.env.params(), player.env.state()?, 0, &ep.trail, size)?;
     let lines = player.lines(&ep, [0.0; 3]);
     let dims = hud::size(
         first.width() as usize,
@@ -316,7 +316,7 @@ pub fn play(a: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
                 Command::Quit => break 'frames,
                 Command::Restart => {
                     player.env.reset(None)?;
-                    ep = Episode::start(&player.env);
+                    ep = Episode::start(&player.env)?;
                     due = Instant::now();
                 }
                 Command::Pause => player.paused = !player.paused,
@@ -342,7 +342,7 @@ pub fn play(a: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
         let scene = socnav::render::draw(
             player.env.params(),
-            player.env.state(),
+            player.env.state()?,
             0,
             &ep.trail,
             player.size,

@@ -3,9 +3,9 @@
 
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
-use socnav::BatchEnv;
 use socnav::config::Kinematics;
 use socnav::policies::{self, OrcaRobot};
+use socnav::{BatchEnv, SimError};
 
 use crate::args::PolicyChoice;
 
@@ -30,7 +30,7 @@ impl Policy {
     }
 
     /// Fill `actions` (3 per environment) from the batch's current observations.
-    pub fn act(&mut self, env: &BatchEnv, actions: &mut [f32]) {
+    pub fn act(&mut self, env: &BatchEnv, actions: &mut [f32]) -> Result<(), SimError> {
         match self.choice {
             PolicyChoice::Random => {
                 for a in actions.chunks_exact_mut(3) {
@@ -44,7 +44,8 @@ impl Policy {
                 }
             }
             PolicyChoice::Goal => policies::goal_actions(env, actions),
-            PolicyChoice::Orca => self.orca.actions(env, actions),
+            PolicyChoice::Orca => return self.orca.actions(env, actions),
         }
+        Ok(())
     }
 }

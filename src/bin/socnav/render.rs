@@ -51,9 +51,9 @@ pub fn render(a: &RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     };
     let mut env = BatchEnv::new(config, options)?;
     env.reset(Some(a.seed))?;
-    let robot = |env: &BatchEnv| (env.state().robot_x[0], env.state().robot_y[0]);
-    let mut trail = vec![robot(&env)];
-    let first = render::draw(env.params(), env.state(), 0, &trail, size)?;
+    let robot = |env: &BatchEnv| env.state().map(|s| (s.robot_x[0], s.robot_y[0]));
+    let mut trail = vec![robot(&env)?];
+    let first = render::draw(env.params(), env.state()?, 0, &trail, size)?;
     if let Output::Png = kind {
         render::write_png(&first, &a.out)?;
         println!(
@@ -70,11 +70,11 @@ pub fn render(a: &RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     let mut steps = 0;
     let mut ended = false;
     while steps < max_steps && !ended {
-        policy.act(&env, &mut actions);
+        policy.act(&env, &mut actions)?;
         env.step(Actions::Continuous(&actions))?;
         steps += 1;
-        trail.push(robot(&env));
-        gif.push(&render::draw(env.params(), env.state(), 0, &trail, size)?)?;
+        trail.push(robot(&env)?);
+        gif.push(&render::draw(env.params(), env.state()?, 0, &trail, size)?)?;
         let out = env.outputs();
         ended = out.terminated[0] != 0 || out.truncated[0] != 0;
     }

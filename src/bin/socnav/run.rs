@@ -45,7 +45,7 @@ pub fn run(a: &RunArgs) -> Result<(), Box<dyn std::error::Error>> {
     let bar = progress_bar(a.steps as u64);
     let mut stepping = Duration::ZERO;
     for _ in 0..a.steps {
-        policy.act(&env, &mut actions);
+        policy.act(&env, &mut actions)?;
         let t = Instant::now();
         env.step(Actions::Continuous(&actions))?;
         stepping += t.elapsed();
@@ -76,6 +76,10 @@ pub fn run(a: &RunArgs) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
+#[expect(
+    clippy::expect_used,
+    reason = "the template is a constant (and the bar runs in tests)"
+)]
 fn progress_bar(steps: u64) -> ProgressBar {
     // indicatif draws only when stderr is a terminal; in CI and pipes the bar stays silent.
     let bar = ProgressBar::new(steps);
@@ -105,9 +109,12 @@ impl Summary<'_> {
     fn json(&self) -> Value {
         let mut metrics = Map::new();
         for key in TABLE_KEYS {
-            metrics.insert(key.to_string(), finite_or_null(self.agg.mean(key)));
+            metrics.insert(
+                key.to_string(),
+                finite_or_null(self.agg.mean(key).unwrap_or(f64::NAN)),
+            );
         }
-        let m = |k: &str| finite_or_null(self.agg.mean(k));
+        let m = |k: &str| finite_or_null(self.agg.mean(k).unwrap_or(f64::NAN));
         json!({
             "config": self.a.config,
             "backend": self.env.backend_name(),
@@ -161,11 +168,11 @@ impl Summary<'_> {
 
     /// Outcome rates, social events and the metric table of the finished episodes.
     fn print_outcomes(&self) {
-        let pct = |k: &str| 100.0 * self.agg.mean(k);
+        let pct = |k: &str| 100.0 * self.agg.mean(k).unwrap_or(f64::NAN);
         println!(
             "episodes finished: {} (mean length {:.1} steps)",
             self.agg.episodes(),
-            self.agg.mean("length")
+            self.agg.mean("length").unwrap_or(f64::NAN)
         );
         println!(
             // As in 0.1.1, a wall collision is an object collision: the wall share is part of
@@ -192,7 +199,7 @@ impl Summary<'_> {
         for chunk in TABLE_KEYS.chunks(4) {
             let cells: Vec<String> = chunk
                 .iter()
-                .map(|k| format!("{k:>26} {:>9.4}", self.agg.mean(k)))
+                .map(|k| format!("{k:>26} {:>9.4}", self.agg.mean(k).unwrap_or(f64::NAN)))
                 .collect();
             println!("{}", cells.join(""));
         }

@@ -189,7 +189,7 @@ pub fn soak(a: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
                 for e in 0..a.envs {
                     t.non_finite += non_finite(env, e);
                     if tick.is_multiple_of(a.check_every.max(1)) {
-                        let broken = violations(env.state(), e);
+                        let broken = violations(env.state()?, e);
                         if let Some(first) = broken.first() {
                             if t.broken == 0 {
                                 eprintln!("socnav soak: {}: {first}", configs[k]);

@@ -50,6 +50,10 @@ pub(super) fn robot<const W: bool, const P: bool>(
 
 /// The first record of `out` as a fixed-size array: one bounds check, then plain stores.
 #[inline]
+#[expect(
+    clippy::expect_used,
+    reason = "callers pass a record slot of RECORD floats"
+)]
 fn record(out: &mut [f32]) -> &mut [f32; RECORD] {
     (&mut out[..RECORD])
         .try_into()

@@ -52,7 +52,7 @@ fn actions(n: usize, t: usize) -> Vec<f32> {
 fn fingerprints(env: &BatchEnv) -> (u64, u64) {
     let o = env.outputs();
     (
-        env.state().fingerprint(),
+        env.state().unwrap().fingerprint(),
         (0..o.n_envs).fold(FNV_OFFSET, |h, e| o.fingerprint_env(e, h)),
     )
 }
@@ -64,7 +64,7 @@ fn rejected(env: &mut BatchEnv, actions: Actions<'_>, needles: &[&str]) {
     let err = env
         .step(actions)
         .expect_err("invalid actions must be rejected");
-    let SimError::Action(msg) = &err else {
+    let SimError::Action { message: msg, .. } = &err else {
         panic!("expected SimError::Action, got {err:?}")
     };
     for needle in needles {
@@ -160,7 +160,7 @@ fn options_are_validated() {
     )
     .unwrap_err();
     assert!(
-        matches!(&err, SimError::Shape(m) if m.contains("n_envs") && m.contains('0')),
+        matches!(&err, SimError::Shape { what: "n_envs", message: m } if m.contains("n_envs") && m.contains('0')),
         "{err:?}"
     );
     let err = BatchEnv::new(
@@ -172,7 +172,7 @@ fn options_are_validated() {
     )
     .unwrap_err();
     assert!(
-        matches!(&err, SimError::Shape(m) if m.contains("threads") && m.contains('0')),
+        matches!(&err, SimError::Shape { what: "threads", message: m } if m.contains("threads") && m.contains('0')),
         "{err:?}"
     );
 }
@@ -185,7 +185,7 @@ fn reset_envs_rejects_a_wrong_mask() {
     let before = fingerprints(&env);
     let err = env.reset_envs(&[true, false, true]).unwrap_err();
     assert!(
-        matches!(&err, SimError::Shape(m) if m.contains('3') && m.contains('4')),
+        matches!(&err, SimError::Shape { what: "reset mask", message: m } if m.contains('3') && m.contains('4')),
         "{err:?}"
     );
     assert_eq!(fingerprints(&env), before);
@@ -197,13 +197,13 @@ fn state_documents_check_the_environment_index() {
     let mut env = make(config("exp1"), 3, 0);
     let err = env.get_state(3).unwrap_err();
     assert!(
-        matches!(&err, SimError::Shape(m) if m.contains('3')),
+        matches!(&err, SimError::EnvIndex { env: 3, n_envs: 3 }),
         "{err:?}"
     );
     let doc = env.get_state(0).unwrap();
     let err = env.set_state(3, &doc).unwrap_err();
     assert!(
-        matches!(&err, SimError::Shape(m) if m.contains('3')),
+        matches!(&err, SimError::EnvIndex { env: 3, n_envs: 3 }),
         "{err:?}"
     );
 }
@@ -226,13 +226,17 @@ fn without(doc: &Value, path: &str) -> Value {
 /// that the environment is unchanged by the failed load.
 fn load_rejected(env: &mut BatchEnv, doc: &Value, needles: &[&str]) -> String {
     let before = (
-        env.state().fingerprint_env(0, FNV_OFFSET),
+        env.state().unwrap().fingerprint_env(0, FNV_OFFSET),
         env.get_state(0).unwrap(),
     );
     let err = env
         .set_state(0, doc)
         .expect_err("the document must be rejected");
-    let SimError::Shape(msg) = &err else {
+    let SimError::Shape {
+        what: "state document",
+        message: msg,
+    } = &err
+    else {
         panic!("expected SimError::Shape, got {err:?}")
     };
     for needle in needles {
@@ -242,7 +246,7 @@ fn load_rejected(env: &mut BatchEnv, doc: &Value, needles: &[&str]) -> String {
         );
     }
     let after = (
-        env.state().fingerprint_env(0, FNV_OFFSET),
+        env.state().unwrap().fingerprint_env(0, FNV_OFFSET),
         env.get_state(0).unwrap(),
     );
     assert!(
@@ -376,7 +380,10 @@ fn a_loaded_state_steps_identically() {
                 "{name}: outputs after step {t}"
             );
             assert_eq!(
-                original.state().differing_columns(loaded.state()),
+                original
+                    .state()
+                    .unwrap()
+                    .differing_columns(loaded.state().unwrap()),
                 Vec::<&str>::new(),
                 "{name}: state columns after step {t}"
             );

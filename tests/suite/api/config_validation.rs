@@ -44,7 +44,7 @@ fn shipped_configs() -> Vec<PathBuf> {
 /// The problems of a rejected config, or a panic naming what was returned instead.
 fn config_problems(result: Result<Config, SimError>) -> Vec<String> {
     match result {
-        Err(SimError::Config(problems)) => problems,
+        Err(err @ SimError::Config(_)) => err.config_problems(),
         other => panic!("expected SimError::Config, got {other:?}"),
     }
 }
@@ -235,17 +235,16 @@ fn batch_rejects_an_invalid_config_built_in_code() {
     let SimError::Config(problems) = err else {
         panic!("expected SimError::Config, got {err:?}")
     };
+    // Each problem carries the key it is about, for a caller to branch on.
     assert!(
         problems
             .iter()
-            .any(|p| p.contains("robot.radius") && p.contains("-1")),
+            .any(|p| p.key.as_deref() == Some("robot.radius") && p.message.contains("-1")),
         "{problems:?}"
     );
-    assert!(
-        problems
-            .iter()
-            .any(|p| p.contains("events.crowd_formation_probability") && p.contains('2'))
-    );
+    assert!(problems.iter().any(|p| {
+        p.key.as_deref() == Some("events.crowd_formation_probability") && p.message.contains('2')
+    }));
 }
 
 /// Contract: a partial TOML file takes the defaults for every key it does not set.

@@ -16,7 +16,7 @@ fn actions(env: &BatchEnv) -> (Vec<f32>, Vec<f32>) {
     let mut goal = vec![0.0; 3 * env.n_envs()];
     goal_actions(env, &mut goal);
     let mut orca = vec![0.0; 3 * env.n_envs()];
-    OrcaRobot::new().actions(env, &mut orca);
+    OrcaRobot::new().actions(env, &mut orca).unwrap();
     (goal, orca)
 }
 

@@ -94,7 +94,7 @@ fn rgb_at(img: &Pixmap, view: &View, (x, y): (f32, f32)) -> Rgb {
 fn frame(env: &BatchEnv) -> (Pixmap, View) {
     let f = render::Frame {
         params: env.params(),
-        state: env.state(),
+        state: env.state().unwrap(),
         env: 0,
         trail: &[],
         size_px: SIZE,
@@ -123,7 +123,7 @@ fn image_size_follows_size_px_and_room_aspect() {
     tall.set_state(0, &doc).unwrap();
     let f = render::Frame {
         params: tall.params(),
-        state: tall.state(),
+        state: tall.state().unwrap(),
         env: 0,
         trail: &[],
         size_px: 300,
@@ -230,21 +230,38 @@ fn progress_bar_shows_tick_over_episode_length() {
 #[test]
 fn bad_requests_are_errors() {
     let env = scene_env();
-    let too_small = render::draw(env.params(), env.state(), 0, &[], 8);
-    assert!(matches!(too_small, Err(SimError::Shape(m)) if m.contains("8 px")));
-    let no_env = render::draw(env.params(), env.state(), 1, &[], SIZE);
-    assert!(matches!(no_env, Err(SimError::Shape(m)) if m.contains("environment 1")));
+    let too_small = render::draw(env.params(), env.state().unwrap(), 0, &[], 8);
+    assert!(
+        matches!(too_small, Err(SimError::Shape { what: "render", message: m }) if m.contains("8 px"))
+    );
+    let no_env = render::draw(env.params(), env.state().unwrap(), 1, &[], SIZE);
+    assert!(matches!(
+        no_env,
+        Err(SimError::EnvIndex { env: 1, n_envs: 1 })
+    ));
     let missing = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
         .join("no-such-dir")
         .join("x.png");
     let (img, _) = frame(&env);
     match render::write_png(&img, &missing) {
-        Err(SimError::Io(m)) => assert!(m.contains("no-such-dir"), "{m}"),
+        // The kind survives: a missing directory is NotFound (a full disk would be StorageFull).
+        Err(SimError::Io {
+            kind,
+            path,
+            message,
+            ..
+        }) => {
+            assert_eq!(kind, std::io::ErrorKind::NotFound);
+            assert_eq!(path.as_deref(), Some(missing.as_path()));
+            assert!(message.contains("no-such-dir"), "{message}");
+        }
         other => panic!("expected an Io error, got {other:?}"),
     }
     let mut gif =
         GifWriter::new(Vec::new(), "test.gif", img.width(), img.height() + 1, 30).unwrap();
-    assert!(matches!(gif.push(&img), Err(SimError::Io(m)) if m.contains("test.gif")));
+    assert!(
+        matches!(gif.push(&img), Err(SimError::Shape { what: "GIF", message: m }) if m.contains("test.gif"))
+    );
 }
 
 #[test]
@@ -270,7 +287,7 @@ fn gif_of_a_few_steps_decodes_frame_by_frame() {
     };
     let mut env = BatchEnv::new(Config::default(), options).unwrap();
     env.reset(Some(3)).unwrap();
-    let s = env.state();
+    let s = env.state().unwrap();
     let mut trail = vec![(s.robot_x[0], s.robot_y[0])];
     // Half a robot radius behind the robot's centre at reset: robot-coloured in the first frame.
     let (sin, cos) = socnav::math::sin_cos(s.robot_theta[0]);
@@ -289,8 +306,11 @@ fn gif_of_a_few_steps_decodes_frame_by_frame() {
     gif.push(&first).unwrap();
     for _ in 0..steps {
         env.step(Actions::Continuous(&[1.0, 0.0, 0.5])).unwrap();
-        trail.push((env.state().robot_x[0], env.state().robot_y[0]));
-        gif.push(&render::draw(env.params(), env.state(), 0, &trail, size).unwrap())
+        trail.push((
+            env.state().unwrap().robot_x[0],
+            env.state().unwrap().robot_y[0],
+        ));
+        gif.push(&render::draw(env.params(), env.state().unwrap(), 0, &trail, size).unwrap())
             .unwrap();
     }
     assert_eq!(gif.frames(), steps + 1);

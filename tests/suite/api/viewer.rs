@@ -85,7 +85,7 @@ fn recordings_have_0_1_1s_layout() {
         assert_eq!(floats("reward"), [rewards[t]]);
         // The entities present, in slot order (socnav packs them first and pads after them), and
         // nothing of the padding: 14 floats for each human, laptop, table and plant of the scene.
-        let st = env.state();
+        let st = env.state().unwrap();
         let counts = [
             st.n_humans[0],
             st.n_laptops[0],

@@ -113,7 +113,7 @@ fn validate_assembled(path: &str) -> Result<naga::Module, String> {
         socnav::EnvOptions::default(),
     )
     .expect("batch");
-    let columns = env.state().columns();
+    let columns = env.state().unwrap().columns();
     let prelude = wgsl::prelude(
         &columns,
         &env.outputs().columns(),

@@ -101,12 +101,12 @@ fn check(text: &str) {
     };
     let mut env = match BatchEnv::new(config, options) {
         Ok(env) => env,
-        Err(SimError::Scenario(_) | SimError::Sngnn(_)) => return,
+        Err(SimError::Scenario { .. } | SimError::Sngnn(_)) => return,
         Err(e) => panic!("a valid config builds a batch, got {e:?}\n{text}"),
     };
     match env.reset(Some(5)) {
         Ok(()) => {}
-        Err(SimError::Scenario(_)) => return,
+        Err(SimError::Scenario { .. }) => return,
         Err(e) => panic!("reset: {e:?}\n{text}"),
     }
     let holonomic = env.params().holonomic != 0;
@@ -120,7 +120,7 @@ fn check(text: &str) {
         let actions: Vec<f32> = (0..3).flat_map(|_| a).collect();
         match env.step(Actions::Continuous(&actions)) {
             Ok(()) => {}
-            Err(SimError::Scenario(_)) => return, // an autoreset could not place the next scenario
+            Err(SimError::Scenario { .. }) => return, // an autoreset could not place the next scenario
             Err(e) => panic!("step {t}: {e:?}\n{text}"),
         }
         let out = env.outputs();
@@ -141,7 +141,7 @@ fn check(text: &str) {
             );
         }
         for e in 0..3 {
-            let broken = violations(env.state(), e);
+            let broken = violations(env.state().unwrap(), e);
             assert!(broken.is_empty(), "step {t}: {broken:?}\n{text}");
         }
     }
@@ -216,7 +216,7 @@ fn the_base_config_runs_cleanly() {
 /// The problems `doc` is refused with, one string.
 fn refusal(doc: &toml::Table) -> String {
     match Config::from_toml_str(&toml::to_string(doc).unwrap()) {
-        Err(SimError::Config(problems)) => problems.join("\n"),
+        Err(err @ SimError::Config(_)) => err.config_problems().join("\n"),
         other => panic!("expected a refusal, got {other:?}"),
     }
 }

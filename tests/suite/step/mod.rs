@@ -80,7 +80,7 @@ fn info_of(env: &BatchEnv, e: usize, key: usize) -> f32 {
 
 /// Robot pose (x, y, θ) and command (v_x, v_y, ω) of environment `e`.
 fn robot(env: &BatchEnv, e: usize) -> ([f32; 3], [f32; 3]) {
-    let s = env.state();
+    let s = env.state().unwrap();
     (
         [s.robot_x[e], s.robot_y[e], s.robot_theta[e]],
         [s.robot_vx[e], s.robot_vy[e], s.robot_w[e]],

@@ -47,7 +47,7 @@ fn batch(config: Config, n_envs: usize, mode: AutoresetMode, backend: BackendCho
 /// Actions for `env`: the first half of the environments turn to their goal and drive when
 /// facing it, the rest act uniformly at random (lateral 0 unless holonomic).
 fn actions(env: &BatchEnv, rng: &mut RngStream, out: &mut [f32]) {
-    let s = env.state();
+    let s = env.state().unwrap();
     let holonomic = env.params().holonomic != 0;
     let n = env.n_envs();
     for e in 0..n {
@@ -75,7 +75,7 @@ fn actions(env: &BatchEnv, rng: &mut RngStream, out: &mut [f32]) {
 
 /// Assert that the two batches hold the same state and outputs, naming the first differences.
 fn assert_same(name: &str, step: usize, cpu: &BatchEnv, gpu: &BatchEnv) {
-    let (cs, gs) = (cpu.state(), gpu.state());
+    let (cs, gs) = (cpu.state().unwrap(), gpu.state().unwrap());
     let (co, go) = (cpu.outputs(), gpu.outputs());
     let differ = cs.differing_columns(gs);
     let differ_out = co.differing_columns(go);
@@ -132,7 +132,7 @@ impl Tally {
     fn add(&mut self, env: &BatchEnv) {
         let done = &env.outputs().episode_done;
         self.ended += done.iter().filter(|&&d| d != 0).count();
-        let discomfort = &env.state().r_discomfort_sngnn;
+        let discomfort = &env.state().unwrap().r_discomfort_sngnn;
         self.sngnn_scored += discomfort.iter().filter(|&&d| d > 0.0).count();
     }
 }
@@ -158,7 +158,7 @@ fn lockstep(
         gpu.copy_state_from(&cpu).expect("same shape");
         cpu.step(Actions::Continuous(&a)).expect("CPU step");
         gpu.step(Actions::Continuous(&a)).expect("GPU step");
-        let (cs, gs) = (cpu.state(), gpu.state());
+        let (cs, gs) = (cpu.state().unwrap(), gpu.state().unwrap());
         let (co, go) = (cpu.outputs(), gpu.outputs());
         let (in_state, w1, c1) = diverged_envs(
             &cs.columns(),

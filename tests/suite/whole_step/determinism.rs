@@ -66,8 +66,8 @@ fn thread_count_does_not_change_the_trajectory() {
     let mut two = make(&config, n, 5, Some(2));
     assert_eq!((one.threads(), two.threads()), (1, 2));
     assert_eq!(
-        one.state().fingerprint(),
-        two.state().fingerprint(),
+        one.state().unwrap().fingerprint(),
+        two.state().unwrap().fingerprint(),
         "after reset"
     );
     for t in 0..80 {
@@ -75,8 +75,8 @@ fn thread_count_does_not_change_the_trajectory() {
         one.step(Actions::Continuous(&a)).unwrap();
         two.step(Actions::Continuous(&a)).unwrap();
         assert_eq!(
-            one.state().fingerprint(),
-            two.state().fingerprint(),
+            one.state().unwrap().fingerprint(),
+            two.state().unwrap().fingerprint(),
             "state after step {t}"
         );
         assert_eq!(
@@ -85,7 +85,7 @@ fn thread_count_does_not_change_the_trajectory() {
             "outputs after step {t}"
         );
     }
-    let episodes: u32 = one.state().episode.iter().sum();
+    let episodes: u32 = one.state().unwrap().episode.iter().sum();
     assert!(
         episodes > n as u32,
         "the run must cross autoresets ({episodes} episodes)"
@@ -107,8 +107,8 @@ fn batch_size_does_not_change_an_environments_trajectory() {
         large.step(Actions::Continuous(&actions(100, t))).unwrap();
         for k in 0..37 {
             let (a, b) = (
-                small.state().fingerprint_env(k, FNV_OFFSET),
-                large.state().fingerprint_env(k, FNV_OFFSET),
+                small.state().unwrap().fingerprint_env(k, FNV_OFFSET),
+                large.state().unwrap().fingerprint_env(k, FNV_OFFSET),
             );
             assert_eq!(a, b, "env {k} state after step {t}");
             let (oa, ob) = (
@@ -128,7 +128,7 @@ fn batch_size_does_not_change_an_environments_trajectory() {
     }
     assert_eq!(compared, 70 * 37);
     assert!(
-        small.state().episode.iter().any(|&ep| ep > 1),
+        small.state().unwrap().episode.iter().any(|&ep| ep > 1),
         "the run must cross autoresets"
     );
 }
@@ -145,9 +145,12 @@ fn a_different_seed_gives_a_different_trajectory() {
         a.step(Actions::Continuous(&actions(n, t))).unwrap();
         b.step(Actions::Continuous(&actions(n, t))).unwrap();
     }
-    assert_ne!(a.state().fingerprint(), b.state().fingerprint());
+    assert_ne!(
+        a.state().unwrap().fingerprint(),
+        b.state().unwrap().fingerprint()
+    );
     for k in 0..n {
-        let (sa, sb) = (a.state(), b.state());
+        let (sa, sb) = (a.state().unwrap(), b.state().unwrap());
         assert_ne!(
             (sa.robot_x[k], sa.robot_y[k]),
             (sb.robot_x[k], sb.robot_y[k]),
@@ -158,8 +161,8 @@ fn a_different_seed_gives_a_different_trajectory() {
     let c = make(&config, n, 1 | (1 << 32), None);
     let a0 = make(&config, n, 1, None);
     assert_ne!(
-        a0.state().fingerprint(),
-        c.state().fingerprint(),
+        a0.state().unwrap().fingerprint(),
+        c.state().unwrap().fingerprint(),
         "the high half of the seed is ignored"
     );
 }
@@ -184,14 +187,14 @@ fn reset_with_the_same_seed_restarts_the_same_run() {
     env.reset(Some(11)).unwrap();
     let first_reset = valid_outputs(env.outputs());
     let first_docs: Vec<_> = (0..n).map(|k| env.get_state(k).unwrap()).collect();
-    let first_fingerprint = env.state().fingerprint();
+    let first_fingerprint = env.state().unwrap().fingerprint();
     let mut first_run = Vec::new();
     for t in 0..30 {
         env.step(Actions::Continuous(&actions(n, t))).unwrap();
         first_run.push(valid_outputs(env.outputs()));
     }
     assert!(
-        env.state().episode.iter().all(|&ep| ep > 1),
+        env.state().unwrap().episode.iter().all(|&ep| ep > 1),
         "every env must have started new episodes"
     );
     env.reset(Some(11)).unwrap();
@@ -217,7 +220,7 @@ fn reset_with_the_same_seed_restarts_the_same_run() {
     // zeros), is that of the first run.
     env.reset(Some(11)).unwrap();
     assert_eq!(
-        env.state().fingerprint(),
+        env.state().unwrap().fingerprint(),
         first_fingerprint,
         "state fingerprint after the second reset"
     );

@@ -111,8 +111,8 @@ fn batch_seeds_follow_the_sequence() {
             expected = next_episode_seed(expected);
         }
         assert_eq!(
-            env.state().next_seed(k),
-            next_episode_seed(env.state().episode_seed(k))
+            env.state().unwrap().next_seed(k),
+            next_episode_seed(env.state().unwrap().episode_seed(k))
         );
     }
 }
@@ -186,18 +186,24 @@ fn next_seeds_name_episodes_at_any_index() {
             "seed {} at index {k} and {i}",
             seeds[i]
         );
-        assert_eq!(b.state().episode_seed(k), seeds[i]);
+        assert_eq!(b.state().unwrap().episode_seed(k), seeds[i]);
     }
     // None: the environment plays the next episode of its own sequence.
-    let before = b.state().next_seed(1);
+    let before = b.state().unwrap().next_seed(1);
     b.set_next_seeds(&[Some(5), None, None, None])
         .expect("seeds");
     b.reset(None).expect("reset");
-    assert_eq!(b.state().episode_seed(0), 5);
-    assert_eq!(b.state().episode_seed(1), before);
-    assert_eq!(b.state().episode_seed(1), next_episode_seed(seeds[0]));
+    assert_eq!(b.state().unwrap().episode_seed(0), 5);
+    assert_eq!(b.state().unwrap().episode_seed(1), before);
+    assert_eq!(
+        b.state().unwrap().episode_seed(1),
+        next_episode_seed(seeds[0])
+    );
     match b.set_next_seeds(&[Some(1), Some(2)]) {
-        Err(SimError::Shape(msg)) => {
+        Err(SimError::Shape {
+            what: "seeds",
+            message: msg,
+        }) => {
             assert!(
                 msg.contains("2 seeds") && msg.contains("4 environments"),
                 "{msg}"
@@ -214,7 +220,9 @@ fn reset_seed_wraps_and_documents_carry_seeds() {
     let config = Config::from_name_or_path("exp1").expect("exp1");
     let mut env = batch(&config, 3, 0);
     env.reset(Some(u64::MAX - 1)).expect("reset");
-    let got: Vec<u64> = (0..3).map(|k| env.state().episode_seed(k)).collect();
+    let got: Vec<u64> = (0..3)
+        .map(|k| env.state().unwrap().episode_seed(k))
+        .collect();
     assert_eq!(got, [u64::MAX - 1, u64::MAX, 0]);
     let doc = env.get_state(1).expect("doc");
     assert_eq!(doc["socnav"]["seed"], serde_json::json!(u64::MAX));
@@ -223,8 +231,11 @@ fn reset_seed_wraps_and_documents_carry_seeds() {
         serde_json::json!(next_episode_seed(u64::MAX))
     );
     env.set_state(0, &doc).expect("load");
-    assert_eq!(env.state().episode_seed(0), u64::MAX);
-    assert_eq!(env.state().next_seed(0), next_episode_seed(u64::MAX));
+    assert_eq!(env.state().unwrap().episode_seed(0), u64::MAX);
+    assert_eq!(
+        env.state().unwrap().next_seed(0),
+        next_episode_seed(u64::MAX)
+    );
     let mut bad = doc.clone();
     bad["socnav"]["next_seed"] = serde_json::json!(-1);
     let err = env
@@ -233,7 +244,7 @@ fn reset_seed_wraps_and_documents_carry_seeds() {
         .to_string();
     assert!(err.contains("socnav.next_seed"), "{err}");
     assert_eq!(
-        env.state().episode_seed(2),
+        env.state().unwrap().episode_seed(2),
         0,
         "a rejected document changes nothing"
     );

@@ -175,7 +175,7 @@ fn push_speed_at_overlap(overlap: f64) -> [f32; 2] {
         );
         let mut env = load(c, &[doc]);
         env.step(Actions::Continuous(&[0.0; 3])).expect("step");
-        env.state().h_speed[0]
+        env.state().unwrap().h_speed[0]
     })
 }
 

@@ -13,7 +13,7 @@ use socnav::state::BatchState;
 fn state_round_trip() {
     let Some(dev) = device() else { return };
     let env = rolled_out(config("exp3"), 64, 60);
-    let state = env.state().clone();
+    let state = env.state().unwrap().clone();
     let outputs = env.outputs().clone();
     let gpu = GpuStages::new(dev, env.params(), &state, &outputs, &[]).expect("GPU stages");
     let mut back = BatchState::zeroed(state.n_envs, state.strides);
@@ -109,13 +109,13 @@ fn episode_seeds_match_the_cpu() {
     }
     for e in 0..n {
         assert_eq!(
-            cpu.state().episode_seed(e),
-            gpu.state().episode_seed(e),
+            cpu.state().unwrap().episode_seed(e),
+            gpu.state().unwrap().episode_seed(e),
             "env {e}"
         );
         assert_eq!(
-            cpu.state().next_seed(e),
-            gpu.state().next_seed(e),
+            cpu.state().unwrap().next_seed(e),
+            gpu.state().unwrap().next_seed(e),
             "env {e}"
         );
     }

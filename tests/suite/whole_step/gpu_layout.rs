@@ -41,7 +41,7 @@ fn same_on_both(name: &str, n_envs: usize, steps: usize) -> usize {
         let a = common::gpu::random_actions(&mut rng, n_envs, holonomic);
         cpu.step(Actions::Continuous(&a)).expect("CPU step");
         gpu.step(Actions::Continuous(&a)).expect("GPU step");
-        let state = cpu.state().differing_columns(gpu.state());
+        let state = cpu.state().unwrap().differing_columns(gpu.state().unwrap());
         let outputs = cpu.outputs().differing_columns(gpu.outputs());
         assert!(
             state.is_empty() && outputs.is_empty(),

@@ -54,7 +54,7 @@ fn shipped_configs_keep_the_invariants_under_adversarial_actions() {
             }
             env.step(Actions::Continuous(&actions)).unwrap();
             for e in 0..n {
-                let broken = violations(env.state(), e);
+                let broken = violations(env.state().unwrap(), e);
                 assert!(broken.is_empty(), "{config}, step {t}: {broken:?}");
             }
         }
@@ -64,8 +64,8 @@ fn shipped_configs_keep_the_invariants_under_adversarial_actions() {
 #[test]
 fn broken_states_are_named() {
     let env = env("exp2", 2);
-    let caps = env.state().strides;
-    let mut s = env.state().clone();
+    let caps = env.state().unwrap().strides;
+    let mut s = env.state().unwrap().clone();
     s.h_x[caps.humans] = f32::NAN;
     s.robot_y[0] = 1e6;
     s.h_role[1] = socnav::state::role::STATIC; // a group member that claims to be alone

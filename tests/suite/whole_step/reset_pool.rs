@@ -15,7 +15,7 @@ use socnav::{Actions, BatchEnv, EnvOptions};
 /// The row an in-place reset of environment `e` of `env` produces, in pool layout.
 fn reset_in_place(env: &BatchEnv, e: usize) -> Vec<u32> {
     let p = *env.params();
-    let mut state = env.state().clone();
+    let mut state = env.state().unwrap().clone();
     let mut out = env.outputs().clone();
     let mut b = Batch {
         s: state.chunk(),
@@ -81,7 +81,10 @@ fn rows_equal_in_place_resets() {
         let mut scratch = RowScratch::new(*env.caps(), *env.layout());
         for e in 0..n {
             let mut row = vec![0u32; words];
-            let (episode, seed) = (env.state().episode[e], env.state().next_seed(e));
+            let (episode, seed) = (
+                env.state().unwrap().episode[e],
+                env.state().unwrap().next_seed(e),
+            );
             write_row(&p, e, episode, seed, &mut scratch, &mut row).expect("row");
             let expected = reset_in_place(&env, e);
             assert_eq!(expected.len(), words, "{name}: row length");

@@ -239,7 +239,7 @@ fn scenarios_of_every_shipped_config_satisfy_the_spawn_invariants() {
                 check_scene(
                     &ctx,
                     config,
-                    env.state(),
+                    env.state().unwrap(),
                     e,
                     env.caps().obstacle_vertices,
                     &mut stats,
@@ -877,9 +877,13 @@ fn unsatisfiable_scenario_is_an_error_naming_the_entity() {
             start.elapsed()
         );
         match err {
-            SimError::Scenario(msg) => assert!(
-                msg.contains(entity),
-                "the message must name the {entity}: {msg}"
+            SimError::Scenario {
+                entity: what,
+                message,
+                ..
+            } => assert!(
+                message.contains(entity) && what.contains(entity),
+                "the error must name the {entity}: {what}, {message}"
             ),
             other => panic!("expected SimError::Scenario, got {other:?}"),
         }

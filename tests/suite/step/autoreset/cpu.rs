@@ -76,7 +76,7 @@ fn next_step_resets_on_the_step_after_the_end() {
             o.terminated.iter().chain(&o.truncated).all(|&f| f == 0),
             "step {t} must not end the episode"
         );
-        assert!(env.state().tick.iter().all(|&k| k == t));
+        assert!(env.state().unwrap().tick.iter().all(|&k| k == t));
     }
     env.step(Actions::Continuous(&stop(n))).unwrap();
     let o = env.outputs();
@@ -136,18 +136,18 @@ fn next_step_resets_on_the_step_after_the_end() {
             fresh.get_state(e).unwrap(),
             "env {e}: state of the new episode"
         );
-        assert_eq!(env.state().tick[e], 0, "env {e}");
+        assert_eq!(env.state().unwrap().tick[e], 0, "env {e}");
         assert_eq!(
-            env.state().robot_vx[e],
+            env.state().unwrap().robot_vx[e],
             0.0,
             "env {e}: the reset step moved the robot"
         );
     }
     // And the episode goes on from there.
     env.step(Actions::Continuous(&drive)).unwrap();
-    assert!(env.state().tick.iter().all(|&k| k == 1));
+    assert!(env.state().unwrap().tick.iter().all(|&k| k == 1));
     assert!(
-        env.state().robot_vx.iter().all(|&v| v > 0.0),
+        env.state().unwrap().robot_vx.iter().all(|&v| v > 0.0),
         "the step after the reset step moves the robot"
     );
 }
@@ -226,7 +226,7 @@ fn same_step_resets_inside_the_finishing_step() {
         o.has_final.iter().all(|&h| h == 0),
         "has_final is cleared by the next step"
     );
-    assert!(same.state().tick.iter().all(|&k| k == 1));
+    assert!(same.state().unwrap().tick.iter().all(|&k| k == 1));
     assert!(
         o.reward
             .iter()
@@ -259,7 +259,7 @@ fn same_step_after_leaving_the_map() {
             {
                 assert_eq!((o.terminated[e], o.truncated[e]), (1, 0), "env {e}");
                 assert_eq!(o.reward[e], -1.0, "env {e}: out-of-map reward");
-                assert_eq!(env.state().tick[e], 0, "env {e}: already reset");
+                assert_eq!(env.state().unwrap().tick[e], 0, "env {e}: already reset");
                 left += 1;
             }
         }
@@ -299,10 +299,10 @@ fn disabled_freezes_finished_environments_until_reset_by_mask() {
             "env {e} is not in the mask: unchanged"
         );
     }
-    assert_eq!(env.state().tick[1], 0);
+    assert_eq!(env.state().unwrap().tick[1], 0);
     env.step(Actions::Continuous(&stop(n))).unwrap();
     env.step(Actions::Continuous(&stop(n))).unwrap(); // ticks 4, 2, 4, 4: envs 0, 2, 3 end
-    assert_eq!(env.state().tick.to_vec(), vec![4, 2, 4, 4]);
+    assert_eq!(env.state().unwrap().tick.to_vec(), vec![4, 2, 4, 4]);
     let finished = [0, 2, 3];
     for e in finished {
         assert_eq!(env.outputs().truncated[e], 1, "env {e}");
@@ -326,7 +326,7 @@ fn disabled_freezes_finished_environments_until_reset_by_mask() {
         }
         // Env 1 keeps stepping until its own 4th step, then freezes too.
         assert_eq!(
-            env.state().tick[1],
+            env.state().unwrap().tick[1],
             (3 + k as u32).min(LENGTH + 1),
             "env 1 at frozen step {k}"
         );
@@ -337,7 +337,7 @@ fn disabled_freezes_finished_environments_until_reset_by_mask() {
         .map(|e| (outputs_of(&env, e), state_of(&env, e)))
         .collect();
     env.reset_envs(&[true, false, false, false]).unwrap();
-    assert_eq!(env.state().tick[0], 0);
+    assert_eq!(env.state().unwrap().tick[0], 0);
     assert_eq!(
         (env.outputs().reward[0], env.outputs().truncated[0]),
         (0.0, 0)
@@ -360,7 +360,7 @@ fn disabled_freezes_finished_environments_until_reset_by_mask() {
     }
     env.step(Actions::Continuous(&drive)).unwrap();
     assert_eq!(
-        env.state().tick.to_vec(),
+        env.state().unwrap().tick.to_vec(),
         vec![1, 4, 4, 4],
         "only env 0 steps"
     );

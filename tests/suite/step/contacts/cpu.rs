@@ -32,7 +32,7 @@ fn contact_pushes_a_human_out_of_a_plant() {
     );
     let mut env = load(scene_config(), &[doc]);
     step(&mut env, &[[0.0; 3]]);
-    let s = env.state();
+    let s = env.state().unwrap();
     // Penetration 1e-3·softplus(60) = 0.06 m, force 6 → speed min(6, 0.1) = 0.1 m/s along +x.
     // 1e-6: f32 positions near 1 m.
     close("pushed x", s.h_x[1], 0.8, 1e-6);
@@ -63,7 +63,7 @@ fn contact_gives_a_static_human_the_push_speed() {
     push(&mut doc, "humans", static_human(1, -0.7, 0.0, 0.5));
     let mut env = load(scene_config(), &[doc]);
     step(&mut env, &[[0.0; 3]]);
-    let s = env.state();
+    let s = env.state().unwrap();
     assert_eq!(
         (s.h_x[0], s.h_y[0], s.h_theta[0]),
         (-0.7, 0.0, 0.5),

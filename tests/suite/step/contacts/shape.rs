@@ -94,7 +94,7 @@ const INSET: f64 = 0.9994;
 /// every environment of `env`'s state (the other stages would move the entities of the scene);
 /// the state and outputs after them.
 fn run_stage(env: &BatchEnv, stage: &str) -> (BatchState, Outputs) {
-    let mut state = env.state().clone();
+    let mut state = env.state().unwrap().clone();
     let mut outputs = env.outputs().clone();
     let n_envs = state.n_envs;
     let mut b = Batch {
@@ -216,7 +216,7 @@ fn human_push_out_follows_the_option() {
     }
     for shape in [ContactShape::Exact, ContactShape::Polygon64] {
         let env = load(scene_config(shape), &docs);
-        let before = env.state().clone();
+        let before = env.state().unwrap().clone();
         let (after, _) = run_stage(&env, "contacts");
         for (e, (what, angle)) in cases.iter().enumerate() {
             let i = e * after.strides.humans;

@@ -21,7 +21,7 @@ fn speed_threshold_zeroes_a_slow_walker() {
         c.human.speed_threshold = threshold;
         let mut env = load(c, std::slice::from_ref(&doc));
         step(&mut env, &[[0.0; 3]]);
-        let s = env.state();
+        let s = env.state().unwrap();
         close(
             &format!("threshold {threshold}: speed"),
             s.h_speed[0],

@@ -263,7 +263,7 @@ fn walker_velocity(config: Config, doc: &Value) -> [f32; 2] {
     env.reset(None).unwrap();
     env.set_state(0, doc).unwrap();
     env.step(Actions::Continuous(&[0.0, 0.0, 0.0])).unwrap();
-    let s = env.state();
+    let s = env.state().unwrap();
     let i = (0..s.n_humans[0] as usize)
         .find(|&i| s.h_id[i] == 1)
         .unwrap();
@@ -385,7 +385,7 @@ fn visible_obstacle_shortcuts_are_exact() {
     for _ in 0..150 {
         env.step(Actions::Continuous(&[0.5, 0.0, 0.2].repeat(n_envs)))
             .unwrap();
-        let mut state = env.state().clone();
+        let mut state = env.state().unwrap().clone();
         let s = state.chunk();
         for e in 0..n_envs {
             let first = e * s.strides.humans + s.n_static[e] as usize;

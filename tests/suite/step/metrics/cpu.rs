@@ -144,7 +144,7 @@ fn time_to_collision_of_a_human_walking_at_the_robot() {
     let mut env = load(scene_config(), &[head_on, passing, leaving]);
     let forward = [1.0f32, 0.0, 0.0];
     step(&mut env, &[forward, forward, [0.0; 3]]);
-    let s = env.state();
+    let s = env.state().unwrap();
     let h = s.strides.humans;
     // The walker moved 0.1 m towards its goal and faces it.
     close("walker x", s.h_x[0], 2.95, 1e-6);

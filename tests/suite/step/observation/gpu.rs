@@ -143,7 +143,7 @@ fn partial_observation() {
     // The sensor hides some humans and not all of them, so the compaction is exercised.
     let env = rolled_out(partial(config("exp3")), 256, 40);
     let seen: u32 = (0..256).map(|e| env.outputs().obs_count[5 * e]).sum();
-    let present: u32 = env.state().n_humans.iter().sum();
+    let present: u32 = env.state().unwrap().n_humans.iter().sum();
     assert!(
         0 < seen && seen < present,
         "{seen} of {present} humans seen"

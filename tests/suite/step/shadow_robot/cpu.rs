@@ -30,7 +30,7 @@ fn shadow_robot_collides_with_a_group_member_it_touches() {
         json!({"x": 0.9, "y": 0.0, "theta": 0.0, "vel": [0.0, 0.0, 0.0], "path_length": 0.0});
     let mut env = load(scene_config(), &[doc]);
     step(&mut env, &[[0.0, 0.0, 0.0]]);
-    let s = env.state();
+    let s = env.state().unwrap();
     assert_eq!(
         s.shadow_collided[0], 1,
         "the shadow robot touches a group member"

@@ -95,7 +95,7 @@ fn apply_recorded(ep: &Episode, step: &Step<'_>, events: &[&Value], at: &str) ->
     env.set_state(0, &ep.document(step.state_after_motion()))
         .unwrap_or_else(|e| panic!("{at}: {e}"));
     let p = *env.params();
-    let mut state: BatchState = env.state().clone();
+    let mut state: BatchState = env.state().unwrap().clone();
     // New walkers' goals come from this stream; their values are not compared.
     let mut rng = RngStream::new(0, 0);
     let mut new_walkers = Vec::new();
@@ -431,9 +431,9 @@ fn event_rates_match_the_configured_probabilities() {
     let mut tallies: [Tally; 4] = Default::default();
     for t in 0..600 {
         let before: Vec<Chances> = (0..n)
-            .map(|e| chances(env.state(), e, group_size))
+            .map(|e| chances(env.state().unwrap(), e, group_size))
             .collect();
-        let counts_before = counts(env.state());
+        let counts_before = counts(env.state().unwrap());
         let actions: Vec<f32> = (0..n * 3)
             .map(|k| {
                 if k % 3 == 1 {
@@ -465,7 +465,7 @@ fn event_rates_match_the_configured_probabilities() {
             );
         }
         // Same episode, same numbers of humans and laptops.
-        let counts_after = counts(env.state());
+        let counts_after = counts(env.state().unwrap());
         for e in 0..n {
             if counts_before[e].0 == counts_after[e].0 {
                 assert_eq!(

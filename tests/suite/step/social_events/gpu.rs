@@ -132,7 +132,7 @@ pub(crate) fn parity(
     let dev = device()?;
     let env = rolled_out(config, n_envs, 40);
     let p = *env.params();
-    let mut cpu = env.state().clone();
+    let mut cpu = env.state().unwrap().clone();
     let mut cpu_out = env.outputs().clone();
     let mut gpu = GpuStages::new(dev, &p, &cpu, &cpu_out, &[stage]).expect("GPU stages");
     let mut from_gpu = cpu.clone();
