@@ -294,6 +294,15 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
         }
     }
     crate::systems::regroup::number_lists(&mut s.env_chunk(e), 0);
+    // What a step must keep true must hold of what it starts from: an entity at NaN or far
+    // outside the room would break the step's geometry (ORCA's obstacle processing).
+    let broken = crate::state::invariants::violations(s, e);
+    if !broken.is_empty() {
+        return Err(SimError::shape(
+            "state document",
+            format!("state document: {}", broken.join("; ")),
+        ));
+    }
     derive_goal_distances(s, e);
     (s.robot_wvx[e], s.robot_wvy[e]) = crate::systems::robot_motion::world_velocity(
         s.robot_theta[e],

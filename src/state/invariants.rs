@@ -1,6 +1,7 @@
 //! What every step must leave true of an environment's state, checked by `socnav soak` over
-//! billions of steps with adversarial actions (and usable by any test): positions finite and in
-//! the room, counts within the capacities, and every human in exactly the place its role says.
+//! billions of steps with adversarial actions, by `set_state` on every loaded document, and
+//! usable by any test: positions finite and in the room (robot, humans, objects, walls), counts
+//! within the capacities, and every human in exactly the place its role says.
 
 use super::{BatchState, NONE, group_kind, role};
 
@@ -36,14 +37,14 @@ pub fn violations(s: &BatchState, e: usize) -> Vec<String> {
         s.map_x[e] / 2.0 + ROOM_SLACK_M,
         s.map_y[e] / 2.0 + ROOM_SLACK_M,
     );
-    // `human`: a human's slot, or None for the robot; named only on failure (this runs every
-    // step of a soak, for every environment).
-    let mut place = |human: Option<usize>, x: f32, y: f32| {
+    // `who`: the entity's kind and slot, or None for the robot; named only on failure (this runs
+    // every step of a soak, for every environment).
+    let mut place = |who: Option<(&str, usize)>, x: f32, y: f32| {
         let inside = x.is_finite() && y.is_finite() && x.abs() <= hx && y.abs() <= hy;
         if inside {
             return;
         }
-        let what = human.map_or_else(|| "the robot".to_owned(), |k| format!("human slot {k}"));
+        let what = who.map_or_else(|| "the robot".to_owned(), |(k, i)| format!("{k} slot {i}"));
         if !(x.is_finite() && y.is_finite()) {
             fail(format!("{what} at non-finite ({x}, {y})"));
         } else {
@@ -54,10 +55,16 @@ pub fn violations(s: &BatchState, e: usize) -> Vec<String> {
         }
     };
     place(None, s.robot_x[e], s.robot_y[e]);
-    let n_humans = s.n_humans[e] as usize;
-    for k in 0..n_humans {
-        let h = e * caps.humans + k;
-        place(Some(k), s.h_x[h], s.h_y[h]);
+    for (kind, n, cap, xs, ys) in [
+        ("human", s.n_humans[e], caps.humans, &s.h_x, &s.h_y),
+        ("table", s.n_tables[e], caps.tables, &s.t_x, &s.t_y),
+        ("laptop", s.n_laptops[e], caps.laptops, &s.l_x, &s.l_y),
+        ("plant", s.n_plants[e], caps.plants, &s.p_x, &s.p_y),
+        ("wall", s.n_walls[e], caps.walls, &s.w_x, &s.w_y),
+    ] {
+        for k in 0..n as usize {
+            place(Some((kind, k)), xs[e * cap + k], ys[e * cap + k]);
+        }
     }
     humans_in_their_places(s, e, &mut fail);
     out

@@ -290,6 +290,24 @@ fn set_state_names_an_exceeded_capacity() {
     println!("{msg}");
 }
 
+/// Contract: a document's entities must lie in its room and be finite, as a step keeps them: a
+/// plant 1000 km out collapses its obstacle square in 32-bit coordinates (ORCA's obstacle
+/// processing would panic on the zero-length edge), a robot at NaN poisons every output.
+#[test]
+fn set_state_refuses_entities_outside_the_room_or_not_finite() {
+    let mut env = make(config("exp1"), 1, 0);
+    let doc = env.get_state(0).unwrap();
+    let mut far = doc.clone();
+    far["state"]["plants"][0]["x"] = json!(1.0e6);
+    load_rejected(&mut env, &far, &["plant slot 0", "outside the room"]);
+    let mut nan = doc.clone();
+    nan["state"]["robot"]["x"] = json!("nan");
+    load_rejected(&mut env, &nan, &["the robot", "non-finite"]);
+    // The batch is untouched and steps on.
+    env.step(Actions::Continuous(&actions(1, 0))).unwrap();
+    assert!(env.outputs().obs.iter().all(|v| v.is_finite()));
+}
+
 /// Contract: sizes that are config constants in socnav must match the batch's config, and the
 /// message gives both values.
 #[test]

@@ -119,6 +119,12 @@ fn image_size_follows_size_px_and_room_aspect() {
     let mut doc = scene_doc();
     doc["room"]["map_x"] = json!(6.0);
     doc["room"]["map_y"] = json!(12.0);
+    // A consistent document: its walls turned with the room (mirrored in the diagonal).
+    for w in doc["walls"].as_array_mut().unwrap() {
+        let (x, y, theta) = (w["x"].clone(), w["y"].clone(), w["theta"].as_f64().unwrap());
+        (w["x"], w["y"]) = (y, x);
+        w["theta"] = json!(std::f64::consts::FRAC_PI_2 - theta);
+    }
     let mut tall = scene_env();
     tall.set_state(0, &doc).unwrap();
     let f = render::Frame {
