@@ -71,6 +71,25 @@ impl std::fmt::Debug for BatchEnv {
 }
 
 impl BatchEnv {
+    /// One environment of `config` on the CPU with one thread, reset with `seed`, that never
+    /// resets itself (`AutoresetMode::Disabled`): what a viewer, a renderer or a heatmap scene
+    /// steps episode by episode.
+    ///
+    /// # Errors
+    /// As [`BatchEnv::new`] and [`BatchEnv::reset`].
+    pub fn single(config: Config, seed: u64) -> Result<Self, SimError> {
+        let options = EnvOptions {
+            n_envs: 1,
+            seed,
+            autoreset: AutoresetMode::Disabled,
+            threads: Some(1),
+            ..Default::default()
+        };
+        let mut env = Self::new(config, options)?;
+        env.reset(Some(seed))?;
+        Ok(env)
+    }
+
     /// A batch of `options.n_envs` environments of `config` on the backend `options.backend`. Call
     /// [`BatchEnv::reset`] before the first step.
     pub fn new(config: Config, options: EnvOptions) -> Result<Self, SimError> {

@@ -42,7 +42,7 @@ use crate::geometry::Disc;
 use crate::sngnn::{self, Scorer};
 use crate::state::{BatchState, Caps, StateChunk, blocker_kind};
 use crate::systems::{reward, sngnn_score, world};
-use crate::{Actions, AutoresetMode, BatchEnv, EnvOptions, SimError, StepParams};
+use crate::{Actions, BatchEnv, SimError, StepParams};
 
 /// Smallest grid side.
 pub const MIN_GRID: usize = 2;
@@ -114,15 +114,7 @@ impl Scene {
     pub fn new(config: &Config, seed: u64) -> Result<Self, SimError> {
         let mut stepping = config.clone();
         stepping.reward.kind = RewardKind::Dsrnn;
-        let options = EnvOptions {
-            n_envs: 1,
-            seed,
-            autoreset: AutoresetMode::Disabled,
-            threads: Some(1),
-            ..Default::default()
-        };
-        let mut env = BatchEnv::new(stepping, options)?;
-        env.reset(Some(seed))?;
+        let mut env = BatchEnv::single(stepping, seed)?;
         let before = env.get_state(0)?;
         env.step(Actions::Continuous(&[0.0; 3]))?;
         let after = env.get_state(0)?;

@@ -33,10 +33,7 @@ def build_batch(
         base = overrides.pop("base", "exp1")
         bad = list(_non_finite(overrides, ""))
         if bad:
-            problems = [(key, f"`{key}` must be finite, got {value}") for key, value in bad]
-            err = ConfigError("invalid configuration:\n  - " + "\n  - ".join(m for _, m in problems))
-            err.problems = problems  # as the core's ConfigError carries them
-            raise err
+            raise config_error([(key, f"`{key}` must be finite, got {value}") for key, value in bad])
         text = json.dumps(overrides)
     elif isinstance(config, str):
         base, text = config, None
@@ -48,6 +45,15 @@ def build_batch(
     return Batch(
         base, int(num_envs), 0 if seed is None else check_seed(seed), autoreset_mode, threads, text, None, backend
     )
+
+
+def config_error(problems: list[tuple[str | None, str]], prefix: str = "") -> ConfigError:
+    """A ``ConfigError`` raised in Python, with ``problems`` as the core's carry them: ``(key or
+    None, message)`` pairs; ``prefix`` (a file, say) leads each message."""
+    problems = [(key, f"{prefix}{message}") for key, message in problems]
+    err = ConfigError("invalid configuration:\n  - " + "\n  - ".join(m for _, m in problems))
+    err.problems = problems
+    return err
 
 
 def _non_finite(table: Mapping[str, Any], prefix: str):

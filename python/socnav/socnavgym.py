@@ -51,11 +51,13 @@ def load_socnavgym_yaml(path: str | os.PathLike[str]) -> str:
     with open(path, encoding="utf-8") as f:
         parsed = yaml.safe_load(f)
     if not isinstance(parsed, dict):
-        raise ConfigError(f"{os.fspath(path)}: a SocNavGym config is a YAML mapping, got {type(parsed).__name__}")
+        raise _batch.config_error(
+            [(None, f"a SocNavGym config is a YAML mapping, got {type(parsed).__name__}")], f"{os.fspath(path)}: "
+        )
     try:
         return socnavgym_config_toml(json.dumps(parsed))
     except ConfigError as e:
-        raise ConfigError(f"{os.fspath(path)}: {e}") from None
+        raise _batch.config_error(e.problems, f"{os.fspath(path)}: ") from None
 
 
 class SocNavGymEnv(gym.Env):

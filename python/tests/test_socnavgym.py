@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import socnav
 from socnav.socnavgym import DiscreteActions, SocNavGymEnv, load_socnavgym_yaml
 
 GOLDEN = Path(os.environ.get("SOCNAV_GOLDEN_DIR", Path(__file__).resolve().parents[2] / "tests/data/golden/socnavgym"))
@@ -180,5 +181,12 @@ def test_discrete_actions_follow_socnavgym():
 def test_bad_yaml_config_names_the_file(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("- just\n- a list\n")
-    with pytest.raises(Exception, match="bad.yaml"):
+    with pytest.raises(Exception, match="bad.yaml") as err:
         load_socnavgym_yaml(bad)
+    assert isinstance(err.value, socnav.ConfigError) and err.value.problems[0][1].startswith(str(bad))
+    # The core's problems keep their keys behind the file's name.
+    partial = tmp_path / "partial.yaml"
+    partial.write_text("env:\n  margin: 0.5\n")
+    with pytest.raises(socnav.ConfigError, match="partial.yaml") as err:
+        load_socnavgym_yaml(partial)
+    assert all(message.startswith(str(partial)) for _, message in err.value.problems)

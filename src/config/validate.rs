@@ -414,10 +414,10 @@ fn check_room_fits(c: &Config, other_problems: bool, v: &mut Problems) {
         return;
     }
     let o = &c.objects;
-    let table_circumradius =
-        (0.25 * o.table_length * o.table_length + 0.25 * o.table_width * o.table_width).sqrt();
-    let laptop_circumradius =
-        (0.25 * o.laptop_length * o.laptop_length + 0.25 * o.laptop_width * o.laptop_width).sqrt();
+    let circumradius =
+        |length: f32, width: f32| (0.25 * length * length + 0.25 * width * width).sqrt();
+    let table_circumradius = circumradius(o.table_length, o.table_width);
+    let laptop_circumradius = circumradius(o.laptop_length, o.laptop_width);
     let group_radius = c.group.radius + 0.5 * c.human.diameter;
     let side = box_x.min(box_y);
     for (what, radius, asked) in [

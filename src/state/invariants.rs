@@ -5,9 +5,10 @@
 
 use super::{BatchState, NONE, group_kind, role};
 
-/// How far outside the room's bounding rectangle (m) a robot or human may be: a robot that
-/// leaves the map ends its episode on that step (0.1.1's OUT_OF_MAP), a step moves at most a
-/// few tenths of a metre, and an L room's removed block is inside the rectangle.
+/// How far outside the room's bounding rectangle (m) an entity may be: a robot that leaves the
+/// map ends its episode on that step (0.1.1's OUT_OF_MAP), a step moves at most a few tenths of
+/// a metre, a laptop's user sits at most `config::validate::MAX_SEAT_DISTANCE_M` (1.5 m) from a
+/// laptop on a table inside the walls, and an L room's removed block is inside the rectangle.
 pub const ROOM_SLACK_M: f32 = 2.0;
 
 /// Every broken invariant of environment `e` (empty when none), each naming the environment,

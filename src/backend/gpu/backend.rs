@@ -264,7 +264,7 @@ impl GpuBackend {
 /// The host state of `cell`, which [`GpuBackend::host_state`] has just filled.
 fn downloaded(cell: &mut OnceLock<BatchState>) -> Result<&mut BatchState, SimError> {
     cell.get_mut()
-        .ok_or_else(|| SimError::Usage("the host state was not downloaded first".into()))
+        .ok_or_else(|| SimError::Internal("the host state was not downloaded first".into()))
 }
 
 /// The passes of a step: the stages of `STAGES`, in order, those only the SNGNN-v2 reward runs

@@ -10,7 +10,7 @@ use socnav::recording::{RecordingDir, Step, episode_json};
 use socnav::spec::{N_INFO, info};
 use socnav::viewer::controls::{self, Held};
 use socnav::viewer::{Command, Window, hud};
-use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
+use socnav::{Actions, BatchEnv, Config, SimError};
 
 use crate::args::PlayArgs;
 use crate::outcome::outcome;
@@ -269,15 +269,7 @@ pub fn play(a: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     }
     let config = Config::from_name_or_path(&a.config)?;
     let size = a.size.unwrap_or(config.render.resolution);
-    let options = EnvOptions {
-        n_envs: 1,
-        seed: a.seed,
-        autoreset: AutoresetMode::Disabled,
-        threads: Some(1),
-        ..Default::default()
-    };
-    let mut env = BatchEnv::new(config, options)?;
-    env.reset(Some(a.seed))?;
+    let env = BatchEnv::single(config, a.seed)?;
     let holonomic = env.params().holonomic != 0;
     let record = a.record.as_deref().map(RecordingDir::open).transpose()?;
     let mut player = Player {

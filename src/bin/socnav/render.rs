@@ -6,7 +6,7 @@ use std::path::Path;
 
 use socnav::render::{self, GifWriter};
 use socnav::spec::N_INFO;
-use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions};
+use socnav::{Actions, BatchEnv, Config};
 
 use crate::args::RenderArgs;
 use crate::outcome::outcome;
@@ -42,15 +42,7 @@ pub fn render(a: &RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     let config = Config::from_name_or_path(&a.config)?;
     let size = a.size.unwrap_or(config.render.resolution);
     let frame_ms = config.render.frame_ms;
-    let options = EnvOptions {
-        n_envs: 1,
-        seed: a.seed,
-        autoreset: AutoresetMode::Disabled,
-        threads: Some(1),
-        ..Default::default()
-    };
-    let mut env = BatchEnv::new(config, options)?;
-    env.reset(Some(a.seed))?;
+    let mut env = BatchEnv::single(config, a.seed)?;
     let robot = |env: &BatchEnv| env.state().map(|s| (s.robot_x[0], s.robot_y[0]));
     let mut trail = vec![robot(&env)?];
     let first = render::draw(env.params(), env.state()?, 0, &trail, size)?;
