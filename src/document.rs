@@ -7,7 +7,10 @@
 //! Tests synchronise with the reference through it; users load fixed scenarios with it.
 //!
 //! Numbers are rounded to f32 on the way in; non-finite numbers are the strings "inf", "-inf",
-//! "nan" (as in the golden files). Sizes that are config constants in socnav (radii, table and
+//! "nan" (as in the golden files). A loaded number must be finite (a running minimum may be
+//! "inf") and at most 1e9 in magnitude, a speed within what the config allows, the walls no
+//! longer than the observation's rows for the config hold, and the loaded state must keep the
+//! invariants (`state::invariants`). Sizes that are config constants in socnav (radii, table and
 //! laptop sizes, wall thickness) must match the batch's config. A snapshot larger than the
 //! batch's capacities is an error naming the capacity.
 //!
@@ -280,7 +283,7 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
     // remains beyond what the document fills.
     s.clear_slots(e);
     read::room(p, &r, s, e)?;
-    read::human_params(&r.at("human_params")?, s, e)?;
+    read::human_params(p, &r.at("human_params")?, s, e)?;
     let st = r.at("state")?;
     read::snapshot(p, &st, s, e)?;
     sngnn::check_entity_ids(s, e)?;

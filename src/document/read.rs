@@ -15,6 +15,11 @@ pub(super) struct Reader<'a> {
     path: String,
 }
 
+/// The largest magnitude of a number in a document: positions, sums over an episode and
+/// parameters stay orders of magnitude below, while squares and products of larger numbers in a
+/// step would overflow f32.
+const MAX_MAGNITUDE: f32 = 1e9;
+
 pub(super) fn err(path: &str, what: impl std::fmt::Display) -> SimError {
     SimError::shape("state document", format!("state document: `{path}` {what}"))
 }
@@ -78,7 +83,35 @@ impl<'a> Reader<'a> {
     }
 
     /// A number; "inf", "-inf" and "nan" strings stand for the non-finite values.
+    /// A finite number of magnitude at most [`MAX_MAGNITUDE`].
     fn as_f32(&self) -> Result<f32, SimError> {
+        let x = self.as_number()?;
+        if !x.is_finite() {
+            return Err(err(&self.path, format!("is {x}; it must be finite")));
+        }
+        if x.abs() > MAX_MAGNITUDE {
+            return Err(err(
+                &self.path,
+                format!("is {x}; no quantity of a state exceeds {MAX_MAGNITUDE:e} in magnitude"),
+            ));
+        }
+        Ok(x)
+    }
+
+    /// A finite number in `lo..=hi`; `why` says where the bounds come from.
+    pub(super) fn f_in(&self, key: &str, lo: f32, hi: f32, why: &str) -> Result<f32, SimError> {
+        let x = self.f(key)?;
+        if !(lo..=hi).contains(&x) {
+            return Err(err(
+                &self.child_path(key),
+                format!("is {x}; it must be in [{lo}, {hi}] ({why})"),
+            ));
+        }
+        Ok(x)
+    }
+
+    /// A number, the strings "inf", "-inf" and "nan" included.
+    fn as_number(&self) -> Result<f32, SimError> {
         match self.value {
             Value::Number(n) => n
                 .as_f64()
@@ -92,8 +125,19 @@ impl<'a> Reader<'a> {
         }
     }
 
+    /// A finite number (m, rad, s, ... as the key says).
     pub(super) fn f(&self, key: &str) -> Result<f32, SimError> {
         self.at(key)?.as_f32()
+    }
+
+    /// A finite number or +inf: a running minimum before its first sample (`metrics.v_min`,
+    /// `episode_sums.min_human_distance`, ...). Never NaN or -inf.
+    pub(super) fn f_or_inf(&self, key: &str) -> Result<f32, SimError> {
+        let r = self.at(key)?;
+        match r.as_number()? {
+            f32::INFINITY => Ok(f32::INFINITY),
+            _ => r.as_f32(),
+        }
     }
 
     pub(super) fn u(&self, key: &str) -> Result<u32, SimError> {
@@ -217,8 +261,31 @@ pub(super) fn room(
         s.w_y[wb + k] = w.f("y")?;
         s.w_theta[wb + k] = w.f("theta")?;
         (s.w_sin[wb + k], s.w_cos[wb + k]) = crate::math::sin_cos(s.w_theta[wb + k]);
-        s.w_length[wb + k] = w.f("length")?;
+        let length = w.f("length")?;
+        if !(length.is_finite() && length > 0.0) {
+            return Err(err(
+                &w.child_path("length"),
+                format!("is {length} m; a wall's length must be a positive number"),
+            ));
+        }
+        s.w_length[wb + k] = length;
     }
+    // The observation holds the walls' segments in rows sized for the config's rooms: longer
+    // walls than any of them would overrun it.
+    let segments: u64 = (wb..wb + walls.len())
+        .map(|w| {
+            u64::from(crate::room::segment_count(
+                s.w_length[w],
+                p.wall_segment_size,
+            ))
+        })
+        .sum();
+    capacity(
+        "wall segments",
+        segments as usize,
+        s.strides.wall_segments,
+        "the walls of the config's largest room, in `objects.wall_segment_size` pieces",
+    )?;
     s.n_walls[e] = walls.len() as u32;
     let blockers = r.list("spawn_blockers")?;
     capacity(
@@ -249,11 +316,21 @@ pub(super) fn room(
     Ok(())
 }
 
-pub(super) fn human_params(r: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimError> {
+pub(super) fn human_params(
+    p: &StepParams,
+    r: &Reader<'_>,
+    s: &mut BatchState,
+    e: usize,
+) -> Result<(), SimError> {
     s.orca_neighbor_dist[e] = r.f("orca_neighborDist")?;
     s.orca_time_horizon[e] = r.f("orca_timeHorizon")?;
     s.orca_time_horizon_obst[e] = r.f("orca_timeHorizonObst")?;
-    s.orca_max_speed[e] = r.f("orca_maxSpeed")?;
+    s.orca_max_speed[e] = r.f_in(
+        "orca_maxSpeed",
+        0.0,
+        max_walker_speed(p),
+        WALKER_SPEED_BOUND,
+    )?;
     s.sfm_r0[e] = r.f("sfm_r0")?;
     s.sfm_gamma[e] = r.f("sfm_gamma")?;
     s.sfm_n[e] = r.f("sfm_n")?;
@@ -270,7 +347,7 @@ pub(super) fn snapshot(
 ) -> Result<(), SimError> {
     s.tick[e] = st.u("tick")?;
     robot(p, &st.at("robot")?, s, e)?;
-    shadow(&st.at("shadow_robot")?, s, e)?;
+    shadow(p, &st.at("shadow_robot")?, s, e)?;
     let ids = humans(p, st, s, e)?;
     let laptop_ids = objects(p, st, s, e)?;
     groups(st, p, s, e, &ids)?;
@@ -288,15 +365,43 @@ fn robot(p: &StepParams, r: &Reader<'_>, s: &mut BatchState, e: usize) -> Result
     s.robot_y[e] = r.f("y")?;
     s.robot_theta[e] = r.f("theta")?;
     [s.goal_x[e], s.goal_y[e]] = r.vec::<2>("goal")?;
-    [s.robot_vx[e], s.robot_vy[e], s.robot_w[e]] = r.vec::<3>("vel")?;
+    [s.robot_vx[e], s.robot_vy[e], s.robot_w[e]] = robot_velocity(p, r)?;
     Ok(())
 }
 
-fn shadow(r: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimError> {
+/// Why a walker's speed is bounded (as `config::validate` bounds `human.max_speed`).
+const WALKER_SPEED_BOUND: &str = "a step moves a walker at most its diameter";
+
+/// The fastest a walker may go (m/s): one diameter per step.
+fn max_walker_speed(p: &StepParams) -> f32 {
+    2.0 * p.human_radius / p.dt
+}
+
+/// A robot's `vel` [vx, vy, ω] (m/s, m/s, rad/s), each within the robot's limits (a
+/// velocity is always a clipped command).
+fn robot_velocity(p: &StepParams, r: &Reader<'_>) -> Result<[f32; 3], SimError> {
+    let vel = r.vec::<3>("vel")?;
+    let limits = [p.robot_max_speed, p.robot_max_speed, p.robot_max_rotation];
+    for (k, (v, limit)) in vel.iter().zip(limits).enumerate() {
+        // f32 rounding of a limit that was clipped against.
+        let limit = limit * (1.0 + 1e-5);
+        if v.abs() > limit {
+            return Err(err(
+                &format!("{}[{k}]", r.child_path("vel")),
+                format!(
+                    "is {v}; the robot's limits (`robot.max_speed`, `robot.max_rotation`) bound it to ±{limit}"
+                ),
+            ));
+        }
+    }
+    Ok(vel)
+}
+
+fn shadow(p: &StepParams, r: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimError> {
     s.shadow_x[e] = r.f("x")?;
     s.shadow_y[e] = r.f("y")?;
     s.shadow_theta[e] = r.f("theta")?;
-    [s.shadow_vx[e], s.shadow_vy[e], s.shadow_w[e]] = r.vec::<3>("vel")?;
+    [s.shadow_vx[e], s.shadow_vy[e], s.shadow_w[e]] = robot_velocity(p, r)?;
     s.shadow_collided[e] = r.flag("collided")?;
     s.shadow_reached[e] = r.flag("reached")?;
     s.shadow_reach_tick[e] = if r.opt("reach_tick").is_some() {
@@ -359,7 +464,7 @@ fn humans(
         s.h_x[i] = h.f("x")?;
         s.h_y[i] = h.f("y")?;
         s.h_theta[i] = h.f("theta")?;
-        s.h_speed[i] = h.f("speed")?;
+        s.h_speed[i] = h.f_in("speed", 0.0, max_walker_speed(p), WALKER_SPEED_BOUND)?;
         [s.h_goal_x[i], s.h_goal_y[i]] = if h.opt("goal").is_some() {
             h.vec::<2>("goal")?
         } else {
@@ -683,15 +788,15 @@ fn metrics(m: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimError>
     s.m_failure_to_progress[e] = m.u("failure_to_progress")?;
     s.m_stalled_time[e] = m.f("stalled_time")?;
     s.m_path_length[e] = m.f("path_length")?;
-    s.m_v_min[e] = m.f("v_min")?;
+    s.m_v_min[e] = m.f_or_inf("v_min")?;
     s.m_v_max[e] = m.f("v_max")?;
     s.m_v_avg[e] = m.f("v_avg")?;
     [s.m_prev_vx[e], s.m_prev_vy[e]] = m.vec::<2>("prev_vel")?;
-    s.m_a_min[e] = m.f("a_min")?;
+    s.m_a_min[e] = m.f_or_inf("a_min")?;
     s.m_a_max[e] = m.f("a_max")?;
     s.m_a_avg[e] = m.f("a_avg")?;
     [s.m_prev_ax[e], s.m_prev_ay[e]] = m.vec::<2>("prev_a")?;
-    s.m_j_min[e] = m.f("jerk_min")?;
+    s.m_j_min[e] = m.f_or_inf("jerk_min")?;
     s.m_j_max[e] = m.f("jerk_max")?;
     s.m_j_avg[e] = m.f("jerk_avg")?;
     s.m_compliant[e] = m.u("compliant_count")?;
@@ -731,8 +836,8 @@ pub(super) fn extras(x: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(),
     s.pending_reset[e] = x.flag("pending_reset")?;
     if let Some(sums) = x.opt("episode_sums") {
         s.ep_return[e] = sums.f("return")?;
-        s.ep_min_human_dist[e] = sums.f("min_human_distance")?;
-        s.ep_min_obstacle_dist[e] = sums.f("min_obstacle_distance")?;
+        s.ep_min_human_dist[e] = sums.f_or_inf("min_human_distance")?;
+        s.ep_min_obstacle_dist[e] = sums.f_or_inf("min_obstacle_distance")?;
         s.ep_sum_avg_obstacle_dist[e] = sums.f("sum_average_obstacle_distance")?;
         s.ep_sum_ttc[e] = sums.f("sum_time_to_collision")?;
         s.ep_sum_discomfort_dsrnn[e] = sums.f("sum_discomfort_dsrnn")?;

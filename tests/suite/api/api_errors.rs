@@ -290,9 +290,9 @@ fn set_state_names_an_exceeded_capacity() {
     println!("{msg}");
 }
 
-/// Contract: a document's entities must lie in its room and be finite, as a step keeps them: a
-/// plant 1000 km out collapses its obstacle square in 32-bit coordinates (ORCA's obstacle
-/// processing would panic on the zero-length edge), a robot at NaN poisons every output.
+/// Contract: a document's entities must lie in its room and its numbers be finite, as a step
+/// keeps them: a plant 1000 km out collapses its obstacle square in 32-bit coordinates (ORCA's
+/// obstacle processing would panic on the zero-length edge), a robot at NaN poisons every output.
 #[test]
 fn set_state_refuses_entities_outside_the_room_or_not_finite() {
     let mut env = make(config("exp1"), 1, 0);
@@ -302,7 +302,11 @@ fn set_state_refuses_entities_outside_the_room_or_not_finite() {
     load_rejected(&mut env, &far, &["plant slot 0", "outside the room"]);
     let mut nan = doc.clone();
     nan["state"]["robot"]["x"] = json!("nan");
-    load_rejected(&mut env, &nan, &["the robot", "non-finite"]);
+    load_rejected(
+        &mut env,
+        &nan,
+        &["`state.robot.x` is NaN", "must be finite"],
+    );
     // The batch is untouched and steps on.
     env.step(Actions::Continuous(&actions(1, 0))).unwrap();
     assert!(env.outputs().obs.iter().all(|v| v.is_finite()));

@@ -6,10 +6,10 @@
 //! finite (the info fields documented as NaN excepted) and the state's invariants.
 
 use proptest::prelude::*;
-use socnav::spec::{N_INFO, info};
-use socnav::state::invariants::violations;
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
 use toml::Value;
+
+use super::assert_clean;
 
 /// Every leaf of exp3's config as (section, key).
 fn leaves(base: &toml::Table) -> Vec<(String, String)> {
@@ -82,16 +82,20 @@ fn mutate(old: &Value, kind: u8, x: f64) -> Option<Value> {
     })
 }
 
-/// What a mutated config must do (see the module docs).
+/// What a mutated TOML config must do (see the module docs).
 fn check(text: &str) {
-    let config = match Config::from_toml_str(text) {
-        Ok(c) => c,
+    match Config::from_toml_str(text) {
+        Ok(config) => run_cleanly(config, text),
         Err(SimError::Config(problems)) => {
             assert!(!problems.is_empty(), "a refusal lists its problems");
-            return;
         }
         Err(e) => panic!("a config is refused with SimError::Config, got {e:?}\n{text}"),
-    };
+    }
+}
+
+/// A config that loaded builds a batch (or fails to place its scenario with
+/// `SimError::Scenario`), resets, and steps with extreme actions keeping its outputs clean.
+fn run_cleanly(config: Config, context: &str) {
     let options = EnvOptions {
         n_envs: 3,
         seed: 5,
@@ -102,12 +106,12 @@ fn check(text: &str) {
     let mut env = match BatchEnv::new(config, options) {
         Ok(env) => env,
         Err(SimError::Scenario { .. } | SimError::Sngnn(_)) => return,
-        Err(e) => panic!("a valid config builds a batch, got {e:?}\n{text}"),
+        Err(e) => panic!("a valid config builds a batch, got {e:?}\n{context}"),
     };
     match env.reset(Some(5)) {
         Ok(()) => {}
         Err(SimError::Scenario { .. }) => return,
-        Err(e) => panic!("reset: {e:?}\n{text}"),
+        Err(e) => panic!("reset: {e:?}\n{context}"),
     }
     let holonomic = env.params().holonomic != 0;
     let lateral = if holonomic { 1.0 } else { 0.0 };
@@ -121,29 +125,9 @@ fn check(text: &str) {
         match env.step(Actions::Continuous(&actions)) {
             Ok(()) => {}
             Err(SimError::Scenario { .. }) => return, // an autoreset could not place the next scenario
-            Err(e) => panic!("step {t}: {e:?}\n{text}"),
+            Err(e) => panic!("step {t}: {e:?}\n{context}"),
         }
-        let out = env.outputs();
-        assert!(
-            out.obs.iter().all(|v| v.is_finite()),
-            "step {t}: a non-finite observation\n{text}"
-        );
-        assert!(
-            out.reward.iter().all(|v| v.is_finite()),
-            "step {t}: a non-finite reward\n{text}"
-        );
-        for (k, v) in out.info.iter().enumerate() {
-            let key = k % N_INFO;
-            let nan_ok = key == info::TIME_TO_REACH_GOAL || key == info::AVERAGE_OBSTACLE_DISTANCE;
-            assert!(
-                v.is_finite() || (v.is_nan() && nan_ok),
-                "step {t}: info {key} is {v}\n{text}"
-            );
-        }
-        for e in 0..3 {
-            let broken = violations(env.state().unwrap(), e);
-            assert!(broken.is_empty(), "step {t}: {broken:?}\n{text}");
-        }
+        assert_clean(&env, &format!("step {t}\n{context}"));
     }
 }
 
@@ -274,4 +258,60 @@ fn regression_a_laptop_user_seated_out_of_reach_is_refused() {
         .unwrap()
         .insert("laptop_users".into(), Value::try_from([3, 3]).unwrap());
     check(&toml::to_string(&doc).unwrap());
+}
+
+/// The SocNavGym 0.1.1 config dict (`exp3_no_sngnn.yaml`, as the golden episode's header carries
+/// the parsed YAML) that the SocNavGym target mutates; from the repository's copy of the golden
+/// episodes, so that the target never skips.
+fn socnavgym_base() -> serde_json::Value {
+    use std::io::Read;
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/golden/socnavgym/exp3_no_sngnn_seed0.json.gz"
+    );
+    let mut text = String::new();
+    flate2::read::GzDecoder::new(std::fs::File::open(path).unwrap())
+        .read_to_string(&mut text)
+        .unwrap();
+    let root: serde_json::Value = serde_json::from_str(&text).unwrap();
+    root["header"]["config"].clone()
+}
+
+/// What a mutated SocNavGym dict must do: load as a validated config (which then runs cleanly)
+/// or be refused with `SimError::Config` listing its problems.
+fn check_socnavgym(dict: &serde_json::Value) {
+    let context = serde_json::to_string_pretty(dict).unwrap();
+    match Config::from_socnavgym(dict) {
+        Ok(config) => run_cleanly(config, &context),
+        Err(SimError::Config(problems)) => {
+            assert!(!problems.is_empty(), "a refusal lists its problems");
+        }
+        Err(e) => panic!("a SocNavGym dict is refused with SimError::Config, got {e:?}\n{context}"),
+    }
+}
+
+proptest! {
+    #![proptest_config(super::config(48))]
+
+    #[test]
+    fn mutated_socnavgym_dicts_are_refused_clearly_or_run_cleanly(
+        edits in prop::collection::vec((0usize..1000, 0u8..64, 0.0f64..1.0), 1..6),
+        drop in prop::option::of(0usize..1000),
+    ) {
+        let mut dict = socnavgym_base();
+        let paths = super::json::paths(&dict);
+        for (pick, kind, x) in edits {
+            super::json::mutate_at(&mut dict, &paths[pick % paths.len()], kind, x);
+        }
+        if let Some(pick) = drop {
+            super::json::remove(&mut dict, &paths[pick % paths.len()]);
+        }
+        check_socnavgym(&dict);
+    }
+}
+
+/// The unmutated SocNavGym dict passes the same check.
+#[test]
+fn the_base_socnavgym_dict_runs_cleanly() {
+    check_socnavgym(&socnavgym_base());
 }

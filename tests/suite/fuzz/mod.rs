@@ -3,10 +3,21 @@
 //! budget and seed; `SOCNAV_FUZZ_CASES=N SOCNAV_FUZZ_SEED=S` runs N cases per target from seed S
 //! (a long run: see benches/RESULTS.md).
 //! Every failure found becomes a named regression test beside its target.
+//!
+//! The targets: configs (TOML text and SocNavGym dicts), state documents for `set_state`,
+//! actions (any bit pattern), sequences of API calls, and the feasibility of valid configs.
 
+mod actions;
 mod configs;
+mod documents;
+mod feasibility;
+mod json;
+mod sequences;
 
 use proptest::test_runner::{Config, RngSeed};
+use socnav::BatchEnv;
+use socnav::spec::{N_INFO, info};
+use socnav::state::invariants::violations;
 
 /// A target's settings: `SOCNAV_FUZZ_CASES` cases (else `default`), from the fixed seed
 /// `SOCNAV_FUZZ_SEED` (else 0, so CI runs the same cases every time; a long run picks another).
@@ -17,5 +28,36 @@ fn config(default: u32) -> Config {
         rng_seed: RngSeed::Fixed(env("SOCNAV_FUZZ_SEED").unwrap_or(0)),
         failure_persistence: None,
         ..Config::default()
+    }
+}
+
+/// The outputs of the batch's last step or reset are finite (the info fields documented as NaN
+/// where 0.1.1 has `None` excepted) and every environment keeps the state's invariants;
+/// `context` names the case in a failure.
+fn assert_clean(env: &BatchEnv, context: &str) {
+    let out = env.outputs();
+    assert!(
+        out.obs.iter().all(|v| v.is_finite()),
+        "a non-finite observation\n{context}"
+    );
+    assert!(
+        out.reward.iter().all(|v| v.is_finite()),
+        "a non-finite reward\n{context}"
+    );
+    for (k, v) in out.info.iter().enumerate() {
+        let key = k % N_INFO;
+        let nan_ok = key == info::TIME_TO_REACH_GOAL || key == info::AVERAGE_OBSTACLE_DISTANCE;
+        assert!(
+            v.is_finite() || (v.is_nan() && nan_ok),
+            "info {key} of environment {} is {v}\n{context}",
+            k / N_INFO
+        );
+    }
+    let state = env
+        .state()
+        .expect("the CPU backend's state is always readable");
+    for e in 0..env.n_envs() {
+        let broken = violations(state, e);
+        assert!(broken.is_empty(), "{broken:?}\n{context}");
     }
 }
