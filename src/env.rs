@@ -112,6 +112,7 @@ impl BatchEnv {
         let caps = Caps::from_config(&config);
         let layout = ObsLayout::new(&caps, &config.observation);
         let params = StepParams::new(&config, options.autoreset);
+        check_memory(options.n_envs, caps, layout)?;
         let state = BatchState::seeded(options.n_envs, caps, options.seed);
         let out = Outputs::new(options.n_envs, layout);
         let sngnn = match config.reward.kind {
@@ -417,4 +418,40 @@ impl BatchEnv {
         }
         Ok(())
     }
+}
+
+/// Refuse a batch the host cannot hold before allocating it (an allocation failure aborts the
+/// process, the Python interpreter with it): the state and outputs of `n_envs` environments,
+/// twice over for the backends' copies (the reset pool, the GPU's host mirror), must be
+/// reservable. Linux grants reservations up to about its memory and swap, so this catches a
+/// batch far too large; one that fits the reservation but not the memory in use is the
+/// operating system's to refuse.
+fn check_memory(n_envs: usize, caps: Caps, layout: ObsLayout) -> Result<(), SimError> {
+    let per_env = 4
+        * (BatchState::new(1, caps)
+            .columns()
+            .iter()
+            .map(|c| c.2)
+            .sum::<usize>()
+            + Outputs::new(1, layout)
+                .columns()
+                .iter()
+                .map(|c| c.2)
+                .sum::<usize>()
+            + 3);
+    let bytes = n_envs.checked_mul(2).and_then(|n| n.checked_mul(per_env));
+    let reservable = bytes.is_some_and(|b| Vec::<u8>::new().try_reserve_exact(b).is_ok());
+    if reservable {
+        return Ok(());
+    }
+    let bytes = (per_env as u64).saturating_mul((n_envs as u64).saturating_mul(2));
+    Err(SimError::OutOfMemory {
+        bytes,
+        message: format!(
+            "a batch of {n_envs} environments needs about {:.1} GB ({per_env} bytes of state and \
+             outputs per environment, twice over), more than this machine can reserve: use fewer \
+             environments",
+            bytes as f64 / 1e9
+        ),
+    })
 }

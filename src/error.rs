@@ -58,6 +58,15 @@ pub enum SimError {
     /// on the device is then unknown: drop the batch and make a new one.
     #[error("device failure: {0}")]
     Device(String),
+    /// The host cannot hold what was asked for (a batch too large for the machine's memory);
+    /// nothing was allocated.
+    #[error("{message}")]
+    OutOfMemory {
+        /// The bytes asked for.
+        bytes: u64,
+        /// The whole explanation, with the batch size and what to do.
+        message: String,
+    },
     /// A call that does not fit the object it was made on (a low-level API used out of order, or
     /// on an object built without what the call needs).
     #[error("{0}")]

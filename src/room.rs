@@ -240,7 +240,9 @@ fn corridor_wall(
     out: &mut RoomLayout,
 ) {
     let m = (2.0 * p.robot_radius).max(2.0 * p.human_radius) + 0.5;
-    let g = rng.next_f32() * m + m;
+    // A door wider than its wall (a large robot in a short L-room corridor line) would give the
+    // pieces negative lengths (0.1.1 builds them so): the door then spans the whole line.
+    let g = (rng.next_f32() * m + m).min(length);
     let c = rng.next_f32() * (0.5 * length - 0.5 * g);
     let (s, co) = crate::math::sin_cos(theta);
     let half = 0.5 * length;
@@ -248,10 +250,17 @@ fn corridor_wall(
     let right_len = half - c - 0.5 * g;
     let t = p.wall_thickness;
     let at = |offset: f32| (cx + offset * co, cy + offset * s);
-    let (lx, ly) = at(-half + 0.5 * left_len);
-    wall(out, t, lx, ly, theta, left_len);
-    let (rx, ry) = at(half - 0.5 * right_len);
-    wall(out, t, rx, ry, theta, right_len);
+    // A piece the door leaves nothing of (it spans the line) is left out: a wall of no length
+    // is no obstacle, and ORCA's obstacle processing refuses its zero-length edges. Any other
+    // piece is built, however short, as 0.1.1 builds it.
+    if left_len > 0.0 {
+        let (lx, ly) = at(-half + 0.5 * left_len);
+        wall(out, t, lx, ly, theta, left_len);
+    }
+    if right_len > 0.0 {
+        let (rx, ry) = at(half - 0.5 * right_len);
+        wall(out, t, rx, ry, theta, right_len);
+    }
     let (dx, dy) = at(c);
     out.blockers.push((
         blocker_kind::DOOR,

@@ -116,6 +116,7 @@ class SocNavEnv(gym.Env):
         if self._human is not None:
             self._human.close()
             self._human = None
+        self._batch.close()
         super().close()
 
     def _obs(self) -> Any:

@@ -182,6 +182,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         if self._human is not None:
             self._human.close()
             self._human = None
+        self._batch.close()
 
     def _track(self, restart: np.ndarray) -> None:
         """Record the robot poses for drawing (restarting the paths of ``restart``)."""

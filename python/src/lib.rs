@@ -26,6 +26,7 @@ use socnav::spec::{
     DISCRETE_ACTIONS, ENTITY_KEYS, EPISODE_KEYS, EVENT_KEYS, INFO_KEYS, INTERACTION_KEYS, RECORD,
 };
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
+use std::sync::{Mutex, MutexGuard, TryLockError};
 
 create_exception!(
     _socnav,
@@ -188,12 +189,20 @@ fn py_err_attached(py: Python<'_>, e: SimError) -> Result<PyErr, PyErr> {
             kind,
             message,
         } => {
-            let err = PyErr::from(std::io::Error::new(kind, message));
+            let err = PyErr::from(std::io::Error::new(kind, message.clone()));
+            // OSError's str() reads errno and strerror once a filename is set.
+            let value = err.value(py);
+            value.setattr("errno", posix_errno(kind))?;
+            value.setattr("strerror", message)?;
             if let Some(path) = path {
-                err.value(py).setattr("filename", path)?;
+                value.setattr("filename", path)?;
             }
             err
         }
+        SimError::OutOfMemory { bytes, .. } => with(
+            pyo3::exceptions::PyMemoryError::new_err(msg.clone()),
+            &[("bytes", bytes.into_pyobject(py)?.into_any())],
+        )?,
         SimError::BackendUnavailable(_) => BackendUnavailableError::new_err(msg),
         SimError::Device(_) => DeviceError::new_err(msg),
         SimError::Usage(_) => UsageError::new_err(msg),
@@ -201,6 +210,22 @@ fn py_err_attached(py: Python<'_>, e: SimError) -> Result<PyErr, PyErr> {
         SimError::Sngnn(_) => SngnnError::new_err(msg),
         SimError::Display(_) => DisplayError::new_err(msg),
         other => SocNavError::new_err(other.to_string()),
+    })
+}
+
+/// The POSIX errno of an I/O error kind, for Python's `OSError.errno` (the same numbers on
+/// Linux, macOS and Windows' C runtime for these kinds); `None` for the others.
+fn posix_errno(kind: std::io::ErrorKind) -> Option<i32> {
+    use std::io::ErrorKind as K;
+    Some(match kind {
+        K::NotFound => 2,
+        K::PermissionDenied => 13,
+        K::AlreadyExists => 17,
+        K::NotADirectory => 20,
+        K::IsADirectory => 21,
+        K::StorageFull => 28,
+        K::ReadOnlyFilesystem => 30,
+        _ => return None,
     })
 }
 
@@ -216,11 +241,73 @@ fn parse_autoreset(name: &str) -> PyResult<AutoresetMode> {
 }
 
 /// A batch of environments stepping together.
-#[pyclass(module = "socnav._socnav")]
+///
+/// One concurrency model: a batch is idle, busy (a call holds it: a step, a reset, a state
+/// load, ... while the GIL is released) or closed. A call that arrives while another is in
+/// flight (from another thread) raises `UsageError` at once instead of waiting or racing; a
+/// closed batch raises `UsageError` for every call but `close`. A batch belongs to the process
+/// that made it: its worker threads and GPU device do not survive `fork`, so a forked child's
+/// calls raise `UsageError`.
+#[pyclass(module = "socnav._socnav", frozen)]
 struct Batch {
+    inner: Mutex<Inner>,
+    /// The process that made the batch.
+    pid: u32,
+    n_envs: usize,
+}
+
+/// What the lock of a [`Batch`] guards.
+struct Inner {
     env: BatchEnv,
     /// The ORCA-driven robot's scratch state, made on its first use.
     orca: socnav::policies::OrcaRobot,
+    /// Why the batch is closed (`close()`, or its device was lost), or `None` while usable.
+    closed: Option<String>,
+}
+
+impl Batch {
+    /// The batch, held for one call: `UsageError` if another call holds it, if it is closed, or
+    /// in a process forked after it was made.
+    fn lock(&self) -> PyResult<MutexGuard<'_, Inner>> {
+        let pid = std::process::id();
+        if pid != self.pid {
+            return Err(UsageError::new_err(format!(
+                "this batch was made in process {} and cannot be used in process {pid}, forked \
+                 from it: its worker threads and GPU device stay with the parent. Make the batch \
+                 in the child, or start workers with the 'spawn' or 'forkserver' method",
+                self.pid
+            )));
+        }
+        let inner = match self.inner.try_lock() {
+            Ok(inner) => inner,
+            Err(TryLockError::WouldBlock) => {
+                return Err(UsageError::new_err(
+                    "the batch is busy: another call on it (a step or reset from another thread) \
+                     is in flight; calls on one batch must not overlap",
+                ));
+            }
+            Err(TryLockError::Poisoned(_)) => {
+                return Err(InternalError::new_err(
+                    "an earlier call on this batch panicked, so its state is unknown; make a new \
+                     batch (and please report the panic)",
+                ));
+            }
+        };
+        if let Some(why) = &inner.closed {
+            return Err(UsageError::new_err(format!("the batch is closed ({why})")));
+        }
+        Ok(inner)
+    }
+}
+
+impl Inner {
+    /// `result` as a Python error; a lost device closes the batch (it cannot step again).
+    fn check<T>(&mut self, result: Result<T, SimError>) -> PyResult<T> {
+        if let Err(SimError::Device(why)) = &result {
+            self.closed = Some(format!("its GPU device failed: {why}"));
+        }
+        result.map_err(py_err)
+    }
 }
 
 /// An array over `data` with `shape`, owned by the `Batch` object `owner`.
@@ -289,56 +376,93 @@ impl Batch {
         };
         let env = BatchEnv::new(c, options).map_err(py_err)?;
         Ok(Self {
-            env,
-            orca: socnav::policies::OrcaRobot::new(),
+            n_envs: env.n_envs(),
+            inner: Mutex::new(Inner {
+                env,
+                orca: socnav::policies::OrcaRobot::new(),
+                closed: None,
+            }),
+            pid: std::process::id(),
         })
+    }
+
+    /// Close the batch: every later call but `close` raises `UsageError`. Closing twice does
+    /// nothing; closing while another thread's call is in flight raises `UsageError`.
+    fn close(&self) -> PyResult<()> {
+        if std::process::id() != self.pid {
+            return Ok(()); // a forked child's copy: nothing of it is usable anyway
+        }
+        let mut inner = match self.inner.try_lock() {
+            Ok(inner) => inner,
+            Err(TryLockError::Poisoned(poisoned)) => poisoned.into_inner(),
+            Err(TryLockError::WouldBlock) => {
+                return Err(UsageError::new_err(
+                    "cannot close the batch while another call on it is in flight",
+                ));
+            }
+        };
+        inner
+            .closed
+            .get_or_insert_with(|| "close() was called".to_owned());
+        Ok(())
+    }
+
+    /// Whether the batch is closed (`close()`, or its GPU device was lost).
+    #[getter]
+    fn closed(&self) -> bool {
+        match self.inner.try_lock() {
+            Ok(inner) => inner.closed.is_some(),
+            Err(TryLockError::Poisoned(poisoned)) => poisoned.into_inner().closed.is_some(),
+            Err(TryLockError::WouldBlock) => false,
+        }
     }
 
     /// Number of environments.
     #[getter]
     fn num_envs(&self) -> usize {
-        self.env.n_envs()
+        self.n_envs
     }
 
     /// The backend stepping the batch (`"cpu"`).
     #[getter]
-    fn backend(&self) -> &'static str {
-        self.env.backend_name()
+    fn backend(&self) -> PyResult<&'static str> {
+        Ok(self.lock()?.env.backend_name())
     }
 
     /// What runs the batch: the CPU threads, or the GPU adapter.
     #[getter]
-    fn device(&self) -> String {
-        self.env.device()
+    fn device(&self) -> PyResult<String> {
+        Ok(self.lock()?.env.device())
     }
 
     /// The time step (s).
     #[getter]
-    fn time_step(&self) -> f32 {
-        self.env.params().dt
+    fn time_step(&self) -> PyResult<f32> {
+        Ok(self.lock()?.env.params().dt)
     }
 
     /// Whether the robot is holonomic (else differential drive: the lateral action must be 0).
     #[getter]
-    fn holonomic(&self) -> bool {
-        self.env.config().robot.kinematics == Kinematics::Holonomic
+    fn holonomic(&self) -> PyResult<bool> {
+        Ok(self.lock()?.env.config().robot.kinematics == Kinematics::Holonomic)
     }
 
     /// The resolved config as TOML (every key).
-    fn config_toml(&self) -> String {
-        self.env.config().to_toml_string()
+    fn config_toml(&self) -> PyResult<String> {
+        Ok(self.lock()?.env.config().to_toml_string())
     }
 
     /// The observation layout: `dim`, `robot` (robot record length), `record` (14), `padded`
     /// (every type padded to its capacity, walls omitted), and per
     /// entity key its `offset` and `capacity` (records), plus the interaction pair capacities.
     fn layout<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let l = self.env.layout();
+        let inner = self.lock()?;
+        let l = inner.env.layout();
         let d = PyDict::new(py);
         d.set_item("dim", l.dim)?;
         d.set_item("robot", l.robot)?;
         d.set_item("record", RECORD)?;
-        d.set_item("padded", self.env.config().observation.padded)?;
+        d.set_item("padded", inner.env.config().observation.padded)?;
         let entities = PyDict::new(py);
         for (t, key) in ENTITY_KEYS.iter().enumerate() {
             entities.set_item(*key, (l.offset[t], l.capacity[t]))?;
@@ -369,54 +493,54 @@ impl Batch {
     /// Reset every environment: with `seed`, environment i plays the episode of seed
     /// `seed + i`; without, each plays the next episode of its seed sequence.
     #[pyo3(signature = (seed=None))]
-    fn reset(&mut self, py: Python<'_>, seed: Option<u64>) -> PyResult<()> {
-        let env = &mut self.env;
-        py.detach(|| env.reset(seed)).map_err(py_err)
+    fn reset(&self, py: Python<'_>, seed: Option<u64>) -> PyResult<()> {
+        let mut inner = self.lock()?;
+        let env = &mut inner.env;
+        let result = py.detach(|| env.reset(seed));
+        inner.check(result)
     }
 
     /// Name the episode each environment plays at its next reset: one entry per environment, an
     /// int in 0..2**64 (its episode seed) or None (keep its sequence).
-    fn set_next_seeds(&mut self, seeds: Vec<Option<u64>>) -> PyResult<()> {
-        self.env.set_next_seeds(&seeds).map_err(py_err)
+    fn set_next_seeds(&self, seeds: Vec<Option<u64>>) -> PyResult<()> {
+        let mut inner = self.lock()?;
+        let result = inner.env.set_next_seeds(&seeds);
+        inner.check(result)
     }
 
     /// Reset the environments where `mask` is true.
-    fn reset_envs(&mut self, py: Python<'_>, mask: PyReadonlyArray1<'_, bool>) -> PyResult<()> {
+    fn reset_envs(&self, py: Python<'_>, mask: PyReadonlyArray1<'_, bool>) -> PyResult<()> {
         let mask = mask
             .as_slice()
             .map_err(|e| PyValueError::new_err(e.to_string()))?
             .to_vec();
-        let env = &mut self.env;
-        py.detach(|| env.reset_envs(&mask)).map_err(py_err)
+        let mut inner = self.lock()?;
+        let env = &mut inner.env;
+        let result = py.detach(|| env.reset_envs(&mask));
+        inner.check(result)
     }
 
     /// One step with continuous actions: float32 `(num_envs, 3)` in [-1, 1] (forward, lateral,
     /// rotation). The GIL is released while the batch steps.
-    fn step_continuous(
-        &mut self,
-        py: Python<'_>,
-        actions: PyReadonlyArray2<'_, f32>,
-    ) -> PyResult<()> {
+    fn step_continuous(&self, py: Python<'_>, actions: PyReadonlyArray2<'_, f32>) -> PyResult<()> {
         let actions = actions
             .as_slice()
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let env = &mut self.env;
-        py.detach(|| env.step(Actions::Continuous(actions)))
-            .map_err(py_err)
+        let mut inner = self.lock()?;
+        let env = &mut inner.env;
+        let result = py.detach(|| env.step(Actions::Continuous(actions)));
+        inner.check(result)
     }
 
     /// One step with discrete actions: uint32 `(num_envs,)` in 0..7.
-    fn step_discrete(
-        &mut self,
-        py: Python<'_>,
-        actions: PyReadonlyArray1<'_, u32>,
-    ) -> PyResult<()> {
+    fn step_discrete(&self, py: Python<'_>, actions: PyReadonlyArray1<'_, u32>) -> PyResult<()> {
         let actions = actions
             .as_slice()
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let env = &mut self.env;
-        py.detach(|| env.step(Actions::Discrete(actions)))
-            .map_err(py_err)
+        let mut inner = self.lock()?;
+        let env = &mut inner.env;
+        let result = py.detach(|| env.step(Actions::Discrete(actions)));
+        inner.check(result)
     }
 
     /// The output buffers as arrays without copies, by name: `obs` `(n, dim)`, `obs_count`
@@ -427,9 +551,9 @@ impl Batch {
     /// `final_*` copies. Overwritten in place by every step and reset.
     fn buffers<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
         let py = slf.py();
-        let this = slf.borrow();
-        let o = this.env.outputs();
-        let n = this.env.n_envs();
+        let inner = slf.get().lock()?;
+        let o = inner.env.outputs();
+        let n = inner.env.n_envs();
         let st = &o.strides;
         let d = PyDict::new(py);
         let f32s: [(&str, &[f32], usize); 5] = [
@@ -474,18 +598,21 @@ impl Batch {
     /// `"goal"` (the go-to-goal controller, from the observations) or `"orca"` (the velocity ORCA
     /// gives the robot toward its goal, from the state; the GPU backend downloads it).
     fn policy_actions<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         policy: &str,
     ) -> PyResult<Bound<'py, numpy::PyArray2<f32>>> {
-        let n = self.env.n_envs();
+        let n = self.n_envs;
         let mut actions = vec![0.0f32; 3 * n];
-        let (env, orca) = (&self.env, &mut self.orca);
+        let mut guard = self.lock()?;
+        let inner = &mut *guard;
+        let (env, orca) = (&inner.env, &mut inner.orca);
         match policy {
             "goal" => socnav::policies::goal_actions(env, &mut actions),
-            "orca" => py
-                .detach(|| orca.actions(env, &mut actions))
-                .map_err(py_err)?,
+            "orca" => {
+                let result = py.detach(|| orca.actions(env, &mut actions));
+                inner.check(result)?;
+            }
             other => {
                 return Err(PyValueError::new_err(format!(
                     "policy must be 'goal' or 'orca', got {other:?}"
@@ -520,9 +647,12 @@ impl Batch {
             }
             None => Vec::new(),
         };
+        let mut inner = self.lock()?;
+        let state = inner.env.state().map(|_| ());
+        inner.check(state)?;
         let pixmap = socnav::render::draw(
-            self.env.params(),
-            self.env.state().map_err(py_err)?,
+            inner.env.params(),
+            inner.env.state().map_err(py_err)?,
             env,
             &trail,
             size,
@@ -543,7 +673,10 @@ impl Batch {
     /// The robot's pose of every environment: float32 `(n, 3)`, x and y (m), heading (rad),
     /// world frame (read from the state; the GPU backend downloads it).
     fn robot_poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f32>>> {
-        let s = self.env.state().map_err(py_err)?;
+        let mut inner = self.lock()?;
+        let state = inner.env.state().map(|_| ());
+        inner.check(state)?;
+        let s = inner.env.state().map_err(py_err)?;
         let poses: Vec<f32> = (0..s.n_envs)
             .flat_map(|e| [s.robot_x[e], s.robot_y[e], s.robot_theta[e]])
             .collect();
@@ -553,14 +686,15 @@ impl Batch {
     }
 
     /// Time every stage of the step (two clock reads per stage and chunk; off by default).
-    fn set_stage_timing(&mut self, on: bool) {
-        self.env.set_stage_timing(on);
+    fn set_stage_timing(&self, on: bool) -> PyResult<()> {
+        self.lock()?.env.set_stage_timing(on);
+        Ok(())
     }
 
     /// Seconds spent per stage while stage timing was on: `{stage name: seconds}`.
     fn stage_seconds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
-        for (name, seconds) in self.env.stage_seconds() {
+        for (name, seconds) in self.lock()?.env.stage_seconds() {
             d.set_item(name, seconds)?;
         }
         Ok(d)
@@ -568,15 +702,18 @@ impl Batch {
 
     /// One environment's state as a JSON document (`BatchEnv::get_state`).
     fn get_state(&self, env: usize) -> PyResult<String> {
-        let doc = self.env.get_state(env).map_err(py_err)?;
-        Ok(doc.to_string())
+        let mut inner = self.lock()?;
+        let doc = inner.env.get_state(env);
+        Ok(inner.check(doc)?.to_string())
     }
 
     /// Load one environment's state from a JSON document (`BatchEnv::set_state`).
-    fn set_state(&mut self, env: usize, doc: &str) -> PyResult<()> {
+    fn set_state(&self, env: usize, doc: &str) -> PyResult<()> {
         let doc: serde_json::Value = serde_json::from_str(doc)
             .map_err(|e| PyValueError::new_err(format!("state document is not JSON: {e}")))?;
-        self.env.set_state(env, &doc).map_err(py_err)
+        let mut inner = self.lock()?;
+        let result = inner.env.set_state(env, &doc);
+        inner.check(result)
     }
 }
 

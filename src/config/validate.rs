@@ -15,6 +15,7 @@ pub fn validate(config: &Config) -> Vec<String> {
     let mut v = Problems::default();
     check_scalars(config, &mut v);
     check_step_displacement(config, &mut v);
+    check_group_noise(config, &mut v);
     check_laptops(config, &mut v);
     check_observation(config, &mut v);
     check_counts(config, &mut v);
@@ -108,6 +109,26 @@ fn check_step_displacement(c: &Config, v: &mut Problems) {
                  it would pass through walls and people (lower the speed or the time step)"
             ));
         }
+    }
+}
+
+/// How far (m) a group member's velocity noise may walk it from its group over an episode, as
+/// its typical spread σ·dt·√(steps): the noise accumulates step after step, with nothing pulling
+/// the member back, and walks it through walls and out of the room beyond about this.
+pub const MAX_GROUP_NOISE_DRIFT_M: f32 = 1.0;
+
+/// A group's velocity noise must keep its members with it (see [`MAX_GROUP_NOISE_DRIFT_M`]).
+fn check_group_noise(c: &Config, v: &mut Problems) {
+    let (sigma, dt) = (c.group.velocity_noise_std, c.episode.time_step);
+    let drift = sigma * dt * (c.episode.length as f32).sqrt();
+    // A non-finite σ is the scalar checks' to report; a finite one may still overflow the product.
+    if sigma.is_finite() && (drift.is_nan() || drift > MAX_GROUP_NOISE_DRIFT_M) {
+        v.0.push(format!(
+            "`group.velocity_noise_std` {sigma} m/s walks a group member about {drift:.3} m from \
+             its group over an episode (σ × `episode.time_step` {dt} s × √`episode.length` {}), \
+             more than {MAX_GROUP_NOISE_DRIFT_M} m: members would drift through walls",
+            c.episode.length
+        ));
     }
 }
 

@@ -98,6 +98,24 @@ impl<'a> Reader<'a> {
         Ok(x)
     }
 
+    /// An angle (rad) that `math::sin_cos` takes: |θ| ≤ 2^20 rad.
+    pub(super) fn angle(&self, key: &str) -> Result<f32, SimError> {
+        self.at(key)?.as_angle()
+    }
+
+    /// This node as an angle (see [`Reader::angle`]).
+    fn as_angle(&self) -> Result<f32, SimError> {
+        let x = self.as_f32()?;
+        let max = crate::math::SIN_COS_MAX_ARG;
+        if x.abs() > max {
+            return Err(err(
+                &self.path,
+                format!("is {x} rad; socnav's sine and cosine take angles up to {max} rad"),
+            ));
+        }
+        Ok(x)
+    }
+
     /// A finite number in `lo..=hi`; `why` says where the bounds come from.
     pub(super) fn f_in(&self, key: &str, lo: f32, hi: f32, why: &str) -> Result<f32, SimError> {
         let x = self.f(key)?;
@@ -259,7 +277,7 @@ pub(super) fn room(
         s.w_id[wb + k] = w.u("id")?;
         s.w_x[wb + k] = w.f("x")?;
         s.w_y[wb + k] = w.f("y")?;
-        s.w_theta[wb + k] = w.f("theta")?;
+        s.w_theta[wb + k] = w.angle("theta")?;
         (s.w_sin[wb + k], s.w_cos[wb + k]) = crate::math::sin_cos(s.w_theta[wb + k]);
         let length = w.f("length")?;
         if !(length.is_finite() && length > 0.0) {
@@ -308,7 +326,7 @@ pub(super) fn room(
         };
         s.b_x[bb + k] = b.f("x")?;
         s.b_y[bb + k] = b.f("y")?;
-        s.b_theta[bb + k] = b.f("theta")?;
+        s.b_theta[bb + k] = b.angle("theta")?;
         s.b_length[bb + k] = b.f("length")?;
         s.b_width[bb + k] = b.f("width")?;
     }
@@ -363,7 +381,7 @@ fn robot(p: &StepParams, r: &Reader<'_>, s: &mut BatchState, e: usize) -> Result
     r.matches("goal_radius", p.goal_radius, "robot.goal_radius")?;
     s.robot_x[e] = r.f("x")?;
     s.robot_y[e] = r.f("y")?;
-    s.robot_theta[e] = r.f("theta")?;
+    s.robot_theta[e] = r.angle("theta")?;
     [s.goal_x[e], s.goal_y[e]] = r.vec::<2>("goal")?;
     [s.robot_vx[e], s.robot_vy[e], s.robot_w[e]] = robot_velocity(p, r)?;
     Ok(())
@@ -400,7 +418,7 @@ fn robot_velocity(p: &StepParams, r: &Reader<'_>) -> Result<[f32; 3], SimError> 
 fn shadow(p: &StepParams, r: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimError> {
     s.shadow_x[e] = r.f("x")?;
     s.shadow_y[e] = r.f("y")?;
-    s.shadow_theta[e] = r.f("theta")?;
+    s.shadow_theta[e] = r.angle("theta")?;
     [s.shadow_vx[e], s.shadow_vy[e], s.shadow_w[e]] = robot_velocity(p, r)?;
     s.shadow_collided[e] = r.flag("collided")?;
     s.shadow_reached[e] = r.flag("reached")?;
@@ -463,7 +481,7 @@ fn humans(
         s.h_id[i] = ids[k];
         s.h_x[i] = h.f("x")?;
         s.h_y[i] = h.f("y")?;
-        s.h_theta[i] = h.f("theta")?;
+        s.h_theta[i] = h.angle("theta")?;
         s.h_speed[i] = h.f_in("speed", 0.0, max_walker_speed(p), WALKER_SPEED_BOUND)?;
         [s.h_goal_x[i], s.h_goal_y[i]] = if h.opt("goal").is_some() {
             h.vec::<2>("goal")?
@@ -528,7 +546,7 @@ fn objects(
         s.l_id[lb + k] = ids[k];
         s.l_x[lb + k] = l.f("x")?;
         s.l_y[lb + k] = l.f("y")?;
-        s.l_theta[lb + k] = l.f("theta")?;
+        s.l_theta[lb + k] = l.angle("theta")?;
         (s.l_sin[lb + k], s.l_cos[lb + k]) = crate::math::sin_cos(s.l_theta[lb + k]);
         s.l_user[lb + k] = if l.opt("hl").is_some() {
             l.u("hl")?
@@ -546,7 +564,7 @@ fn objects(
         s.t_id[tb + k] = t.u("id")?;
         s.t_x[tb + k] = t.f("x")?;
         s.t_y[tb + k] = t.f("y")?;
-        s.t_theta[tb + k] = t.f("theta")?;
+        s.t_theta[tb + k] = t.angle("theta")?;
         (s.t_sin[tb + k], s.t_cos[tb + k]) = crate::math::sin_cos(s.t_theta[tb + k]);
     }
     s.n_tables[e] = tables.len() as u32;
@@ -726,7 +744,7 @@ fn forming(
             }
             s.cf_slot_x[sb + k] = items[0].as_f32()?;
             s.cf_slot_y[sb + k] = items[1].as_f32()?;
-            s.cf_slot_theta[sb + k] = items[2].as_f32()?;
+            s.cf_slot_theta[sb + k] = items[2].as_angle()?;
         }
         let slot_map = cf.at("slot_of")?;
         for (id, k) in slot_map
@@ -757,7 +775,8 @@ fn forming(
     if let Some(lf) = st.opt("hl_forming") {
         s.lf_human[e] = slot_of(ids, lf.u("human")?, &lf.child_path("human"))? as u32;
         s.lf_laptop[e] = slot_of(laptop_ids, lf.u("laptop")?, &lf.child_path("laptop"))? as u32;
-        [s.lf_seat_x[e], s.lf_seat_y[e], s.lf_seat_theta[e]] = lf.vec::<3>("seat")?;
+        [s.lf_seat_x[e], s.lf_seat_y[e], _] = lf.vec::<3>("seat")?;
+        s.lf_seat_theta[e] = lf.at("seat")?.items()?[2].as_angle()?;
         s.lf_active[e] = 1;
     }
     Ok(())

@@ -412,3 +412,29 @@ fn a_loaded_state_steps_identically() {
         }
     }
 }
+
+/// Contract: a batch too large for the machine is refused with `SimError::OutOfMemory` naming
+/// its size before anything is allocated (an allocation failure would abort the process, a
+/// Python interpreter with it), and a batch that fits is still made.
+#[test]
+fn a_batch_too_large_for_the_machine_is_refused_before_allocating() {
+    for n_envs in [1usize << 40, 1 << 63, usize::MAX] {
+        let options = EnvOptions {
+            n_envs,
+            ..Default::default()
+        };
+        match BatchEnv::new(config("exp1"), options) {
+            Err(SimError::OutOfMemory { bytes, message }) => {
+                assert!(bytes > 1 << 40, "{bytes}");
+                assert!(
+                    message.contains(&format!("a batch of {n_envs} environments needs about"))
+                        && message.contains("use fewer environments"),
+                    "{message}"
+                );
+            }
+            Err(other) => panic!("{n_envs}: expected OutOfMemory, got {other:?}"),
+            Ok(_) => panic!("{n_envs} environments were made"),
+        }
+    }
+    make(config("exp1"), 4, 0);
+}

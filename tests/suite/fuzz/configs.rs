@@ -315,3 +315,23 @@ proptest! {
 fn the_base_socnavgym_dict_runs_cleanly() {
     check_socnavgym(&socnavgym_base());
 }
+/// Found by the SocNavGym target (seed 2): `noise_variance` 1e38 (a group member's velocity noise)
+/// made the first observation non-finite; the noise also accumulates, walking members through
+/// walls. It is refused now beyond about 1 m of drift over an episode.
+#[test]
+fn regression_group_noise_that_walks_members_away_is_refused() {
+    let mut dict = socnavgym_base();
+    dict["human-human-interaction"]["noise_variance"] = serde_json::json!(1e38);
+    match Config::from_socnavgym(&dict) {
+        Err(err @ SimError::Config(_)) => {
+            let problems = err.config_problems().join("\n");
+            assert!(
+                problems.contains("`group.velocity_noise_std` 100000000000000000000000000000000000000 m/s walks a group member"),
+                "{problems}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    dict["human-human-interaction"]["noise_variance"] = serde_json::json!(0.07);
+    check_socnavgym(&dict);
+}

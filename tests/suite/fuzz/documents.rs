@@ -173,6 +173,12 @@ fn regression_non_finite_or_impossible_numbers_are_refused() {
             serde_json::json!(2e9),
             "no quantity of a state exceeds 1e9",
         ),
+        // Found at seed 2: a heading beyond what socnav's sine and cosine take gave NaN.
+        (
+            "theta",
+            serde_json::json!(1358912.7),
+            "socnav's sine and cosine take angles up to 1048576 rad",
+        ),
     ];
     for (key, value, expected) in cases {
         let mut doc = env.get_state(0).unwrap();

@@ -188,3 +188,44 @@ proptest! {
         }
     }
 }
+
+/// Found by this target (seed 2): an L room (`shape = "random"`) 11 x 7 m with corridors and a
+/// robot 1.5 m across drew a corridor door wider than its short wall line; the pieces beside the
+/// door got negative lengths and a contact test panicked (`clamp` with min > max), which the
+/// batch reported as an internal error. The door now spans at most its line.
+#[test]
+fn regression_a_door_wider_than_its_corridor_line_spans_it() {
+    let count = |key: &'static str, r: [i64; 2]| (key, r);
+    let d = Draw {
+        shape: "random",
+        corridors: true,
+        size_x: [11, 11],
+        size_y: [7, 7],
+        margin: 0.0,
+        counts: vec![
+            count("static_humans", [0, 0]),
+            count("dynamic_humans", [0, 2]),
+            count("tables", [1, 3]),
+            count("plants", [0, 0]),
+            count("laptops", [0, 0]),
+            count("moving_groups", [0, 0]),
+            count("moving_groups_non_dispersing", [0, 0]),
+            count("standing_groups", [0, 0]),
+            count("standing_groups_non_dispersing", [0, 0]),
+            count("group_size", [2, 2]),
+            count("laptop_users", [0, 0]),
+            count("laptop_users_non_dispersing", [0, 0]),
+        ],
+        robot_radius: 0.7464766542204634,
+        human_diameter: 0.3,
+        group_radius: 0.3,
+        plant_radius: 0.1,
+        table: [0.5, 1.0],
+        laptop: [0.1, 0.1],
+    };
+    let config = Config::from_toml_str(&config_text(&d)).unwrap();
+    match reset_and_step(config, 10_524_287_534_628_775_006) {
+        Some(Ok(()) | Err(SimError::Scenario { .. })) => {}
+        other => panic!("{other:?}"),
+    }
+}
