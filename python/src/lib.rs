@@ -25,6 +25,7 @@ use socnav::episodes::TABLE_KEYS;
 use socnav::spec::{
     DISCRETE_ACTIONS, ENTITY_KEYS, EPISODE_KEYS, EVENT_KEYS, INFO_KEYS, INTERACTION_KEYS, RECORD,
 };
+use socnav::state::BatchState;
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
 use std::sync::{Mutex, MutexGuard, TryLockError};
 
@@ -301,6 +302,16 @@ impl Batch {
 }
 
 impl Inner {
+    /// The batch state (downloaded from a GPU), or the error, which closes the batch when the
+    /// device is lost.
+    fn state(&mut self) -> PyResult<&BatchState> {
+        // Checked first and read again: a reference returned from one branch of a match on it
+        // would hold the borrow that `check` needs.
+        let downloaded = self.env.state().map(|_| ());
+        self.check(downloaded)?;
+        self.env.state().map_err(py_err)
+    }
+
     /// `result` as a Python error; a lost device closes the batch (it cannot step again).
     fn check<T>(&mut self, result: Result<T, SimError>) -> PyResult<T> {
         if let Err(SimError::Device(why)) = &result {
@@ -648,16 +659,9 @@ impl Batch {
             None => Vec::new(),
         };
         let mut inner = self.lock()?;
-        let state = inner.env.state().map(|_| ());
-        inner.check(state)?;
-        let pixmap = socnav::render::draw(
-            inner.env.params(),
-            inner.env.state().map_err(py_err)?,
-            env,
-            &trail,
-            size,
-        )
-        .map_err(py_err)?;
+        let params = *inner.env.params();
+        let pixmap =
+            socnav::render::draw(&params, inner.state()?, env, &trail, size).map_err(py_err)?;
         let (w, h) = (pixmap.width() as usize, pixmap.height() as usize);
         // Every pixel is opaque (the background is painted first): premultiplied RGB is RGB.
         let rgb: Vec<u8> = pixmap
@@ -674,9 +678,7 @@ impl Batch {
     /// world frame (read from the state; the GPU backend downloads it).
     fn robot_poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f32>>> {
         let mut inner = self.lock()?;
-        let state = inner.env.state().map(|_| ());
-        inner.check(state)?;
-        let s = inner.env.state().map_err(py_err)?;
+        let s = inner.state()?;
         let poses: Vec<f32> = (0..s.n_envs)
             .flat_map(|e| [s.robot_x[e], s.robot_y[e], s.robot_theta[e]])
             .collect();

@@ -7,7 +7,7 @@
 
 use proptest::prelude::*;
 use socnav::spec::DISCRETE_ACTIONS;
-use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
+use socnav::{Actions, AutoresetMode, BatchEnv, Config, SimError};
 
 use super::assert_clean;
 
@@ -45,16 +45,8 @@ fn batch(holonomic: bool, seed: u64) -> BatchEnv {
             r#"kinematics = "holonomic""#,
         );
     }
-    let options = EnvOptions {
-        n_envs: N_ENVS,
-        seed,
-        autoreset: AutoresetMode::SameStep,
-        threads: Some(1),
-        ..Default::default()
-    };
-    let mut env = BatchEnv::new(Config::from_toml_str(&text).unwrap(), options).unwrap();
-    env.reset(Some(seed)).unwrap();
-    env
+    let config = Config::from_toml_str(&text).unwrap();
+    super::batch(config, N_ENVS, seed, AutoresetMode::SameStep, 1).unwrap()
 }
 
 /// The first environment whose actions the batch must refuse, or `None`.

@@ -6,7 +6,7 @@
 //! finite (the info fields documented as NaN excepted) and the state's invariants.
 
 use proptest::prelude::*;
-use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
+use socnav::{Actions, AutoresetMode, Config, SimError};
 use toml::Value;
 
 use super::assert_clean;
@@ -84,35 +84,29 @@ fn mutate(old: &Value, kind: u8, x: f64) -> Option<Value> {
 
 /// What a mutated TOML config must do (see the module docs).
 fn check(text: &str) {
-    match Config::from_toml_str(text) {
-        Ok(config) => run_cleanly(config, text),
+    loaded_or_refused(Config::from_toml_str(text), text);
+}
+
+/// A loaded config runs cleanly; a refused one is refused with `SimError::Config` listing its
+/// problems. `context` (the config's text) names the case in a failure.
+fn loaded_or_refused(loaded: Result<Config, SimError>, context: &str) {
+    match loaded {
+        Ok(config) => run_cleanly(config, context),
         Err(SimError::Config(problems)) => {
             assert!(!problems.is_empty(), "a refusal lists its problems");
         }
-        Err(e) => panic!("a config is refused with SimError::Config, got {e:?}\n{text}"),
+        Err(e) => panic!("a config is refused with SimError::Config, got {e:?}\n{context}"),
     }
 }
 
 /// A config that loaded builds a batch (or fails to place its scenario with
 /// `SimError::Scenario`), resets, and steps with extreme actions keeping its outputs clean.
 fn run_cleanly(config: Config, context: &str) {
-    let options = EnvOptions {
-        n_envs: 3,
-        seed: 5,
-        autoreset: AutoresetMode::SameStep,
-        threads: Some(1),
-        ..Default::default()
-    };
-    let mut env = match BatchEnv::new(config, options) {
+    let mut env = match super::batch(config, 3, 5, AutoresetMode::SameStep, 1) {
         Ok(env) => env,
         Err(SimError::Scenario { .. } | SimError::Sngnn(_)) => return,
-        Err(e) => panic!("a valid config builds a batch, got {e:?}\n{context}"),
+        Err(e) => panic!("a valid config builds a batch and resets, got {e:?}\n{context}"),
     };
-    match env.reset(Some(5)) {
-        Ok(()) => {}
-        Err(SimError::Scenario { .. }) => return,
-        Err(e) => panic!("reset: {e:?}\n{context}"),
-    }
     let holonomic = env.params().holonomic != 0;
     let lateral = if holonomic { 1.0 } else { 0.0 };
     for t in 0..12 {
@@ -281,13 +275,7 @@ fn socnavgym_base() -> serde_json::Value {
 /// or be refused with `SimError::Config` listing its problems.
 fn check_socnavgym(dict: &serde_json::Value) {
     let context = serde_json::to_string_pretty(dict).unwrap();
-    match Config::from_socnavgym(dict) {
-        Ok(config) => run_cleanly(config, &context),
-        Err(SimError::Config(problems)) => {
-            assert!(!problems.is_empty(), "a refusal lists its problems");
-        }
-        Err(e) => panic!("a SocNavGym dict is refused with SimError::Config, got {e:?}\n{context}"),
-    }
+    loaded_or_refused(Config::from_socnavgym(dict), &context);
 }
 
 proptest! {

@@ -6,7 +6,7 @@
 
 use proptest::prelude::*;
 use serde_json::Value;
-use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
+use socnav::{Actions, AutoresetMode, BatchEnv, Config, SimError};
 
 use super::assert_clean;
 use super::json::{mutate_at, paths, remove};
@@ -16,15 +16,8 @@ const CONFIGS: [&str; 3] = ["exp3", "corridor_mixed", "lroom_mixed"];
 /// A batch of two environments of `config`, `steps` steps into the episodes of seed `seed`,
 /// driven by a fixed sweep of actions.
 fn batch(config: &str, seed: u64, steps: usize) -> BatchEnv {
-    let options = EnvOptions {
-        n_envs: 2,
-        seed,
-        autoreset: AutoresetMode::NextStep,
-        threads: Some(1),
-        ..Default::default()
-    };
-    let mut env = BatchEnv::new(Config::from_name_or_path(config).unwrap(), options).unwrap();
-    env.reset(Some(seed)).unwrap();
+    let config = Config::from_name_or_path(config).unwrap();
+    let mut env = super::batch(config, 2, seed, AutoresetMode::NextStep, 1).unwrap();
     for t in 0..steps {
         env.step(Actions::Discrete(&[(t % 7) as u32, ((t / 3) % 7) as u32]))
             .unwrap();

@@ -9,7 +9,7 @@ use std::sync::mpsc;
 use std::time::Duration;
 
 use proptest::prelude::*;
-use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
+use socnav::{Actions, AutoresetMode, Config, SimError};
 use toml::Value;
 
 /// Far beyond the slowest valid reset seen (a few milliseconds for 8 environments): only a
@@ -141,15 +141,7 @@ fn reset_and_step(config: Config, seed: u64) -> Option<Result<(), SimError>> {
     let (send, receive) = mpsc::channel();
     std::thread::spawn(move || {
         let run = || -> Result<(), SimError> {
-            let options = EnvOptions {
-                n_envs: 8,
-                seed,
-                autoreset: AutoresetMode::SameStep,
-                threads: Some(1),
-                ..Default::default()
-            };
-            let mut env = BatchEnv::new(config, options)?;
-            env.reset(Some(seed))?;
+            let mut env = super::batch(config, 8, seed, AutoresetMode::SameStep, 1)?;
             for _ in 0..30 {
                 env.step(Actions::Discrete(&[0; 8]))?;
             }

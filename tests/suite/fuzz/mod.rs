@@ -15,9 +15,9 @@ mod json;
 mod sequences;
 
 use proptest::test_runner::{Config, RngSeed};
-use socnav::BatchEnv;
 use socnav::spec::{N_INFO, info};
 use socnav::state::invariants::violations;
+use socnav::{AutoresetMode, BatchEnv, EnvOptions, SimError};
 
 /// A target's settings: `SOCNAV_FUZZ_CASES` cases (else `default`), from the fixed seed
 /// `SOCNAV_FUZZ_SEED` (else 0, so CI runs the same cases every time; a long run picks another).
@@ -29,6 +29,27 @@ fn config(default: u32) -> Config {
         failure_persistence: None,
         ..Config::default()
     }
+}
+
+/// A CPU batch of `n_envs` environments of `config` on `threads` worker threads, reset at the
+/// episodes of seeds `seed`, `seed + 1`, ...
+fn batch(
+    config: socnav::Config,
+    n_envs: usize,
+    seed: u64,
+    autoreset: AutoresetMode,
+    threads: usize,
+) -> Result<BatchEnv, SimError> {
+    let options = EnvOptions {
+        n_envs,
+        seed,
+        autoreset,
+        threads: Some(threads),
+        ..Default::default()
+    };
+    let mut env = BatchEnv::new(config, options)?;
+    env.reset(Some(seed))?;
+    Ok(env)
 }
 
 /// The outputs of the batch's last step or reset are finite (the info fields documented as NaN

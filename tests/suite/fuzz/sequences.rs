@@ -6,7 +6,7 @@
 
 use proptest::prelude::*;
 use socnav::state::BatchState;
-use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions};
+use socnav::{Actions, AutoresetMode, BatchEnv, Config};
 
 use super::assert_clean;
 
@@ -75,17 +75,8 @@ fn episode_and_counts(s: &BatchState, e: usize) -> ([u32; 3], [u32; 5]) {
 }
 
 fn batch(autoreset: AutoresetMode, threads: usize, seed: u64) -> BatchEnv {
-    let options = EnvOptions {
-        n_envs: N_ENVS,
-        seed,
-        autoreset,
-        threads: Some(threads),
-        ..Default::default()
-    };
     let config = Config::from_name_or_path("exp3").unwrap();
-    let mut env = BatchEnv::new(config, options).unwrap();
-    env.reset(Some(seed)).unwrap();
-    env
+    super::batch(config, N_ENVS, seed, autoreset, threads).unwrap()
 }
 
 proptest! {
