@@ -93,6 +93,47 @@ impl BatchEnv {
     /// A batch of `options.n_envs` environments of `config` on the backend `options.backend`. Call
     /// [`BatchEnv::reset`] before the first step.
     pub fn new(config: Config, options: EnvOptions) -> Result<Self, SimError> {
+        let choice = options.backend;
+        Self::build(config, options, |params, state, out, threads, sngnn| {
+            crate::backend::open(choice, params, state, out, threads, sngnn)
+        })
+    }
+
+    /// A batch as [`BatchEnv::new`] makes it, on the GPU backend over `device` (`options.backend`
+    /// is not consulted): a device of the caller's choosing, e.g. one of its own
+    /// ([`GpuDevice::open_private`](crate::backend::gpu::GpuDevice::open_private)) whose loss
+    /// touches no other batch.
+    #[cfg(feature = "gpu")]
+    pub fn on_device(
+        config: Config,
+        options: EnvOptions,
+        device: crate::backend::gpu::GpuDevice,
+    ) -> Result<Self, SimError> {
+        Self::build(config, options, |params, state, out, threads, sngnn| {
+            let gpu = crate::backend::gpu::GpuBackend::new(
+                device,
+                params,
+                state,
+                out,
+                threads,
+                sngnn.as_ref(),
+            )?;
+            Ok(Box::new(gpu))
+        })
+    }
+
+    /// Validate `config` and `options`, then make the batch on the backend `open` returns.
+    fn build(
+        config: Config,
+        options: EnvOptions,
+        open: impl FnOnce(
+            StepParams,
+            BatchState,
+            Outputs,
+            Option<usize>,
+            Option<SngnnReward>,
+        ) -> Result<Box<dyn Backend>, SimError>,
+    ) -> Result<Self, SimError> {
         let problems = crate::config::validate(&config);
         if !problems.is_empty() {
             return Err(SimError::config(problems));
@@ -119,8 +160,7 @@ impl BatchEnv {
             RewardKind::Sngnn => Some(SngnnReward::for_config(&config)?),
             RewardKind::Dsrnn => None,
         };
-        let backend =
-            crate::backend::open(options.backend, params, state, out, options.threads, sngnn)?;
+        let backend = open(params, state, out, options.threads, sngnn)?;
         let actions = vec![0.0; 3 * options.n_envs];
         Ok(Self {
             config,
@@ -447,6 +487,7 @@ fn check_memory(n_envs: usize, caps: Caps, layout: ObsLayout) -> Result<(), SimE
     let bytes = (per_env as u64).saturating_mul((n_envs as u64).saturating_mul(2));
     Err(SimError::OutOfMemory {
         bytes,
+        device: None,
         message: format!(
             "a batch of {n_envs} environments needs about {:.1} GB ({per_env} bytes of state and \
              outputs per environment, twice over), more than this machine can reserve: use fewer \

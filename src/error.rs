@@ -54,16 +54,20 @@ pub enum SimError {
     /// The requested backend cannot run here (no adapter, or the batch exceeds its limits).
     #[error("backend unavailable: {0}")]
     BackendUnavailable(String),
-    /// The device failed during a run (lost, out of memory, a failed transfer). The batch's state
-    /// on the device is then unknown: drop the batch and make a new one.
+    /// The device failed during a run (lost, a failed transfer). The batch's state on the device
+    /// is then unknown: every later call on the batch reports the failure again; drop the batch
+    /// and make a new one (a new batch opens a new device when the old one was lost).
     #[error("device failure: {0}")]
     Device(String),
-    /// The host cannot hold what was asked for (a batch too large for the machine's memory);
-    /// nothing was allocated.
+    /// The host or the GPU cannot hold what was asked for (a batch too large for the machine's
+    /// memory, or for the adapter's memory or largest binding); nothing of the new batch is kept,
+    /// and batches made before it are unaffected.
     #[error("{message}")]
     OutOfMemory {
         /// The bytes asked for.
         bytes: u64,
+        /// The GPU adapter that refused them; `None` for the host's memory.
+        device: Option<String>,
         /// The whole explanation, with the batch size and what to do.
         message: String,
     },

@@ -200,9 +200,12 @@ fn py_err_attached(py: Python<'_>, e: SimError) -> Result<PyErr, PyErr> {
             }
             err
         }
-        SimError::OutOfMemory { bytes, .. } => with(
+        SimError::OutOfMemory { bytes, device, .. } => with(
             pyo3::exceptions::PyMemoryError::new_err(msg.clone()),
-            &[("bytes", bytes.into_pyobject(py)?.into_any())],
+            &[
+                ("bytes", bytes.into_pyobject(py)?.into_any()),
+                ("device", device.into_pyobject(py)?.into_any()),
+            ],
         )?,
         SimError::BackendUnavailable(_) => BackendUnavailableError::new_err(msg),
         SimError::Device(_) => DeviceError::new_err(msg),

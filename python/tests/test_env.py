@@ -186,6 +186,16 @@ def test_single_env_cannot_step_past_the_end():
     env.step(6)
 
 
+def test_a_batch_too_large_for_the_machine_raises_memory_error_naming_its_bytes():
+    """Refused before anything is allocated (an allocation failure would abort the interpreter);
+    `device` is None for the host's memory, the adapter's name for a GPU's."""
+    with pytest.raises(MemoryError, match="use fewer environments") as caught:
+        socnav.make_vec("exp1", num_envs=2**40)
+    assert caught.value.bytes > 2**40
+    assert caught.value.device is None
+    socnav.make_vec("exp1", num_envs=2).close()
+
+
 def test_gpu_backend_steps_like_the_cpu_backend():
     """The GPU backend from Python: the same observations, rewards and flags as the CPU backend,
     through autoresets. Skips without an adapter unless REQUIRE_GPU=1 (as the Rust tests).

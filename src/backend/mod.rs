@@ -46,8 +46,9 @@ impl std::str::FromStr for BackendChoice {
 /// # Errors
 /// `BackendUnavailable` for `Gpu` without a usable adapter (the message says how to install a
 /// driver) or in a build without the `gpu` feature, and for a batch the adapter cannot run
-/// (too large, or an SNGNN-v2 time step without an exact frame rule on the device). `Auto`
-/// takes the CPU backend instead, with one line on stderr, in each of these cases.
+/// (an SNGNN-v2 time step without an exact frame rule on the device); `OutOfMemory` for a batch
+/// too large for the adapter. `Auto` takes the CPU backend instead, with one line on stderr, in
+/// each of these cases.
 pub fn open(
     choice: BackendChoice,
     params: StepParams,
@@ -85,9 +86,14 @@ pub fn open(
             let kept = (choice == BackendChoice::Auto).then(|| (state.clone(), out.clone()));
             match gpu::GpuBackend::new(dev, params, state, out, threads, sngnn.as_ref()) {
                 Ok(gpu) => Ok(Box::new(gpu)),
-                Err(SimError::BackendUnavailable(why)) => match kept {
-                    Some((state, out)) => on_cpu(&why, state, out),
-                    None => Err(SimError::BackendUnavailable(why)),
+                Err(
+                    e @ (SimError::BackendUnavailable(_)
+                    | SimError::OutOfMemory {
+                        device: Some(_), ..
+                    }),
+                ) => match kept {
+                    Some((state, out)) => on_cpu(&e.to_string(), state, out),
+                    None => Err(e),
                 },
                 Err(e) => Err(e),
             }

@@ -87,8 +87,8 @@ impl GpuBackend {
     /// (all cores when `None`); `sngnn` scores the steps when the reward is SNGNN-v2's.
     ///
     /// # Errors
-    /// `BackendUnavailable` when a stage has no shader, the batch does not fit the adapter's
-    /// limits, a shader fails to build, or the SNGNN-v2 reward cannot run on the device (see
+    /// `OutOfMemory` when the batch does not fit the adapter's memory or bindings;
+    /// `BackendUnavailable` when a stage has no shader, a shader fails to build, or the SNGNN-v2 reward cannot run on the device (see
     /// `GpuStages::with_sngnn_graphs`: episodes too long for its frame-gap table).
     pub fn new(
         dev: GpuDevice,
@@ -149,8 +149,10 @@ impl GpuBackend {
         self.gpu.adapter()
     }
 
-    /// Upload what the host edited and refill the pool rows that are stale.
+    /// Upload what the host edited and refill the pool rows that are stale (`SimError::Device`
+    /// once the device is lost: the batch is then closed for good).
     fn prepare(&mut self) -> Result<(), SimError> {
+        self.gpu.check_lost()?;
         if let Some(s) = self.state.get().filter(|_| self.state_edited) {
             self.gpu.upload_state(s);
             self.episode.copy_from_slice(&s.episode);
@@ -252,6 +254,8 @@ impl GpuBackend {
     /// The host copy of the state, downloaded if there is none (`SimError::Device` when the
     /// download fails: a lost device).
     fn host_state(&self) -> Result<&BatchState, SimError> {
+        // A copy read before the loss would be the state of a batch that can no longer step.
+        self.gpu.check_lost()?;
         if let Some(s) = self.state.get() {
             return Ok(s);
         }

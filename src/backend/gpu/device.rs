@@ -13,7 +13,10 @@
 //!
 //! wgpu reports validation errors through a handler that panics by default; the device installed
 //! here records them instead ([`GpuDevice::take_errors`]), so a shader or buffer mistake becomes an
-//! error the caller sees, never a crash of the host (or of a Python interpreter).
+//! error the caller sees, never a crash of the host (or of a Python interpreter). A lost device
+//! (a driver reset, an unplugged GPU, [`wgpu::Device::destroy`]) is recorded the same way
+//! ([`GpuDevice::lost`]): every later call of a batch on it is a `SimError::Device`, and the next
+//! [`GpuDevice::open`] opens a new device instead of handing the lost one out again.
 
 use std::sync::{Arc, Mutex};
 
@@ -125,6 +128,8 @@ pub struct GpuDevice {
     /// The limits the device was opened with (the adapter's own).
     pub limits: wgpu::Limits,
     errors: Arc<Mutex<Vec<String>>>,
+    /// Why the device was lost, once it has been.
+    lost: Arc<Mutex<Option<String>>>,
     /// The pipelines compiled on this device ([`super::kit::PipelineCache`]).
     pub(crate) pipelines: Arc<super::kit::PipelineCache>,
 }
@@ -141,7 +146,8 @@ impl GpuDevice {
     /// The device of the best adapter the policy allows (see the module docs), opened on the
     /// first call and shared by every later call with the same policy and the same
     /// `WGPU_ADAPTER_NAME`/`WGPU_BACKEND`, so that batches reuse the pipelines it compiled
-    /// ([`GpuDevice::pipeline_builds`]).
+    /// ([`GpuDevice::pipeline_builds`]). A shared device that was lost is forgotten, and a new one
+    /// opened in its place.
     pub fn open(policy: AdapterPolicy) -> Result<Self, SimError> {
         type Key = (AdapterPolicy, Option<String>, Option<String>);
         static OPEN: Mutex<Vec<(Key, GpuDevice)>> = Mutex::new(Vec::new());
@@ -151,16 +157,20 @@ impl GpuDevice {
         let mut open = OPEN
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
+        open.retain(|(_, dev)| dev.lost().is_none());
         if let Some((_, dev)) = open.iter().find(|(k, _)| *k == key) {
             return Ok(dev.clone());
         }
-        let dev = Self::open_new(policy)?;
+        let dev = Self::open_private(policy)?;
         open.push((key, dev.clone()));
         Ok(dev)
     }
 
-    /// A device of its own (see [`GpuDevice::open`]).
-    fn open_new(policy: AdapterPolicy) -> Result<Self, SimError> {
+    /// A device of its own, on the adapter [`GpuDevice::open`] would choose, shared with no other
+    /// caller: its pipelines are compiled anew (or read from the pipeline cache on disk), and its
+    /// loss or destruction touches only the batches made on it
+    /// ([`crate::BatchEnv::on_device`]).
+    pub fn open_private(policy: AdapterPolicy) -> Result<Self, SimError> {
         let (instance, backends) = instance();
         let adapters = pollster::block_on(instance.enumerate_adapters(backends));
         let name_filter = std::env::var("WGPU_ADAPTER_NAME")
@@ -189,6 +199,14 @@ impl GpuDevice {
                 .unwrap_or_else(std::sync::PoisonError::into_inner)
                 .push(e.to_string());
         }));
+        let lost = Arc::new(Mutex::new(None));
+        let sink = Arc::clone(&lost);
+        device.set_device_lost_callback(move |reason, message| {
+            *sink
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner) =
+                Some(format!("{message} ({reason:?})"));
+        });
         let disk = super::kit::DiskCache::open(&device, features, &info);
         Ok(Self {
             device,
@@ -196,6 +214,7 @@ impl GpuDevice {
             adapter: AdapterSummary::of(&info),
             limits,
             errors,
+            lost,
             pipelines: Arc::new(super::kit::PipelineCache::new(disk)),
         })
     }
@@ -213,8 +232,29 @@ impl GpuDevice {
         self.pipelines.builds()
     }
 
-    /// The validation errors wgpu reported since the last call, as one error.
+    /// Why the device was lost, or `None` while it works.
+    pub fn lost(&self) -> Option<String> {
+        self.lost
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .clone()
+    }
+
+    /// `SimError::Device` when the device was lost (see the module docs).
+    pub fn check_lost(&self) -> Result<(), SimError> {
+        match self.lost() {
+            None => Ok(()),
+            Some(why) => Err(SimError::Device(format!(
+                "the GPU device ({}) was lost: {why}; drop this batch and make a new one",
+                self.adapter.name
+            ))),
+        }
+    }
+
+    /// The validation errors wgpu reported since the last call, as one error; the loss of the
+    /// device first.
     pub fn take_errors(&self) -> Result<(), SimError> {
+        self.check_lost()?;
         let mut errors = self
             .errors
             .lock()

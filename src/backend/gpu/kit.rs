@@ -259,6 +259,84 @@ pub(crate) fn bytes_of<T>(n: usize) -> u64 {
     (n.max(1) * std::mem::size_of::<T>()) as u64
 }
 
+/// `SimError::OutOfMemory` unless `bytes` of `what` fit one buffer and one storage binding of
+/// `dev` (`what` names the batch and the data, e.g. "the state's f32 columns of 20000
+/// environments").
+pub(crate) fn check_binding(dev: &GpuDevice, what: &str, bytes: u64) -> Result<(), SimError> {
+    let max = dev
+        .limits
+        .max_storage_buffer_binding_size
+        .min(dev.limits.max_buffer_size);
+    if bytes <= max {
+        return Ok(());
+    }
+    Err(SimError::OutOfMemory {
+        bytes,
+        device: Some(dev.adapter.name.clone()),
+        message: format!(
+            "{what} need {bytes} bytes in one buffer, more than {} allows in one binding ({max} \
+             bytes): use fewer environments",
+            dev.adapter.name
+        ),
+    })
+}
+
+/// The device's errors while a batch's buffers and pipelines are made on this thread (wgpu's
+/// error scopes are per thread): a batch that does not fit the device's memory fails with
+/// `SimError::OutOfMemory`, and no error of its making reaches the device's shared error list,
+/// where it would fail the next call of another batch on the same device.
+pub(crate) struct CreationScope {
+    oom: wgpu::ErrorScopeGuard,
+    invalid: wgpu::ErrorScopeGuard,
+    adapter: String,
+}
+
+impl CreationScope {
+    /// Start catching the errors of `dev`'s work on this thread.
+    pub(crate) fn push(dev: &GpuDevice) -> Self {
+        let oom = dev.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let invalid = dev.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        Self {
+            oom,
+            invalid,
+            adapter: dev.adapter.name.clone(),
+        }
+    }
+
+    /// `built`, unless the device ran out of memory while making it (`OutOfMemory`, with the
+    /// `bytes` of the buffers it holds) or reported it invalid (`Device`).
+    pub(crate) fn finish<T>(
+        self,
+        what: &str,
+        built: Result<T, SimError>,
+        bytes: impl FnOnce(&T) -> u64,
+    ) -> Result<T, SimError> {
+        // Scopes pop in the reverse order of their pushes.
+        let invalid = pollster::block_on(self.invalid.pop());
+        let oom = pollster::block_on(self.oom.pop());
+        if let Some(e) = oom {
+            let bytes = built.as_ref().map_or(0, bytes);
+            return Err(SimError::OutOfMemory {
+                bytes,
+                device: Some(self.adapter.clone()),
+                message: format!(
+                    "{} is out of memory for {what} ({bytes} bytes of buffers): {e}; use fewer \
+                     environments, or free the device's memory (other batches, a trainer's \
+                     cached tensors)",
+                    self.adapter
+                ),
+            });
+        }
+        let built = built?;
+        match invalid {
+            Some(e) => Err(SimError::Device(format!(
+                "the GPU device reported, while making {what}: {e}"
+            ))),
+            None => Ok(built),
+        }
+    }
+}
+
 /// A storage buffer the host writes and reads back.
 pub(crate) fn storage_buffer(dev: &GpuDevice, label: &str, size: u64) -> wgpu::Buffer {
     dev.device.create_buffer(&wgpu::BufferDescriptor {

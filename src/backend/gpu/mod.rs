@@ -39,7 +39,10 @@ use crate::sngnn::model::Model;
 use crate::sngnn::packed::PackedLayout;
 use crate::sngnn::pieces::Tables;
 use crate::state::BatchState;
-use kit::{Binding, Groups, bind_buffers, bytes_of, map_and_read, storage_buffer, uniform_buffer};
+use kit::{
+    Binding, CreationScope, Groups, bind_buffers, bytes_of, check_binding, map_and_read,
+    storage_buffer, uniform_buffer,
+};
 use sngnn_net::StepBuffers;
 
 /// A packed table on the device: every f32 column in one storage buffer, every u32 column in
@@ -61,6 +64,8 @@ pub struct GpuStages {
     params: wgpu::Buffer,
     actions: wgpu::Buffer,
     pool: wgpu::Buffer,
+    /// The stages' working memory (`wgsl::ObstacleScratch`).
+    scratch: wgpu::Buffer,
     pool_row_words: usize,
     readback: wgpu::Buffer,
     step_readback: wgpu::Buffer,
@@ -122,17 +127,13 @@ fn sngnn_buffers(
             dev.adapter.name, dev.limits.max_storage_buffers_per_shader_stage
         )));
     }
-    let max = dev.limits.max_storage_buffer_binding_size;
     let u_bytes = bytes_of::<u32>(n_envs * layout.u32_stride());
     let f_bytes = bytes_of::<f32>(n_envs * layout.f32_stride());
-    if u_bytes.max(f_bytes) > max {
-        return Err(SimError::BackendUnavailable(format!(
-            "{n_envs} environments need {} bytes of packed SNGNN graphs, more than {} allows in \
-             one binding ({max} bytes): use fewer environments",
-            u_bytes.max(f_bytes),
-            dev.adapter.name
-        )));
-    }
+    check_binding(
+        dev,
+        &format!("the packed SNGNN graphs of {n_envs} environments"),
+        u_bytes.max(f_bytes),
+    )?;
     // Buffers are created zeroed, as the graphs of environments that never built one are.
     Ok((
         layout,
@@ -149,14 +150,11 @@ fn scratch_buffer(
     state: wgsl::Columns<'_>,
 ) -> Result<wgpu::Buffer, SimError> {
     let bytes = bytes_of::<u32>(n_envs * wgsl::ObstacleScratch::of(state).words);
-    let max = dev.limits.max_storage_buffer_binding_size;
-    if bytes > max {
-        return Err(SimError::BackendUnavailable(format!(
-            "{n_envs} environments need {bytes} bytes of working memory for ORCA's obstacles, \
-             more than {} allows in one binding ({max} bytes): use fewer environments",
-            dev.adapter.name
-        )));
-    }
+    check_binding(
+        dev,
+        &format!("the working memory for ORCA's obstacles of {n_envs} environments"),
+        bytes,
+    )?;
     Ok(storage_buffer(dev, "scratch", bytes))
 }
 
@@ -169,18 +167,15 @@ impl DeviceTable {
         packed_f32: Vec<f32>,
         packed_u32: Vec<u32>,
     ) -> Result<Self, SimError> {
-        let max = dev.limits.max_storage_buffer_binding_size;
         for (kind, bytes) in [
             ("f32", bytes_of::<f32>(packed_f32.len())),
             ("u32", bytes_of::<u32>(packed_u32.len())),
         ] {
-            if bytes > max {
-                return Err(SimError::BackendUnavailable(format!(
-                    "{n_envs} environments need {bytes} bytes of {kind} {what} columns, more \
-                     than {} allows in one binding ({max} bytes): use fewer environments",
-                    dev.adapter.name
-                )));
-            }
+            check_binding(
+                dev,
+                &format!("the {kind} {what} columns of {n_envs} environments"),
+                bytes,
+            )?;
         }
         Ok(Self {
             f32s: storage_buffer(dev, what, bytes_of::<f32>(packed_f32.len())),
@@ -216,7 +211,7 @@ impl GpuStages {
     /// # Errors
     /// `SimError::Usage` when the state has no SNGNN history or the time step has no frame gaps
     /// ([`TickGaps`]); `SimError::BackendUnavailable` when the adapter allows fewer than 10
-    /// storage buffers per shader stage or the graphs exceed a binding; anything
+    /// storage buffers per shader stage; `SimError::OutOfMemory` when the graphs exceed a binding; anything
     /// [`GpuStages::new`] reports.
     pub fn with_sngnn_graphs(
         dev: GpuDevice,
@@ -244,11 +239,30 @@ impl GpuStages {
         Self::build(dev, params, state, outputs, stages, Some(binding))
     }
 
+    /// [`GpuStages::build_in_scope`], with the device's errors on the way caught
+    /// ([`CreationScope`]).
+    fn build(
+        dev: GpuDevice,
+        params: &StepParams,
+        state: &BatchState,
+        outputs: &Outputs,
+        stages: &[&'static str],
+        sngnn: Option<SngnnBinding>,
+    ) -> Result<Self, SimError> {
+        let scope = CreationScope::push(&dev);
+        let built = Self::build_in_scope(dev, params, state, outputs, stages, sngnn);
+        scope.finish(
+            &format!("a batch of {} environments", state.n_envs),
+            built,
+            Self::device_bytes,
+        )
+    }
+
     #[expect(
         clippy::expect_used,
         reason = "the layout is generated from the very columns it is asked for"
     )]
-    fn build(
+    fn build_in_scope(
         dev: GpuDevice,
         params: &StepParams,
         state: &BatchState,
@@ -269,13 +283,11 @@ impl GpuStages {
         let actions = storage_buffer(&dev, "actions", bytes_of::<f32>(3 * n_envs));
         let pool_row_words = wgsl::pool_row_words(&state.columns(), &outputs.columns());
         let pool_bytes = bytes_of::<u32>(n_envs * pool_row_words);
-        if pool_bytes > dev.limits.max_storage_buffer_binding_size {
-            return Err(SimError::BackendUnavailable(format!(
-                "{n_envs} environments need a reset pool of {pool_bytes} bytes, more than {} \
-                 allows in one binding ({} bytes): use fewer environments",
-                dev.adapter.name, dev.limits.max_storage_buffer_binding_size
-            )));
-        }
+        check_binding(
+            &dev,
+            &format!("the reset pool of {n_envs} environments"),
+            pool_bytes,
+        )?;
         let pool = storage_buffer(&dev, "reset pool", pool_bytes);
         let scratch = scratch_buffer(&dev, n_envs, &state.columns())?;
         let layout = wgsl::BatchLayout::new(
@@ -395,6 +407,7 @@ impl GpuStages {
             params: params_buf,
             actions,
             pool,
+            scratch,
             pool_row_words,
             readback,
             step_readback,
@@ -418,6 +431,35 @@ impl GpuStages {
         &self.dev.adapter
     }
 
+    /// Bytes of the buffers the batch holds on its device (its network's excepted).
+    pub fn device_bytes(&self) -> u64 {
+        let graphs = self
+            .sngnn_graphs
+            .as_ref()
+            .map_or(0, |(_, u, f)| u.size() + f.size());
+        [
+            &self.state.f32s,
+            &self.state.u32s,
+            &self.outputs.f32s,
+            &self.outputs.u32s,
+            &self.params,
+            &self.actions,
+            &self.pool,
+            &self.scratch,
+            &self.readback,
+            &self.step_readback,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum::<u64>()
+            + graphs
+    }
+
+    /// Whether the device was lost, as `SimError::Device` (see [`GpuDevice::lost`]).
+    pub fn check_lost(&self) -> Result<(), SimError> {
+        self.dev.check_lost()
+    }
+
     /// Add SNGNN-v2's network (`model` with `tables`) over the packed graphs, as the stage
     /// `sngnn_score`: each environment with a graph gets the room node's first output written
     /// into its `r_discomfort_sngnn` state column, where the reward stage clamps it (the
@@ -425,7 +467,7 @@ impl GpuStages {
     ///
     /// # Errors
     /// `SimError::Usage` without the graph buffers ([`GpuStages::with_sngnn_graphs`]);
-    /// `SimError::BackendUnavailable` when the network does not fit the adapter.
+    /// `SimError::OutOfMemory` when the network does not fit the adapter.
     pub fn attach_sngnn_net(&mut self, model: &Model, tables: &Tables) -> Result<(), SimError> {
         let Some((layout, gu, gf)) = &self.sngnn_graphs else {
             return Err(SimError::Usage(

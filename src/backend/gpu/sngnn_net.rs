@@ -18,7 +18,10 @@
 //! room node's first output straight into a state column, and records it in the step's compute
 //! pass (`GpuNet::record`).
 
-use super::kit::{Binding, bind_buffers, bytes_of, map_and_read, storage_bindings, storage_buffer};
+use super::kit::{
+    Binding, CreationScope, bind_buffers, bytes_of, check_binding, map_and_read, storage_bindings,
+    storage_buffer,
+};
 use super::{AdapterSummary, GpuDevice};
 use crate::backend::wgsl;
 use crate::backend::wgsl::sngnn_status::{
@@ -112,22 +115,6 @@ impl std::fmt::Debug for GpuNet {
     }
 }
 
-/// `BackendUnavailable` unless a buffer of `bytes` fits one binding of `dev`.
-fn check_fits(dev: &GpuDevice, what: &str, bytes: u64) -> Result<(), SimError> {
-    let max = dev
-        .limits
-        .max_storage_buffer_binding_size
-        .min(dev.limits.max_buffer_size);
-    if bytes > max {
-        return Err(SimError::BackendUnavailable(format!(
-            "SNGNN-v2 needs {bytes} bytes of {what} in one buffer, more than {} allows ({max} \
-             bytes)",
-            dev.adapter.name
-        )));
-    }
-    Ok(())
-}
-
 /// `BackendUnavailable` unless a batch of `n_envs` fits one dispatch dimension of `dev`.
 fn check_batch(dev: &GpuDevice, n_envs: usize) -> Result<(), SimError> {
     let max_groups = dev.limits.max_compute_workgroups_per_dimension as usize;
@@ -147,7 +134,7 @@ fn filled_buffer<T: bytemuck::Pod>(
     data: &[T],
 ) -> Result<wgpu::Buffer, SimError> {
     let bytes = bytes_of::<T>(data.len());
-    check_fits(dev, what, bytes)?;
+    check_binding(dev, &format!("SNGNN-v2's {what}"), bytes)?;
     let buffer = storage_buffer(dev, what, bytes);
     dev.queue
         .write_buffer(&buffer, 0, bytemuck::cast_slice(data));
@@ -157,7 +144,7 @@ fn filled_buffer<T: bytemuck::Pod>(
 /// An empty storage buffer of `n` elements of `T`, after checking that it fits.
 fn empty_buffer<T>(dev: &GpuDevice, what: &str, n: usize) -> Result<wgpu::Buffer, SimError> {
     let bytes = bytes_of::<T>(n);
-    check_fits(dev, what, bytes)?;
+    check_binding(dev, &format!("SNGNN-v2's {what}"), bytes)?;
     Ok(storage_buffer(dev, what, bytes))
 }
 
@@ -174,7 +161,7 @@ impl GpuNet {
     /// with graph and output buffers of its own ([`GpuNet::upload`], [`GpuNet::forward`]).
     ///
     /// # Errors
-    /// `SimError::BackendUnavailable` when a buffer exceeds the adapter's limits (the tables'
+    /// `SimError::OutOfMemory` when a buffer exceeds the adapter's limits or memory (the tables'
     /// largest layer is about 54 MB), there are more environments than one dispatch dimension
     /// holds, or the shader fails to build.
     pub fn new(
@@ -226,7 +213,36 @@ impl GpuNet {
         Self::build(dev, model, tables, layout, n_envs, io)
     }
 
+    /// [`GpuNet::build_in_scope`], with the device's errors on the way caught ([`CreationScope`]).
     fn build(
+        dev: GpuDevice,
+        model: &Model,
+        tables: &Tables,
+        layout: PackedLayout,
+        n_envs: usize,
+        io: Io,
+    ) -> Result<Self, SimError> {
+        let scope = CreationScope::push(&dev);
+        let built = Self::build_in_scope(dev, model, tables, layout, n_envs, io);
+        scope.finish(
+            &format!("SNGNN-v2's network over {n_envs} environments"),
+            built,
+            |net| {
+                [
+                    &net.graph_u32,
+                    &net.graph_f32,
+                    &net.q,
+                    &net.status,
+                    &net.readback,
+                ]
+                .iter()
+                .map(|b| b.size())
+                .sum()
+            },
+        )
+    }
+
+    fn build_in_scope(
         dev: GpuDevice,
         model: &Model,
         tables: &Tables,

@@ -424,8 +424,13 @@ fn a_batch_too_large_for_the_machine_is_refused_before_allocating() {
             ..Default::default()
         };
         match BatchEnv::new(config("exp1"), options) {
-            Err(SimError::OutOfMemory { bytes, message }) => {
+            Err(SimError::OutOfMemory {
+                bytes,
+                device,
+                message,
+            }) => {
                 assert!(bytes > 1 << 40, "{bytes}");
+                assert_eq!(device, None, "the host refused it");
                 assert!(
                     message.contains(&format!("a batch of {n_envs} environments needs about"))
                         && message.contains("use fewer environments"),

@@ -5,6 +5,9 @@ mod api_errors;
 #[cfg(all(feature = "gpu", feature = "cli"))]
 mod cli_backends;
 mod config_validation;
+// Faults caused on the GPU device: destroyed, too small for the batch.
+#[cfg(feature = "gpu")]
+mod gpu_faults;
 // The heatmap tests run the `socnav` binary, which needs the `cli` feature.
 #[cfg(feature = "cli")]
 mod heatmap;
