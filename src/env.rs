@@ -295,6 +295,21 @@ impl BatchEnv {
 
     /// Validate `actions` into the batch's action buffer (3 floats per environment).
     fn load_actions(&mut self, actions: Actions<'_>) -> Result<(), SimError> {
+        self.check_actions(actions)?;
+        match actions {
+            Actions::Continuous(a) => self.actions.copy_from_slice(a),
+            Actions::Discrete(a) => {
+                for (chunk, &k) in self.actions.chunks_exact_mut(3).zip(a) {
+                    chunk.copy_from_slice(&DISCRETE_ACTIONS[k as usize]);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The error [`BatchEnv::step`] would give for `actions`, if any, without stepping: for a
+    /// caller that hands the step to another thread and wants a bad action refused at once.
+    pub fn check_actions(&self, actions: Actions<'_>) -> Result<(), SimError> {
         let n = self.n_envs();
         match actions {
             Actions::Continuous(a) => {
@@ -330,7 +345,6 @@ impl BatchEnv {
                         ));
                     }
                 }
-                self.actions.copy_from_slice(a);
             }
             Actions::Discrete(a) => {
                 if a.len() != n {
@@ -351,9 +365,6 @@ impl BatchEnv {
                             DISCRETE_ACTIONS.len()
                         ),
                     ));
-                }
-                for (chunk, &k) in self.actions.chunks_exact_mut(3).zip(a) {
-                    chunk.copy_from_slice(&DISCRETE_ACTIONS[k as usize]);
                 }
             }
         }

@@ -153,8 +153,9 @@ def check_choice(name: str, value: str, choices: tuple[str, ...]) -> str:
     return value
 
 
-def step_batch(batch: Batch, action_type: str, actions: Any, num_envs: int) -> None:
-    """Validate ``actions`` (shape, dtype, finiteness, range for discrete) and step."""
+def step_batch(batch: Batch, action_type: str, actions: Any, num_envs: int, send: bool = False) -> None:
+    """Validate ``actions`` (shape, dtype, finiteness, range for discrete) and step; with
+    ``send``, only start the step (``Batch.recv`` waits for it)."""
     a = np.asarray(actions)
     if action_type == "continuous":
         if a.shape != (num_envs, 3):
@@ -165,7 +166,7 @@ def step_batch(batch: Batch, action_type: str, actions: Any, num_envs: int) -> N
         if not np.isfinite(a).all():
             bad = np.argwhere(~np.isfinite(a))[0]
             raise ValueError(f"actions[{bad[0]}, {bad[1]}] is {a[tuple(bad)]}: actions must be finite")
-        batch.step_continuous(a)
+        (batch.send_continuous if send else batch.step_continuous)(a)
     else:
         if a.shape != (num_envs,):
             raise ValueError(f"actions must have shape ({num_envs},), got {a.shape}")
@@ -174,7 +175,8 @@ def step_batch(batch: Batch, action_type: str, actions: Any, num_envs: int) -> N
         if a.size and (a.min() < 0 or a.max() >= N_DISCRETE):
             k = int(np.argmax((a < 0) | (a >= N_DISCRETE)))
             raise ValueError(f"actions[{k}] is {a[k]}: discrete actions are 0..{N_DISCRETE - 1}")
-        batch.step_discrete(np.ascontiguousarray(a, dtype=np.uint32))
+        a = np.ascontiguousarray(a, dtype=np.uint32)
+        (batch.send_discrete if send else batch.step_discrete)(a)
 
 
 @dataclass(frozen=True)

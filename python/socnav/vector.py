@@ -84,6 +84,8 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self._reward = np.zeros(self.num_envs, dtype=np.float32)
         self._returns = np.zeros(self.num_envs, dtype=np.float64)
         self._finished = np.zeros(self.num_envs, dtype=bool)
+        # The actions of a step sent and not yet received.
+        self._sent: Any = None
 
     @property
     def backend(self) -> str:
@@ -140,6 +142,32 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
 
     def step(self, actions: Any):
         _batch.step_batch(self._batch, self.action_type, actions, self.num_envs)
+        return self._results(actions)
+
+    def send(self, actions: Any) -> None:
+        """Start a step with ``actions`` and return at once: the batch steps on its own threads
+        (the GIL released) while the caller works, e.g. on a policy's next forward pass; ``recv``
+        returns what ``step`` would have. Same seed and actions, same trajectory as ``step``.
+
+        Between ``send`` and ``recv`` every other call on the environment raises
+        ``socnav.UsageError``, and the arrays of the last results (views, unless ``copy=True``)
+        are being overwritten: read them before ``send``. Bad actions raise here, and nothing is
+        sent. To overlap a whole batch's inference with its simulation, split it in two
+        environments and alternate: send one half's actions, then compute the other's
+        (``benches/send_recv.py``; docs/scaling.md)."""
+        _batch.step_batch(self._batch, self.action_type, actions, self.num_envs, send=True)
+        self._sent = actions
+
+    def recv(self):
+        """Wait for the step ``send`` started and return ``(obs, reward, terminated, truncated,
+        info)`` as ``step`` does (``socnav.UsageError`` when nothing was sent)."""
+        self._batch.recv()
+        actions, self._sent = self._sent, None
+        return self._results(actions)
+
+    def _results(self, actions: Any):
+        """The step's results from the batch's buffers (``actions``: what the step was given,
+        for a custom reward)."""
         b = self._buf
         terminated = b["terminated"].astype(bool)
         truncated = b["truncated"].astype(bool)

@@ -11,7 +11,10 @@
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 mod orca;
+mod stepper;
 mod viewer;
+
+use stepper::{Job, OwnedActions, SendState, Stepper};
 
 use ndarray::{ArrayView, IxDyn};
 use numpy::{Element, PyArray, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2};
@@ -247,14 +250,19 @@ fn parse_autoreset(name: &str) -> PyResult<AutoresetMode> {
 /// A batch of environments stepping together.
 ///
 /// One concurrency model: a batch is idle, busy (a call holds it: a step, a reset, a state
-/// load, ... while the GIL is released) or closed. A call that arrives while another is in
-/// flight (from another thread) raises `UsageError` at once instead of waiting or racing; a
+/// load, ... while the GIL is released; or a step sent with `send_*` and not yet received with
+/// `recv`) or closed. A call that arrives while another is in flight (from another thread, or
+/// between `send_*` and `recv`) raises `UsageError` at once instead of waiting or racing; a
 /// closed batch raises `UsageError` for every call but `close`. A batch belongs to the process
 /// that made it: its worker threads and GPU device do not survive `fork`, so a forked child's
 /// calls raise `UsageError`.
 #[pyclass(module = "socnav._socnav", frozen)]
 struct Batch {
     inner: Mutex<Inner>,
+    /// Whether a step was sent (`send_*`) and not yet received (`recv`).
+    send_state: SendState,
+    /// The thread that runs sent steps, made at the first `send_*`.
+    stepper: Mutex<Option<Stepper>>,
     /// The process that made the batch.
     pid: u32,
     n_envs: usize,
@@ -273,15 +281,7 @@ impl Batch {
     /// The batch, held for one call: `UsageError` if another call holds it, if it is closed, or
     /// in a process forked after it was made.
     fn lock(&self) -> PyResult<MutexGuard<'_, Inner>> {
-        let pid = std::process::id();
-        if pid != self.pid {
-            return Err(UsageError::new_err(format!(
-                "this batch was made in process {} and cannot be used in process {pid}, forked \
-                 from it: its worker threads and GPU device stay with the parent. Make the batch \
-                 in the child, or start workers with the 'spawn' or 'forkserver' method",
-                self.pid
-            )));
-        }
+        self.check_process()?;
         let inner = match self.inner.try_lock() {
             Ok(inner) => inner,
             Err(TryLockError::WouldBlock) => {
@@ -300,7 +300,65 @@ impl Batch {
         if let Some(why) = &inner.closed {
             return Err(UsageError::new_err(format!("the batch is closed ({why})")));
         }
+        // Read while holding the batch: `send` sets it before it lets go of the batch.
+        if let Some(why) = self.send_state.busy() {
+            return Err(UsageError::new_err(why));
+        }
         Ok(inner)
+    }
+
+    /// `UsageError` in a process forked after the batch was made.
+    fn check_process(&self) -> PyResult<()> {
+        let pid = std::process::id();
+        if pid != self.pid {
+            return Err(UsageError::new_err(format!(
+                "this batch was made in process {} and cannot be used in process {pid}, forked \
+                 from it: its worker threads and GPU device stay with the parent. Make the batch \
+                 in the child, or start workers with the 'spawn' or 'forkserver' method",
+                self.pid
+            )));
+        }
+        Ok(())
+    }
+
+    /// Start stepping the batch with `actions` on its stepper thread and return: a bad action
+    /// is refused here, and the step's own error is `recv`'s.
+    fn send(slf: &Bound<'_, Self>, actions: OwnedActions) -> PyResult<()> {
+        let batch = slf.get();
+        let mut inner = batch.lock()?;
+        let checked = inner.env.check_actions(actions.as_actions());
+        inner.check(checked)?;
+        let mut stepper = batch
+            .stepper
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if stepper.is_none() {
+            *stepper = Some(Stepper::start().map_err(py_err)?);
+        }
+        let job = Job {
+            owner: slf.clone().unbind(),
+            actions,
+        };
+        if let Some(stepper) = stepper.as_ref() {
+            stepper.send(job).map_err(py_err)?;
+        }
+        // Marked while the batch is held, so every call from here to `recv` is refused; the
+        // stepper takes the batch once it is let go of.
+        batch.send_state.sent();
+        Ok(())
+    }
+
+    /// Wait for the sent step (`SendState::claim` first) and return its result.
+    fn wait_for_sent(&self, py: Python<'_>) -> PyResult<Result<(), SimError>> {
+        let result = py.detach(|| {
+            let stepper = self
+                .stepper
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            stepper.as_ref().map(Stepper::recv)
+        });
+        self.send_state.received();
+        result.ok_or_else(|| InternalError::new_err("a step was sent without a stepper thread"))
     }
 }
 
@@ -396,15 +454,21 @@ impl Batch {
                 orca: socnav::policies::OrcaRobot::new(),
                 closed: None,
             }),
+            send_state: SendState::default(),
+            stepper: Mutex::new(None),
             pid: std::process::id(),
         })
     }
 
     /// Close the batch: every later call but `close` raises `UsageError`. Closing twice does
-    /// nothing; closing while another thread's call is in flight raises `UsageError`.
-    fn close(&self) -> PyResult<()> {
+    /// nothing; closing while another thread's call is in flight raises `UsageError`; a step sent
+    /// and not received is waited for, and its result dropped.
+    fn close(&self, py: Python<'_>) -> PyResult<()> {
         if std::process::id() != self.pid {
             return Ok(()); // a forked child's copy: nothing of it is usable anyway
+        }
+        if self.send_state.claim().is_ok() {
+            let _ = self.wait_for_sent(py)?;
         }
         let mut inner = match self.inner.try_lock() {
             Ok(inner) => inner,
@@ -554,6 +618,41 @@ impl Batch {
         let mut inner = self.lock()?;
         let env = &mut inner.env;
         let result = py.detach(|| env.step(Actions::Discrete(actions)));
+        inner.check(result)
+    }
+
+    /// Start a step with continuous actions (as `step_continuous`) on a thread of the batch's
+    /// own and return at once; `recv` waits for it. Until then every other call on the batch
+    /// raises `UsageError`, and its output arrays are being written: read them after `recv`.
+    fn send_continuous(slf: &Bound<'_, Self>, actions: PyReadonlyArray2<'_, f32>) -> PyResult<()> {
+        let actions = actions
+            .as_slice()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .to_vec();
+        Self::send(slf, OwnedActions::Continuous(actions))
+    }
+
+    /// Start a step with discrete actions (as `step_discrete`); see `send_continuous`.
+    fn send_discrete(slf: &Bound<'_, Self>, actions: PyReadonlyArray1<'_, u32>) -> PyResult<()> {
+        let actions = actions
+            .as_slice()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .to_vec();
+        Self::send(slf, OwnedActions::Discrete(actions))
+    }
+
+    /// Wait for the step `send_*` started (the GIL released) and raise its error, if any; the
+    /// output buffers then hold its results. `UsageError` when no step was sent.
+    fn recv(&self, py: Python<'_>) -> PyResult<()> {
+        // A forked child's copy has no stepper thread to wait for.
+        self.check_process()?;
+        if let Err(why) = self.send_state.claim() {
+            // A closed batch, or one in use by another thread, says so first.
+            drop(self.lock()?);
+            return Err(UsageError::new_err(why));
+        }
+        let result = self.wait_for_sent(py)?;
+        let mut inner = self.lock()?;
         inner.check(result)
     }
 
