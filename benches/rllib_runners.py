@@ -52,14 +52,18 @@ def local_runner(config: str, envs: int, steps: int, info_keys) -> dict[str, flo
     cfg = socnav.rllib.ppo_config(config, num_env_runners=0, num_envs_per_env_runner=envs, info_keys=info_keys)
     runner = SingleAgentEnvRunner(config=cfg)
     runner.sample(num_timesteps=2 * envs)
-    runner.get_metrics()
     start = time.perf_counter()
     sampled = sum(len(e) for e in runner.sample(num_timesteps=steps))
     seconds = time.perf_counter() - start
-    metrics = runner.get_metrics()
+    # RLlib's timers: seconds per vector step (smoothed), the environment's and the module's.
+    timers = {k: float(runner.metrics.peek(k)) for k in ("env_step_timer", "rlmodule_inference_timer")}
     runner.stop()
-    per_step = {k: float(np.mean(metrics[k])) for k in ("env_step_timer", "rlmodule_inference_timer") if k in metrics}
-    return {"env_steps_per_s": sampled / seconds, **{f"{k}_s": v for k, v in per_step.items()}}
+    vector_steps = sampled / envs
+    return {
+        "env_steps_per_s": sampled / seconds,
+        "seconds_per_vector_step": seconds / vector_steps,
+        **{f"{k}_s": v for k, v in timers.items()},
+    }
 
 
 def group(config: str, envs: int, steps: int, runners: int) -> float:
