@@ -1,7 +1,7 @@
 """Fuzzing the Python API with hypothesis: `make`/`make_vec` arguments, override dicts, actions
 of every dtype and shape, reset options and state documents. The invariant: a call succeeds, or
 raises a documented exception (socnav's errors, ValueError, TypeError, IndexError, OverflowError,
-MemoryError, KeyError); never a Rust panic (`pyo3_runtime.PanicException`), never a crash of the
+MemoryError, KeyError, and the OSError of its kind for a config path that cannot be read); never a Rust panic (`pyo3_runtime.PanicException`), never a crash of the
 interpreter, and a batch that refused a call still steps.
 
 `HYPOTHESIS_PROFILE=long` runs the long profile (100,000 examples in all, see benches/RESULTS.md);
@@ -37,8 +37,9 @@ settings.register_profile(
 )
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
-#: What a bad argument may raise: documented errors, never a panic.
-EXPECTED = (socnav.SocNavError, ValueError, TypeError, IndexError, OverflowError, MemoryError, KeyError)
+#: What a bad argument may raise: documented errors, never a panic. A config string that names no
+#: shipped config is read as a path: FileNotFoundError, IsADirectoryError (``""`` is ``.``), ...
+EXPECTED = (socnav.SocNavError, ValueError, TypeError, IndexError, OverflowError, MemoryError, KeyError, OSError)
 
 SHIPPED = [c for c in socnav.shipped_configs() if "sngnn" not in c]
 
