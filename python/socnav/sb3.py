@@ -157,15 +157,20 @@ class SocNavSB3VecEnv(VecEnv):
         return self._copy_obs(obs)
 
     def step_async(self, actions: np.ndarray) -> None:
-        """Record the actions of the next :meth:`step_wait`: ``(num_envs, 3)`` floats for
-        continuous actions, ``(num_envs,)`` integers (or ``(num_envs, 1)``) for discrete ones."""
+        """Start stepping the batch with ``actions`` (``(num_envs, 3)`` floats for continuous
+        actions, ``(num_envs,)`` integers, or ``(num_envs, 1)``, for discrete ones) on its own
+        thread (``SocNavVectorEnv.send``): bad actions raise here, and the caller may work until
+        :meth:`step_wait`."""
+        if self._actions is not None:
+            raise RuntimeError("step_async() twice: call step_wait() for the step in flight first")
         a = np.asarray(actions)
         if self.action_type == "discrete" and a.shape == (self.num_envs, 1):
             a = a.reshape(self.num_envs)
+        self.venv.send(a)
         self._actions = a
 
     def step_wait(self) -> VecEnvStepReturn:
-        """Step the batch with the recorded actions.
+        """Wait for the step :meth:`step_async` started.
 
         Returns
         -------
@@ -183,8 +188,8 @@ class SocNavSB3VecEnv(VecEnv):
         """
         if self._actions is None:
             raise RuntimeError("step_wait() without step_async(): call step_async(actions) first")
-        actions, self._actions = self._actions, None
-        obs, reward, terminated, truncated, info = self.venv.step(actions)
+        self._actions = None
+        obs, reward, terminated, truncated, info = self.venv.recv()
         dones = terminated | truncated
         infos: list[dict[str, Any]] = [{"TimeLimit.truncated": False} for _ in range(self.num_envs)]
         if dones.any():
