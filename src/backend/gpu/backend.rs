@@ -88,8 +88,9 @@ impl GpuBackend {
     ///
     /// # Errors
     /// `OutOfMemory` when the batch does not fit the adapter's memory or bindings;
-    /// `BackendUnavailable` when a stage has no shader, a shader fails to build, or the SNGNN-v2 reward cannot run on the device (see
-    /// `GpuStages::with_sngnn_graphs`: episodes too long for its frame-gap table).
+    /// `BackendUnavailable` when a stage has no shader, a shader fails to build, or the SNGNN-v2
+    /// reward cannot run on the device (see `GpuStages::with_sngnn_graphs`: episodes too long for
+    /// its frame-gap table).
     pub fn new(
         dev: GpuDevice,
         params: StepParams,
