@@ -1,8 +1,9 @@
 """Fuzzing the Python API with hypothesis: `make`/`make_vec` arguments, override dicts, actions
 of every dtype and shape, reset options and state documents. The invariant: a call succeeds, or
 raises a documented exception (socnav's errors, ValueError, TypeError, IndexError, OverflowError,
-MemoryError, KeyError, and the OSError of its kind for a config path that cannot be read); never a Rust panic (`pyo3_runtime.PanicException`), never a crash of the
-interpreter, and a batch that refused a call still steps.
+MemoryError, KeyError, and the OSError of its kind for a config path that cannot be read); never
+a Rust panic (`pyo3_runtime.PanicException`), never a crash of the interpreter, and a batch that
+refused a call still steps.
 
 `HYPOTHESIS_PROFILE=long` runs the long profile (100,000 examples in all, see benches/RESULTS.md);
 skipped when hypothesis is not installed, unless REQUIRE_HYPOTHESIS=1 (scripts/test-fuzz)."""
