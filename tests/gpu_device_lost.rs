@@ -12,9 +12,7 @@ use socnav::backend::gpu::{AdapterPolicy, GpuDevice};
 use socnav::{Actions, BatchEnv, Config, EnvOptions, SimError};
 
 fn batch() -> Result<BatchEnv, SimError> {
-    let config = Config::from_file(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/exp1.toml"),
-    )?;
+    let config = Config::from_name_or_path("exp1")?;
     let mut env = BatchEnv::new(
         config,
         EnvOptions {

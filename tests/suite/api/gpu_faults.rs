@@ -6,21 +6,11 @@
 
 use crate::common;
 
-use std::path::Path;
-
+use common::load_config as config;
 use socnav::backend::BackendChoice;
 use socnav::backend::gpu::{AdapterPolicy, GpuDevice};
 use socnav::state::BatchState;
-use socnav::{Actions, BatchEnv, Config, EnvOptions, SimError};
-
-fn config(name: &str) -> Config {
-    Config::from_file(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("configs")
-            .join(format!("{name}.toml")),
-    )
-    .unwrap_or_else(|e| panic!("{name}: {e}"))
-}
+use socnav::{Actions, BatchEnv, EnvOptions, SimError};
 
 fn options(n_envs: usize) -> EnvOptions {
     EnvOptions {
