@@ -15,7 +15,8 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from socnav import _batch
-from socnav._socnav import Batch
+from socnav._socnav import Batch, UsageError
+from socnav.pinned import PinnedBuffers
 from socnav.render import RENDER_MODES, HumanView, Trails, check_render_mode, tile
 
 _AUTORESET = {
@@ -86,6 +87,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self._finished = np.zeros(self.num_envs, dtype=bool)
         # The actions of a step sent and not yet received.
         self._sent: Any = None
+        self._pinned: PinnedBuffers | None = None
 
     @property
     def backend(self) -> str:
@@ -96,6 +98,27 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
     def device(self) -> str:
         """What runs the batch: the CPU threads, or the GPU adapter."""
         return self._batch.device
+
+    def pin_memory(self) -> int:
+        """Page-lock the batch's output buffers for CUDA (``cudaHostRegister``, through torch),
+        so that tensors over them (``torch.from_numpy(obs)``) are pinned and
+        ``tensor.to("cuda", non_blocking=True)`` is an asynchronous DMA. Returns the bytes
+        pinned; idempotent; undone by ``unpin_memory()`` or ``close()``.
+
+        The next ``step`` overwrites the buffers, so the copy must have finished by then: a
+        loop that brings the policy's actions back to the host (``.cpu()``) before stepping
+        has waited for it. ``BackendUnavailableError`` without torch or a CUDA device."""
+        if self.closed:
+            raise UsageError("pin_memory on a closed environment")
+        if self._pinned is None:
+            self._pinned = PinnedBuffers(self._buf.values())
+        return self._pinned.bytes
+
+    def unpin_memory(self) -> None:
+        """Undo ``pin_memory`` (nothing when the buffers are not pinned)."""
+        if self._pinned is not None:
+            self._pinned.release()
+            self._pinned = None
 
     def reset(
         self,
@@ -210,6 +233,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         if self._human is not None:
             self._human.close()
             self._human = None
+        self.unpin_memory()
         self._batch.close()
 
     def _track(self, restart: np.ndarray) -> None:

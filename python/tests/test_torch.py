@@ -48,3 +48,46 @@ def test_copy_true_gives_tensors_a_step_does_not_overwrite() -> None:
     for _ in range(5):
         env.step(np.full(4, 2))
     assert torch.equal(kept, before)
+
+
+def _cuda_or_skip() -> None:
+    """Run where CUDA exists; skip loudly elsewhere (REQUIRE_CUDA=1 makes its absence a failure)."""
+    if torch.cuda.is_available():
+        return
+    if os.environ.get("REQUIRE_CUDA") == "1":
+        pytest.fail("REQUIRE_CUDA=1 but torch sees no CUDA device")
+    pytest.skip(f"SKIPPED LOUDLY: no CUDA device (torch {torch.__version__}); pinned buffers untested here")
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+def test_pinned_buffers_feed_asynchronous_copies_to_cuda(backend: str) -> None:
+    _cuda_or_skip()
+    try:
+        env = socnav.make_vec("exp2", num_envs=64, seed=3, obs_mode="flat", action_type="discrete", backend=backend)
+    except socnav.BackendUnavailableError as e:
+        pytest.skip(f"SKIPPED LOUDLY: no GPU adapter for the gpu backend: {e}")
+    obs, _ = env.reset(seed=3)
+    obs_t = torch.from_numpy(obs)
+    assert not obs_t.is_pinned()
+    pinned = env.pin_memory()
+    assert pinned >= obs.nbytes and env.pin_memory() == pinned, "idempotent"
+    reward_t = None
+    policy = torch.nn.Linear(obs.shape[1], 7).cuda()
+    for _ in range(30):
+        obs_cuda = obs_t.to("cuda", non_blocking=True)
+        assert obs_t.is_pinned(), "the batch's buffer is page-locked"
+        expected = obs.copy()
+        # Bringing the actions back waits for the stream, so the copy is done before the step.
+        actions = policy(obs_cuda).argmax(1).cpu().numpy()
+        np.testing.assert_array_equal(obs_cuda.cpu().numpy(), expected)
+        obs, reward, *_ = env.step(actions)
+        assert obs.ctypes.data == obs_t.data_ptr(), "the same buffer, refilled in place"
+        if reward_t is None:
+            reward_t = torch.from_numpy(reward)
+            assert reward_t.is_pinned()
+        np.testing.assert_array_equal(reward_t.to("cuda", non_blocking=True).cpu().numpy(), reward)
+    env.unpin_memory()
+    assert not obs_t.is_pinned()
+    env.pin_memory()
+    env.close()  # unpins before the batch can be freed
+    assert not obs_t.is_pinned()
