@@ -29,6 +29,11 @@ _AUTORESET = {
 class SocNavVectorEnv(gym.vector.VectorEnv):
     """``num_envs`` environments of one config stepping together (see ``make_vec``)."""
 
+    # Class-level defaults, so that ``close`` (which gymnasium's ``__del__`` calls) finds them on
+    # an environment whose ``__init__`` raised before setting them (a bad config or backend).
+    _human: HumanView | None = None
+    _pinned: PinnedBuffers | None = None
+
     def __init__(
         self,
         config: str | Mapping[str, Any] = "exp1",
@@ -60,7 +65,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             "render_fps": 1.0 / self._batch.time_step,
         }
         self.render_mode = check_render_mode(render_mode)
-        self._human: HumanView | None = None
+        self._human = None
         self._steps = 0
         self.render_size = int(render_size)
         self.render_envs = list(range(min(self.num_envs, 4))) if render_envs is None else [int(e) for e in render_envs]
@@ -87,7 +92,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self._finished = np.zeros(self.num_envs, dtype=bool)
         # The actions of a step sent and not yet received.
         self._sent: Any = None
-        self._pinned: PinnedBuffers | None = None
+        self._pinned = None
 
     @property
     def backend(self) -> str:
@@ -234,7 +239,9 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             self._human.close()
             self._human = None
         self.unpin_memory()
-        self._batch.close()
+        batch: Batch | None = getattr(self, "_batch", None)  # None when __init__ raised before it
+        if batch is not None:
+            batch.close()
 
     def _track(self, restart: np.ndarray) -> None:
         """Record the robot poses for drawing (restarting the paths of ``restart``)."""

@@ -272,3 +272,15 @@ def test_sngnn_weights_path_and_install_errors(tmp_path, monkeypatch):
     with pytest.raises(socnav.SngnnError, match="SOCNAV_V2.tch"):
         socnav._socnav.sngnn_install_from_wheel(str(wheel), str(dest))
     assert not dest.exists(), "a failed install leaves no file"
+
+
+def test_closing_an_environment_whose_construction_failed_raises_nothing() -> None:
+    # gymnasium 1.2's VectorEnv.__del__ calls close() on an object whose __init__ raised (a bad
+    # config, no GPU adapter) before any of its attributes was set; close must find nothing to do.
+    with pytest.raises(socnav.ConfigError):
+        socnav.make_vec({"base": "exp1", "counts": {"plants": [5, 1]}}, num_envs=2)
+    from socnav.vector import SocNavVectorEnv
+
+    bare = SocNavVectorEnv.__new__(SocNavVectorEnv)
+    bare.close()
+    bare.close()
