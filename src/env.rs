@@ -392,6 +392,13 @@ impl BatchEnv {
         self.backend.pipelines_compiled()
     }
 
+    /// The GPU backend's host path so far: bytes read back, finished rows, and the seconds spent
+    /// refilling the reset pool, waiting for the device and copying its outputs (`None` on the
+    /// CPU backend).
+    pub fn host_path(&self) -> Option<crate::backend::HostPath> {
+        self.backend.host_path()
+    }
+
     /// Time each stage of the following steps ([`BatchEnv::stage_seconds`]); off by default.
     pub fn set_stage_timing(&mut self, on: bool) {
         self.backend.set_stage_timing(on);

@@ -103,6 +103,23 @@ soa! {
     }
 }
 
+/// The output columns a step writes only for an environment whose episode ends at it: the
+/// SAME_STEP finals (with `has_final`) and the episode statistics and seed (with
+/// `episode_done`). Every other column is written at every step. Between two such steps these
+/// columns keep their values, on both backends, so a host copy needs them only from the
+/// environments that finished (the GPU backend's step readback, `backend::gpu::readback`).
+pub const FINISHED_ONLY_COLUMNS: [&str; 9] = [
+    "final_obs",
+    "final_obs_count",
+    "final_hh_pairs",
+    "final_hl_pairs",
+    "final_pair_count",
+    "final_info",
+    "episode",
+    "episode_seed_lo",
+    "episode_seed_hi",
+];
+
 impl Outputs {
     /// Zeroed outputs for `n_envs` environments with observation layout `layout`.
     pub fn new(n_envs: usize, layout: ObsLayout) -> Self {

@@ -107,6 +107,34 @@ pub fn open(
     }
 }
 
+/// Where a GPU batch's host path spends its time and what it moves, summed over every step and
+/// reset since the batch was made (`socnav bench --backend gpu` reports it per step).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct HostPath {
+    /// Steps and resets that read their outputs back.
+    pub reads: u64,
+    /// Bytes copied from the device to host-visible memory.
+    pub bytes: u64,
+    /// Rows of environments that finished, read back with their step.
+    pub finished_rows: u64,
+    /// Reads that needed a second copy: more environments finished than the first copy held.
+    pub second_reads: u64,
+    /// Reads of the whole output table (after device work that was not read back).
+    pub full_reads: u64,
+    /// Seconds generating reset-pool rows on the host and writing them to the device before a
+    /// step can be submitted (the rows of the next episodes that are missing).
+    pub refill_s: f64,
+    /// Seconds generating reset-pool rows while the device runs a step (the rows two episodes
+    /// ahead of the environments that reset): off the critical path unless longer than the
+    /// device's work.
+    pub refill_ahead_s: f64,
+    /// Seconds from submitting the device work to its readback being mapped, less the host's
+    /// work meanwhile (`refill_ahead_s`).
+    pub wait_s: f64,
+    /// Seconds copying the mapped readback into the host's outputs.
+    pub copy_s: f64,
+}
+
 /// A way of running the step over the whole batch.
 pub trait Backend: Send + Sync {
     /// Reset the environments whose `mask` entry is true (all when `mask` is `None`), clearing
@@ -141,6 +169,10 @@ pub trait Backend: Send + Sync {
     }
     /// What runs the batch, for logs and benchmark records: the CPU threads, or the GPU adapter.
     fn device(&self) -> String;
+    /// The host path's totals (`None` on the CPU backend, which has none).
+    fn host_path(&self) -> Option<HostPath> {
+        None
+    }
     /// Seconds `steps` steps take on the device alone (see `BatchEnv::time_device_steps`);
     /// `None` without a device.
     fn time_device_steps(

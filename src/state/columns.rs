@@ -27,6 +27,8 @@ pub trait ColumnValue: Copy + Default + Send + Sync + 'static {
     fn pack(column: &[Self], f32s: &mut Vec<f32>, u32s: &mut Vec<u32>);
     /// Fill `column` from the packed array of its kind, starting at that array's cursor.
     fn unpack(column: &mut [Self], f32s: &[f32], u32s: &[u32], cursor: &mut [usize; 2]);
+    /// `column` as its 32-bit words (an f32's bits), to be written in place.
+    fn words_mut(column: &mut [Self]) -> &mut [u32];
 }
 
 impl ColumnValue for f32 {
@@ -41,6 +43,9 @@ impl ColumnValue for f32 {
         column.copy_from_slice(&f32s[cursor[0]..cursor[0] + column.len()]);
         cursor[0] += column.len();
     }
+    fn words_mut(column: &mut [Self]) -> &mut [u32] {
+        bytemuck::cast_slice_mut(column)
+    }
 }
 
 impl ColumnValue for u32 {
@@ -54,6 +59,9 @@ impl ColumnValue for u32 {
     fn unpack(column: &mut [Self], _: &[f32], u32s: &[u32], cursor: &mut [usize; 2]) {
         column.copy_from_slice(&u32s[cursor[1]..cursor[1] + column.len()]);
         cursor[1] += column.len();
+    }
+    fn words_mut(column: &mut [Self]) -> &mut [u32] {
+        column
     }
 }
 
@@ -138,6 +146,17 @@ macro_rules! soa {
             pub fn unpack(&mut self, f32s: &[f32], u32s: &[u32]) {
                 let mut cursor = [0usize; 2];
                 $( <$ty as $crate::state::columns::ColumnValue>::unpack(&mut self.$col, f32s, u32s, &mut cursor); )*
+            }
+
+            /// Column `name`'s 32-bit words (an f32 column's bits), to be written in place;
+            /// `None` if the table has no such column.
+            pub fn column_words_mut(&mut self, name: &str) -> Option<&mut [u32]> {
+                $(
+                    if name == stringify!($col) {
+                        return Some(<$ty as $crate::state::columns::ColumnValue>::words_mut(&mut self.$col));
+                    }
+                )*
+                None
             }
 
             /// Names of the columns whose bits differ from `other`'s (same shape), for test

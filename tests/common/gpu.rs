@@ -171,7 +171,12 @@ pub fn fill_pool(gpu: &mut GpuStages, p: &StepParams, state: &BatchState, layout
         &scratches,
     );
     assert!(failed.is_empty(), "scenario generation failed: {failed:?}");
-    gpu.write_pool_rows(0, &rows);
+    let words = gpu.pool_row_words();
+    for (e, row) in rows.chunks_exact(words).enumerate() {
+        // The half a reset from this counter reads (`pool_row_of`).
+        let half = ((state.episode[e] + 1) & 1) as usize;
+        gpu.write_pool_rows(half, e, row);
+    }
 }
 
 /// [`check_parity`] in autoreset mode `mode`.

@@ -10,11 +10,12 @@
 //! network's dispatches, [`super::GpuNet`]), still in the same pass and submit; the network's
 //! status words are read back with the outputs.
 //!
-//! Resets copy rows of the reset pool (`src/backend/reset_pool.rs`): an environment whose episode
-//! counter moved on the device has consumed its row (and its next episode seed moved one step
-//! along the sequence, which the host follows without reading it back), and the host generates
-//! its next one (on its worker threads, for all such environments at once) before the next
-//! device work. The state stays on the device; [`Backend::state`] downloads a host copy when
+//! Resets copy rows of the reset pool (`src/backend/reset_pool.rs`), two per environment (its
+//! next episode's and the one after, `backend::gpu::pool_rows`): an environment whose episode counter
+//! moved on the device has consumed its next row (and its next episode seed moved one step along
+//! the sequence, which the host follows without reading it back), so its other row becomes the
+//! next, and the host generates the one two episodes ahead (on its worker threads, for all such
+//! environments at once) while the device runs the following step. The state stays on the device; [`Backend::state`] downloads a host copy when
 //! asked and keeps it until the next step, and [`Backend::state_mut`] edits that copy, which is
 //! uploaded before the next device work.
 
@@ -30,10 +31,8 @@ use crate::pipeline::STAGES;
 use crate::sngnn::SngnnReward;
 use crate::state::{BatchState, Caps};
 
-use super::{GpuDevice, GpuStages};
-
-/// `row_episode` of a pool row that holds nothing valid.
-const NO_ROW: u32 = u32::MAX;
+use super::pool_rows::{PoolRows, Which};
+use super::{GpuDevice, GpuStages, StepRead};
 
 /// The GPU backend.
 pub struct GpuBackend {
@@ -51,18 +50,10 @@ pub struct GpuBackend {
     episode: Vec<u32>,
     /// Each environment's next episode seed on the device.
     next_seed: Vec<u64>,
-    /// The episode counter each pool row was generated for ([`NO_ROW`]: none).
-    row_episode: Vec<u32>,
-    /// The episode seed each pool row was generated for.
-    row_seed: Vec<u64>,
-    /// Rows whose scenario could not be generated: the error, raised when the row is consumed
-    /// (the step at which the CPU backend's reset would fail).
-    row_errors: Vec<Option<SimError>>,
+    /// Which episode each row of the reset pool starts ([`PoolRows`]).
+    rows: PoolRows,
     /// Episode counters read back by the last device work.
     read_episode: Vec<u32>,
-    /// Reused buffers of the pool refill.
-    stale: Vec<usize>,
-    rows: Vec<u32>,
     scratches: reset_pool::Scratches,
     threads: usize,
     pool: Option<rayon::ThreadPool>,
@@ -71,6 +62,9 @@ pub struct GpuBackend {
     actions_mask: Vec<f32>,
     /// The passes of a step ([`step_passes`]).
     step_passes: Vec<&'static str>,
+    /// Seconds spent refilling the reset pool before submitting, and while the device worked.
+    refill_s: f64,
+    refill_ahead_s: f64,
 }
 
 impl std::fmt::Debug for GpuBackend {
@@ -118,6 +112,7 @@ impl GpuBackend {
         let caps = state.strides;
         let layout = out.strides.layout;
         let episode = state.episode.clone();
+        let row_words = gpu.pool_row_words();
         let next_seed = (0..n).map(|e| state.next_seed(e)).collect();
         Ok(Self {
             params,
@@ -129,12 +124,8 @@ impl GpuBackend {
             outputs_edited: false,
             episode,
             next_seed,
-            row_episode: vec![NO_ROW; n],
-            row_seed: vec![0; n],
-            row_errors: (0..n).map(|_| None).collect(),
+            rows: PoolRows::new(n, row_words),
             read_episode: vec![0; n],
-            stale: Vec::new(),
-            rows: Vec::new(),
             scratches: reset_pool::Scratches::new(caps, layout, pool.as_ref()),
             threads,
             pool,
@@ -142,6 +133,8 @@ impl GpuBackend {
             stage_seconds: vec![0.0; STAGES.len()],
             actions_mask: vec![0.0; 3 * n],
             step_passes,
+            refill_s: 0.0,
+            refill_ahead_s: 0.0,
         })
     }
 
@@ -166,50 +159,20 @@ impl GpuBackend {
             self.gpu.upload_outputs(&self.out);
             self.outputs_edited = false;
         }
-        self.refill()
+        let start = Instant::now();
+        let refilled = self.refill();
+        self.refill_s += start.elapsed().as_secs_f64();
+        refilled
     }
 
-    /// Generate the pool rows of the environments whose row is not for their current episode
-    /// counter and next seed, and write them to the device (consecutive environments in one
-    /// write).
+    /// Generate the next rows the pool lacks (after an edit of the state, new seeds or new
+    /// constants: normally none) and write them to the device.
     fn refill(&mut self) -> Result<(), SimError> {
-        self.stale.clear();
-        self.stale.extend((0..self.episode.len()).filter(|&e| {
-            self.row_episode[e] != self.episode[e] || self.row_seed[e] != self.next_seed[e]
-        }));
-        if self.stale.is_empty() {
-            return Ok(());
-        }
-        let words = self.gpu.pool_row_words();
-        self.rows.clear();
-        self.rows.resize(self.stale.len() * words, 0);
-        let failed = reset_pool::write_rows(
-            &self.params,
-            &self.stale,
-            &self.episode,
-            &self.next_seed,
-            &mut self.rows,
-            self.pool.as_ref(),
-            &self.scratches,
-        );
-        for &e in &self.stale {
-            self.row_episode[e] = self.episode[e];
-            self.row_seed[e] = self.next_seed[e];
-            self.row_errors[e] = None;
-        }
-        for (e, err) in failed {
-            self.row_errors[e] = Some(err);
-        }
-        let mut k = 0;
-        while k < self.stale.len() {
-            let mut end = k + 1;
-            while end < self.stale.len() && self.stale[end] == self.stale[end - 1] + 1 {
-                end += 1;
-            }
-            self.gpu
-                .write_pool_rows(self.stale[k], &self.rows[k * words..end * words]);
-            k = end;
-        }
+        self.rows
+            .select(Which::Next, &self.episode, &self.next_seed);
+        self.rows
+            .generate(&self.params, self.pool.as_ref(), &self.scratches);
+        self.rows.write(&mut self.gpu);
         Ok(())
     }
 
@@ -222,6 +185,26 @@ impl GpuBackend {
         } else {
             &[crate::backend::wgsl::RESET_PASS]
         };
+        let read = StepRead {
+            out: &mut self.out,
+            episode: &mut self.read_episode,
+            pool: self.pool.as_ref(),
+        };
+        // While the device works: the rows two episodes ahead that the pool lacks.
+        let (rows, params, pool, scratches) = (
+            &mut self.rows,
+            &self.params,
+            self.pool.as_ref(),
+            &self.scratches,
+        );
+        let (episode, next_seed) = (&self.episode, &self.next_seed);
+        let mut ahead_s = 0.0;
+        let ahead = || {
+            let start = Instant::now();
+            rows.select(Which::Ahead, episode, next_seed);
+            rows.generate(params, pool, scratches);
+            ahead_s = start.elapsed().as_secs_f64();
+        };
         if self.timing && step {
             for pass in passes {
                 let start = Instant::now();
@@ -229,21 +212,23 @@ impl GpuBackend {
                 self.gpu.wait()?;
                 self.stage_seconds[stage_of(pass)] += start.elapsed().as_secs_f64();
             }
-            self.gpu
-                .run_stages(&[], Some((&mut self.out, &mut self.read_episode)))?;
+            self.gpu.run_stages(&[], Some(read), ahead)?;
         } else {
-            self.gpu
-                .run_stages(passes, Some((&mut self.out, &mut self.read_episode)))?;
+            self.gpu.run_stages(passes, Some(read), ahead)?;
         }
+        self.refill_ahead_s += ahead_s;
+        // They reach the pool before the next submit; this step read the other rows.
+        self.rows.write(&mut self.gpu);
         let mut error = None;
         for e in 0..self.episode.len() {
             if self.read_episode[e] != self.episode[e] {
-                if let Some(err) = self.row_errors[e].take() {
+                let (seed, failed) = self.rows.consumed(e, self.episode[e]);
+                if let Some(err) = failed {
                     error.get_or_insert(err);
                 }
                 self.episode[e] = self.read_episode[e];
                 // The row set the next seed one step along (scenario::reset_env).
-                self.next_seed[e] = crate::seeds::next_episode_seed(self.row_seed[e]);
+                self.next_seed[e] = crate::seeds::next_episode_seed(seed);
             }
         }
         if let Some(e) = self.gpu.sngnn_failure() {
@@ -324,6 +309,13 @@ impl Backend for GpuBackend {
         self.run(true)
     }
 
+    fn host_path(&self) -> Option<crate::backend::HostPath> {
+        let mut path = self.gpu.host_path();
+        path.refill_s = self.refill_s;
+        path.refill_ahead_s = self.refill_ahead_s;
+        Some(path)
+    }
+
     fn time_device_steps(
         &mut self,
         actions: &[f32],
@@ -335,7 +327,7 @@ impl Backend for GpuBackend {
         self.gpu.wait()?;
         let start = Instant::now();
         for _ in 0..steps {
-            self.gpu.run_stages(&self.step_passes, None)?;
+            self.gpu.run_stages(&self.step_passes, None, || {})?;
         }
         self.gpu.wait()?;
         Ok(Some(start.elapsed().as_secs_f64()))
@@ -371,7 +363,7 @@ impl Backend for GpuBackend {
         self.params = params;
         self.gpu.upload_params(&params);
         // Every row depends on the constants.
-        self.row_episode.fill(NO_ROW);
+        self.rows.invalidate();
     }
 
     fn threads(&self) -> usize {

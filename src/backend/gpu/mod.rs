@@ -23,6 +23,8 @@
 pub mod backend;
 pub mod device;
 pub(crate) mod kit;
+pub(crate) mod pool_rows;
+pub(crate) mod readback;
 pub mod sngnn_net;
 
 pub use backend::GpuBackend;
@@ -43,7 +45,19 @@ use kit::{
     Binding, CreationScope, Groups, bind_buffers, bytes_of, check_binding, map_and_read,
     storage_buffer, uniform_buffer,
 };
+use readback::{StepReadback, words_to_bytes};
 use sngnn_net::StepBuffers;
+
+/// What a step's readback fills on the host: the outputs, each environment's episode counter,
+/// and the threads that copy large columns (the caller alone when `None`).
+pub struct StepRead<'a> {
+    /// The host's outputs (same batch size and layout).
+    pub out: &'a mut Outputs,
+    /// One episode counter per environment.
+    pub episode: &'a mut [u32],
+    /// Threads for copying the outputs.
+    pub pool: Option<&'a rayon::ThreadPool>,
+}
 
 /// A packed table on the device: every f32 column in one storage buffer, every u32 column in
 /// another, and the host copies they are packed from and read back into.
@@ -69,6 +83,10 @@ pub struct GpuStages {
     pool_row_words: usize,
     readback: wgpu::Buffer,
     step_readback: wgpu::Buffer,
+    /// The uniform batch layout.
+    batch: wgpu::Buffer,
+    /// What a step hands the host ([`readback`]).
+    step_read: StepReadback,
     /// Word offset of the `episode` column in the state's u32 buffer.
     episode_offset: usize,
     /// Group 0 (the prelude's bindings), and group 1 (the SNGNN graphs) when the batch has them.
@@ -282,7 +300,8 @@ impl GpuStages {
             .write_buffer(&params_buf, 0, bytemuck::bytes_of(params));
         let actions = storage_buffer(&dev, "actions", bytes_of::<f32>(3 * n_envs));
         let pool_row_words = wgsl::pool_row_words(&state.columns(), &outputs.columns());
-        let pool_bytes = bytes_of::<u32>(n_envs * pool_row_words);
+        // Two rows per environment: its next episode's and the one after it.
+        let pool_bytes = bytes_of::<u32>(2 * n_envs * pool_row_words);
         check_binding(
             &dev,
             &format!("the reset pool of {n_envs} environments"),
@@ -307,20 +326,6 @@ impl GpuStages {
         };
         let episode_offset = layout_at("c_episode");
         let sngnn_score_at = layout_at("c_r_discomfort_sngnn");
-        // The outputs (f32 words, then u32 words), the state's episode counters and, with the
-        // SNGNN graphs, the network's status words, read back after every step.
-        let status_words = if sngnn.is_some() { n_envs } else { 0 };
-        let step_readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("step readback"),
-            size: bytes_of::<u32>(
-                outputs_table.packed_f32.len()
-                    + outputs_table.packed_u32.len()
-                    + n_envs
-                    + status_words,
-            ),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let sngnn_graphs = match &sngnn {
             Some(b) => Some(sngnn_buffers(&dev, n_envs, b.layout)?),
             None => None,
@@ -334,7 +339,9 @@ impl GpuStages {
                 state_table
                     .largest()
                     .max(outputs_table.largest())
-                    .max(graph_words),
+                    .max(graph_words)
+                    // A step's second copy of finished rows (`readback`).
+                    .max(1 + n_envs * wgsl::finished_row_words(&outputs.columns())),
             ),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
@@ -344,6 +351,29 @@ impl GpuStages {
         // graphs and the frame gaps (`backend::wgsl::sngnn_prelude`), bound only by the shaders
         // that use them, so that every other shader is the same pipeline as without them.
         let batch = uniform_buffer(&dev, "batch layout", &layout.words());
+        let (step_read, read_compiled) = StepReadback::new(
+            &dev,
+            n_envs,
+            &state.columns(),
+            &outputs.columns(),
+            readback::Tables {
+                f32s: &outputs_table.f32s,
+                u32s: &outputs_table.u32s,
+                batch: &batch,
+            },
+        )?;
+        // A step's readback: the outputs (the selective copy of `step_read`, or the whole
+        // table), the state's episode counters and, with the SNGNN graphs, the network's status
+        // words.
+        let status_words = if sngnn.is_some() { n_envs } else { 0 };
+        let table_words = (outputs_table.packed_f32.len() + outputs_table.packed_u32.len())
+            .max(step_read.most_words());
+        let step_readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("step readback"),
+            size: bytes_of::<u32>(table_words + n_envs + status_words),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let storage = |read_only| Binding::Storage { read_only };
         let mut bound = vec![vec![
             (&params_buf, storage(true)),
@@ -393,7 +423,7 @@ impl GpuStages {
             &wgsl::SizeClasses::of(&columns),
         );
         let mut pipelines = Vec::with_capacity(stages.len());
-        let mut compiled = 0;
+        let mut compiled = usize::from(read_compiled);
         for &stage in stages {
             let built = build_pass(&dev, stage, &groups, &prelude)?;
             compiled += usize::from(built.as_ref().is_some_and(|b| b.1));
@@ -411,6 +441,8 @@ impl GpuStages {
             pool_row_words,
             readback,
             step_readback,
+            batch,
+            step_read,
             episode_offset,
             bind_groups,
             pipelines,
@@ -448,11 +480,13 @@ impl GpuStages {
             &self.scratch,
             &self.readback,
             &self.step_readback,
+            &self.batch,
         ]
         .iter()
         .map(|b| b.size())
         .sum::<u64>()
             + graphs
+            + self.step_read.device_bytes()
     }
 
     /// Whether the device was lost, as `SimError::Device` (see [`GpuDevice::lost`]).
@@ -552,14 +586,18 @@ impl GpuStages {
         self.pool_row_words
     }
 
-    /// Write `rows` (whole pool rows) into the reset pool from environment `first_env` on.
-    pub fn write_pool_rows(&mut self, first_env: usize, rows: &[u32]) {
+    /// Write `rows` (whole pool rows) into the reset pool from environment `first_env` on, in the
+    /// half of the pool for episode counters of parity `half` (0 or 1): the rows that start
+    /// episodes after counters of the other parity, since a reset moves the counter on
+    /// (`pool_row_of` in `shaders/common/pool_reset.wgsl`).
+    pub fn write_pool_rows(&mut self, half: usize, first_env: usize, rows: &[u32]) {
+        assert!(half < 2, "the pool has two halves");
         assert_eq!(
             rows.len() % self.pool_row_words.max(1),
             0,
             "whole pool rows"
         );
-        let offset = (first_env * self.pool_row_words * 4) as u64;
+        let offset = words_to_bytes((half * self.n_envs + first_env) * self.pool_row_words);
         self.dev
             .queue
             .write_buffer(&self.pool, offset, bytemuck::cast_slice(rows));
@@ -567,24 +605,32 @@ impl GpuStages {
 
     /// Run stage `stage` over every environment (one dispatch, one submit).
     pub fn run(&mut self, stage: &str) -> Result<(), SimError> {
-        self.run_stages(&[stage], None)
+        self.run_stages(&[stage], None, || {})
     }
 
-    /// Run `stages` in order over every environment, one dispatch each, in one submit; with `read`,
-    /// the same submit then copies the outputs and the episode counters into the step readback
-    /// buffer, which is read into `read`'s outputs (same batch size and layout) and counters (one
-    /// per environment) without allocating.
+    /// Run `stages` in order over every environment, one dispatch each, in one submit; with
+    /// `read`, the same submit then copies what the step hands the host (`backend::gpu::readback`: the
+    /// per-step output columns and the rows of the environments that finished, or the whole
+    /// output table after device work that was not read back) and the episode counters into the
+    /// step readback buffer, which is read into `read`'s outputs and counters. The host runs
+    /// `while_device_works` between the submit and the wait for the readback.
     pub fn run_stages(
         &mut self,
         stages: &[&str],
-        read: Option<(&mut Outputs, &mut [u32])>,
+        read: Option<StepRead<'_>>,
+        while_device_works: impl FnOnce(),
     ) -> Result<(), SimError> {
+        let started = std::time::Instant::now();
         let mut enc = self
             .dev
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("step"),
             });
+        let selective = read.is_some() && !self.step_read.whole_table_next;
+        if selective {
+            self.step_read.clear(&mut enc);
+        }
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("step"),
@@ -611,20 +657,38 @@ impl GpuStages {
                 pass.set_pipeline(pipeline);
                 pass.dispatch_workgroups((self.n_envs as u32).div_ceil(wgsl::WORKGROUP_SIZE), 1, 1);
             }
+            if selective {
+                self.step_read.record(&mut pass);
+            }
         }
-        let Some((out, episode)) = read else {
+        let Some(read) = read else {
             self.dev.queue.submit([enc.finish()]);
+            while_device_works();
+            self.step_read.whole_table_next = true;
             return self.dev.take_errors();
         };
-        let f_bytes = (self.outputs.packed_f32.len() * 4) as u64;
-        let u_bytes = (self.outputs.packed_u32.len() * 4) as u64;
-        let e_bytes = (self.n_envs * 4) as u64;
+        let tables = readback::Tables {
+            f32s: &self.outputs.f32s,
+            u32s: &self.outputs.u32s,
+            batch: &self.batch,
+        };
         let rb = &self.step_readback;
-        enc.copy_buffer_to_buffer(&self.outputs.f32s, 0, rb, 0, f_bytes);
-        enc.copy_buffer_to_buffer(&self.outputs.u32s, 0, rb, f_bytes, u_bytes);
-        let episode_at = (self.episode_offset * 4) as u64;
-        enc.copy_buffer_to_buffer(&self.state.u32s, episode_at, rb, f_bytes + u_bytes, e_bytes);
-        let mut total = f_bytes + u_bytes + e_bytes;
+        let f_words = self.outputs.packed_f32.len();
+        let table_bytes = if selective {
+            self.step_read.copy(&mut enc, &tables, rb)
+        } else {
+            let (f_bytes, u_bytes) = (
+                words_to_bytes(f_words),
+                words_to_bytes(self.outputs.packed_u32.len()),
+            );
+            enc.copy_buffer_to_buffer(&self.outputs.f32s, 0, rb, 0, f_bytes);
+            enc.copy_buffer_to_buffer(&self.outputs.u32s, 0, rb, f_bytes, u_bytes);
+            f_bytes + u_bytes
+        };
+        let e_bytes = words_to_bytes(self.n_envs);
+        let episode_at = words_to_bytes(self.episode_offset);
+        enc.copy_buffer_to_buffer(&self.state.u32s, episode_at, rb, table_bytes, e_bytes);
+        let mut total = table_bytes + e_bytes;
         // Stage timing runs the passes one submit each and reads back after the last.
         let scored = std::mem::take(&mut self.sngnn_unread);
         if let (true, Some(net)) = (scored, &self.sngnn_net) {
@@ -632,19 +696,65 @@ impl GpuStages {
             total += e_bytes;
         }
         self.dev.queue.submit([enc.finish()]);
-        let status = &mut self.sngnn_status;
+        let working = std::time::Instant::now();
+        while_device_works();
+        let host_work_s = working.elapsed().as_secs_f64();
+        let (status, step_read) = (&mut self.sngnn_status, &self.step_read);
+        let StepRead { out, episode, pool } = read;
+        let table_words = (table_bytes / 4) as usize;
+        let mut copy_s = 0.0;
+        let mut finished = Ok(0);
         map_and_read(&self.dev, rb, total, |words| {
-            let (f, rest) = words.split_at((f_bytes / 4) as usize);
-            let (u, rest) = rest.split_at((u_bytes / 4) as usize);
+            let copying = std::time::Instant::now();
+            let (table, rest) = words.split_at(table_words);
             let (ep, st) = rest.split_at(episode.len());
-            out.unpack(bytemuck::cast_slice(f), u);
+            if selective {
+                finished = step_read.read(table, out, pool);
+            } else {
+                let (f, u) = table.split_at(f_words);
+                out.unpack(bytemuck::cast_slice(f), u);
+            }
             episode.copy_from_slice(ep);
             if scored {
                 status.copy_from_slice(st);
             } else {
                 status.fill(0);
             }
-        })
+            copy_s = copying.elapsed().as_secs_f64();
+        })?;
+        let mut bytes = total;
+        let mut second = false;
+        if selective {
+            let count = finished?;
+            let held = self.step_read.rows_hint();
+            if count > held {
+                let copying = std::time::Instant::now();
+                let (src, at) = self.step_read.rest_at(held);
+                let rows =
+                    self.read_words_at(src, at, (count - held) * self.step_read.row_words())?;
+                self.step_read.scatter(&rows, out)?;
+                copy_s += copying.elapsed().as_secs_f64();
+                bytes += words_to_bytes(rows.len());
+                second = true;
+            }
+            self.step_read.note_finished(count);
+            self.step_read.stats.finished_rows += count as u64;
+        } else {
+            self.step_read.whole_table_next = false;
+            self.step_read.stats.full_reads += 1;
+        }
+        let stats = &mut self.step_read.stats;
+        stats.reads += 1;
+        stats.bytes += bytes;
+        stats.second_reads += u64::from(second);
+        stats.copy_s += copy_s;
+        stats.wait_s += started.elapsed().as_secs_f64() - copy_s - host_work_s;
+        Ok(())
+    }
+
+    /// The host path's totals so far (the pool refill's time is the backend's to add).
+    pub fn host_path(&self) -> crate::backend::HostPath {
+        self.step_read.stats
     }
 
     /// Set the batch's bind groups on `pass`.
@@ -696,6 +806,11 @@ impl GpuStages {
 
     /// The first `n` 32-bit words of `src`.
     fn read_words(&self, src: &wgpu::Buffer, n: usize) -> Result<Vec<u32>, SimError> {
+        self.read_words_at(src, 0, n)
+    }
+
+    /// `n` 32-bit words of `src` from byte `at` on.
+    fn read_words_at(&self, src: &wgpu::Buffer, at: u64, n: usize) -> Result<Vec<u32>, SimError> {
         if n == 0 {
             return Ok(Vec::new());
         }
@@ -706,7 +821,7 @@ impl GpuStages {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("readback"),
             });
-        enc.copy_buffer_to_buffer(src, 0, &self.readback, 0, bytes);
+        enc.copy_buffer_to_buffer(src, at, &self.readback, 0, bytes);
         self.dev.queue.submit([enc.finish()]);
         let mut words = Vec::new();
         self.map_and_read(&self.readback, bytes, |w| words.extend_from_slice(w))?;

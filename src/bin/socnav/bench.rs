@@ -30,7 +30,9 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             env.step(Actions::Continuous(&actions))?;
         }
         // Throughput with stage timing off (it costs two clock reads per stage and chunk)...
+        let path_before = env.host_path();
         let (steps, secs) = timed_steps(&mut env, &actions, a.seconds)?;
+        let host_path = host_path_per_step(path_before, env.host_path(), steps);
         // On a GPU, the simulation alone: the same steps with nothing delivered to the host.
         let device_only = env
             .time_device_steps(Actions::Continuous(&actions), steps)?
@@ -52,6 +54,8 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             "seconds": secs,
             "env_steps_per_s": (n * steps) as f64 / secs,
             "device_only_env_steps_per_s": device_only,
+            // GPU: the host path's time and bytes per step over the timed steps.
+            "host_path": host_path,
             "state_bytes_per_env": env.state()?.bytes_per_env(),
             "obs_floats_per_env": env.layout().dim,
             // CPU stage time is summed over threads: each stage's share of the step's CPU time.
@@ -104,6 +108,18 @@ fn print_row(row: &serde_json::Value, header: bool, env: &socnav::BatchEnv) {
             "    simulation on the device alone: {d:.0} env-steps/s (no outputs to the host, no reset rows refilled)"
         );
     }
+    if let Some(p) = row["host_path"].as_object() {
+        let ms = |k: &str| 1e3 * p[k].as_f64().unwrap_or(0.0);
+        println!(
+            "    host path per step: {:.2} ms refilling the reset pool ({:.2} ms more while the device works), {:.2} ms waiting for the device, {:.2} ms copying out; {:.1} MB read back ({:.1} finished rows)",
+            ms("refill_s"),
+            ms("refill_ahead_s"),
+            ms("wait_s"),
+            ms("copy_s"),
+            p["bytes"].as_f64().unwrap_or(0.0) / 1e6,
+            p["finished_rows"].as_f64().unwrap_or(0.0)
+        );
+    }
     if let Some(stages) = row["stage_env_steps_per_s"].as_object() {
         let cells: Vec<String> = stages
             .iter()
@@ -117,6 +133,25 @@ fn print_row(row: &serde_json::Value, header: bool, env: &socnav::BatchEnv) {
             .collect();
         println!("    {}", cells.join(" | "));
     }
+}
+
+/// The host path's figures per step between two totals (`None` on the CPU backend).
+fn host_path_per_step(
+    before: Option<socnav::backend::HostPath>,
+    after: Option<socnav::backend::HostPath>,
+    steps: usize,
+) -> Option<serde_json::Value> {
+    let (b, a) = (before?, after?);
+    let per = |x: f64| x / steps.max(1) as f64;
+    Some(json!({
+        "refill_s": per(a.refill_s - b.refill_s),
+        "refill_ahead_s": per(a.refill_ahead_s - b.refill_ahead_s),
+        "wait_s": per(a.wait_s - b.wait_s),
+        "copy_s": per(a.copy_s - b.copy_s),
+        "bytes": per((a.bytes - b.bytes) as f64),
+        "finished_rows": per((a.finished_rows - b.finished_rows) as f64),
+        "second_reads": per((a.second_reads - b.second_reads) as f64),
+    }))
 }
 
 /// Step for at least `seconds` (and 10 steps); the steps taken and the seconds they took.

@@ -541,12 +541,7 @@ fn wgsl_twins_define_every_public_item() {
 #[test]
 fn shipped_configs_share_one_prelude() {
     let mut preludes = std::collections::BTreeMap::<String, Vec<String>>::new();
-    for name in socnav::Config::shipped_names() {
-        let config = socnav::Config::from_name_or_path(name).expect("a shipped config");
-        let caps = socnav::state::Caps::from_config(&config);
-        let state = socnav::state::BatchState::new(1, caps);
-        let layout = socnav::spec::ObsLayout::new(&caps, &config.observation);
-        let outputs = socnav::outputs::Outputs::new(1, layout);
+    for (name, state, outputs) in shipped_tables() {
         let columns = state.columns();
         let classes = wgsl::SizeClasses::of(&columns);
         let prelude = wgsl::prelude(&columns, &outputs.columns(), &classes);
@@ -554,6 +549,27 @@ fn shipped_configs_share_one_prelude() {
     }
     let groups: Vec<Vec<String>> = preludes.into_values().collect();
     assert_eq!(groups.len(), 1, "configs by prelude: {groups:?}");
+}
+
+/// Every shipped config's name with a one-environment state and outputs (what its shaders'
+/// generated text is made from).
+fn shipped_tables() -> Vec<(
+    &'static str,
+    socnav::state::BatchState,
+    socnav::outputs::Outputs,
+)> {
+    socnav::Config::shipped_names()
+        .map(|name| {
+            let config = socnav::Config::from_name_or_path(name).expect("a shipped config");
+            let caps = socnav::state::Caps::from_config(&config);
+            let layout = socnav::spec::ObsLayout::new(&caps, &config.observation);
+            (
+                name,
+                socnav::state::BatchState::new(1, caps),
+                socnav::outputs::Outputs::new(1, layout),
+            )
+        })
+        .collect()
 }
 
 /// One environment's working memory for ORCA's obstacles, by hand for `stress`'s 304 vertices:
@@ -569,5 +585,204 @@ fn obstacle_scratch_layout() {
     assert_eq!(
         (none.list, none.set, none.stack, none.words),
         (0, 10, 19, 22)
+    );
+}
+
+/// The GPU backend's finished-rows pass (`wgsl::finished_rows_shader`, generated from the output
+/// columns) validates for every shipped config and is the same text for all of them (one
+/// pipeline per device); its row is the environment's index and the finished-only columns.
+#[test]
+fn the_finished_rows_pass_validates_and_is_shared() {
+    let mut sources = BTreeSet::new();
+    for (name, state, outputs) in shipped_tables() {
+        let src = wgsl::finished_rows_shader(&state.columns(), &outputs.columns());
+        validate_source(&src, &format!("finished rows ({name})")).expect("validates");
+        let row: usize = outputs
+            .columns()
+            .iter()
+            .filter(|c| socnav::outputs::FINISHED_ONLY_COLUMNS.contains(&c.0))
+            .map(|c| c.2)
+            .sum();
+        assert_eq!(
+            wgsl::finished_row_words(&outputs.columns()),
+            1 + row,
+            "{name}"
+        );
+        assert_eq!(
+            wgsl::finished_columns(&outputs.columns()).len(),
+            socnav::outputs::FINISHED_ONLY_COLUMNS.len(),
+            "every finished-only column is an output column"
+        );
+        sources.insert(src);
+    }
+    assert_eq!(
+        sources.len(),
+        1,
+        "the finished-rows pass differs between configs"
+    );
+}
+
+/// Bytes of function-scope arrays in `module`, per function: naga's SPIR-V writer gives every
+/// function-local variable without an initialiser a zero one (`OpConstantNull`), so each call of
+/// the function zeroes them whether it reads them or not (issue 19).
+fn zeroed_local_array_bytes(module: &naga::Module) -> Vec<(String, u32)> {
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).expect("layout");
+    let functions = module
+        .functions
+        .iter()
+        .map(|(_, f)| f)
+        .chain(module.entry_points.iter().map(|e| &e.function));
+    functions
+        .map(|f| {
+            let bytes = f
+                .local_variables
+                .iter()
+                .filter(|(_, v)| v.init.is_none() && holds_array(module, v.ty))
+                .map(|(_, v)| layouter[v.ty].size)
+                .sum();
+            (f.name.clone().unwrap_or_default(), bytes)
+        })
+        .filter(|&(_, b)| b > 0)
+        .collect()
+}
+
+/// Whether type `ty` is an array or a struct holding one (at any depth).
+fn holds_array(module: &naga::Module, ty: naga::Handle<naga::Type>) -> bool {
+    match &module.types[ty].inner {
+        naga::TypeInner::Array { .. } => true,
+        naga::TypeInner::Struct { members, .. } => {
+            members.iter().any(|m| holds_array(module, m.ty))
+        }
+        _ => false,
+    }
+}
+
+/// A ratchet on the zero-initialised function-scope arrays of every stage shader (as assembled for
+/// exp2): no function may zero more bytes per call than it does today, so a change that adds one
+/// fails here and one that removes one lowers the table. The largest are ORCA's fixed-size lists,
+/// sized by global maxima, which every ORCA call zeroes (issue 19, item 2: size them from the
+/// config's capacities and keep the narrow field of view's arrays out of the wide one's calls).
+#[test]
+fn zeroed_function_scope_arrays_do_not_grow() {
+    // Stage::function, bytes zeroed per call (exp2's assembly), as of issue 19's first part.
+    const BUDGET: &[(&str, u32)] = &[
+        ("begin_step::state_permute_humans", 512),
+        ("begin_step::state_permute_groups", 512),
+        ("begin_step::state_permute_laptop_users", 512),
+        ("begin_step::state_permute_laptops", 512),
+        ("robot_motion::state_permute_humans", 512),
+        ("robot_motion::state_permute_groups", 512),
+        ("robot_motion::state_permute_laptop_users", 512),
+        ("robot_motion::state_permute_laptops", 512),
+        ("shadow_robot::state_permute_humans", 512),
+        ("shadow_robot::state_permute_groups", 512),
+        ("shadow_robot::state_permute_laptop_users", 512),
+        ("shadow_robot::state_permute_laptops", 512),
+        ("shadow_robot::orca_obstacles_corners", 32),
+        ("shadow_robot::orca_obstacles_polygon", 72),
+        ("shadow_robot::orca_world_velocity", 7728),
+        ("group_velocities::state_permute_humans", 512),
+        ("group_velocities::state_permute_groups", 512),
+        ("group_velocities::state_permute_laptop_users", 512),
+        ("group_velocities::state_permute_laptops", 512),
+        ("group_velocities::orca_obstacles_corners", 32),
+        ("group_velocities::orca_obstacles_polygon", 72),
+        ("group_velocities::orca_world_velocity", 7728),
+        ("human_motion::state_permute_humans", 512),
+        ("human_motion::state_permute_groups", 512),
+        ("human_motion::state_permute_laptop_users", 512),
+        ("human_motion::state_permute_laptops", 512),
+        ("human_motion::orca_obstacles_corners", 32),
+        ("human_motion::orca_obstacles_polygon", 72),
+        ("human_motion::orca_world_velocity", 7728),
+        ("group_motion::state_permute_humans", 512),
+        ("group_motion::state_permute_groups", 512),
+        ("group_motion::state_permute_laptop_users", 512),
+        ("group_motion::state_permute_laptops", 512),
+        ("goals::state_permute_humans", 512),
+        ("goals::state_permute_groups", 512),
+        ("goals::state_permute_laptop_users", 512),
+        ("goals::state_permute_laptops", 512),
+        ("formation::state_permute_humans", 512),
+        ("formation::state_permute_groups", 512),
+        ("formation::state_permute_laptop_users", 512),
+        ("formation::state_permute_laptops", 512),
+        ("formation::orca_obstacles_corners", 32),
+        ("formation::orca_obstacles_polygon", 72),
+        ("formation::regroup_sorted", 1284),
+        ("formation::regroup_inverse", 256),
+        ("formation::regroup_remap", 1024),
+        ("formation::regroup_canonicalize", 1040),
+        ("formation::form_crowd", 128),
+        ("formation::form_approximate_crowd", 128),
+        ("contacts::state_permute_humans", 512),
+        ("contacts::state_permute_groups", 512),
+        ("contacts::state_permute_laptop_users", 512),
+        ("contacts::state_permute_laptops", 512),
+        ("termination::state_permute_humans", 512),
+        ("termination::state_permute_groups", 512),
+        ("termination::state_permute_laptop_users", 512),
+        ("termination::state_permute_laptops", 512),
+        ("sngnn_graph::state_permute_humans", 512),
+        ("sngnn_graph::state_permute_groups", 512),
+        ("sngnn_graph::state_permute_laptop_users", 512),
+        ("sngnn_graph::state_permute_laptops", 512),
+        ("sngnn_graph::sn_select", 16),
+        ("reward::state_permute_humans", 512),
+        ("reward::state_permute_groups", 512),
+        ("reward::state_permute_laptop_users", 512),
+        ("reward::state_permute_laptops", 512),
+        ("metrics::state_permute_humans", 512),
+        ("metrics::state_permute_groups", 512),
+        ("metrics::state_permute_laptop_users", 512),
+        ("metrics::state_permute_laptops", 512),
+        ("observation::state_permute_humans", 512),
+        ("observation::state_permute_groups", 512),
+        ("observation::state_permute_laptop_users", 512),
+        ("observation::state_permute_laptops", 512),
+        ("observation::obs_noise", 20),
+        ("social_events::state_permute_humans", 512),
+        ("social_events::state_permute_groups", 512),
+        ("social_events::state_permute_laptop_users", 512),
+        ("social_events::state_permute_laptops", 512),
+        ("social_events::orca_obstacles_corners", 32),
+        ("social_events::orca_obstacles_polygon", 72),
+        ("social_events::regroup_sorted", 1284),
+        ("social_events::regroup_inverse", 256),
+        ("social_events::regroup_remap", 1024),
+        ("social_events::regroup_canonicalize", 1040),
+        ("social_events::crowd_dispersal", 268),
+        ("social_events::laptop_dispersal", 260),
+        ("social_events::crowd_formation", 420),
+        ("social_events::laptop_formation", 520),
+        ("autoreset::state_permute_humans", 512),
+        ("autoreset::state_permute_groups", 512),
+        ("autoreset::state_permute_laptop_users", 512),
+        ("autoreset::state_permute_laptops", 512),
+    ];
+    let mut report = Vec::new();
+    let mut over = Vec::new();
+    for s in socnav::pipeline::STAGES {
+        let file = s.shader_file();
+        if wgsl::is_standalone(&file) {
+            continue;
+        }
+        let module = validate_assembled(&file).expect("assembled");
+        for (function, bytes) in zeroed_local_array_bytes(&module) {
+            let key = format!("{}::{function}", s.name);
+            let budget = BUDGET.iter().find(|(k, _)| *k == key).map_or(0, |b| b.1);
+            if bytes > budget {
+                over.push(format!("{key}: {bytes} bytes (budget {budget})"));
+            }
+            report.push(format!("(\"{key}\", {bytes}),"));
+        }
+    }
+    // The table's current values, to paste after a change lowers them.
+    println!("{}", report.join("\n"));
+    assert!(
+        over.is_empty(),
+        "zeroed function-scope arrays grew:\n{}",
+        over.join("\n")
     );
 }

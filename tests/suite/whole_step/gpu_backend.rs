@@ -43,26 +43,22 @@ fn masked_reset() {
     }
 }
 
-/// Contract: episode seeds on the GPU backend (which follows each environment's seed sequence on
-/// the host as the device consumes reset-pool rows): autoresets, a seeded reset and seeds named
-/// for the next autoreset of some environments give the CPU's episodes, outputs and reported
-/// seeds, bit for bit.
-#[test]
-fn episode_seeds_match_the_cpu() {
+/// The same batch of `config` (`n` environments, seed `seed`, autoreset `mode`) on the CPU and
+/// on the GPU backend, reset.
+fn cpu_and_gpu(
+    config: &socnav::Config,
+    n: usize,
+    seed: u64,
+    mode: socnav::AutoresetMode,
+) -> (socnav::BatchEnv, socnav::BatchEnv) {
     use socnav::backend::BackendChoice;
-    use socnav::{Actions, BatchEnv, EnvOptions};
-    if device().is_none() {
-        return;
-    }
-    let mut c = config("exp1");
-    c.episode.length = 12;
-    let n = 67;
     let make = |backend| {
-        let mut env = BatchEnv::new(
-            c.clone(),
-            EnvOptions {
+        let mut env = socnav::BatchEnv::new(
+            config.clone(),
+            socnav::EnvOptions {
                 n_envs: n,
-                seed: 5,
+                seed,
+                autoreset: mode,
                 backend,
                 ..Default::default()
             },
@@ -71,7 +67,23 @@ fn episode_seeds_match_the_cpu() {
         env.reset(None).expect("reset");
         env
     };
-    let (mut cpu, mut gpu) = (make(BackendChoice::Cpu), make(BackendChoice::Gpu));
+    (make(BackendChoice::Cpu), make(BackendChoice::Gpu))
+}
+
+/// Contract: episode seeds on the GPU backend (which follows each environment's seed sequence on
+/// the host as the device consumes reset-pool rows): autoresets, a seeded reset and seeds named
+/// for the next autoreset of some environments give the CPU's episodes, outputs and reported
+/// seeds, bit for bit.
+#[test]
+fn episode_seeds_match_the_cpu() {
+    use socnav::{Actions, AutoresetMode};
+    if device().is_none() {
+        return;
+    }
+    let mut c = config("exp1");
+    c.episode.length = 12;
+    let n = 67;
+    let (mut cpu, mut gpu) = cpu_and_gpu(&c, n, 5, AutoresetMode::NextStep);
     let named: Vec<Option<u64>> = (0..n as u64)
         .map(|e| (e % 3 == 0).then_some(u64::MAX - e))
         .collect();
@@ -128,4 +140,94 @@ fn episode_seeds_match_the_cpu() {
         reported.contains(&((1 << 40) + 1)),
         "the seeded reset's environment 1"
     );
+}
+
+/// Contract (issue 19): a step reads back what it hands the host and no more: every per-step
+/// output column, the episode counters, and the finished-only columns
+/// (`socnav::outputs::FINISHED_ONLY_COLUMNS`) of the environments that finished, within the rows
+/// the readback's hint had room for (twice the most recent finishers, at least 16); more finishers
+/// than that (here: every environment times out at once) take a second copy. The host's outputs
+/// stay the CPU's bit for bit through it all, and the first read after device work that was not
+/// read back copies the whole table.
+#[test]
+fn a_step_reads_back_only_what_it_hands_the_host() {
+    use socnav::outputs::FINISHED_ONLY_COLUMNS;
+    use socnav::{Actions, AutoresetMode};
+    if device().is_none() {
+        return;
+    }
+    let mut c = config("exp2");
+    c.episode.length = 10;
+    let n = 200;
+    let (mut cpu, mut gpu) = cpu_and_gpu(&c, n, 9, AutoresetMode::SameStep);
+    let columns = cpu.outputs().columns();
+    let words = |finished: bool| -> u64 {
+        columns
+            .iter()
+            .filter(|c| FINISHED_ONLY_COLUMNS.contains(&c.0) == finished)
+            .map(|c| c.2 as u64)
+            .sum()
+    };
+    let n64 = n as u64;
+    // Per-step columns and the episode counters, then the counter of finished rows.
+    let fixed = 4 * (n64 * words(false) + n64 + 1);
+    let row = 4 * (1 + words(true));
+    let whole_table = 4 * n64 * (words(false) + words(true));
+    let mut rng = socnav::rng::RngStream::new(3, 0);
+    let mut recent: Vec<u64> = Vec::new();
+    let (mut second_reads, mut finished_total) = (0, 0);
+    for t in 0..40 {
+        let before = gpu.host_path().expect("the GPU backend's host path");
+        let a = random_actions(&mut rng, n, false);
+        cpu.step(Actions::Continuous(&a)).expect("step");
+        gpu.step(Actions::Continuous(&a)).expect("step");
+        let after = gpu.host_path().expect("host path");
+        let finished = (0..n)
+            .filter(|&e| cpu.outputs().has_final[e] != 0 || cpu.outputs().episode_done[e] != 0)
+            .count() as u64;
+        let moved = after.bytes - before.bytes;
+        let hint = recent
+            .iter()
+            .rev()
+            .take(8)
+            .max()
+            .map_or(16, |&m| (2 * m).max(16))
+            .min(n64);
+        assert_eq!(
+            after.finished_rows - before.finished_rows,
+            finished,
+            "step {t}"
+        );
+        assert_eq!(
+            moved,
+            fixed + row * hint.max(finished),
+            "step {t}: {finished} finished, room for {hint}"
+        );
+        if t == 0 {
+            // Nothing finished yet: the per-step columns (about half of exp2's table) and room
+            // for 16 rows of 200.
+            assert!(
+                10 * moved < 6 * whole_table,
+                "{moved} bytes read of a {whole_table}-byte table"
+            );
+        }
+        second_reads += after.second_reads - before.second_reads;
+        finished_total += finished;
+        recent.push(finished);
+        let differ = cpu.outputs().differing_columns(gpu.outputs());
+        assert!(differ.is_empty(), "step {t}: outputs differ in {differ:?}");
+    }
+    assert!(
+        second_reads >= 1,
+        "no step overflowed the hint: the second copy is untested"
+    );
+    assert!(finished_total > n64, "only {finished_total} episodes ended");
+    // Device work the host did not read (the benchmark's device-only timing) is followed by a
+    // read of the whole table, after which the host's outputs are the device's again.
+    let a = random_actions(&mut rng, n, false);
+    gpu.time_device_steps(Actions::Continuous(&a), 3)
+        .expect("device steps");
+    let full = gpu.host_path().expect("host path").full_reads;
+    gpu.step(Actions::Continuous(&a)).expect("step");
+    assert_eq!(gpu.host_path().expect("host path").full_reads, full + 1);
 }
