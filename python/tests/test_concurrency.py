@@ -120,10 +120,15 @@ def test_a_forked_child_may_not_use_its_parents_batch() -> None:
 def test_ctrl_c_during_a_rollout_interrupts_cleanly_and_leaves_the_batch_usable() -> None:
     script = textwrap.dedent(
         """
+        import signal
         import sys
         import numpy as np
         from socnav._socnav import Batch
 
+        # Python raises KeyboardInterrupt only where SIGINT was not ignored at its start, and a
+        # shell's background jobs start with it ignored: restore Python's handler whatever the
+        # test runner was started from.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         batch = Batch("exp3", 2048, seed=0, threads=1)
         batch.reset(0)
         actions = np.zeros(2048, dtype=np.uint32)
@@ -146,6 +151,9 @@ def test_ctrl_c_during_a_rollout_interrupts_cleanly_and_leaves_the_batch_usable(
     assert child.stdout.readline().strip() == "ready"
     time.sleep(0.3)
     child.send_signal(signal.SIGINT)
-    out, err = child.communicate(timeout=60)
+    try:
+        out, err = child.communicate(timeout=60)
+    finally:
+        child.kill()
     assert child.returncode == 0, err
     assert "interrupted; usable: True" in out, (out, err)
