@@ -28,6 +28,7 @@ use clap::Parser;
 
 fn main() -> ExitCode {
     quiet_wayland_probe();
+    end_quietly_on_a_closed_pipe();
     let cli = args::Cli::parse();
     let result = match cli.command {
         args::Command::Run(a) => run::run(&a),
@@ -47,6 +48,21 @@ fn main() -> ExitCode {
             eprintln!("error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Restore SIGPIPE's default action, as Unix tools have it: a reader that closes the pipe early
+/// (`socnav devices | head -1`) ends this process quietly. Rust's runtime ignores SIGPIPE, which
+/// makes `println!` panic on the broken pipe instead.
+#[expect(
+    unsafe_code,
+    reason = "libc::signal is unsafe; sound here: called first thing in `main`, before any thread exists"
+)]
+fn end_quietly_on_a_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: SIG_DFL is a valid disposition for SIGPIPE, and no other thread is running yet.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

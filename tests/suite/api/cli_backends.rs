@@ -2,7 +2,7 @@
 //! seed and policy (issue 4), apart from the fields that time the run or name the backend: the
 //! GPU backend is bit-identical to the CPU backend, so every outcome, metric and event count
 //! matches. Needs a GPU adapter (lavapipe will do); skips loudly without one unless
-//! `REQUIRE_GPU=1`.
+//! `REQUIRE_GPU=1`. Also: the tool ends quietly when its reader closes the pipe.
 
 use crate::common;
 
@@ -60,4 +60,26 @@ fn run_reports_match() {
             "{config} ({policy}): reports differ"
         );
     }
+}
+
+/// A reader that closes the pipe early (`socnav check-config ... | head -1`) ends the tool as it
+/// ends Unix tools, by SIGPIPE, never with a panic ("failed printing to stdout").
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_the_tool_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_socnav"))
+        .args(["check-config", "configs/exp2.toml"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("socnav runs");
+    // Nobody reads what it prints.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("socnav ends");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.signal(), Some(13), "ended by SIGPIPE: {:?}", out.status);
 }
