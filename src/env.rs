@@ -404,6 +404,11 @@ impl BatchEnv {
         self.backend.set_stage_timing(on);
     }
 
+    /// How [`BatchEnv::stage_seconds`] is measured on this backend (for reports).
+    pub fn stage_clock(&self) -> &'static str {
+        self.backend.stage_clock()
+    }
+
     /// Seconds spent per stage while stage timing was on, with the stage names.
     pub fn stage_seconds(&self) -> Vec<(&'static str, f64)> {
         STAGES

@@ -160,6 +160,11 @@ pub trait Backend: Send + Sync {
     fn set_stage_timing(&mut self, on: bool);
     /// Seconds spent in each stage while timing was on (order of `STAGES`).
     fn stage_seconds(&self) -> Vec<f64>;
+    /// How the stages are timed, for reports: CPU time per chunk, GPU timestamps around each
+    /// pass, or the wall time of a submit per pass.
+    fn stage_clock(&self) -> &'static str {
+        "CPU time of each stage per chunk, summed over threads"
+    }
     /// Short name, e.g. "cpu".
     fn name(&self) -> &'static str;
     /// How many GPU pipelines creating this batch compiled (0 when its device had compiled them

@@ -181,8 +181,10 @@ impl GpuDevice {
         let info = adapter.get_info();
         // The adapter's own limits: large batches need storage bindings beyond WebGPU's defaults.
         let limits = adapter.limits();
-        // wgpu's pipeline cache, where the backend has one (`kit::DiskCache`).
-        let features = adapter.features() & wgpu::Features::PIPELINE_CACHE;
+        // wgpu's pipeline cache, where the backend has one (`kit::DiskCache`), and timestamp
+        // queries, which time the passes for `socnav bench` (`GpuStages::time_passes`).
+        let features =
+            adapter.features() & (wgpu::Features::PIPELINE_CACHE | wgpu::Features::TIMESTAMP_QUERY);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("socnav"),
             required_features: features,

@@ -638,24 +638,7 @@ impl GpuStages {
             });
             self.bind(&mut pass);
             for &stage in stages {
-                let Some((_, pipeline)) = self.pipelines.iter().find(|(s, _)| *s == stage) else {
-                    return Err(SimError::Usage(format!(
-                        "stage {stage:?} was not built for this batch"
-                    )));
-                };
-                let Some(pipeline) = pipeline else {
-                    let Some(net) = &self.sngnn_net else {
-                        return Err(SimError::Usage(format!(
-                            "stage {stage:?} needs SNGNN-v2's network (GpuStages::attach_sngnn_net)"
-                        )));
-                    };
-                    net.record(&mut pass);
-                    self.bind(&mut pass);
-                    self.sngnn_unread = true;
-                    continue;
-                };
-                pass.set_pipeline(pipeline);
-                pass.dispatch_workgroups((self.n_envs as u32).div_ceil(wgsl::WORKGROUP_SIZE), 1, 1);
+                self.sngnn_unread |= self.record(&mut pass, stage)?;
             }
             if selective {
                 self.step_read.record(&mut pass);
@@ -755,6 +738,102 @@ impl GpuStages {
     /// The host path's totals so far (the pool refill's time is the backend's to add).
     pub fn host_path(&self) -> crate::backend::HostPath {
         self.step_read.stats
+    }
+
+    /// Record stage `stage` into `pass` (whose bind groups are the batch's): its dispatch, or the
+    /// network's. Returns whether the network ran.
+    fn record(&self, pass: &mut wgpu::ComputePass<'_>, stage: &str) -> Result<bool, SimError> {
+        let Some((_, pipeline)) = self.pipelines.iter().find(|(s, _)| *s == stage) else {
+            return Err(SimError::Usage(format!(
+                "stage {stage:?} was not built for this batch"
+            )));
+        };
+        let Some(pipeline) = pipeline else {
+            let Some(net) = &self.sngnn_net else {
+                return Err(SimError::Usage(format!(
+                    "stage {stage:?} needs SNGNN-v2's network (GpuStages::attach_sngnn_net)"
+                )));
+            };
+            net.record(pass);
+            self.bind(pass);
+            return Ok(true);
+        };
+        pass.set_pipeline(pipeline);
+        pass.dispatch_workgroups((self.n_envs as u32).div_ceil(wgsl::WORKGROUP_SIZE), 1, 1);
+        Ok(false)
+    }
+
+    /// Whether the device has timestamp queries ([`GpuStages::time_passes`]).
+    pub fn has_timestamps(&self) -> bool {
+        self.dev
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// Seconds of device time each of `stages` takes, in order: each stage runs in a compute pass
+    /// of its own with a timestamp written at its start and end, all in one submit (nothing is
+    /// read back, so the next read copies the whole output table). `None` where the device has
+    /// no timestamp queries (`wgpu::Features::TIMESTAMP_QUERY`); then time each stage as a submit
+    /// of its own.
+    pub fn time_passes(&mut self, stages: &[&str]) -> Result<Option<Vec<f64>>, SimError> {
+        if !self.has_timestamps() || stages.is_empty() {
+            return Ok(None);
+        }
+        let device = &self.dev.device;
+        let count = 2 * stages.len() as u32;
+        let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("pass times"),
+            ty: wgpu::QueryType::Timestamp,
+            count,
+        });
+        let bytes = 8 * u64::from(count);
+        let buffer = |label, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let resolved = buffer(
+            "pass times",
+            wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let read = buffer(
+            "pass times readback",
+            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        );
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("timed passes"),
+        });
+        for (k, &stage) in (0u32..).zip(stages) {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(stage),
+                timestamp_writes: Some(wgpu::ComputePassTimestampWrites {
+                    query_set: &set,
+                    beginning_of_pass_write_index: Some(2 * k),
+                    end_of_pass_write_index: Some(2 * k + 1),
+                }),
+            });
+            self.bind(&mut pass);
+            self.sngnn_unread |= self.record(&mut pass, stage)?;
+        }
+        enc.resolve_query_set(&set, 0..count, &resolved, 0);
+        enc.copy_buffer_to_buffer(&resolved, 0, &read, 0, bytes);
+        self.dev.queue.submit([enc.finish()]);
+        self.step_read.whole_table_next = true;
+        // Nanoseconds per tick.
+        let period = f64::from(self.dev.queue.get_timestamp_period());
+        let mut seconds = Vec::with_capacity(stages.len());
+        map_and_read(&self.dev, &read, bytes, |words| {
+            let ticks = |i: usize| u64::from(words[2 * i]) | (u64::from(words[2 * i + 1]) << 32);
+            for k in 0..stages.len() {
+                let span = ticks(2 * k + 1).saturating_sub(ticks(2 * k));
+                seconds.push(span as f64 * period * 1e-9);
+            }
+        })?;
+        Ok(Some(seconds))
     }
 
     /// Set the batch's bind groups on `pass`.

@@ -60,6 +60,7 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             "obs_floats_per_env": env.layout().dim,
             // CPU stage time is summed over threads: each stage's share of the step's CPU time.
             // GPU stages are timed one submit each, in wall time.
+            "stage_clock": env.stage_clock(),
             "stage_share": stages.iter().map(|(k, s)| (k.to_string(), json!(s / stage_total))).collect::<serde_json::Map<_, _>>(),
             "stage_env_steps_per_s": stages.iter().map(|(k, s)| (k.to_string(), json!((n * timed) as f64 / s * stage_parallelism(&env) as f64))).collect::<serde_json::Map<_, _>>(),
         }));
@@ -89,9 +90,10 @@ fn stage_parallelism(env: &socnav::BatchEnv) -> usize {
 fn print_row(row: &serde_json::Value, header: bool, env: &socnav::BatchEnv) {
     if header {
         println!(
-            "{} backend on {}; per-stage figures are env-steps/s if the stage ran alone",
+            "{} backend on {}; per-stage figures are env-steps/s if the stage ran alone ({})",
             env.backend_name(),
-            env.device()
+            env.device(),
+            env.stage_clock()
         );
     }
     println!(

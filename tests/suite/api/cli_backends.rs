@@ -69,16 +69,16 @@ fn run_reports_match() {
 fn a_closed_pipe_ends_the_tool_quietly() {
     use std::os::unix::process::ExitStatusExt;
     use std::process::{Command, Stdio};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_socnav"))
+    // A pipe whose reader is gone before the tool starts, so its first write fails.
+    let (reader, writer) = std::io::pipe().expect("a pipe");
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_socnav"))
         .args(["check-config", "configs/exp2.toml"])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .stdout(Stdio::piped())
+        .stdout(writer)
         .stderr(Stdio::piped())
-        .spawn()
+        .output()
         .expect("socnav runs");
-    // Nobody reads what it prints.
-    drop(child.stdout.take());
-    let out = child.wait_with_output().expect("socnav ends");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(

@@ -231,3 +231,35 @@ fn a_step_reads_back_only_what_it_hands_the_host() {
     gpu.step(Actions::Continuous(&a)).expect("step");
     assert_eq!(gpu.host_path().expect("host path").full_reads, full + 1);
 }
+
+/// Stage timing on the GPU backend (what `socnav bench`'s per-pass shares come from): every pass
+/// of the step gets a positive time (GPU timestamps around each pass where the device has them,
+/// as lavapipe does), those only the SNGNN-v2 reward runs none, and the steps so timed (their
+/// outputs read back whole) stay the CPU's bit for bit.
+#[test]
+fn stage_timing_times_every_pass_and_changes_nothing() {
+    use socnav::{Actions, AutoresetMode};
+    if device().is_none() {
+        return;
+    }
+    let n = 64;
+    let (mut cpu, mut gpu) = cpu_and_gpu(&config("exp2"), n, 4, AutoresetMode::SameStep);
+    gpu.set_stage_timing(true);
+    let mut rng = socnav::rng::RngStream::new(8, 0);
+    for t in 0..20 {
+        let a = random_actions(&mut rng, n, false);
+        cpu.step(Actions::Continuous(&a)).expect("step");
+        gpu.step(Actions::Continuous(&a)).expect("step");
+        let differ = cpu.outputs().differing_columns(gpu.outputs());
+        assert!(differ.is_empty(), "step {t}: outputs differ in {differ:?}");
+    }
+    for (name, seconds) in gpu.stage_seconds() {
+        let sngnn_only = socnav::pipeline::stage(name).is_some_and(|s| s.sngnn_reward_only);
+        assert_eq!(
+            seconds > 0.0,
+            !sngnn_only,
+            "{name}: {seconds} s ({})",
+            gpu.stage_clock()
+        );
+    }
+}
