@@ -609,11 +609,12 @@ impl GpuStages {
     }
 
     /// Run `stages` in order over every environment, one dispatch each, in one submit; with
-    /// `read`, the same submit then copies what the step hands the host (`backend::gpu::readback`: the
-    /// per-step output columns and the rows of the environments that finished, or the whole
-    /// output table after device work that was not read back) and the episode counters into the
-    /// step readback buffer, which is read into `read`'s outputs and counters. The host runs
-    /// `while_device_works` between the submit and the wait for the readback.
+    /// `read`, the same submit then copies what the step hands the host
+    /// (`backend::gpu::readback`: the per-step output columns and the rows of the environments
+    /// that finished, or the whole output table after device work that was not read back) and
+    /// the episode counters into the step readback buffer, which is read into `read`'s outputs
+    /// and counters. The host runs `while_device_works` between the submit and the wait for the
+    /// readback.
     pub fn run_stages(
         &mut self,
         stages: &[&str],
@@ -672,7 +673,8 @@ impl GpuStages {
         let episode_at = words_to_bytes(self.episode_offset);
         enc.copy_buffer_to_buffer(&self.state.u32s, episode_at, rb, table_bytes, e_bytes);
         let mut total = table_bytes + e_bytes;
-        // Stage timing runs the passes one submit each and reads back after the last.
+        // Stage timing runs the passes without a read (`time_passes`, or a submit per pass) and
+        // reads back after them: the network's status is read if it ran since the last read.
         let scored = std::mem::take(&mut self.sngnn_unread);
         if let (true, Some(net)) = (scored, &self.sngnn_net) {
             enc.copy_buffer_to_buffer(net.status_buffer(), 0, rb, total, e_bytes);
