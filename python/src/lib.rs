@@ -285,10 +285,13 @@ impl Batch {
         let inner = match self.inner.try_lock() {
             Ok(inner) => inner,
             Err(TryLockError::WouldBlock) => {
-                return Err(UsageError::new_err(
+                // A sent step may still hold the batch on the stepper's thread: the caller is
+                // told about the send, whether or not the step has finished yet.
+                let why = self.send_state.busy().unwrap_or(
                     "the batch is busy: another call on it (a step or reset from another thread) \
                      is in flight; calls on one batch must not overlap",
-                ));
+                );
+                return Err(UsageError::new_err(why));
             }
             Err(TryLockError::Poisoned(_)) => {
                 return Err(InternalError::new_err(
