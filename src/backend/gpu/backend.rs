@@ -223,8 +223,11 @@ impl GpuBackend {
             self.gpu.run_stages(passes, Some(read), ahead)?;
         }
         self.refill_ahead_s += ahead_s;
-        // They reach the pool before the next submit; this step read the other rows.
+        // They reach the pool before the next submit; this step read the other rows. Writing
+        // them is on the critical path, so it counts as refill time.
+        let writing = Instant::now();
         self.rows.write(&mut self.gpu);
+        self.refill_s += writing.elapsed().as_secs_f64();
         let mut error = None;
         for e in 0..self.episode.len() {
             if self.read_episode[e] != self.episode[e] {
