@@ -154,11 +154,17 @@ pub fn check_parity(
     )
 }
 
-/// Fill the GPU's reset pool with every environment's next-episode row for `state`'s episode
-/// counters and next seeds, as `GpuBackend` keeps it.
-pub fn fill_pool(gpu: &mut GpuStages, p: &StepParams, state: &BatchState, layout: ObsLayout) {
+/// Every environment's next-episode pool row for `state`'s episode counters and next seeds,
+/// with the half of the pool a reset from that counter reads (`pool_row_of`).
+pub fn next_pool_rows(
+    gpu: &GpuStages,
+    p: &StepParams,
+    state: &BatchState,
+    layout: ObsLayout,
+) -> Vec<(usize, Vec<u32>)> {
     let envs: Vec<usize> = (0..state.n_envs).collect();
-    let mut rows = vec![0u32; envs.len() * gpu.pool_row_words()];
+    let words = gpu.pool_row_words();
+    let mut rows = vec![0u32; envs.len() * words];
     let scratches = reset_pool::Scratches::new(state.strides, layout, None);
     let seeds: Vec<u64> = envs.iter().map(|&e| state.next_seed(e)).collect();
     let failed = reset_pool::write_rows(
@@ -171,11 +177,20 @@ pub fn fill_pool(gpu: &mut GpuStages, p: &StepParams, state: &BatchState, layout
         &scratches,
     );
     assert!(failed.is_empty(), "scenario generation failed: {failed:?}");
-    let words = gpu.pool_row_words();
-    for (e, row) in rows.chunks_exact(words).enumerate() {
-        // The half a reset from this counter reads (`pool_row_of`).
-        let half = ((state.episode[e] + 1) & 1) as usize;
-        gpu.write_pool_rows(half, e, row);
+    rows.chunks_exact(words)
+        .enumerate()
+        .map(|(e, row)| (((state.episode[e] + 1) & 1) as usize, row.to_vec()))
+        .collect()
+}
+
+/// Fill the GPU's reset pool with every environment's next-episode row for `state`'s episode
+/// counters and next seeds, as `GpuBackend` keeps it.
+pub fn fill_pool(gpu: &mut GpuStages, p: &StepParams, state: &BatchState, layout: ObsLayout) {
+    for (e, (half, row)) in next_pool_rows(gpu, p, state, layout)
+        .into_iter()
+        .enumerate()
+    {
+        gpu.write_pool_rows(half, e, &row);
     }
 }
 

@@ -78,6 +78,13 @@ pub struct GpuStages {
     params: wgpu::Buffer,
     actions: wgpu::Buffer,
     pool: wgpu::Buffer,
+    /// New pool rows the host wrote back to back in one queue write, waiting to be copied into
+    /// their places at the start of the next submit ([`GpuStages::stage_pool_rows`]).
+    pool_staging: wgpu::Buffer,
+    /// Those copies: (offset in `pool_staging`, offset in `pool`, bytes); and the bytes of
+    /// `pool_staging` they use.
+    pool_copies: Vec<(u64, u64, u64)>,
+    pool_staged: u64,
     /// The stages' working memory (`wgsl::ObstacleScratch`).
     scratch: wgpu::Buffer,
     pool_row_words: usize,
@@ -158,6 +165,19 @@ fn sngnn_buffers(
         storage_buffer(dev, "sngnn graphs u32", u_bytes),
         storage_buffer(dev, "sngnn graphs f32", f_bytes),
     ))
+}
+
+/// Pool rows the staging buffer first has room for ([`GpuStages::stage_pool_rows`]; it grows).
+const POOL_STAGING_ROWS: usize = 64;
+
+/// A buffer the host writes rows into and the device copies from, of `words` words.
+fn staging_buffer(dev: &GpuDevice, words: usize) -> wgpu::Buffer {
+    dev.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("pool staging"),
+        size: bytes_of::<u32>(words),
+        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// The stages' working memory of `n_envs` environments (`wgsl::ObstacleScratch`), or why the
@@ -422,6 +442,7 @@ impl GpuStages {
             &outputs.columns(),
             &wgsl::SizeClasses::of(&columns),
         );
+        let pool_staging = staging_buffer(&dev, POOL_STAGING_ROWS * pool_row_words);
         let mut pipelines = Vec::with_capacity(stages.len());
         let mut compiled = usize::from(read_compiled);
         for &stage in stages {
@@ -437,6 +458,9 @@ impl GpuStages {
             params: params_buf,
             actions,
             pool,
+            pool_staging,
+            pool_copies: Vec::new(),
+            pool_staged: 0,
             scratch,
             pool_row_words,
             readback,
@@ -477,6 +501,7 @@ impl GpuStages {
             &self.params,
             &self.actions,
             &self.pool,
+            &self.pool_staging,
             &self.scratch,
             &self.readback,
             &self.step_readback,
@@ -603,6 +628,51 @@ impl GpuStages {
             .write_buffer(&self.pool, offset, bytemuck::cast_slice(rows));
     }
 
+    /// Write `rows` (whole pool rows, back to back) to the device in one queue write, to be
+    /// copied into the pool before the next submitted work: `runs` lists, in order, each run of
+    /// consecutive environments of one half (as [`GpuStages::write_pool_rows`] takes them) and
+    /// its number of rows. A queue write per run costs several microseconds of the host's time
+    /// each, and the rows of a step are scattered; one write and a copy per run cost less.
+    pub fn stage_pool_rows(&mut self, rows: &[u32], runs: &[(usize, usize, usize)]) {
+        let bytes = words_to_bytes(rows.len());
+        if self.pool_staged + bytes > self.pool_staging.size() {
+            // Copies still to make read the staging buffer: make them before it is replaced.
+            if !self.pool_copies.is_empty() {
+                let mut enc =
+                    self.dev
+                        .device
+                        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                            label: Some("pool rows"),
+                        });
+                self.flush_pool_copies(&mut enc);
+                self.dev.queue.submit([enc.finish()]);
+            }
+            let words = (2 * self.pool_staging.size() / 4).max(rows.len() as u64) as usize;
+            self.pool_staging = staging_buffer(&self.dev, words);
+        }
+        self.dev.queue.write_buffer(
+            &self.pool_staging,
+            self.pool_staged,
+            bytemuck::cast_slice(rows),
+        );
+        let mut from = self.pool_staged;
+        for &(half, first_env, n) in runs {
+            let to = words_to_bytes((half * self.n_envs + first_env) * self.pool_row_words);
+            let size = words_to_bytes(n * self.pool_row_words);
+            self.pool_copies.push((from, to, size));
+            from += size;
+        }
+        self.pool_staged += bytes;
+    }
+
+    /// Record the staged pool rows' copies into `enc` (before its passes).
+    fn flush_pool_copies(&mut self, enc: &mut wgpu::CommandEncoder) {
+        for (from, to, size) in self.pool_copies.drain(..) {
+            enc.copy_buffer_to_buffer(&self.pool_staging, from, &self.pool, to, size);
+        }
+        self.pool_staged = 0;
+    }
+
     /// Run stage `stage` over every environment (one dispatch, one submit).
     pub fn run(&mut self, stage: &str) -> Result<(), SimError> {
         self.run_stages(&[stage], None, || {})
@@ -628,6 +698,7 @@ impl GpuStages {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("step"),
             });
+        self.flush_pool_copies(&mut enc);
         let selective = read.is_some() && !self.step_read.whole_table_next;
         if selective {
             self.step_read.clear(&mut enc);
@@ -809,6 +880,11 @@ impl GpuStages {
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("timed passes"),
         });
+        let pending = std::mem::take(&mut self.pool_copies);
+        for (from, to, size) in pending {
+            enc.copy_buffer_to_buffer(&self.pool_staging, from, &self.pool, to, size);
+        }
+        self.pool_staged = 0;
         for (k, &stage) in (0u32..).zip(stages) {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(stage),

@@ -47,6 +47,9 @@ pub(crate) struct PoolRows {
     for_counter: Vec<u32>,
     for_seed: Vec<u64>,
     words: Vec<u32>,
+    /// The generated rows as runs of consecutive environments of one half: (half, first
+    /// environment, rows).
+    runs: Vec<(usize, usize, usize)>,
     row_words: usize,
 }
 
@@ -69,6 +72,7 @@ impl PoolRows {
             for_counter: vec![0; n_envs],
             for_seed: vec![0; n_envs],
             words: Vec::new(),
+            runs: Vec::new(),
             row_words,
         }
     }
@@ -138,10 +142,11 @@ impl PoolRows {
         }
     }
 
-    /// Write the generated rows to the device (consecutive environments of one half in one
-    /// write); they reach the pool before the next submitted work.
+    /// Hand the generated rows to the device in one write, each run of consecutive environments
+    /// of one half copied into its place before the next submitted work
+    /// ([`GpuStages::stage_pool_rows`]).
     pub(crate) fn write(&mut self, gpu: &mut GpuStages) {
-        let words = self.row_words;
+        self.runs.clear();
         let mut k = 0;
         while k < self.envs.len() {
             let mut end = k + 1;
@@ -151,12 +156,11 @@ impl PoolRows {
             {
                 end += 1;
             }
-            gpu.write_pool_rows(
-                self.halves[k],
-                self.envs[k],
-                &self.words[k * words..end * words],
-            );
+            self.runs.push((self.halves[k], self.envs[k], end - k));
             k = end;
+        }
+        if !self.runs.is_empty() {
+            gpu.stage_pool_rows(&self.words[..self.envs.len() * self.row_words], &self.runs);
         }
         self.envs.clear();
         self.halves.clear();

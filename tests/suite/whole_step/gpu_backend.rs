@@ -263,3 +263,52 @@ fn stage_timing_times_every_pass_and_changes_nothing() {
         );
     }
 }
+
+/// Pool rows staged in one queue write each and copied into place before the next submit
+/// (`GpuStages::stage_pool_rows`, how `GpuBackend` writes them) reset environments exactly as
+/// rows written in place do, also when the staging buffer must grow while copies of an earlier
+/// write are still pending (10 rows, then 90).
+#[test]
+fn staged_pool_rows_land_where_written_ones_do() {
+    use socnav::backend::wgsl::RESET_PASS;
+    let Some(dev) = device() else { return };
+    let env = rolled_out(config("exp1"), 100, 30);
+    let (p, state, out) = (*env.params(), env.state().unwrap().clone(), env.outputs());
+    let layout = out.strides.layout;
+    let mask = vec![1.0f32; 3 * state.n_envs];
+    let after_reset = |stage: fn(&mut GpuStages, &[(usize, Vec<u32>)])| {
+        let mut gpu =
+            GpuStages::new(dev.clone(), &p, &state, out, &[RESET_PASS]).expect("GPU stages");
+        let rows = next_pool_rows(&gpu, &p, &state, layout);
+        stage(&mut gpu, &rows);
+        gpu.upload_actions(&mask);
+        gpu.run(RESET_PASS).expect("reset pass");
+        let mut back = BatchState::zeroed(state.n_envs, state.strides);
+        gpu.download_state(&mut back).expect("readback");
+        back
+    };
+    let written = after_reset(|gpu, rows| {
+        for (e, (half, row)) in rows.iter().enumerate() {
+            gpu.write_pool_rows(*half, e, row);
+        }
+    });
+    let staged = after_reset(|gpu, rows| {
+        for range in [0..10, 10..rows.len()] {
+            let words: Vec<u32> = rows[range.clone()]
+                .iter()
+                .flat_map(|r| r.1.clone())
+                .collect();
+            let runs: Vec<(usize, usize, usize)> = range.map(|e| (rows[e].0, e, 1)).collect();
+            gpu.stage_pool_rows(&words, &runs);
+        }
+    });
+    assert!(
+        written.differing_columns(&state).contains(&"episode"),
+        "the pass reset nothing"
+    );
+    assert!(
+        written.differing_columns(&staged).is_empty(),
+        "staged rows differ in {:?}",
+        written.differing_columns(&staged)
+    );
+}
