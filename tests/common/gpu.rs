@@ -154,6 +154,9 @@ pub fn check_parity(
     )
 }
 
+/// Pool rows, one per environment in order, each with the half of the pool it belongs in.
+pub type HalfRows = Vec<(usize, Vec<u32>)>;
+
 /// Every environment's next-episode pool row for `state`'s episode counters and next seeds,
 /// with the half of the pool a reset from that counter reads (`pool_row_of`).
 pub fn next_pool_rows(
@@ -161,7 +164,7 @@ pub fn next_pool_rows(
     p: &StepParams,
     state: &BatchState,
     layout: ObsLayout,
-) -> Vec<(usize, Vec<u32>)> {
+) -> HalfRows {
     let envs: Vec<usize> = (0..state.n_envs).collect();
     let words = gpu.pool_row_words();
     let mut rows = vec![0u32; envs.len() * words];

@@ -276,7 +276,7 @@ fn staged_pool_rows_land_where_written_ones_do() {
     let (p, state, out) = (*env.params(), env.state().unwrap().clone(), env.outputs());
     let layout = out.strides.layout;
     let mask = vec![1.0f32; 3 * state.n_envs];
-    let after_reset = |stage: fn(&mut GpuStages, &[(usize, Vec<u32>)])| {
+    let after_reset = |stage: fn(&mut GpuStages, &HalfRows)| {
         let mut gpu =
             GpuStages::new(dev.clone(), &p, &state, out, &[RESET_PASS]).expect("GPU stages");
         let rows = next_pool_rows(&gpu, &p, &state, layout);
