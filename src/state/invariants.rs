@@ -136,6 +136,21 @@ fn humans_in_their_places(s: &BatchState, e: usize, fail: &mut impl FnMut(String
             )),
         }
     }
+    // Groups hold runs of slots in group order, each starting at or after the end of the one
+    // before (the observation's interaction pairs walk them so, `systems::observation`).
+    let mut end = 0;
+    for g in 0..n_groups {
+        let gi = e * caps.groups + g;
+        let (first, count) = (s.g_first[gi] as usize, s.g_count[gi] as usize);
+        if first < end || first + count > n_humans {
+            fail(format!(
+                "group {g}: slots {first}..{}, starting before the end {end} of the group before \
+                 it or past the {n_humans} humans",
+                first + count
+            ));
+        }
+        end = first + count;
+    }
     let members: usize = (0..n_groups)
         .map(|g| e * caps.groups + g)
         .filter(|&gi| s.g_kind[gi] != group_kind::DISSOLVED)

@@ -191,3 +191,24 @@ fn regression_non_finite_or_impossible_numbers_are_refused() {
         "{err}"
     );
 }
+
+/// Found by the long run (seed 1017; minimal: `corridor_mixed`, seed 206, 6 steps, one edit): a
+/// document whose groups' member slots overlapped (a group starting before the end of the group
+/// before it) loaded, and writing the observation's interaction pairs panicked on it. The
+/// invariants now require groups to hold runs of slots in order, so `set_state` refuses it.
+#[test]
+fn regression_groups_whose_slots_overlap_are_refused() {
+    let mut env = batch(CONFIGS[1], 206, 6);
+    let mut doc = env.get_state(0).unwrap();
+    let nodes = paths(&doc);
+    mutate_at(&mut doc, &nodes[9217 % nodes.len()], 19, 0.0);
+    let before = env.get_state(1).unwrap();
+    match env.set_state(1, &doc) {
+        Err(SimError::Shape { message, .. }) => {
+            assert!(message.contains("starting before the end"), "{message}")
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(env.get_state(1).unwrap(), before);
+    check(&mut env, &doc);
+}
