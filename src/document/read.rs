@@ -349,7 +349,14 @@ pub(super) fn human_params(
         max_walker_speed(p),
         WALKER_SPEED_BOUND,
     )?;
-    s.sfm_r0[e] = r.f("sfm_r0")?;
+    // The force's range: drawn as |0.05 + 0.01 N| m, and a divisor of the surface gap in an
+    // exponential, where a negative one makes the force of a nearby obstacle overflow.
+    s.sfm_r0[e] = r.f_in(
+        "sfm_r0",
+        f32::MIN_POSITIVE,
+        1e9,
+        "the social force's range is positive",
+    )?;
     s.sfm_gamma[e] = r.f("sfm_gamma")?;
     s.sfm_n[e] = r.f("sfm_n")?;
     s.sfm_n_prime[e] = r.f("sfm_n_prime")?;

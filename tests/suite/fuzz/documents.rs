@@ -212,3 +212,26 @@ fn regression_groups_whose_slots_overlap_are_refused() {
     assert_eq!(env.get_state(1).unwrap(), before);
     check(&mut env, &doc);
 }
+
+/// Found by the long run (seed 1027): a document with a negative social-force range `sfm_r0`
+/// (-0.046 m) loaded, and the next step's SFM force of a nearby obstacle, `exp(-gap / r0)`,
+/// overflowed into a non-finite observation. The range is now refused unless positive.
+#[test]
+fn regression_a_non_positive_social_force_range_is_refused() {
+    let mut env = batch(CONFIGS[1], 11, 5);
+    for r0 in [-0.046, 0.0] {
+        let mut doc = env.get_state(0).unwrap();
+        doc["human_params"]["sfm_r0"] = serde_json::json!(r0);
+        let before = env.get_state(1).unwrap();
+        match env.set_state(1, &doc) {
+            Err(SimError::Shape { message, .. }) => {
+                assert!(
+                    message.contains("`human_params.sfm_r0` is"),
+                    "{r0}: {message}"
+                )
+            }
+            other => panic!("{r0}: {other:?}"),
+        }
+        assert_eq!(env.get_state(1).unwrap(), before);
+    }
+}
