@@ -161,6 +161,17 @@ fn humans_in_their_places(s: &BatchState, e: usize, fail: &mut impl FnMut(String
             "the groups list {members} members, {grouped} humans have a group role"
         ));
     }
+    // The laptops' side of the links: a laptop names no user, or the user who sits at it.
+    for l in 0..s.n_laptops[e] as usize {
+        let user = s.l_user[e * caps.laptops + l];
+        let sits_here = (user as usize) < n_users
+            && s.lu_laptop[e * caps.laptop_users + user as usize] as usize == l;
+        if user != NONE && !sits_here {
+            fail(format!(
+                "laptop {l} names laptop user {user}, who is not at it ({n_users} users)"
+            ));
+        }
+    }
     for u in 0..n_users {
         let ui = e * caps.laptop_users + u;
         let laptop = s.lu_laptop[ui];

@@ -235,3 +235,24 @@ fn regression_a_non_positive_social_force_range_is_refused() {
         assert_eq!(env.get_state(1).unwrap(), before);
     }
 }
+
+/// Found by the long run (seed 1083; minimal: exp3, seed 429, 10 steps, `laptops[0].hl` set to
+/// 0): a laptop naming a laptop user that does not exist (or sits at another laptop) loaded, and
+/// the next regrouping after a social event indexed past the users and panicked. The invariants
+/// now check the laptops' side of the laptop-user links too.
+#[test]
+fn regression_a_laptop_naming_a_user_that_is_not_its_own_is_refused() {
+    let mut env = batch(CONFIGS[0], 429, 10);
+    let mut doc = env.get_state(0).unwrap();
+    let nodes = paths(&doc);
+    mutate_at(&mut doc, &nodes[3670 % nodes.len()], 0, 0.0);
+    let before = env.get_state(1).unwrap();
+    match env.set_state(1, &doc) {
+        Err(SimError::Shape { message, .. }) => {
+            assert!(message.contains("laptop 0 names laptop user"), "{message}")
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(env.get_state(1).unwrap(), before);
+    check(&mut env, &doc);
+}
