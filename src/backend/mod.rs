@@ -122,8 +122,8 @@ pub struct HostPath {
     /// Reads of the whole output table (after device work that was not read back).
     pub full_reads: u64,
     /// Seconds of reset-pool work on the critical path: generating the rows of the next episodes
-    /// that are missing before a submit, and writing every new row to the device (one queue
-    /// write per run of consecutive environments).
+    /// that are missing before a submit, and handing every new row to the device (one queue
+    /// write to a staging buffer, copied into place at the next submit).
     pub refill_s: f64,
     /// Seconds generating reset-pool rows while the device runs a step (the rows two episodes
     /// ahead of the environments that reset): off the critical path unless longer than the

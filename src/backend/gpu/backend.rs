@@ -11,13 +11,15 @@
 //! status words are read back with the outputs.
 //!
 //! Resets copy rows of the reset pool (`src/backend/reset_pool.rs`), two per environment (its
-//! next episode's and the one after, `backend::gpu::pool_rows`): an environment whose episode counter
-//! moved on the device has consumed its next row (and its next episode seed moved one step along
-//! the sequence, which the host follows without reading it back), so its other row becomes the
-//! next, and the host generates the one two episodes ahead (on its worker threads, for all such
-//! environments at once) while the device runs the following step. The state stays on the device; [`Backend::state`] downloads a host copy when
-//! asked and keeps it until the next step, and [`Backend::state_mut`] edits that copy, which is
-//! uploaded before the next device work.
+//! next episode's and the one after, `backend::gpu::pool_rows`): an environment whose episode
+//! counter moved on the device has consumed its next row (and its next episode seed moved one
+//! step along the sequence, which the host follows without reading it back), so its other row
+//! becomes the next, and the host generates the one two episodes ahead (on its worker threads,
+//! for all such environments at once) while the device runs the following step.
+//!
+//! The state stays on the device; [`Backend::state`] downloads a host copy when asked and keeps
+//! it until the next step, and [`Backend::state_mut`] edits that copy, which is uploaded before
+//! the next device work.
 
 use std::sync::OnceLock;
 use std::time::Instant;

@@ -622,7 +622,7 @@ impl GpuStages {
             0,
             "whole pool rows"
         );
-        let offset = words_to_bytes((half * self.n_envs + first_env) * self.pool_row_words);
+        let offset = self.pool_row_at(half, first_env);
         self.dev
             .queue
             .write_buffer(&self.pool, offset, bytemuck::cast_slice(rows));
@@ -657,12 +657,17 @@ impl GpuStages {
         );
         let mut from = self.pool_staged;
         for &(half, first_env, n) in runs {
-            let to = words_to_bytes((half * self.n_envs + first_env) * self.pool_row_words);
+            let to = self.pool_row_at(half, first_env);
             let size = words_to_bytes(n * self.pool_row_words);
             self.pool_copies.push((from, to, size));
             from += size;
         }
         self.pool_staged += bytes;
+    }
+
+    /// Byte offset in the pool of environment `env`'s row in half `half`.
+    fn pool_row_at(&self, half: usize, env: usize) -> u64 {
+        words_to_bytes((half * self.n_envs + env) * self.pool_row_words)
     }
 
     /// Record the staged pool rows' copies into `enc` (before its passes).
@@ -880,11 +885,7 @@ impl GpuStages {
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("timed passes"),
         });
-        let pending = std::mem::take(&mut self.pool_copies);
-        for (from, to, size) in pending {
-            enc.copy_buffer_to_buffer(&self.pool_staging, from, &self.pool, to, size);
-        }
-        self.pool_staged = 0;
+        self.flush_pool_copies(&mut enc);
         for (k, &stage) in (0u32..).zip(stages) {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(stage),

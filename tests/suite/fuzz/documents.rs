@@ -192,24 +192,35 @@ fn regression_non_finite_or_impossible_numbers_are_refused() {
     );
 }
 
+/// Environment 0's document of `config` after `steps` steps from `seed`, with the node the
+/// documents target's `pick` chose mutated as its `kind` says (how proptest reports a find).
+fn mutated(config: &str, seed: u64, steps: usize, pick: usize, kind: u8) -> (BatchEnv, Value) {
+    let env = batch(config, seed, steps);
+    let mut doc = env.get_state(0).unwrap();
+    let nodes = paths(&doc);
+    mutate_at(&mut doc, &nodes[pick % nodes.len()], kind, 0.0);
+    (env, doc)
+}
+
+/// `set_state` refuses `doc` for environment 1 with a message containing `why`, and the
+/// environment stays as it was.
+fn assert_refused(env: &mut BatchEnv, doc: &Value, why: &str) {
+    let before = env.get_state(1).unwrap();
+    match env.set_state(1, doc) {
+        Err(SimError::Shape { message, .. }) => assert!(message.contains(why), "{message}"),
+        other => panic!("refused ({why}) expected: {other:?}"),
+    }
+    assert_eq!(env.get_state(1).unwrap(), before);
+}
+
 /// Found by the long run (seed 1017; minimal: `corridor_mixed`, seed 206, 6 steps, one edit): a
 /// document whose groups' member slots overlapped (a group starting before the end of the group
 /// before it) loaded, and writing the observation's interaction pairs panicked on it. The
 /// invariants now require groups to hold runs of slots in order, so `set_state` refuses it.
 #[test]
 fn regression_groups_whose_slots_overlap_are_refused() {
-    let mut env = batch(CONFIGS[1], 206, 6);
-    let mut doc = env.get_state(0).unwrap();
-    let nodes = paths(&doc);
-    mutate_at(&mut doc, &nodes[9217 % nodes.len()], 19, 0.0);
-    let before = env.get_state(1).unwrap();
-    match env.set_state(1, &doc) {
-        Err(SimError::Shape { message, .. }) => {
-            assert!(message.contains("starting before the end"), "{message}")
-        }
-        other => panic!("{other:?}"),
-    }
-    assert_eq!(env.get_state(1).unwrap(), before);
+    let (mut env, doc) = mutated(CONFIGS[1], 206, 6, 9217, 19);
+    assert_refused(&mut env, &doc, "starting before the end");
     check(&mut env, &doc);
 }
 
@@ -222,17 +233,7 @@ fn regression_a_non_positive_social_force_range_is_refused() {
     for r0 in [-0.046, 0.0] {
         let mut doc = env.get_state(0).unwrap();
         doc["human_params"]["sfm_r0"] = serde_json::json!(r0);
-        let before = env.get_state(1).unwrap();
-        match env.set_state(1, &doc) {
-            Err(SimError::Shape { message, .. }) => {
-                assert!(
-                    message.contains("`human_params.sfm_r0` is"),
-                    "{r0}: {message}"
-                )
-            }
-            other => panic!("{r0}: {other:?}"),
-        }
-        assert_eq!(env.get_state(1).unwrap(), before);
+        assert_refused(&mut env, &doc, "`human_params.sfm_r0` is");
     }
 }
 
@@ -242,17 +243,7 @@ fn regression_a_non_positive_social_force_range_is_refused() {
 /// now check the laptops' side of the laptop-user links too.
 #[test]
 fn regression_a_laptop_naming_a_user_that_is_not_its_own_is_refused() {
-    let mut env = batch(CONFIGS[0], 429, 10);
-    let mut doc = env.get_state(0).unwrap();
-    let nodes = paths(&doc);
-    mutate_at(&mut doc, &nodes[3670 % nodes.len()], 0, 0.0);
-    let before = env.get_state(1).unwrap();
-    match env.set_state(1, &doc) {
-        Err(SimError::Shape { message, .. }) => {
-            assert!(message.contains("laptop 0 names laptop user"), "{message}")
-        }
-        other => panic!("{other:?}"),
-    }
-    assert_eq!(env.get_state(1).unwrap(), before);
+    let (mut env, doc) = mutated(CONFIGS[0], 429, 10, 3670, 0);
+    assert_refused(&mut env, &doc, "laptop 0 names laptop user");
     check(&mut env, &doc);
 }
