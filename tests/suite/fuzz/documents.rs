@@ -6,6 +6,8 @@
 
 use proptest::prelude::*;
 use serde_json::Value;
+use socnav::spec::{N_INFO, info};
+use socnav::state::invariants::info_outside_spec;
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, SimError};
 
 use super::assert_clean;
@@ -245,5 +247,36 @@ fn regression_a_non_positive_social_force_range_is_refused() {
 fn regression_a_laptop_naming_a_user_that_is_not_its_own_is_refused() {
     let (mut env, doc) = mutated(CONFIGS[0], 429, 10, 3670, 0);
     assert_refused(&mut env, &doc, "laptop 0 names laptop user");
+    check(&mut env, &doc);
+}
+
+/// Found by the long run (seed 1465): a document of a room without obstacles (exp3's, its walls
+/// list emptied) loads, as a state may, and its `MINIMUM_OBSTACLE_DISTANCE` is then +inf, the
+/// value spec 8.2 defines for "none" (and `AVERAGE_OBSTACLE_DISTANCE` NaN, 0.1.1's `None`); the
+/// fuzz check took it for a non-finite output. The checks now take the spec's non-finite values
+/// from `info_outside_spec`, which allows them only where there is no obstacle.
+#[test]
+fn regression_a_room_without_obstacles_reports_the_specs_infinite_distance() {
+    let mut env = batch(CONFIGS[0], 378, 0);
+    let mut doc = env.get_state(0).unwrap();
+    doc["walls"] = serde_json::json!([]);
+    doc["state"]["tables"] = serde_json::json!([]);
+    doc["state"]["plants"] = serde_json::json!([]);
+    env.set_state(1, &doc).unwrap();
+    env.step(Actions::Continuous(&[1.0, 0.0, 1.0, 1.0, 0.0, 1.0]))
+        .unwrap();
+    let row = env.outputs().info[N_INFO..2 * N_INFO].to_vec();
+    assert_eq!(row[info::MINIMUM_OBSTACLE_DISTANCE], f32::INFINITY);
+    assert!(row[info::AVERAGE_OBSTACLE_DISTANCE].is_nan());
+    let state = env.state().unwrap();
+    assert_eq!(info_outside_spec(state, 1, &row), Vec::<usize>::new());
+    // Environment 0 has its walls: the same values there are outside the spec.
+    assert_eq!(
+        info_outside_spec(state, 0, &row),
+        vec![
+            info::MINIMUM_OBSTACLE_DISTANCE,
+            info::AVERAGE_OBSTACLE_DISTANCE
+        ]
+    );
     check(&mut env, &doc);
 }
