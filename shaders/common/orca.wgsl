@@ -798,24 +798,33 @@ fn orca_lp2(lines: ptr<function, OrcaLines>, radius: f32, opt: vec2<f32>, direct
     return OrcaLp2((*lines).len, result);
 }
 
-// RVO2's `linearProgram3`; `proj` is working memory (its lines are overwritten).
+// What `orca_lp3` returns: the velocity (m/s) and its working memory's ORCA_OVERFLOW_* bits.
+struct OrcaLp3 {
+    result: vec2<f32>,
+    overflow: u32,
+}
+
+// RVO2's `linearProgram3`. Its working memory (Rust's `proj`, the projected lines) is a variable
+// of its own, not the caller's: naga gives every function-scope variable a zero initialiser, so
+// declared here it is zeroed only by the rare calls that need LP3, not by every ORCA call
+// (issue 19: 3,088 bytes a call at ORCA_MAX_LINES = 192).
 fn orca_lp3(
     lines: ptr<function, OrcaLines>,
     num_obst_lines: u32,
     begin_line: u32,
     radius: f32,
     result_in: vec2<f32>,
-    proj: ptr<function, OrcaLines>,
-) -> vec2<f32> {
+) -> OrcaLp3 {
+    var proj: OrcaLines;
     var result = result_in;
     var distance = 0.0;
     for (var i = begin_line; i < (*lines).len; i = i + 1u) {
         let li = (*lines).items[i];
         if (orca_det(li.direction, li.point - result) > distance) {
             // `result` violates line i by more than the current maximum.
-            orca_lines_clear(proj);
+            orca_lines_clear(&proj);
             for (var k = 0u; k < num_obst_lines; k = k + 1u) {
-                orca_lines_push(proj, (*lines).items[k]);
+                orca_lines_push(&proj, (*lines).items[k]);
             }
             // RVO2 loops j from numObstLines to i: empty when LP2 failed on an obstacle line.
             for (var j = min(num_obst_lines, i); j < i; j = j + 1u) {
@@ -833,40 +842,37 @@ fn orca_lp3(
                 } else {
                     point = li.point + (orca_det(lj.direction, li.point - lj.point) / determinant) * li.direction;
                 }
-                orca_lines_push(proj, OrcaLine(point, orca_normalize(lj.direction - li.direction)));
+                orca_lines_push(&proj, OrcaLine(point, orca_normalize(lj.direction - li.direction)));
             }
             let opt = vec2<f32>(-li.direction.y, li.direction.x);
-            let r = orca_lp2(proj, radius, opt, true);
+            let r = orca_lp2(&proj, radius, opt, true);
             // A failure here is float round-off only: RVO2 keeps the previous result.
-            if (r.fail >= (*proj).len) {
+            if (r.fail >= proj.len) {
                 result = r.result;
             }
             distance = orca_det(li.direction, li.point - result);
         }
     }
-    return result;
+    return OrcaLp3(result, proj.overflow);
 }
 
 // ---- mod.rs -------------------------------------------------------------------------------------
 
-// Rust `solve` after the lines: LP2 and, if it fails, LP3 (obstacle lines hard). `proj` is
-// working memory (a separate variable from `lines`).
-fn orca_solve(agent: OrcaAgent, lines: ptr<function, OrcaLines>, proj: ptr<function, OrcaLines>) -> OrcaResult {
+// Rust `solve` after the lines: LP2 and, if it fails, LP3 (obstacle lines hard).
+fn orca_solve(agent: OrcaAgent, lines: ptr<function, OrcaLines>) -> OrcaResult {
     let r2 = orca_lp2(lines, agent.max_speed, agent.pref_vel, false);
-    var v = r2.result;
-    var used_lp3 = 0u;
-    if (r2.fail < (*lines).len) {
-        v = orca_lp3(lines, (*lines).num_obstacle_lines, r2.fail, agent.max_speed, v, proj);
-        used_lp3 = 1u;
+    if (r2.fail >= (*lines).len) {
+        return OrcaResult(r2.result, 0u, (*lines).overflow);
     }
-    return OrcaResult(v, used_lp3, (*lines).overflow | (*proj).overflow);
+    let r3 = orca_lp3(lines, (*lines).num_obstacle_lines, r2.fail, agent.max_speed, r2.result);
+    return OrcaResult(r3.result, 1u, (*lines).overflow | r3.overflow);
 }
 
 // Rust `compute_new_velocity`: obstacle edges by brute force from the copy `obstacles`, ORCA
 // lines for them and for the gathered `agent_neighbors` (selected and sorted, e.g. with
-// `orca_agent_neighbor_candidate`), then LP2/LP3. `obstacle_neighbors`, `lines` and `proj` are
-// working memory (separate variables; the edges and lines stay readable afterwards). The
-// caller ORs the agent neighbour list's overflow into the result's.
+// `orca_agent_neighbor_candidate`), then LP2/LP3. `obstacle_neighbors` and `lines` are working
+// memory (separate variables; the edges and lines stay readable afterwards). The caller ORs the
+// agent neighbour list's overflow into the result's.
 fn orca_compute_new_velocity(
     agent: OrcaAgent,
     agent_neighbors: ptr<function, OrcaGathered>,
@@ -874,15 +880,13 @@ fn orca_compute_new_velocity(
     time_step: f32,
     obstacle_neighbors: ptr<function, OrcaObstacleNeighbors>,
     lines: ptr<function, OrcaLines>,
-    proj: ptr<function, OrcaLines>,
 ) -> OrcaResult {
     let range_sq = orca_obstacle_range_sq(agent.time_horizon_obst, agent.max_speed, agent.radius);
     orca_obstacle_neighbors(agent.pos, range_sq, obstacles, obstacle_neighbors);
     orca_lines_clear(lines);
-    orca_lines_clear(proj);
     orca_push_obstacle_lines(agent, obstacles, obstacle_neighbors, lines);
     orca_push_agent_lines(agent, agent_neighbors, time_step, lines);
-    var r = orca_solve(agent, lines, proj);
+    var r = orca_solve(agent, lines);
     r.overflow = r.overflow | (*obstacle_neighbors).overflow | (*obstacles).overflow;
     return r;
 }

@@ -216,7 +216,6 @@ fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> Orc
         obstacles = orca_world_visible(e, others.view.view, first, orca_obstacles_list(e));
     }
     var lines: OrcaLines;
-    var proj: OrcaLines;
     var onb: OrcaObstacleNeighbors;
     var set_overflow = 0u;
     let range_sq = orca_obstacle_range_sq(first.time_horizon_obst, first.max_speed, first.radius);
@@ -257,7 +256,7 @@ fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> Orc
     for (var k = 0u; k < nb.len; k++) {
         orca_push_agent_line(first, orca_world_candidate(e, nb.items[k].index), params.dt, &lines);
     }
-    let r = orca_solve(first, &lines, &proj);
+    let r = orca_solve(first, &lines);
     let overflow = r.overflow | nb.overflow | onb.overflow | set_overflow;
     if (overflow != 0u) {
         return OrcaWorldVelocity(vec2<f32>(math_nan(), math_nan()), overflow);

@@ -754,15 +754,21 @@ fn permuted_cap(state: Columns<'_>) -> usize {
 fn permute_functions(state: Columns<'_>) -> String {
     let mut out = String::new();
     for (kind, name) in PERMUTED_KINDS {
+        let columns: Vec<_> = state
+            .iter()
+            .filter(|c| kind_of(c.0) == Some(kind))
+            .collect();
         out.push_str(&format!(
-            "fn {name}(e: u32, perm: array<u32, PERMUTE_CAP>, n: u32, used: u32) {{\n\
-             \x20   var tf: array<f32, PERMUTE_CAP>;\n\
-             \x20   var tu: array<u32, PERMUTE_CAP>;\n"
+            "fn {name}(e: u32, perm: array<u32, PERMUTE_CAP>, n: u32, used: u32) {{\n"
         ));
-        for &(col, elem, _) in state {
-            if kind_of(col) != Some(kind) {
-                continue;
+        // A temporary only for the element types the kind has: naga zeroes every local array on
+        // each call, read or not.
+        for (elem, tmp, ty) in [(Elem::F32, "tf", "f32"), (Elem::U32, "tu", "u32")] {
+            if columns.iter().any(|c| c.1 == elem) {
+                out.push_str(&format!("    var {tmp}: array<{ty}, PERMUTE_CAP>;\n"));
             }
+        }
+        for &&(col, elem, _) in &columns {
             let (buf, tmp, zero) = match elem {
                 Elem::F32 => ("sf", "tf", "0.0"),
                 Elem::U32 => ("su", "tu", "0u"),

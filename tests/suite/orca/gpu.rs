@@ -189,7 +189,6 @@ fn main_blocks(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 
     var lines: OrcaLines;
-    var proj: OrcaLines;
     for (var k = 0u; k < onb.len; k = k + 1u) {
         let o1 = onb.items[k].index;
         let o2 = vert_next(sc.vert_offset + o1);
@@ -199,7 +198,7 @@ fn main_blocks(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var k = 0u; k < nb.len; k = k + 1u) {
         orca_push_agent_line(agent, load_neighbor(sc.agent_offset + nb.items[k].index), sc.time_step, &lines);
     }
-    var r = orca_solve(agent, &lines, &proj);
+    var r = orca_solve(agent, &lines);
     r.overflow = r.overflow | nb.overflow | onb.overflow;
     write_out(a, r, &nb, &onb, &lines);
 }
@@ -237,8 +236,7 @@ fn main_copies(@builtin(global_invocation_id) gid: vec3<u32>) {
 
     var onb: OrcaObstacleNeighbors;
     var lines: OrcaLines;
-    var proj: OrcaLines;
-    var r = orca_compute_new_velocity(agent, &gathered, &obst, sc.time_step, &onb, &lines, &proj);
+    var r = orca_compute_new_velocity(agent, &gathered, &obst, sc.time_step, &onb, &lines);
     r.overflow = r.overflow | nb.overflow;
     write_out(a, r, &nb, &onb, &lines);
 }
