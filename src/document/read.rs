@@ -394,8 +394,16 @@ fn robot(p: &StepParams, r: &Reader<'_>, s: &mut BatchState, e: usize) -> Result
     Ok(())
 }
 
-/// Why a walker's speed is bounded (as `config::validate` bounds `human.max_speed`).
+/// Why a walker's speed limit is bounded (as `config::validate` bounds `human.max_speed`).
 const WALKER_SPEED_BOUND: &str = "a step moves a walker at most its diameter";
+
+/// Why a human's current speed is bounded by the document's magnitude only, not by its limit:
+/// the step itself makes faster ones. RVO2's f32 linear programs can fling a walker or a moving
+/// group far beyond its limit (`state::invariants::human_in_room`, docs/fidelity.md), and a
+/// moving group's members add the group's noise to its velocity. The next step recomputes every
+/// walker's velocity (ORCA from its preferred velocity, the social force capped at the limit),
+/// so a loaded speed moves nothing by itself.
+const FLUNG_SPEED: &str = "a speed is not negative; the step may make one far beyond the limit";
 
 /// The fastest a walker may go (m/s): one diameter per step.
 fn max_walker_speed(p: &StepParams) -> f32 {
@@ -489,7 +497,7 @@ fn humans(
         s.h_x[i] = h.f("x")?;
         s.h_y[i] = h.f("y")?;
         s.h_theta[i] = h.angle("theta")?;
-        s.h_speed[i] = h.f_in("speed", 0.0, max_walker_speed(p), WALKER_SPEED_BOUND)?;
+        s.h_speed[i] = h.f_in("speed", 0.0, MAX_MAGNITUDE, FLUNG_SPEED)?;
         [s.h_goal_x[i], s.h_goal_y[i]] = if h.opt("goal").is_some() {
             h.vec::<2>("goal")?
         } else {

@@ -122,6 +122,14 @@ fn regression_humans_flung_out_of_the_room_by_rvo2_keep_the_invariants() {
             "{config}: human slot {slot} at ({x}, {y}) at tick {}, not flung out",
             s.tick[0]
         );
+        // The state the step made loads again, its flung speeds included (`set_state` once
+        // refused every walker faster than a diameter a step).
+        let fastest = s.h_speed.iter().fold(0.0f32, |a, &b| a.max(b));
+        assert!(fastest > 2.0 * env.params().human_radius / env.params().dt);
+        let doc = env.get_state(0).unwrap();
+        env.set_state(0, &doc)
+            .unwrap_or_else(|e| panic!("{config}, tick {ticks}: {e}"));
+        assert_eq!(env.get_state(0).unwrap(), doc);
     }
 }
 
