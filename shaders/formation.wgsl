@@ -11,6 +11,10 @@
 // (Mesa inlines every call, and each copy of the regrouping and obstacle rebuild costs llvmpipe
 // compile time).
 //
+// Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
+// environment, queues those with a crowd forming or a walker at its laptop seat; `main` runs one
+// lane per queued environment. Any other environment `main` would leave as it is.
+//
 // Capacities: Rust asserts that a new group and a new laptop user fit their capacities
 // (guaranteed by `Caps`: crowd formation raises the group capacity to humans / 2, laptop-use
 // formation the laptop-user capacity to the laptops). Should one not fit, the GPU poisons the
@@ -272,10 +276,23 @@ fn sit_down(e: u32) {
     // Rust: `regroup::canonicalize`, called by `main` (see the header).
 }
 
+// Queue the environments `main` has work in (see the header).
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
     if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
+        return;
+    }
+    if (su[batch.c_cf_active + e] != 0u || (su[batch.c_lf_active + e] != 0u && seat_reached(e))) {
+        rare_push(RARE_FORMATION, e);
+    }
+}
+
+// The formations of one queued environment per lane (`queue_work` checked that it steps).
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = rare_env(RARE_FORMATION, gid.x);
+    if (e == NONE) {
         return;
     }
     // The crowd, then the laptop seat, each followed by the regrouping when it completed (see

@@ -10,6 +10,12 @@
 // (`regroup_canonicalize`) at the end of the Rust `disperse_group` and `end_laptop_use`; here
 // `main` calls it right after them, from one place (Mesa inlines every call, and each copy of
 // the regrouping and obstacle rebuild costs llvmpipe compile time).
+//
+// Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
+// environment, draws the events' chances in `main`'s order up to the first that hits and queues
+// the environments where one does; `main` runs one lane per queued environment and redraws from
+// the start (the step's stream is keyed by the tick, so it draws the same numbers). Where no
+// chance hits, `main` would have changed nothing, and the environment is not queued.
 
 // Outcome of an attempt to start a formation (Rust `Start`).
 const START_STARTED: u32 = 0u;
@@ -278,18 +284,43 @@ fn laptop_formation(e: u32, rng: ptr<function, RngStream>) -> u32 {
     return START_BLOCKED;
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = gid.x;
-    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u || su[batch.c_done + e] != 0u || params.replay != 0u) {
-        return;
-    }
-    // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
-    var rng = rng_new(
+// Environment e's stream of the step's social events, keyed like the Rust LazyStream (which
+// only defers the key hash to the first draw).
+fn social_rng(e: u32) -> RngStream {
+    return rng_new(
         su[batch.c_seed_lo + e],
         su[batch.c_seed_hi + e],
         rng_stream_id(STREAM_SOCIAL, su[batch.c_tick + e]),
     );
+}
+
+// Queue the environments where a chance of `main` hits (see the header): the same draws in the
+// same order up to the first hit (`||` stops there). Nothing happens before a hit, so the
+// forming flags `main` reads for its formation chances are those read here.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = gid.x;
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u || su[batch.c_done + e] != 0u || params.replay != 0u) {
+        return;
+    }
+    var rng = social_rng(e);
+    let idle = su[batch.c_cf_active + e] == 0u && su[batch.c_lf_active + e] == 0u;
+    if ((params.p_crowd_dispersal > 0.0 && rng_chance(&rng, params.p_crowd_dispersal))
+        || (params.p_laptop_dispersal > 0.0 && rng_chance(&rng, params.p_laptop_dispersal))
+        || (idle && params.p_crowd_formation > 0.0 && rng_chance(&rng, params.p_crowd_formation))
+        || (idle && params.p_laptop_formation > 0.0 && rng_chance(&rng, params.p_laptop_formation))) {
+        rare_push(RARE_SOCIAL_EVENTS, e);
+    }
+}
+
+// The events of one queued environment per lane (`queue_work` checked that it steps).
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = rare_env(RARE_SOCIAL_EVENTS, gid.x);
+    if (e == NONE) {
+        return;
+    }
+    var rng = social_rng(e);
     // The two dispersals, each followed by the regrouping when it happened (see the header).
     for (var phase = 0u; phase < 2u; phase++) {
         var dispersed = false;

@@ -87,6 +87,9 @@ pub struct GpuStages {
     pool_staged: u64,
     /// The stages' working memory (`wgsl::ObstacleScratch`).
     scratch: wgpu::Buffer,
+    /// The queues of the rare work (`wgsl::RARE_WORK_STAGES`): counters cleared before every
+    /// submit, then the lists.
+    rare: wgpu::Buffer,
     pool_row_words: usize,
     readback: wgpu::Buffer,
     step_readback: wgpu::Buffer,
@@ -98,9 +101,9 @@ pub struct GpuStages {
     episode_offset: usize,
     /// Group 0 (the prelude's bindings), and group 1 (the SNGNN graphs) when the batch has them.
     bind_groups: Vec<wgpu::BindGroup>,
-    /// The passes built, by name: a compute pipeline, or `None` for the network stage
+    /// The passes built, by name: their pipelines, or `None` for the network stage
     /// ([`Shader::Network`], recorded by [`GpuNet`]).
-    pipelines: Vec<(&'static str, Option<wgpu::ComputePipeline>)>,
+    pipelines: Vec<(&'static str, Option<PassPipelines>)>,
     /// How many pipelines building this batch compiled rather than found on its device.
     compiled: usize,
     /// The packed SNGNN graphs (u32 and f32 regions), bind group 1, with their layout; only
@@ -329,6 +332,11 @@ impl GpuStages {
         )?;
         let pool = storage_buffer(&dev, "reset pool", pool_bytes);
         let scratch = scratch_buffer(&dev, n_envs, &state.columns())?;
+        let rare = storage_buffer(
+            &dev,
+            "rare work queues",
+            bytes_of::<u32>(wgsl::rare_work_words(n_envs)),
+        );
         let layout = wgsl::BatchLayout::new(
             n_envs,
             &state.columns(),
@@ -367,7 +375,8 @@ impl GpuStages {
             mapped_at_creation: false,
         });
         // Group 0, the bindings of the prelude (`backend::wgsl::prelude`): params, sf, su,
-        // actions, outf, outu, pool, the batch layout, scratch. With the SNGNN graphs, group 1: the packed
+        // actions, outf, outu, pool, the batch layout, scratch, the rare work's queues. With the
+        // SNGNN graphs, group 1: the packed
         // graphs and the frame gaps (`backend::wgsl::sngnn_prelude`), bound only by the shaders
         // that use them, so that every other shader is the same pipeline as without them.
         let batch = uniform_buffer(&dev, "batch layout", &layout.words());
@@ -405,6 +414,7 @@ impl GpuStages {
             (&pool, storage(true)),
             (&batch, Binding::Uniform),
             (&scratch, storage(false)),
+            (&rare, storage(false)),
         ]];
         let gaps = sngnn.as_ref().map(|b| {
             let gaps = storage_buffer(
@@ -447,7 +457,7 @@ impl GpuStages {
         let mut compiled = usize::from(read_compiled);
         for &stage in stages {
             let built = build_pass(&dev, stage, &groups, &prelude)?;
-            compiled += usize::from(built.as_ref().is_some_and(|b| b.1));
+            compiled += built.as_ref().map_or(0, |b| b.1);
             pipelines.push((stage, built.map(|b| b.0)));
         }
         let this = Self {
@@ -462,6 +472,7 @@ impl GpuStages {
             pool_copies: Vec::new(),
             pool_staged: 0,
             scratch,
+            rare,
             pool_row_words,
             readback,
             step_readback,
@@ -503,6 +514,7 @@ impl GpuStages {
             &self.pool,
             &self.pool_staging,
             &self.scratch,
+            &self.rare,
             &self.readback,
             &self.step_readback,
             &self.batch,
@@ -703,7 +715,7 @@ impl GpuStages {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("step"),
             });
-        self.flush_pool_copies(&mut enc);
+        self.begin_submit(&mut enc);
         let selective = read.is_some() && !self.step_read.whole_table_next;
         if selective {
             self.step_read.clear(&mut enc);
@@ -836,9 +848,22 @@ impl GpuStages {
             self.bind(pass);
             return Ok(true);
         };
-        pass.set_pipeline(pipeline);
-        pass.dispatch_workgroups((self.n_envs as u32).div_ceil(wgsl::WORKGROUP_SIZE), 1, 1);
+        let workgroups = (self.n_envs as u32).div_ceil(wgsl::WORKGROUP_SIZE);
+        if let Some(queue) = &pipeline.queue {
+            pass.set_pipeline(queue);
+            pass.dispatch_workgroups(workgroups, 1, 1);
+        }
+        pass.set_pipeline(&pipeline.main);
+        pass.dispatch_workgroups(workgroups, 1, 1);
         Ok(false)
+    }
+
+    /// What every submit of stages starts with: the pool rows staged since the last one copied
+    /// into their places, and the rare work's queues emptied.
+    fn begin_submit(&mut self, enc: &mut wgpu::CommandEncoder) {
+        self.flush_pool_copies(enc);
+        let counters = bytes_of::<u32>(wgsl::RARE_WORK_STAGES.len());
+        enc.clear_buffer(&self.rare, 0, Some(counters));
     }
 
     /// Whether the device has timestamp queries ([`GpuStages::time_passes`]).
@@ -885,7 +910,7 @@ impl GpuStages {
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("timed passes"),
         });
-        self.flush_pool_copies(&mut enc);
+        self.begin_submit(&mut enc);
         for (k, &stage) in (0u32..).zip(stages) {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(stage),
@@ -996,8 +1021,15 @@ impl GpuStages {
     }
 }
 
-/// A pipeline, and whether getting it compiled it.
-type Built = Option<(wgpu::ComputePipeline, bool)>;
+/// The pipelines of a pass: `main` and, for a stage of [`wgsl::RARE_WORK_STAGES`], `queue_work`
+/// (dispatched before it, over every environment, to queue those `main` runs for).
+struct PassPipelines {
+    queue: Option<wgpu::ComputePipeline>,
+    main: wgpu::ComputePipeline,
+}
+
+/// A pass's pipelines, and how many of them getting them compiled.
+type Built = Option<(PassPipelines, usize)>;
 
 /// The pipeline of pass `stage` over the batch (`prelude`, bind `groups`) and whether it was
 /// compiled now: `None` for a network stage, whose pipelines [`GpuStages::attach_sngnn_net`]
@@ -1041,7 +1073,16 @@ fn build_pass(
         (prelude.to_owned(), &groups[..1])
     };
     let src = wgsl::assemble(&file, &prelude).map_err(SimError::Usage)?;
-    dev.pipelines
-        .pipeline(dev, stage, groups, &src, "main")
-        .map(Some)
+    let (main, new) = dev.pipelines.pipeline(dev, stage, groups, &src, "main")?;
+    let mut compiled = usize::from(new);
+    let queue = if wgsl::RARE_WORK_STAGES.contains(&stage) {
+        let (queue, new) = dev
+            .pipelines
+            .pipeline(dev, stage, groups, &src, wgsl::QUEUE_ENTRY)?;
+        compiled += usize::from(new);
+        Some(queue)
+    } else {
+        None
+    };
+    Ok(Some((PassPipelines { queue, main }, compiled)))
 }

@@ -950,3 +950,28 @@ fn main() {
         ["main: never", "main: written", "main: filled"]
     );
 }
+
+/// The stages whose rare work runs out of the hot pass (`wgsl::RARE_WORK_STAGES`) have the entry
+/// point that queues their environments besides `main`, and no other stage has one.
+#[test]
+fn rare_work_stages_have_the_queueing_entry_point() {
+    for s in socnav::pipeline::STAGES {
+        let file = s.shader_file();
+        if wgsl::is_standalone(&file) {
+            continue;
+        }
+        let module = validate_assembled(&file).expect("validates");
+        let mut entries: Vec<&str> = module
+            .entry_points
+            .iter()
+            .map(|e| e.name.as_str())
+            .collect();
+        entries.sort_unstable();
+        let expected = if wgsl::RARE_WORK_STAGES.contains(&s.name) {
+            vec!["main", wgsl::QUEUE_ENTRY]
+        } else {
+            vec!["main"]
+        };
+        assert_eq!(entries, expected, "{}", s.name);
+    }
+}
