@@ -32,13 +32,28 @@ fn sfm_unit(x: f32, y: f32) -> vec2<f32> {
     return vec2<f32>(0.0, 0.0);
 }
 
-// The `obstacle` closure of Rust `velocity`: the push on the walker at `pos` from a point
-// (ox, oy) at `surface_gap` (m), added to `fo`.
-fn sfm_obstacle(pos: vec2<f32>, r0: f32, ox: f32, oy: f32, surface_gap: f32, fo: ptr<function, vec2<f32>>) {
-    let u = sfm_unit(pos.x - ox, pos.y - oy);
-    let m = math_exp(-surface_gap / r0);
-    (*fo).x += m * u.x;
-    (*fo).y += m * u.y;
+// Rust `Obstacles`: what the obstacles' push on a walker depends on, and the sums of
+// `Obstacles::forces` (`f`: x, y and the largest exponent `top`).
+struct SfmObstacles {
+    pos: vec2<f32>,
+    r0: f32,
+    scale: f32,
+    f: vec3<f32>,
+}
+
+// The `obstacle` closure of Rust `Obstacles::forces`: the push on the walker from a point
+// (ox, oy) at `surface_gap` (m), exp(a − scale) with a = −gap / r0, added to `o.f`.
+fn sfm_obstacle(o: ptr<function, SfmObstacles>, ox: f32, oy: f32, surface_gap: f32) {
+    let u = sfm_unit((*o).pos.x - ox, (*o).pos.y - oy);
+    let a = -surface_gap / (*o).r0;
+    let m = math_exp(a - (*o).scale);
+    (*o).f.x += m * u.x;
+    (*o).f.y += m * u.y;
+    (*o).f.z = max((*o).f.z, a);
+}
+
+fn sfm_is_finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & MATH_ABS_MASK) < MATH_INF_BITS;
 }
 
 // The `disc_gap` closure: the gap (m) between the walker's disc and the disc (ox, oy, ro).
@@ -47,20 +62,55 @@ fn sfm_disc_gap(pos: vec2<f32>, ox: f32, oy: f32, ro: f32) -> f32 {
 }
 
 // The `push` closure for a disc: from its centre, when seen.
-fn sfm_push_disc(view: MaybeView, pos: vec2<f32>, r0: f32, d: Disc, fo: ptr<function, vec2<f32>>) {
+fn sfm_push_disc(view: MaybeView, o: ptr<function, SfmObstacles>, d: Disc) {
     if (!perception_maybe_sees_disc(view, d)) {
         return;
     }
-    sfm_obstacle(pos, r0, d.x, d.y, sfm_disc_gap(pos, d.x, d.y, d.r), fo);
+    sfm_obstacle(o, d.x, d.y, sfm_disc_gap((*o).pos, d.x, d.y, d.r));
 }
 
 // The `push` closure for a rectangle: from its nearest point, when seen.
-fn sfm_push_rect(view: MaybeView, pos: vec2<f32>, r0: f32, rc: Rect, fo: ptr<function, vec2<f32>>) {
+fn sfm_push_rect(view: MaybeView, o: ptr<function, SfmObstacles>, rc: Rect) {
     if (!perception_maybe_sees_rect(view, rc)) {
         return;
     }
+    let pos = (*o).pos;
     let q = geo_rect_nearest_point(rc, pos.x, pos.y);
-    sfm_obstacle(pos, r0, q.x, q.y, sfm_length(pos.x - q.x, pos.y - q.y) - params.human_radius, fo);
+    sfm_obstacle(o, q.x, q.y, sfm_length(pos.x - q.x, pos.y - q.y) - params.human_radius);
+}
+
+// Rust `Obstacles::forces`: the obstacle forces on the walker at `pos` of environment e,
+// rescaled by exp(−scale), and the largest exponent (−f32::MAX without any obstacle).
+fn sfm_obstacle_forces(e: u32, pos: vec2<f32>, r0: f32, robot: bool, view: MaybeView, scale: f32) -> vec3<f32> {
+    var o = SfmObstacles(pos, r0, scale, vec3<f32>(0.0, 0.0, -0x1.fffffep127f));
+    let pb = e * batch.s_p_x;
+    for (var k = pb; k < pb + su[batch.c_n_plants + e]; k++) {
+        sfm_push_disc(view, &o, Disc(sf[batch.c_p_x + k], sf[batch.c_p_y + k], params.plant_radius));
+    }
+    for (var w = 0u; w < su[batch.c_n_walls + e]; w++) {
+        sfm_push_rect(view, &o, world_wall_rect(e, w));
+    }
+    for (var t = 0u; t < su[batch.c_n_tables + e]; t++) {
+        sfm_push_rect(view, &o, world_table_rect(e, t));
+    }
+    let lb = e * batch.s_l_x;
+    for (var l = 0u; l < su[batch.c_n_laptops + e]; l++) {
+        if (su[batch.c_l_user + lb + l] == NONE) {
+            sfm_push_rect(view, &o, world_laptop_rect(e, l));
+        }
+    }
+    let gb = e * batch.s_g_x;
+    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+        if (su[batch.c_g_kind + g] == GROUP_STANDING) {
+            sfm_push_disc(view, &o, perception_group_disc(g));
+        }
+    }
+    if (robot) {
+        let rx = sf[batch.c_robot_x + e];
+        let ry = sf[batch.c_robot_y + e];
+        sfm_obstacle(&o, rx, ry, sfm_disc_gap(pos, rx, ry, params.robot_radius));
+    }
+    return o.f;
 }
 
 // Rust `pedestrian_forces`: Σ f_ij over the lone humans, moving-group members and laptop users
@@ -121,33 +171,12 @@ fn sfm_velocity(e: u32, i: u32, robot: bool, view: MaybeView) -> vec2<f32> {
     let du = sfm_unit(sf[batch.c_h_goal_x + i] - pos.x, sf[batch.c_h_goal_y + i] - pos.y);
     var fdx = params.human_max_speed * du.x;
     var fdy = params.human_max_speed * du.y;
-    var fo = vec2<f32>(0.0, 0.0);
-    let pb = e * batch.s_p_x;
-    for (var k = pb; k < pb + su[batch.c_n_plants + e]; k++) {
-        sfm_push_disc(view, pos, sp.r0, Disc(sf[batch.c_p_x + k], sf[batch.c_p_y + k], params.plant_radius), &fo);
-    }
-    for (var w = 0u; w < su[batch.c_n_walls + e]; w++) {
-        sfm_push_rect(view, pos, sp.r0, world_wall_rect(e, w), &fo);
-    }
-    for (var t = 0u; t < su[batch.c_n_tables + e]; t++) {
-        sfm_push_rect(view, pos, sp.r0, world_table_rect(e, t), &fo);
-    }
-    let lb = e * batch.s_l_x;
-    for (var l = 0u; l < su[batch.c_n_laptops + e]; l++) {
-        if (su[batch.c_l_user + lb + l] == NONE) {
-            sfm_push_rect(view, pos, sp.r0, world_laptop_rect(e, l), &fo);
-        }
-    }
-    let gb = e * batch.s_g_x;
-    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
-        if (su[batch.c_g_kind + g] == GROUP_STANDING) {
-            sfm_push_disc(view, pos, sp.r0, perception_group_disc(g), &fo);
-        }
-    }
-    if (robot) {
-        let rx = sf[batch.c_robot_x + e];
-        let ry = sf[batch.c_robot_y + e];
-        sfm_obstacle(pos, sp.r0, rx, ry, sfm_disc_gap(pos, rx, ry, params.robot_radius), &fo);
+    let fo = sfm_obstacle_forces(e, pos, sp.r0, robot, view, 0.0);
+    if (!(sfm_is_finite(fo.x) && sfm_is_finite(fo.y))) {
+        // Rust `overwhelmed`: the speed limit along the forces rescaled by exp(−top).
+        let u = sfm_obstacle_forces(e, pos, sp.r0, robot, view, fo.z);
+        let d = sfm_unit(u.x, u.y);
+        return vec2<f32>(params.human_max_speed * d.x, params.human_max_speed * d.y);
     }
     let fp = sfm_pedestrian_forces(e, i, sp, view);
     // Rust: `W * fd + W * fo + W * fp`, fd = speed · unit. Mesa's NIR optimiser reassociates a

@@ -44,57 +44,19 @@ pub fn velocity(
     let (x, y) = (s.h_x[i], s.h_y[i]);
     let (dx, dy) = unit(s.h_goal_x[i] - x, s.h_goal_y[i] - y);
     let (mut fdx, mut fdy) = (p.human_max_speed * dx, p.human_max_speed * dy);
-    let (mut fox, mut foy) = (0.0f32, 0.0f32);
-    let mut obstacle = |ox: f32, oy: f32, surface_gap: f32| {
-        let (ux, uy) = unit(x - ox, y - oy);
-        let m = math::exp(-surface_gap / sp.r0);
-        fox += m * ux;
-        foy += m * uy;
+    let obstacles = Obstacles {
+        p,
+        s,
+        e,
+        x,
+        y,
+        r0: sp.r0,
+        robot,
+        view,
     };
-    let r = p.human_radius;
-    let disc_gap = |ox: f32, oy: f32, ro: f32| length(x - ox, y - oy) - ro - r;
-    // Discs push from their centre, rectangles from their nearest point; unseen ones not at all.
-    let mut push = |shape: Shape| {
-        if !perception::sees(view, &shape) {
-            return;
-        }
-        match shape {
-            Shape::Disc(d) => obstacle(d.x, d.y, disc_gap(d.x, d.y, d.r)),
-            Shape::Rect(rc) => {
-                let (qx, qy) = rc.nearest_point(x, y);
-                obstacle(qx, qy, length(x - qx, y - qy) - r);
-            }
-        }
-    };
-    let pb = e * s.strides.plants;
-    for k in pb..pb + s.n_plants[e] as usize {
-        push(Shape::Disc(Disc {
-            x: s.p_x[k],
-            y: s.p_y[k],
-            r: p.plant_radius,
-        }));
-    }
-    for w in 0..s.n_walls[e] as usize {
-        push(Shape::Rect(super::world::wall_rect(p, s, e, w)));
-    }
-    for t in 0..s.n_tables[e] as usize {
-        push(Shape::Rect(super::world::table_rect(p, s, e, t)));
-    }
-    let lb = e * s.strides.laptops;
-    for l in 0..s.n_laptops[e] as usize {
-        if s.l_user[lb + l] == crate::state::NONE {
-            push(Shape::Rect(super::world::laptop_rect(p, s, e, l)));
-        }
-    }
-    let gb = e * s.strides.groups;
-    for g in gb..gb + s.n_groups[e] as usize {
-        if s.g_kind[g] == group_kind::STANDING {
-            push(Shape::Disc(perception::group_disc(p, s, g)));
-        }
-    }
-    if robot {
-        let (rx, ry) = (s.robot_x[e], s.robot_y[e]);
-        obstacle(rx, ry, disc_gap(rx, ry, p.robot_radius));
+    let (fox, foy, top) = obstacles.forces(0.0);
+    if !(fox.is_finite() && foy.is_finite()) {
+        return overwhelmed(p, &obstacles, top);
     }
     let (fpx, fpy) = pedestrian_forces(p, s, e, i, &sp, view);
     fdx = W * fdx + W * fox + W * fpx;
@@ -108,6 +70,95 @@ pub fn velocity(
     } else {
         (vx, vy)
     }
+}
+
+/// What the obstacles' push on a walker at (x, y) (m) depends on.
+struct Obstacles<'a> {
+    p: &'a StepParams,
+    s: &'a StateChunk<'a>,
+    e: usize,
+    x: f32,
+    y: f32,
+    r0: f32,
+    robot: bool,
+    view: Option<&'a View>,
+}
+
+impl Obstacles<'_> {
+    /// Σ exp(−gap / r0 − scale) · unit(walker − nearest point) over the obstacles the walker sees,
+    /// and the largest exponent −gap / r0 of them (f32::MIN without any). `scale` 0 gives the
+    /// obstacle force of 0.1.1 (x − 0 is x, so its bits too).
+    fn forces(&self, scale: f32) -> (f32, f32, f32) {
+        let (p, s, e, x, y, view) = (self.p, self.s, self.e, self.x, self.y, self.view);
+        let (mut fox, mut foy, mut top) = (0.0f32, 0.0f32, f32::MIN);
+        let mut obstacle = |ox: f32, oy: f32, surface_gap: f32| {
+            let (ux, uy) = unit(x - ox, y - oy);
+            let a = -surface_gap / self.r0;
+            let m = math::exp(a - scale);
+            fox += m * ux;
+            foy += m * uy;
+            top = top.max(a);
+        };
+        let r = p.human_radius;
+        let disc_gap = |ox: f32, oy: f32, ro: f32| length(x - ox, y - oy) - ro - r;
+        // Discs push from their centre, rectangles from their nearest point; unseen ones not at all.
+        let mut push = |shape: Shape| {
+            if !perception::sees(view, &shape) {
+                return;
+            }
+            match shape {
+                Shape::Disc(d) => obstacle(d.x, d.y, disc_gap(d.x, d.y, d.r)),
+                Shape::Rect(rc) => {
+                    let (qx, qy) = rc.nearest_point(x, y);
+                    obstacle(qx, qy, length(x - qx, y - qy) - r);
+                }
+            }
+        };
+        let pb = e * s.strides.plants;
+        for k in pb..pb + s.n_plants[e] as usize {
+            push(Shape::Disc(Disc {
+                x: s.p_x[k],
+                y: s.p_y[k],
+                r: p.plant_radius,
+            }));
+        }
+        for w in 0..s.n_walls[e] as usize {
+            push(Shape::Rect(super::world::wall_rect(p, s, e, w)));
+        }
+        for t in 0..s.n_tables[e] as usize {
+            push(Shape::Rect(super::world::table_rect(p, s, e, t)));
+        }
+        let lb = e * s.strides.laptops;
+        for l in 0..s.n_laptops[e] as usize {
+            if s.l_user[lb + l] == crate::state::NONE {
+                push(Shape::Rect(super::world::laptop_rect(p, s, e, l)));
+            }
+        }
+        let gb = e * s.strides.groups;
+        for g in gb..gb + s.n_groups[e] as usize {
+            if s.g_kind[g] == group_kind::STANDING {
+                push(Shape::Disc(perception::group_disc(p, s, g)));
+            }
+        }
+        if self.robot {
+            let (rx, ry) = (s.robot_x[e], s.robot_y[e]);
+            obstacle(rx, ry, disc_gap(rx, ry, p.robot_radius));
+        }
+        (fox, foy, top)
+    }
+}
+
+/// The velocity (m/s) of a walker whose obstacle force overflows f32 (an exponent −gap / r0
+/// above 88: a tiny drawn r0, |0.05 + 0.01 N| m, and a walker deep against an obstacle). 0.1.1
+/// computes in f64, where the force is finite up to an exponent of 709 and so large that the
+/// goal and pedestrian terms vanish beside it: the capped velocity is the speed limit along the
+/// obstacle force. Here that direction comes from the forces rescaled by exp(−top), top the
+/// largest exponent, which no term exceeds. (Beyond 709 0.1.1's velocity is NaN; socnav's stays
+/// this one. A walker pushed exactly equally from opposite sides stands still.)
+fn overwhelmed(p: &StepParams, obstacles: &Obstacles<'_>, top: f32) -> (f32, f32) {
+    let (sx, sy, _) = obstacles.forces(top);
+    let (ux, uy) = unit(sx, sy);
+    (p.human_max_speed * ux, p.human_max_speed * uy)
 }
 
 /// Σ f_ij over the lone humans, moving-group members and laptop users `view` sees (standing-group

@@ -281,3 +281,54 @@ fn regression_a_room_without_obstacles_reports_the_specs_infinite_distance() {
     );
     check(&mut env, &doc);
 }
+
+/// Found by the long run (seed 3813): a document with a tiny social-force range `sfm_r0`
+/// (0.0006 m, which 0.1.1's draw |0.05 + 0.01 N| m can give) and an SFM walker against an
+/// obstacle: exp(−gap / r0) overflowed f32, and inf · 0 made the velocity and the next
+/// observation NaN. In 0.1.1's f64 that force is finite and overwhelms the rest, so the capped
+/// velocity is the speed limit straight away from the obstacle; socnav now computes that
+/// (`systems::sfm`'s `overwhelmed`), on both backends alike.
+#[test]
+fn regression_an_overflowing_obstacle_force_sends_the_walker_away_at_its_limit() {
+    let mut doc = batch(CONFIGS[0], 877, 0).get_state(0).unwrap();
+    doc["human_params"]["sfm_r0"] = serde_json::json!(0.0006);
+    // A lone SFM walker 0.3 m from the inner face of the wall at x = 4.8 m: a gap of -0.06 m,
+    // an exponent of 100 (f32 overflows above 88.7, f64 above 709).
+    let walker = &mut doc["state"]["humans"][0];
+    assert_eq!(walker["role"], "dynamic");
+    walker["policy"] = serde_json::json!("sfm");
+    walker["x"] = serde_json::json!(4.5);
+    walker["y"] = serde_json::json!(0.0);
+    let mut backends = vec![socnav::backend::BackendChoice::Cpu];
+    if crate::common::gpu::device().is_some() {
+        backends.push(socnav::backend::BackendChoice::Gpu);
+    }
+    let mut stepped = Vec::new();
+    for backend in backends {
+        let options = socnav::EnvOptions {
+            n_envs: 1,
+            backend,
+            ..Default::default()
+        };
+        let config = Config::from_name_or_path(CONFIGS[0]).unwrap();
+        let mut env = BatchEnv::new(config, options).unwrap();
+        env.reset(Some(877)).unwrap();
+        env.set_state(0, &doc).unwrap();
+        env.step(Actions::Continuous(&[0.0, 0.0, 0.0])).unwrap();
+        assert_clean(&env, &format!("{backend:?}"));
+        let (s, limit) = (env.state().unwrap(), env.params().human_max_speed);
+        assert_eq!(s.h_speed[0], limit, "{backend:?}");
+        assert!(s.h_vx[0] < -0.999 * limit, "{backend:?}: {}", s.h_vx[0]);
+        stepped.push(env);
+    }
+    if let [cpu, gpu] = &stepped[..] {
+        assert_eq!(
+            cpu.state().unwrap().differing_columns(gpu.state().unwrap()),
+            Vec::<&str>::new()
+        );
+        assert_eq!(
+            cpu.outputs().differing_columns(gpu.outputs()),
+            Vec::<&str>::new()
+        );
+    }
+}
