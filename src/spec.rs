@@ -18,7 +18,7 @@
 //! ([`INTERACTION_KEYS`]) with per-kind counts.
 
 use crate::config::{ObsFrame, Observation};
-use crate::state::Caps;
+use crate::state::{BatchState, Caps};
 
 /// Floats per entity record: one-hot type (6), x, y, sin, cos, radius, relative speed,
 /// relative angular speed, gaze.
@@ -295,4 +295,26 @@ pub mod event {
     pub const LAPTOP_FORMATION_START: usize = 6;
     pub const LAPTOP_FORMATION_BLOCKED: usize = 7;
     pub const LAPTOP_FORMATION_COMPLETE: usize = 8;
+}
+
+/// The info keys of environment `e`'s `row` (its [`INFO_KEYS`] values this step)
+/// whose value is non-finite where the spec does not define it so (empty when none). Spec 8.2
+/// defines three: NaN where 0.1.1 has `None` (`TIME_TO_REACH_GOAL` before success,
+/// `AVERAGE_OBSTACLE_DISTANCE` without obstacles) and +inf for "inf if none"
+/// (`MINIMUM_DISTANCE_TO_HUMAN` without humans, `MINIMUM_OBSTACLE_DISTANCE` without walls, tables
+/// and plants: a document may load a room without walls). `s` is the state the row describes.
+pub fn info_outside_spec(s: &BatchState, e: usize, row: &[f32]) -> Vec<usize> {
+    let no_obstacles = s.n_walls[e] + s.n_tables[e] + s.n_plants[e] == 0;
+    let defined = |key: usize, v: f32| match key {
+        _ if v.is_finite() => true,
+        info::TIME_TO_REACH_GOAL => v.is_nan() && row[info::SUCCESS] == 0.0,
+        info::AVERAGE_OBSTACLE_DISTANCE => v.is_nan() && no_obstacles,
+        info::MINIMUM_DISTANCE_TO_HUMAN => v == f32::INFINITY && s.n_humans[e] == 0,
+        info::MINIMUM_OBSTACLE_DISTANCE => v == f32::INFINITY && no_obstacles,
+        _ => false,
+    };
+    (row.iter().enumerate())
+        .filter(|&(key, &v)| !defined(key, v))
+        .map(|(key, _)| key)
+        .collect()
 }

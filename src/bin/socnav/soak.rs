@@ -14,7 +14,8 @@ use rand::{RngExt, SeedableRng};
 use serde_json::{Value, json};
 use socnav::config::Kinematics;
 use socnav::spec::N_INFO;
-use socnav::state::invariants::{info_outside_spec, violations};
+use socnav::spec::info_outside_spec;
+use socnav::state::invariants::violations;
 use socnav::{Actions, BatchEnv, Config, SimError};
 
 use crate::args::SoakArgs;

@@ -6,8 +6,8 @@
 
 use proptest::prelude::*;
 use serde_json::Value;
+use socnav::spec::info_outside_spec;
 use socnav::spec::{N_INFO, info};
-use socnav::state::invariants::info_outside_spec;
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, SimError};
 
 use super::assert_clean;

@@ -15,8 +15,9 @@ mod json;
 mod sequences;
 
 use proptest::test_runner::{Config, RngSeed};
+use socnav::spec::info_outside_spec;
 use socnav::spec::{INFO_KEYS, N_INFO};
-use socnav::state::invariants::{info_outside_spec, violations};
+use socnav::state::invariants::violations;
 use socnav::{AutoresetMode, BatchEnv, EnvOptions, SimError};
 
 /// A target's settings: `SOCNAV_FUZZ_CASES` cases (else `default`), from the fixed seed
