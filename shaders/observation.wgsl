@@ -93,11 +93,17 @@ fn obs_plant_sin_cos() -> vec2<f32> {
     return math_sin_cos(-fr.ref_theta);
 }
 
-fn obs_robot_record(e: u32, row: u32) {
+// The one-hot part of the record at `at` (its first 6 floats): 1 at `kind`, 0 elsewhere. Every
+// float of a record is stored once (no zeroing pass before the values): on a GPU each store of a
+// record is a scattered write, the observation pass's largest cost.
+fn obs_one_hot(at: u32, kind: u32) {
     for (var k = 0u; k < 6u; k++) {
-        outf[row + k] = 0.0;
+        outf[at + k] = select(0.0, 1.0, k == kind);
     }
-    outf[row + ONE_HOT_ROBOT] = 1.0;
+}
+
+fn obs_robot_record(e: u32, row: u32) {
+    obs_one_hot(row, ONE_HOT_ROBOT);
     if (fr.world) {
         outf[row + 6u] = sf[batch.c_goal_x + e];
         outf[row + 7u] = sf[batch.c_goal_y + e];
@@ -124,10 +130,7 @@ fn obs_robot_record(e: u32, row: u32) {
 
 // A non-human record at `at`.
 fn obs_object_record(at: u32, kind: u32, px: f32, py: f32, sc: vec2<f32>, radius: f32) {
-    for (var k = 0u; k < OBS_RECORD; k++) {
-        outf[at + k] = 0.0;
-    }
-    outf[at + kind] = 1.0;
+    obs_one_hot(at, kind);
     outf[at + 6u] = px;
     outf[at + 7u] = py;
     outf[at + 8u] = sc.x;
@@ -135,6 +138,7 @@ fn obs_object_record(at: u32, kind: u32, px: f32, py: f32, sc: vec2<f32>, radius
     outf[at + 10u] = radius;
     outf[at + 11u] = fr.object_v;
     outf[at + 12u] = fr.object_w;
+    outf[at + 13u] = 0.0;
 }
 
 // 1 if the robot centre lies within the gaze cone of the human at (hx, hy), heading cos hc, sin hs.
@@ -166,10 +170,7 @@ fn obs_humans(e: u32, block: u32) -> u32 {
         }
         let at = block + k * OBS_RECORD;
         k += 1u;
-        for (var j = 0u; j < OBS_RECORD; j++) {
-            outf[at + j] = 0.0;
-        }
-        outf[at + ONE_HOT_HUMAN] = 1.0;
+        obs_one_hot(at, ONE_HOT_HUMAN);
         let hsc = math_sin_cos(theta);
         outf[at + 10u] = params.human_radius;
         outf[at + 13u] = obs_gaze(x, y, hsc.y, hsc.x);
