@@ -66,8 +66,7 @@ fn mirror_delta(wall: Rect, x: f32, y: f32) -> vec2<f32> {
 
 fn push_out(e: u32, i: u32) {
     let r = params.human_radius;
-    let pb = e * batch.s_p_x;
-    for (var k = pb; k < pb + su[batch.c_n_plants + e]; k++) {
+    for (var k = at_plant(e, 0u); k < at_plant(e, su[batch.c_n_plants + e]); k += batch.k_plant) {
         let plant = Disc(sf[batch.c_p_x + k], sf[batch.c_p_y + k], params.plant_radius);
         if (geo_disc_disc_as(params.contact_shape, human_disc(i), plant)) {
             push(i, sf[batch.c_h_x + i] - plant.x, sf[batch.c_h_y + i] - plant.y, r + plant.r);
@@ -83,9 +82,8 @@ fn push_out(e: u32, i: u32) {
     for (var t = 0u; t < su[batch.c_n_tables + e]; t++) {
         push_from_rect(i, world_table_rect(e, t));
     }
-    let lb = e * batch.s_l_x;
     for (var l = 0u; l < su[batch.c_n_laptops + e]; l++) {
-        if (su[batch.c_l_user + lb + l] == NONE) {
+        if (su[batch.c_l_user + at_laptop(e, l)] == NONE) {
             push_from_rect(i, world_laptop_rect(e, l));
         }
     }
@@ -97,8 +95,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
-    let hb = e * batch.s_h_x;
-    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]); i += batch.k_human) {
         push_out(e, i);
     }
 }

@@ -38,13 +38,11 @@ fn set_heading(i: u32, theta: f32) {
 
 // Rust `walkers_centroid`.
 fn walkers_centroid(e: u32) -> vec2<f32> {
-    let hb = e * batch.s_h_x;
-    let sb = e * batch.s_cf_human;
     let n = su[batch.c_cf_count + e];
     var x = 0.0;
     var y = 0.0;
-    for (var k = sb; k < sb + n; k++) {
-        let i = hb + su[batch.c_cf_human + k];
+    for (var k = at_crowd_slot(e, 0u); k < at_crowd_slot(e, n); k += batch.k_crowd_slot) {
+        let i = at_human(e, su[batch.c_cf_human + k]);
         x += sf[batch.c_h_x + i];
         y += sf[batch.c_h_y + i];
     }
@@ -53,10 +51,8 @@ fn walkers_centroid(e: u32) -> vec2<f32> {
 
 // Poison (see the header): the forming walkers' positions become NaN.
 fn poison_crowd(e: u32) {
-    let hb = e * batch.s_h_x;
-    let sb = e * batch.s_cf_human;
-    for (var k = sb; k < sb + su[batch.c_cf_count + e]; k++) {
-        let i = hb + su[batch.c_cf_human + k];
+    for (var k = at_crowd_slot(e, 0u); k < at_crowd_slot(e, su[batch.c_cf_count + e]); k += batch.k_crowd_slot) {
+        let i = at_human(e, su[batch.c_cf_human + k]);
         sf[batch.c_h_x + i] = math_nan();
         sf[batch.c_h_y + i] = math_nan();
     }
@@ -69,7 +65,7 @@ fn new_group(e: u32, kind: u32) -> u32 {
         poison_crowd(e);
         return NONE;
     }
-    let g = e * batch.s_g_kind + su[batch.c_n_groups + e];
+    let g = at_group(e, su[batch.c_n_groups + e]);
     su[batch.c_n_groups + e] += 1u;
     su[batch.c_g_kind + g] = kind;
     su[batch.c_g_dispersable + g] = 1u;
@@ -78,16 +74,14 @@ fn new_group(e: u32, kind: u32) -> u32 {
     sf[batch.c_g_vy + g] = 0.0;
     // The members are the walkers that formed the crowd, with their human goal radius.
     sf[batch.c_g_member_goal_radius + g] = params.human_goal_radius;
-    let hb = e * batch.s_h_x;
-    let sb = e * batch.s_cf_human;
     var member_role = ROLE_STANDING_GROUP;
     if (kind == GROUP_MOVING) {
         member_role = ROLE_MOVING_GROUP;
     }
-    for (var k = sb; k < sb + su[batch.c_cf_count + e]; k++) {
-        let i = hb + su[batch.c_cf_human + k];
+    for (var k = at_crowd_slot(e, 0u); k < at_crowd_slot(e, su[batch.c_cf_count + e]); k += batch.k_crowd_slot) {
+        let i = at_human(e, su[batch.c_cf_human + k]);
         su[batch.c_h_role + i] = member_role;
-        su[batch.c_h_group + i] = g - e * batch.s_g_kind;
+        su[batch.c_h_group + i] = slot_group(e, g);
         su[batch.c_h_forming + i] = FORMING_NONE;
         su[batch.c_h_seq + i] = regroup_next_seq(e);
     }
@@ -101,8 +95,7 @@ fn clear_crowd_formation(e: u32) {
     su[batch.c_cf_close_steps + e] = 0u;
     sf[batch.c_cf_x + e] = 0.0;
     sf[batch.c_cf_y + e] = 0.0;
-    let sb = e * batch.s_cf_human;
-    for (var k = sb; k < sb + batch.s_cf_human; k++) {
+    for (var k = at_crowd_slot(e, 0u); k < at_crowd_slot(e, batch.s_cf_human); k += batch.k_crowd_slot) {
         sf[batch.c_cf_slot_x + k] = 0.0;
         sf[batch.c_cf_slot_y + k] = 0.0;
         sf[batch.c_cf_slot_theta + k] = 0.0;
@@ -140,13 +133,11 @@ fn form_crowd(e: u32, rng: ptr<function, RngStream>) {
     if (g == NONE) {
         return;
     }
-    let hb = e * batch.s_h_x;
-    let sb = e * batch.s_cf_human;
     var cx = 0.0;
     var cy = 0.0;
     for (var k = 0u; k < min(n, place_group_cap()); k++) {
         let pose = poses[k];
-        let i = hb + su[batch.c_cf_human + sb + k];
+        let i = at_human(e, su[batch.c_cf_human + at_crowd_slot(e, k)]);
         sf[batch.c_h_x + i] = pose.x;
         sf[batch.c_h_y + i] = pose.y;
         set_heading(i, pose.z);
@@ -165,8 +156,8 @@ fn form_crowd(e: u32, rng: ptr<function, RngStream>) {
         }
         sf[batch.c_g_goal_x + g] = gx;
         sf[batch.c_g_goal_y + g] = gy;
-        for (var k = sb; k < sb + n; k++) {
-            let i = hb + su[batch.c_cf_human + k];
+        for (var k = at_crowd_slot(e, 0u); k < at_crowd_slot(e, n); k += batch.k_crowd_slot) {
+            let i = at_human(e, su[batch.c_cf_human + k]);
             sf[batch.c_h_goal_x + i] = gx;
             sf[batch.c_h_goal_y + i] = gy;
         }
@@ -191,10 +182,8 @@ fn form_approximate_crowd(e: u32, rng: ptr<function, RngStream>, cx: f32, cy: f3
     }
     sf[batch.c_g_x + g] = px / f32(n);
     sf[batch.c_g_y + g] = py / f32(n);
-    let hb = e * batch.s_h_x;
-    let sb = e * batch.s_cf_human;
-    for (var k = sb; k < sb + n; k++) {
-        let i = hb + su[batch.c_cf_human + k];
+    for (var k = at_crowd_slot(e, 0u); k < at_crowd_slot(e, n); k += batch.k_crowd_slot) {
+        let i = at_human(e, su[batch.c_cf_human + k]);
         set_heading(i, math_atan2(cy - sf[batch.c_h_y + i], cx - sf[batch.c_h_x + i]));
     }
     end_crowd_formation(e);
@@ -202,12 +191,10 @@ fn form_approximate_crowd(e: u32, rng: ptr<function, RngStream>, cx: f32, cy: f3
 
 // Rust `crowd_progress`: 0 walking, 1 formed, 2 approximate.
 fn crowd_progress(e: u32, rng: ptr<function, RngStream>) -> u32 {
-    let hb = e * batch.s_h_x;
-    let sb = e * batch.s_cf_human;
     let n = su[batch.c_cf_count + e];
     var all_arrived = true;
-    for (var k = sb; k < sb + n; k++) {
-        let i = hb + su[batch.c_cf_human + k];
+    for (var k = at_crowd_slot(e, 0u); k < at_crowd_slot(e, n); k += batch.k_crowd_slot) {
+        let i = at_human(e, su[batch.c_cf_human + k]);
         if (distance(sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_cf_slot_x + k], sf[batch.c_cf_slot_y + k]) < params.human_goal_radius) {
             set_heading(i, sf[batch.c_cf_slot_theta + k]);
         } else {
@@ -221,8 +208,8 @@ fn crowd_progress(e: u32, rng: ptr<function, RngStream>) -> u32 {
     let c = walkers_centroid(e);
     let reach = params.group_radius + params.human_radius;
     var together = true;
-    for (var k = sb; k < sb + n; k++) {
-        let i = hb + su[batch.c_cf_human + k];
+    for (var k = at_crowd_slot(e, 0u); k < at_crowd_slot(e, n); k += batch.k_crowd_slot) {
+        let i = at_human(e, su[batch.c_cf_human + k]);
         if (!(distance(sf[batch.c_h_x + i], sf[batch.c_h_y + i], c.x, c.y) < reach)) {
             together = false;
             break;
@@ -242,21 +229,21 @@ fn crowd_progress(e: u32, rng: ptr<function, RngStream>) -> u32 {
 
 // Rust `seat_reached`.
 fn seat_reached(e: u32) -> bool {
-    let i = e * batch.s_h_x + su[batch.c_lf_human + e];
+    let i = at_human(e, su[batch.c_lf_human + e]);
     return distance(sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_lf_seat_x + e], sf[batch.c_lf_seat_y + e]) < params.human_goal_radius;
 }
 
 // Rust `sit_down`: the walker becomes a new (dispersable) laptop user at the seat.
 fn sit_down(e: u32) {
-    let i = e * batch.s_h_x + su[batch.c_lf_human + e];
-    let l = e * batch.s_l_x + su[batch.c_lf_laptop + e];
+    let i = at_human(e, su[batch.c_lf_human + e]);
+    let l = at_laptop(e, su[batch.c_lf_laptop + e]);
     let u_local = su[batch.c_n_laptop_users + e];
     if (u_local >= batch.s_lu_human) {
         sf[batch.c_h_x + i] = math_nan();
         sf[batch.c_h_y + i] = math_nan();
         return;
     }
-    let u = e * batch.s_lu_human + u_local;
+    let u = at_laptop_user(e, u_local);
     su[batch.c_n_laptop_users + e] += 1u;
     su[batch.c_lu_human + u] = su[batch.c_lf_human + e];
     su[batch.c_lu_laptop + u] = su[batch.c_lf_laptop + e];

@@ -28,9 +28,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         su[batch.c_seed_hi + e],
         rng_stream_id(STREAM_GOALS, su[batch.c_tick + e]),
     );
-    let hb = e * batch.s_h_x;
-    let first = hb + su[batch.c_n_static + e];
-    for (var i = first; i < first + su[batch.c_n_dynamic + e]; i++) {
+    let first = su[batch.c_n_static + e];
+    for (var i = at_human(e, first); i < at_human(e, first + su[batch.c_n_dynamic + e]); i += batch.k_human) {
         let reach = params.human_radius + params.human_goal_radius;
         if (su[batch.c_h_forming + i] == 0u
             && goal_distance(sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_h_goal_x + i], sf[batch.c_h_goal_y + i]) < reach) {
@@ -41,17 +40,16 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
     }
-    let gb = e * batch.s_g_x;
-    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+    for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]); g += batch.k_group) {
         if (su[batch.c_g_kind + g] != GROUP_MOVING) {
             continue;
         }
         // Each member within reach of the group goal by its own goal radius.
         let reach = params.human_radius + sf[batch.c_g_member_goal_radius + g];
-        let m0 = hb + su[batch.c_g_first + g];
-        let m1 = hb + su[batch.c_g_first + g] + su[batch.c_g_count + g];
+        let m0 = at_human(e, su[batch.c_g_first + g]);
+        let m1 = at_human(e, su[batch.c_g_first + g] + su[batch.c_g_count + g]);
         var arrived = true;
-        for (var i = m0; i < m1; i++) {
+        for (var i = m0; i < m1; i += batch.k_human) {
             if (goal_distance(sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_g_goal_x + g], sf[batch.c_g_goal_y + g]) < reach) {
                 continue;
             }
@@ -63,7 +61,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             if (goal.found) {
                 sf[batch.c_g_goal_x + g] = goal.disc.x;
                 sf[batch.c_g_goal_y + g] = goal.disc.y;
-                for (var i = m0; i < m1; i++) {
+                for (var i = m0; i < m1; i += batch.k_human) {
                     sf[batch.c_h_goal_x + i] = goal.disc.x;
                     sf[batch.c_h_goal_y + i] = goal.disc.y;
                 }

@@ -17,9 +17,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         su[batch.c_seed_hi + e],
         rng_stream_id(STREAM_GROUP_NOISE, su[batch.c_tick + e]),
     );
-    let hb = e * batch.s_h_x;
-    let gb = e * batch.s_g_x;
-    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+    for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]); g += batch.k_group) {
         if (su[batch.c_g_kind + g] != GROUP_MOVING) {
             continue;
         }
@@ -30,10 +28,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let gvx = sf[batch.c_g_vx + g] * scale;
         let gvy = sf[batch.c_g_vy + g] * scale;
-        let first = hb + su[batch.c_g_first + g];
+        let first = su[batch.c_g_first + g];
         var cx = 0.0;
         var cy = 0.0;
-        for (var i = first; i < first + n; i++) {
+        for (var i = at_human(e, first); i < at_human(e, first + n); i += batch.k_human) {
             var nx = 0.0;
             var ny = 0.0;
             if (params.replay != 0u) {

@@ -17,8 +17,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
         return;
     }
-    let gb = e * batch.s_g_x;
-    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+    for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]); g += batch.k_group) {
         if (su[batch.c_g_kind + g] != GROUP_MOVING) {
             continue;
         }

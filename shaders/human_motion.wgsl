@@ -60,8 +60,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         su[batch.c_seed_hi + e],
         rng_stream_id(STREAM_AVOID_ROBOT, su[batch.c_tick + e]),
     );
-    let first = e * batch.s_h_x + su[batch.c_n_static + e];
-    for (var i = first; i < first + su[batch.c_n_dynamic + e]; i++) {
+    let first = su[batch.c_n_static + e];
+    for (var i = at_human(e, first); i < at_human(e, first + su[batch.c_n_dynamic + e]); i += batch.k_human) {
         // Nothing to draw when no walker avoids the robot (every paper config).
         let avoid_robot = params.prob_avoid_robot > 0.0 && rng_chance(&rng, params.prob_avoid_robot);
         let view = perception_view_of_human(i);

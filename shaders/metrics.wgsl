@@ -78,9 +78,8 @@ fn time_to_collision(e: u32) -> f32 {
     let rx = sf[batch.c_robot_x + e];
     let ry = sf[batch.c_robot_y + e];
     let reach = params.robot_radius + params.human_radius;
-    let hb = e * batch.s_h_x;
     var best = math_inf();
-    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]); i += batch.k_human) {
         let vhx = sf[batch.c_h_vx + i];
         let vhy = sf[batch.c_h_vy + i];
         let px = rx - sf[batch.c_h_x + i];

@@ -154,9 +154,8 @@ fn obs_gaze(hx: f32, hy: f32, hc: f32, hs: f32) -> f32 {
 }
 
 fn obs_humans(e: u32, block: u32) -> u32 {
-    let hb = e * batch.s_h_x;
     var k = 0u;
-    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]); i += batch.k_human) {
         let theta = sf[batch.c_h_theta + i];
         let rel = theta - fr.theta;
         let wrapped = math_wrap_angle(rel);
@@ -201,22 +200,23 @@ fn obs_circumradius(length: f32, width: f32) -> f32 {
     return sqrt(0.25 * length * length + 0.25 * width * width);
 }
 
-// Records of `n` rectangles (laptops or tables) whose x, y and heading columns start at `cx`,
-// `cy`, `ctheta` with stride `stride` (twin of the Rust `rectangles`).
+// Records of the rectangles (laptops or tables) whose x, y and heading columns start at `cx`,
+// `cy`, `ctheta`: the elements from `first` to `end` (excluded), `step` apart, i.e. `at_<kind>`
+// of the environment's slot 0 and of its count, and `batch.k_<kind>` (twin of the Rust
+// `rectangles`).
 fn obs_rectangles(
-    e: u32,
     block: u32,
     cx: u32,
     cy: u32,
     ctheta: u32,
-    stride: u32,
-    n: u32,
+    first: u32,
+    end: u32,
+    step: u32,
     one_hot: u32,
     radius: f32,
 ) -> u32 {
-    let base = e * stride;
     var k = 0u;
-    for (var i = base; i < base + n; i++) {
+    for (var i = first; i < end; i += step) {
         let x = sf[cx + i];
         let y = sf[cy + i];
         let l = obs_local(x, y);
@@ -237,19 +237,18 @@ fn obs_rectangles(
 fn obs_laptops(e: u32, block: u32) -> u32 {
     let radius = obs_circumradius(params.laptop_length, params.laptop_width);
     let n = su[batch.c_n_laptops + e];
-    return obs_rectangles(e, block, batch.c_l_x, batch.c_l_y, batch.c_l_theta, batch.s_l_x, n, ONE_HOT_LAPTOP, radius);
+    return obs_rectangles(block, batch.c_l_x, batch.c_l_y, batch.c_l_theta, at_laptop(e, 0u), at_laptop(e, n), batch.k_laptop, ONE_HOT_LAPTOP, radius);
 }
 
 fn obs_tables(e: u32, block: u32) -> u32 {
     let radius = obs_circumradius(params.table_length, params.table_width);
     let n = su[batch.c_n_tables + e];
-    return obs_rectangles(e, block, batch.c_t_x, batch.c_t_y, batch.c_t_theta, batch.s_t_x, n, ONE_HOT_TABLE, radius);
+    return obs_rectangles(block, batch.c_t_x, batch.c_t_y, batch.c_t_theta, at_table(e, 0u), at_table(e, n), batch.k_table, ONE_HOT_TABLE, radius);
 }
 
 fn obs_plants(e: u32, block: u32) -> u32 {
-    let pb = e * batch.s_p_x;
     var k = 0u;
-    for (var i = pb; i < pb + su[batch.c_n_plants + e]; i++) {
+    for (var i = at_plant(e, 0u); i < at_plant(e, su[batch.c_n_plants + e]); i += batch.k_plant) {
         let x = sf[batch.c_p_x + i];
         let y = sf[batch.c_p_y + i];
         let l = obs_local(x, y);
@@ -286,10 +285,9 @@ fn obs_segment(
 }
 
 fn obs_walls(e: u32, block: u32) -> u32 {
-    let wb = e * batch.s_w_x;
     let step = params.wall_segment_size;
     var k = 0u;
-    for (var w = wb; w < wb + su[batch.c_n_walls + e]; w++) {
+    for (var w = at_wall(e, 0u); w < at_wall(e, su[batch.c_n_walls + e]); w += batch.k_wall) {
         let length = sf[batch.c_w_length + w];
         let wc = sf[batch.c_w_cos + w];
         let ws = sf[batch.c_w_sin + w];
@@ -385,7 +383,7 @@ fn obs_noise(e: u32, row: u32, counts_in: array<u32, 5>) {
 fn obs_humans_seen(e: u32, lo: u32, hi: u32) -> u32 {
     var n = 0u;
     for (var k = lo; k < hi; k++) {
-        let i = e * batch.s_h_x + k;
+        let i = at_human(e, k);
         if (obs_sees_point(sf[batch.c_h_x + i], sf[batch.c_h_y + i])) {
             n += 1u;
         }
@@ -396,7 +394,7 @@ fn obs_humans_seen(e: u32, lo: u32, hi: u32) -> u32 {
 fn obs_laptops_seen(e: u32, to: u32) -> u32 {
     var n = 0u;
     for (var k = 0u; k < to; k++) {
-        let i = e * batch.s_l_x + k;
+        let i = at_laptop(e, k);
         if (obs_sees_point(sf[batch.c_l_x + i], sf[batch.c_l_y + i])) {
             n += 1u;
         }
@@ -406,11 +404,10 @@ fn obs_laptops_seen(e: u32, to: u32) -> u32 {
 
 fn obs_human_human(e: u32) -> u32 {
     let out = batch.co_hh_pairs + e * batch.so_hh_pairs;
-    let gb = e * batch.s_g_first;
     var n = 0u;
     var slot = 0u;
     var seen = 0u;
-    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+    for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]); g += batch.k_group) {
         let first = su[batch.c_g_first + g];
         let end = first + su[batch.c_g_count + g];
         var start = first;
@@ -439,14 +436,13 @@ fn obs_human_human(e: u32) -> u32 {
 
 fn obs_human_laptop(e: u32) -> u32 {
     let out = batch.co_hl_pairs + e * batch.so_hl_pairs;
-    let ub = e * batch.s_lu_human;
     var n = 0u;
-    for (var u = ub; u < ub + su[batch.c_n_laptop_users + e]; u++) {
+    for (var u = at_laptop_user(e, 0u); u < at_laptop_user(e, su[batch.c_n_laptop_users + e]); u += batch.k_laptop_user) {
         var h = su[batch.c_lu_human + u];
         var l = su[batch.c_lu_laptop + u];
         if (fr.partial) {
-            let hi = e * batch.s_h_x + h;
-            let li = e * batch.s_l_x + l;
+            let hi = at_human(e, h);
+            let li = at_laptop(e, l);
             if (!obs_sees_point(sf[batch.c_h_x + hi], sf[batch.c_h_y + hi])
                 || !obs_sees_point(sf[batch.c_l_x + li], sf[batch.c_l_y + li])) {
                 continue;

@@ -33,29 +33,26 @@ fn clearance(e: u32, x: f32, y: f32, hvx: f32, hvy: f32) -> f32 {
 
 // The smallest predicted clearance (m) between the robot and any human; +inf without humans.
 fn min_predicted_clearance(e: u32) -> f32 {
-    let hb = e * batch.s_h_x;
     var d_min = math_inf();
-    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]); i += batch.k_human) {
         d_min = min(d_min, clearance(e, sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_h_vx + i], sf[batch.c_h_vy + i]));
     }
     if (params.dsrnn_pseudo_humans != 0u) {
-        let gb = e * batch.s_g_x;
-        for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
-            let first = hb + su[batch.c_g_first + g];
+        for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]); g += batch.k_group) {
+            let first_slot = su[batch.c_g_first + g];
+            let first = at_human(e, first_slot);
             let n = su[batch.c_g_count + g];
             var total = 0.0;
-            for (var k = first; k < first + n; k++) {
+            for (var k = first; k < at_human(e, first_slot + n); k += batch.k_human) {
                 total += sf[batch.c_h_speed + k];
             }
             let mean_speed = total / f32(n);
             let sc = math_sin_cos(sf[batch.c_h_theta + first]);
             d_min = min(d_min, clearance(e, sf[batch.c_g_x + g], sf[batch.c_g_y + g], mean_speed * sc.y, mean_speed * sc.x));
         }
-        let ub = e * batch.s_lu_human;
-        let lb = e * batch.s_l_x;
-        for (var u = ub; u < ub + su[batch.c_n_laptop_users + e]; u++) {
-            let h = hb + su[batch.c_lu_human + u];
-            let l = lb + su[batch.c_lu_laptop + u];
+        for (var u = at_laptop_user(e, 0u); u < at_laptop_user(e, su[batch.c_n_laptop_users + e]); u += batch.k_laptop_user) {
+            let h = at_human(e, su[batch.c_lu_human + u]);
+            let l = at_laptop(e, su[batch.c_lu_laptop + u]);
             let cx = 0.5 * (sf[batch.c_h_x + h] + sf[batch.c_l_x + l]);
             let cy = 0.5 * (sf[batch.c_h_y + h] + sf[batch.c_l_y + l]);
             d_min = min(d_min, clearance(e, cx, cy, 0.0, 0.0));

@@ -33,10 +33,10 @@ fn count_event(e: u32, ev: u32) {
 
 // Rust `dispersable_groups`: local indices of the dispersable groups of `kind`, in group order.
 fn dispersable_groups(e: u32, kind: u32, out: ptr<function, SlotList>) {
-    let gb = e * batch.s_g_kind;
     (*out).len = 0u;
     for (var g = 0u; g < su[batch.c_n_groups + e]; g++) {
-        if (su[batch.c_g_kind + gb + g] == kind && su[batch.c_g_dispersable + gb + g] != 0u) {
+        let gg = at_group(e, g);
+        if (su[batch.c_g_kind + gg] == kind && su[batch.c_g_dispersable + gg] != 0u) {
             (*out).v[(*out).len] = g;
             (*out).len += 1u;
         }
@@ -52,15 +52,15 @@ fn disperse_group(
     became_standing: bool,
     rng: ptr<function, RngStream>,
 ) {
-    let gg = e * batch.s_g_kind + g;
-    let first = e * batch.s_h_x + su[batch.c_g_first + gg];
+    let gg = at_group(e, g);
+    let first = su[batch.c_g_first + gg];
     var stayers = 0u;
     for (var k = 0u; k < n; k++) {
         stayers += u32((*stays)[k]);
     }
     let dissolve = stayers <= 1u;
     for (var k = 0u; k < n; k++) {
-        let i = first + k;
+        let i = at_human(e, first + k);
         if (!(*stays)[k]) {
             regroup_to_lone_walker(e, i, rng);
         } else if (dissolve) {
@@ -76,7 +76,7 @@ fn disperse_group(
         su[batch.c_g_seq + gg] = regroup_next_seq(e);
         for (var k = 0u; k < n; k++) {
             if ((*stays)[k]) {
-                su[batch.c_h_role + first + k] = ROLE_STANDING_GROUP;
+                su[batch.c_h_role + at_human(e, first + k)] = ROLE_STANDING_GROUP;
             }
         }
     }
@@ -95,7 +95,7 @@ fn crowd_dispersal(e: u32, rng: ptr<function, RngStream>) -> bool {
         return false;
     }
     let g = groups.v[rng_below(rng, groups.len)];
-    let n = min(su[batch.c_g_count + e * batch.s_g_count + g], place_group_cap());
+    let n = min(su[batch.c_g_count + at_group(e, g)], place_group_cap());
     var stays: array<bool, PLACE_GROUP_ARRAY>;
     for (var k = 0u; k < n; k++) {
         stays[k] = rng_chance(rng, 0.5);
@@ -107,9 +107,9 @@ fn crowd_dispersal(e: u32, rng: ptr<function, RngStream>) -> bool {
 
 // Rust `end_laptop_use` for local user u.
 fn end_laptop_use(e: u32, u: u32, rng: ptr<function, RngStream>) {
-    let uu = e * batch.s_lu_human + u;
-    let i = e * batch.s_h_x + su[batch.c_lu_human + uu];
-    let l = e * batch.s_l_x + su[batch.c_lu_laptop + uu];
+    let uu = at_laptop_user(e, u);
+    let i = at_human(e, su[batch.c_lu_human + uu]);
+    let l = at_laptop(e, su[batch.c_lu_laptop + uu]);
     regroup_to_lone_walker(e, i, rng);
     su[batch.c_l_user + l] = NONE;
     su[batch.c_l_seq + l] = regroup_next_seq(e);
@@ -119,10 +119,9 @@ fn end_laptop_use(e: u32, u: u32, rng: ptr<function, RngStream>) {
 
 // Rust `laptop_dispersal`.
 fn laptop_dispersal(e: u32, rng: ptr<function, RngStream>) -> bool {
-    let ub = e * batch.s_lu_dispersable;
     var users: SlotList;
     for (var u = 0u; u < su[batch.c_n_laptop_users + e]; u++) {
-        if (su[batch.c_lu_dispersable + ub + u] != 0u) {
+        if (su[batch.c_lu_dispersable + at_laptop_user(e, u)] != 0u) {
             users.v[users.len] = u;
             users.len += 1u;
         }
@@ -137,10 +136,10 @@ fn laptop_dispersal(e: u32, rng: ptr<function, RngStream>) -> bool {
 
 // Rust `free_walkers`: lone walkers not heading anywhere special, in slot order (local slots).
 fn free_walkers(e: u32, out: ptr<function, SlotList>) {
-    let hb = e * batch.s_h_role;
     (*out).len = 0u;
     for (var k = 0u; k < su[batch.c_n_humans + e]; k++) {
-        if (su[batch.c_h_role + hb + k] == ROLE_DYNAMIC && su[batch.c_h_forming + hb + k] == FORMING_NONE) {
+        let i = at_human(e, k);
+        if (su[batch.c_h_role + i] == ROLE_DYNAMIC && su[batch.c_h_forming + i] == FORMING_NONE) {
             (*out).v[(*out).len] = k;
             (*out).len += 1u;
         }
@@ -160,18 +159,17 @@ fn start_crowd_formation(
     poses: ptr<function, array<vec3<f32>, PLACE_GROUP_ARRAY>>,
     n: u32,
 ) {
-    let hb = e * batch.s_h_x;
-    let sb = e * batch.s_cf_human;
     var cx = 0.0;
     var cy = 0.0;
     for (var k = 0u; k < n; k++) {
         let h = (*chosen)[k];
         let pose = (*poses)[k];
-        let i = hb + h;
-        su[batch.c_cf_human + sb + k] = h;
-        sf[batch.c_cf_slot_x + sb + k] = pose.x;
-        sf[batch.c_cf_slot_y + sb + k] = pose.y;
-        sf[batch.c_cf_slot_theta + sb + k] = pose.z;
+        let i = at_human(e, h);
+        let s = at_crowd_slot(e, k);
+        su[batch.c_cf_human + s] = h;
+        sf[batch.c_cf_slot_x + s] = pose.x;
+        sf[batch.c_cf_slot_y + s] = pose.y;
+        sf[batch.c_cf_slot_theta + s] = pose.z;
         sf[batch.c_h_goal_x + i] = pose.x;
         sf[batch.c_h_goal_y + i] = pose.y;
         su[batch.c_h_forming + i] = FORMING_CROWD;
@@ -235,7 +233,7 @@ fn crowd_formation(e: u32, rng: ptr<function, RngStream>) -> u32 {
 
 // Rust `start_laptop_formation`: walker h (local slot) heads for the seat of laptop l.
 fn start_laptop_formation(e: u32, h: u32, l: u32, seat: vec3<f32>) {
-    let i = e * batch.s_h_x + h;
+    let i = at_human(e, h);
     sf[batch.c_h_goal_x + i] = seat.x;
     sf[batch.c_h_goal_y + i] = seat.y;
     su[batch.c_h_forming + i] = FORMING_LAPTOP;
@@ -250,9 +248,9 @@ fn start_laptop_formation(e: u32, h: u32, l: u32, seat: vec3<f32>) {
 
 // Rust `send_to_laptop`.
 fn send_to_laptop(e: u32, h: u32, l: u32) -> bool {
-    let i = e * batch.s_h_x + h;
+    let i = at_human(e, h);
     su[batch.c_h_policy + i] = POLICY_ORCA;
-    let ll = e * batch.s_l_x + l;
+    let ll = at_laptop(e, l);
     let seat = place_seat(sf[batch.c_l_x + ll], sf[batch.c_l_y + ll], sf[batch.c_l_theta + ll]);
     if (!spot_free(e, seat.x, seat.y)) {
         return false;
@@ -263,10 +261,9 @@ fn send_to_laptop(e: u32, h: u32, l: u32) -> bool {
 
 // Rust `laptop_formation`.
 fn laptop_formation(e: u32, rng: ptr<function, RngStream>) -> u32 {
-    let lb = e * batch.s_l_user;
     var laptops: SlotList;
     for (var l = 0u; l < su[batch.c_n_laptops + e]; l++) {
-        if (su[batch.c_l_user + lb + l] == NONE) {
+        if (su[batch.c_l_user + at_laptop(e, l)] == NONE) {
             laptops.v[laptops.len] = l;
             laptops.len += 1u;
         }

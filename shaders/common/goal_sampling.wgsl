@@ -15,7 +15,7 @@ struct GoalSample {
 
 // Rust `world::blocker_rect`: spawn blocker b (local) of environment e.
 fn world_blocker_rect(e: u32, b: u32) -> Rect {
-    let i = e * batch.s_b_x + b;
+    let i = at_blocker(e, b);
     return geo_rect_new(sf[batch.c_b_x + i], sf[batch.c_b_y + i], sf[batch.c_b_theta + i], sf[batch.c_b_length + i], sf[batch.c_b_width + i]);
 }
 
@@ -25,12 +25,10 @@ fn world_blocker_rect(e: u32, b: u32) -> Rect {
 // inlined functions nested in loops cut the callers' loops short on lavapipe.)
 fn world_blocks_goal(e: u32, d: Disc) -> bool {
     var hit = geo_disc_disc(Disc(sf[batch.c_robot_x + e], sf[batch.c_robot_y + e], params.robot_radius), d);
-    let hb = e * batch.s_h_x;
-    for (var i = hb; i < hb + su[batch.c_n_humans + e] && !hit; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]) && !hit; i += batch.k_human) {
         hit = geo_disc_disc(Disc(sf[batch.c_h_x + i], sf[batch.c_h_y + i], params.human_radius), d);
     }
-    let pb = e * batch.s_p_x;
-    for (var i = pb; i < pb + su[batch.c_n_plants + e] && !hit; i++) {
+    for (var i = at_plant(e, 0u); i < at_plant(e, su[batch.c_n_plants + e]) && !hit; i += batch.k_plant) {
         hit = geo_disc_disc(Disc(sf[batch.c_p_x + i], sf[batch.c_p_y + i], params.plant_radius), d);
     }
     for (var w = 0u; w < su[batch.c_n_walls + e] && !hit; w++) {
@@ -52,13 +50,11 @@ fn world_blocks_goal(e: u32, d: Disc) -> bool {
 // group's)?
 fn goals_touches_goal(e: u32, d: Disc) -> bool {
     var hit = geo_disc_disc(d, Disc(sf[batch.c_goal_x + e], sf[batch.c_goal_y + e], params.goal_radius));
-    let hb = e * batch.s_h_x;
     let n_lone = su[batch.c_n_static + e] + su[batch.c_n_dynamic + e];
-    for (var i = hb; i < hb + n_lone && !hit; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, n_lone) && !hit; i += batch.k_human) {
         hit = geo_disc_disc(d, Disc(sf[batch.c_h_goal_x + i], sf[batch.c_h_goal_y + i], params.human_goal_radius));
     }
-    let gb = e * batch.s_g_x;
-    for (var g = gb; g < gb + su[batch.c_n_groups + e] && !hit; g++) {
+    for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]) && !hit; g += batch.k_group) {
         hit = su[batch.c_g_kind + g] == GROUP_MOVING
             && geo_disc_disc(d, Disc(sf[batch.c_g_goal_x + g], sf[batch.c_g_goal_y + g], params.group_goal_radius));
     }

@@ -20,9 +20,8 @@ fn command_acceleration(e: u32) -> vec2<f32> {
 
 // Smallest robot-human centre distance (m); +inf without humans.
 fn min_human_distance(e: u32) -> f32 {
-    let hb = e * batch.s_h_x;
     var best = math_inf();
-    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]); i += batch.k_human) {
         best = min(best, speed(sf[batch.c_h_x + i] - sf[batch.c_robot_x + e], sf[batch.c_h_y + i] - sf[batch.c_robot_y + e]));
     }
     return best;
@@ -36,8 +35,7 @@ fn obstacle_distances(e: u32) -> vec2<f32> {
     var lo = math_inf();
     var sum = 0.0;
     var n = 0u;
-    let pb = e * batch.s_p_x;
-    for (var i = pb; i < pb + su[batch.c_n_plants + e]; i++) {
+    for (var i = at_plant(e, 0u); i < at_plant(e, su[batch.c_n_plants + e]); i += batch.k_plant) {
         let d = speed(sf[batch.c_p_x + i] - rx, sf[batch.c_p_y + i] - ry) - params.plant_radius;
         lo = min(lo, d);
         sum += d;

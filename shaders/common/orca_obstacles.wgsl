@@ -242,8 +242,8 @@ fn orca_obstacles_square(x: f32, y: f32, h: f32) -> array<vec2<f32>, 4> {
 
 // Rust `perception::laptop_use_disc` for global laptop-user slot u of environment e.
 fn orca_obstacles_laptop_use_disc(e: u32, u: u32) -> Disc {
-    let h = e * batch.s_h_x + su[batch.c_lu_human + u];
-    let l = e * batch.s_l_x + su[batch.c_lu_laptop + u];
+    let h = at_human(e, su[batch.c_lu_human + u]);
+    let l = at_laptop(e, su[batch.c_lu_laptop + u]);
     return Disc(
         0.5 * (sf[batch.c_l_x + l] + sf[batch.c_h_x + h]),
         0.5 * (sf[batch.c_l_y + l] + sf[batch.c_h_y + h]),
@@ -276,7 +276,7 @@ fn orca_obstacles_polygon(e: u32, k_in: u32) -> OrcaObstaclePolygon {
     k -= n_tables;
     let n_laptops = su[batch.c_n_laptops + e];
     if (k < n_laptops) {
-        if (su[batch.c_l_user + e * batch.s_l_x + k] == NONE) {
+        if (su[batch.c_l_user + at_laptop(e, k)] == NONE) {
             return orca_obstacles_rect_polygon(world_laptop_rect(e, k));
         }
         return none;
@@ -284,7 +284,7 @@ fn orca_obstacles_polygon(e: u32, k_in: u32) -> OrcaObstaclePolygon {
     k -= n_laptops;
     let n_plants = su[batch.c_n_plants + e];
     if (k < n_plants) {
-        let i = e * batch.s_p_x + k;
+        let i = at_plant(e, k);
         let x = sf[batch.c_p_x + i];
         let y = sf[batch.c_p_y + i];
         let r = params.plant_radius;
@@ -298,15 +298,15 @@ fn orca_obstacles_polygon(e: u32, k_in: u32) -> OrcaObstaclePolygon {
     k -= n_walls;
     let n_users = su[batch.c_n_laptop_users + e];
     if (k < n_users) {
-        let u = e * batch.s_lu_human + k;
-        let h = e * batch.s_h_x + su[batch.c_lu_human + u];
+        let u = at_laptop_user(e, k);
+        let h = at_human(e, su[batch.c_lu_human + u]);
         return orca_obstacles_disc_polygon(
             orca_obstacles_laptop_use_disc(e, u),
             orca_obstacles_square(sf[batch.c_h_x + h], sf[batch.c_h_y + h], params.laptop_user_half_side),
         );
     }
     k -= n_users;
-    let g = e * batch.s_g_x + k;
+    let g = at_group(e, k);
     if (k < su[batch.c_n_groups + e] && su[batch.c_g_kind + g] == GROUP_STANDING) {
         // Rust `perception::group_disc`.
         let d = Disc(sf[batch.c_g_x + g], sf[batch.c_g_y + g], params.group_radius);
@@ -633,16 +633,16 @@ fn orca_obstacles_gather(e: u32, l: u32) {
 // instead; see the header).
 fn orca_obstacles_store(e: u32) {
     let s = orca_obstacles_set(e);
-    let b = e * batch.s_ov_x;
     if (orca_obstacles_set_overflow(s) != 0u) {
         for (var k = 0u; k < batch.s_ov_x; k++) {
-            sf[batch.c_ov_x + b + k] = math_nan();
-            sf[batch.c_ov_y + b + k] = math_nan();
-            sf[batch.c_ov_dir_x + b + k] = math_nan();
-            sf[batch.c_ov_dir_y + b + k] = math_nan();
-            su[batch.c_ov_next + b + k] = (k + 1u) % orca_obstacles_cap();
-            su[batch.c_ov_prev + b + k] = (k + orca_obstacles_cap() - 1u) % orca_obstacles_cap();
-            su[batch.c_ov_convex + b + k] = 1u;
+            let i = at_obstacle_vertex(e, k);
+            sf[batch.c_ov_x + i] = math_nan();
+            sf[batch.c_ov_y + i] = math_nan();
+            sf[batch.c_ov_dir_x + i] = math_nan();
+            sf[batch.c_ov_dir_y + i] = math_nan();
+            su[batch.c_ov_next + i] = (k + 1u) % orca_obstacles_cap();
+            su[batch.c_ov_prev + i] = (k + orca_obstacles_cap() - 1u) % orca_obstacles_cap();
+            su[batch.c_ov_convex + i] = 1u;
         }
         su[batch.c_n_obstacle_vertices + e] = batch.s_ov_x;
         return;
@@ -651,24 +651,26 @@ fn orca_obstacles_store(e: u32) {
     // A smaller set than before: its old tail becomes unused slots, which hold zeros.
     let old = min(su[batch.c_n_obstacle_vertices + e], batch.s_ov_x);
     for (var k = n; k < old; k++) {
-        sf[batch.c_ov_x + b + k] = 0.0;
-        sf[batch.c_ov_y + b + k] = 0.0;
-        sf[batch.c_ov_dir_x + b + k] = 0.0;
-        sf[batch.c_ov_dir_y + b + k] = 0.0;
-        su[batch.c_ov_next + b + k] = 0u;
-        su[batch.c_ov_prev + b + k] = 0u;
-        su[batch.c_ov_convex + b + k] = 0u;
+        let i = at_obstacle_vertex(e, k);
+        sf[batch.c_ov_x + i] = 0.0;
+        sf[batch.c_ov_y + i] = 0.0;
+        sf[batch.c_ov_dir_x + i] = 0.0;
+        sf[batch.c_ov_dir_y + i] = 0.0;
+        su[batch.c_ov_next + i] = 0u;
+        su[batch.c_ov_prev + i] = 0u;
+        su[batch.c_ov_convex + i] = 0u;
     }
     for (var k = 0u; k < n; k++) {
+        let i = at_obstacle_vertex(e, k);
         let p = orca_obstacles_set_point(s, k);
         let d = orca_obstacles_set_dir(s, k);
-        sf[batch.c_ov_x + b + k] = p.x;
-        sf[batch.c_ov_y + b + k] = p.y;
-        sf[batch.c_ov_dir_x + b + k] = d.x;
-        sf[batch.c_ov_dir_y + b + k] = d.y;
-        su[batch.c_ov_next + b + k] = orca_obstacles_set_next(s, k);
-        su[batch.c_ov_prev + b + k] = orca_obstacles_set_prev(s, k);
-        su[batch.c_ov_convex + b + k] = orca_obstacles_set_convex(s, k);
+        sf[batch.c_ov_x + i] = p.x;
+        sf[batch.c_ov_y + i] = p.y;
+        sf[batch.c_ov_dir_x + i] = d.x;
+        sf[batch.c_ov_dir_y + i] = d.y;
+        su[batch.c_ov_next + i] = orca_obstacles_set_next(s, k);
+        su[batch.c_ov_prev + i] = orca_obstacles_set_prev(s, k);
+        su[batch.c_ov_convex + i] = orca_obstacles_set_convex(s, k);
     }
     su[batch.c_n_obstacle_vertices + e] = n;
 }

@@ -28,7 +28,8 @@
 // Candidate identity. Rust collects the candidates into a list and selects by list index; the
 // selection only compares distances (ties keep the visiting order), so here a candidate is
 // visited in the same order and identified by a tag instead of its list index:
-// ORCA_WORLD_HUMAN | slot, ORCA_WORLD_ROBOT, ORCA_WORLD_GROUP | slot (global slots).
+// ORCA_WORLD_HUMAN | slot, ORCA_WORLD_ROBOT, ORCA_WORLD_GROUP | slot (global slots: element
+// indices `at_human(e, k)`, `at_group(e, k)`, compared only for equality, never ordered).
 //
 // List limits. The lists are common/orca.wgsl's fixed-size ones. A list that would grow past its
 // limit (more than ORCA_MAX_AGENT_NEIGHBORS selected agents: n_humans and the candidates in range
@@ -124,9 +125,8 @@ fn orca_world_candidate(e: u32, tag: u32) -> OrcaNeighbor {
 // `list` must be empty.
 fn orca_world_select(e: u32, first: OrcaAgent, others: OrcaWorldOthers, list: ptr<function, OrcaAgentNeighbors>) {
     var range_sq = orca_agent_range_sq(first.neighbor_dist);
-    let hb = e * batch.s_h_x;
     let n_lone = su[batch.c_n_static + e] + su[batch.c_n_dynamic + e];
-    for (var i = hb; i < hb + n_lone; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, n_lone); i += batch.k_human) {
         if (i == others.skip_human || !perception_sees_human(others.view, e, i)) {
             continue;
         }
@@ -137,8 +137,7 @@ fn orca_world_select(e: u32, first: OrcaAgent, others: OrcaWorldOthers, list: pt
         let pos = vec2<f32>(sf[batch.c_robot_x + e], sf[batch.c_robot_y + e]);
         orca_agent_neighbor_candidate(list, first.max_neighbors, first.pos, ORCA_WORLD_ROBOT, pos, &range_sq);
     }
-    let gb = e * batch.s_g_x;
-    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+    for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]); g += batch.k_group) {
         if (su[batch.c_g_kind + g] != GROUP_MOVING || g == others.skip_group
             || !perception_maybe_sees_disc(others.view, perception_group_disc(g))) {
             continue;
@@ -150,9 +149,8 @@ fn orca_world_select(e: u32, first: OrcaAgent, others: OrcaWorldOthers, list: pt
 
 // Processed obstacle vertex `v` (local index) of environment e, as `orca_obstacle_line` reads it.
 fn orca_world_vertex(e: u32, v: u32) -> OrcaVertex {
-    let ob = e * batch.s_ov_x;
-    let g = ob + v;
-    let prev = ob + su[batch.c_ov_prev + g];
+    let g = at_obstacle_vertex(e, v);
+    let prev = at_obstacle_vertex(e, su[batch.c_ov_prev + g]);
     return orca_vertex(
         v,
         vec2<f32>(sf[batch.c_ov_x + g], sf[batch.c_ov_y + g]),
@@ -221,10 +219,9 @@ fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> Orc
     let range_sq = orca_obstacle_range_sq(first.time_horizon_obst, first.max_speed, first.radius);
     if (obstacles == ORCA_WORLD_OBSTACLES_CACHED) {
         // `obstacle_neighbors` over the environment's vertices, in index order.
-        let ob = e * batch.s_ov_x;
         for (var v = 0u; v < su[batch.c_n_obstacle_vertices + e]; v++) {
-            let g = ob + v;
-            let n = ob + su[batch.c_ov_next + g];
+            let g = at_obstacle_vertex(e, v);
+            let n = at_obstacle_vertex(e, su[batch.c_ov_next + g]);
             let a = vec2<f32>(sf[batch.c_ov_x + g], sf[batch.c_ov_y + g]);
             let b = vec2<f32>(sf[batch.c_ov_x + n], sf[batch.c_ov_y + n]);
             orca_obstacle_neighbor_candidate(&onb, first.pos, range_sq, v, a, b);
@@ -232,7 +229,7 @@ fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> Orc
         // `solve`: obstacle lines, then agent lines, then LP2/LP3.
         for (var k = 0u; k < onb.len; k++) {
             let o1 = onb.items[k].index;
-            let o2 = su[batch.c_ov_next + ob + o1];
+            let o2 = su[batch.c_ov_next + at_obstacle_vertex(e, o1)];
             orca_push_obstacle_line(first, orca_world_vertex(e, o1), orca_world_vertex(e, o2), &lines);
         }
     } else if (obstacles == ORCA_WORLD_OBSTACLES_SUBSET) {

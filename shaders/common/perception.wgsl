@@ -145,8 +145,8 @@ fn perception_group_disc(g: u32) -> Disc {
 // Rust `laptop_use_disc`: laptop use `u` (global slot) of environment e, centred halfway between
 // the laptop and its user, of radius half the seat distance.
 fn perception_laptop_use_disc(e: u32, u: u32) -> Disc {
-    let h = e * batch.s_h_x + su[batch.c_lu_human + u];
-    let l = e * batch.s_l_x + su[batch.c_lu_laptop + u];
+    let h = at_human(e, su[batch.c_lu_human + u]);
+    let l = at_laptop(e, su[batch.c_lu_laptop + u]);
     return Disc(
         0.5 * (sf[batch.c_l_x + l] + sf[batch.c_h_x + h]),
         0.5 * (sf[batch.c_l_y + l] + sf[batch.c_h_y + h]),
@@ -162,11 +162,11 @@ fn perception_sees_human(mv: MaybeView, e: u32, j: u32) -> bool {
     }
     let r = su[batch.c_h_role + j];
     if (r == ROLE_MOVING_GROUP || r == ROLE_STANDING_GROUP) {
-        let g = e * batch.s_g_x + su[batch.c_h_group + j];
+        let g = at_group(e, su[batch.c_h_group + j]);
         return perception_sees_disc(mv.view, perception_group_disc(g));
     }
     if (r == ROLE_LAPTOP_USER) {
-        let u = e * batch.s_lu_human + su[batch.c_h_laptop_user + j];
+        let u = at_laptop_user(e, su[batch.c_h_laptop_user + j]);
         return perception_sees_disc(mv.view, perception_laptop_use_disc(e, u));
     }
     return perception_sees_disc(mv.view, Disc(sf[batch.c_h_x + j], sf[batch.c_h_y + j], params.human_radius));

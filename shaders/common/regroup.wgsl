@@ -32,21 +32,17 @@ fn regroup_next_seq(e: u32) -> u32 {
 
 // Rust `number_lists`: list positions from the current slot order.
 fn regroup_number_lists(e: u32) {
-    let hb = e * batch.s_h_seq;
-    let gb = e * batch.s_g_seq;
-    let lb = e * batch.s_l_seq;
-    let ub = e * batch.s_lu_seq;
     for (var k = 0u; k < su[batch.c_n_humans + e]; k++) {
-        su[batch.c_h_seq + hb + k] = k;
+        su[batch.c_h_seq + at_human(e, k)] = k;
     }
     for (var k = 0u; k < su[batch.c_n_groups + e]; k++) {
-        su[batch.c_g_seq + gb + k] = k;
+        su[batch.c_g_seq + at_group(e, k)] = k;
     }
     for (var k = 0u; k < su[batch.c_n_laptops + e]; k++) {
-        su[batch.c_l_seq + lb + k] = k;
+        su[batch.c_l_seq + at_laptop(e, k)] = k;
     }
     for (var k = 0u; k < su[batch.c_n_laptop_users + e]; k++) {
-        su[batch.c_lu_seq + ub + k] = k;
+        su[batch.c_lu_seq + at_laptop_user(e, k)] = k;
     }
     su[batch.c_seq_next + e] = su[batch.c_n_humans + e] + su[batch.c_n_groups + e] + su[batch.c_n_laptops + e]
         + su[batch.c_n_laptop_users + e];
@@ -107,16 +103,15 @@ fn regroup_key_less(a: vec4<u32>, b: vec4<u32>) -> bool {
 // then those in use in their users' order).
 fn regroup_key(e: u32, kind: u32, k: u32) -> vec4<u32> {
     if (kind == 0u) {
-        let g = e * batch.s_g_kind + k;
+        let g = at_group(e, k);
         return vec4<u32>(su[batch.c_g_kind + g], su[batch.c_g_seq + g], 0u, 0u);
     }
-    let ub = e * batch.s_lu_seq;
     if (kind == 1u) {
-        let u = ub + k;
+        let u = at_laptop_user(e, k);
         return vec4<u32>(u32(su[batch.c_lu_human + u] == NONE), su[batch.c_lu_seq + u], 0u, 0u);
     }
     if (kind == 2u) {
-        let i = e * batch.s_h_role + k;
+        let i = at_human(e, k);
         let r = su[batch.c_h_role + i];
         let seq = su[batch.c_h_seq + i];
         if (r == ROLE_STATIC) {
@@ -124,27 +119,27 @@ fn regroup_key(e: u32, kind: u32, k: u32) -> vec4<u32> {
         } else if (r == ROLE_DYNAMIC) {
             return vec4<u32>(1u, 0u, 0u, seq);
         } else if (r == ROLE_MOVING_GROUP || r == ROLE_STANDING_GROUP) {
-            let g = e * batch.s_g_kind + su[batch.c_h_group + i];
+            let g = at_group(e, su[batch.c_h_group + i]);
             return vec4<u32>(2u, su[batch.c_g_kind + g], su[batch.c_g_seq + g], seq);
         }
-        return vec4<u32>(3u, 0u, su[batch.c_lu_seq + ub + su[batch.c_h_laptop_user + i]], seq);
+        return vec4<u32>(3u, 0u, su[batch.c_lu_seq + at_laptop_user(e, su[batch.c_h_laptop_user + i])], seq);
     }
-    let l = e * batch.s_l_user + k;
+    let l = at_laptop(e, k);
     let u = su[batch.c_l_user + l];
     if (u == NONE) {
         return vec4<u32>(0u, su[batch.c_l_seq + l], 0u, 0u);
     }
-    return vec4<u32>(1u, su[batch.c_lu_seq + ub + u], 0u, 0u);
+    return vec4<u32>(1u, su[batch.c_lu_seq + at_laptop_user(e, u)], 0u, 0u);
 }
 
 // Whether sorted entry `old` of kind `kind` is kept: Rust `sorted_groups` and `sorted_users`
 // keep the leading live entries (dissolved groups and ended uses sort last).
 fn regroup_live(e: u32, kind: u32, old: u32) -> bool {
     if (kind == 0u) {
-        return su[batch.c_g_kind + e * batch.s_g_kind + old] != GROUP_DISSOLVED;
+        return su[batch.c_g_kind + at_group(e, old)] != GROUP_DISSOLVED;
     }
     if (kind == 1u) {
-        return su[batch.c_lu_human + e * batch.s_lu_human + old] != NONE;
+        return su[batch.c_lu_human + at_laptop_user(e, old)] != NONE;
     }
     return true;
 }
@@ -224,10 +219,6 @@ fn regroup_map(inv: ptr<function, array<u32, PERMUTE_CAP>>, v: u32) -> u32 {
 
 // Rust `remap`.
 fn regroup_remap(e: u32, perms: ptr<function, array<RegroupPerm, 4>>) {
-    let hb = e * batch.s_h_group;
-    let gb = e * batch.s_g_count;
-    let lb = e * batch.s_l_user;
-    let ub = e * batch.s_lu_human;
     let n_humans = su[batch.c_n_humans + e];
     var inv_g = regroup_inverse((*perms)[0], su[batch.c_n_groups + e]);
     var inv_u = regroup_inverse((*perms)[1], su[batch.c_n_laptop_users + e]);
@@ -235,7 +226,7 @@ fn regroup_remap(e: u32, perms: ptr<function, array<RegroupPerm, 4>>) {
     var inv_l = regroup_inverse((*perms)[3], su[batch.c_n_laptops + e]);
     var n_static = 0u;
     var n_dynamic = 0u;
-    for (var i = hb; i < hb + n_humans; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, n_humans); i += batch.k_human) {
         su[batch.c_h_group + i] = regroup_map(&inv_g, su[batch.c_h_group + i]);
         su[batch.c_h_laptop_user + i] = regroup_map(&inv_u, su[batch.c_h_laptop_user + i]);
         n_static += u32(su[batch.c_h_role + i] == ROLE_STATIC);
@@ -245,29 +236,28 @@ fn regroup_remap(e: u32, perms: ptr<function, array<RegroupPerm, 4>>) {
     su[batch.c_n_dynamic + e] = n_dynamic;
     su[batch.c_n_groups + e] = (*perms)[0].len;
     su[batch.c_n_laptop_users + e] = (*perms)[1].len;
-    for (var u = ub; u < ub + (*perms)[1].len; u++) {
+    for (var u = at_laptop_user(e, 0u); u < at_laptop_user(e, (*perms)[1].len); u += batch.k_laptop_user) {
         su[batch.c_lu_human + u] = regroup_map(&inv_h, su[batch.c_lu_human + u]);
         su[batch.c_lu_laptop + u] = regroup_map(&inv_l, su[batch.c_lu_laptop + u]);
     }
-    for (var l = lb; l < lb + su[batch.c_n_laptops + e]; l++) {
+    for (var l = at_laptop(e, 0u); l < at_laptop(e, su[batch.c_n_laptops + e]); l += batch.k_laptop) {
         su[batch.c_l_user + l] = regroup_map(&inv_u, su[batch.c_l_user + l]);
     }
     // Members are consecutive now: each group's first slot and count from the humans.
-    for (var g = gb; g < gb + (*perms)[0].len; g++) {
+    for (var g = at_group(e, 0u); g < at_group(e, (*perms)[0].len); g += batch.k_group) {
         su[batch.c_g_count + g] = 0u;
     }
     for (var k = 0u; k < n_humans; k++) {
-        let g = su[batch.c_h_group + hb + k];
+        let g = su[batch.c_h_group + at_human(e, k)];
         if (g != NONE) {
-            let gg = gb + g;
+            let gg = at_group(e, g);
             if (su[batch.c_g_count + gg] == 0u) {
                 su[batch.c_g_first + gg] = k;
             }
             su[batch.c_g_count + gg] += 1u;
         }
     }
-    let sb = e * batch.s_cf_human;
-    for (var k = sb; k < sb + su[batch.c_cf_count + e]; k++) {
+    for (var k = at_crowd_slot(e, 0u); k < at_crowd_slot(e, su[batch.c_cf_count + e]); k += batch.k_crowd_slot) {
         su[batch.c_cf_human + k] = regroup_map(&inv_h, su[batch.c_cf_human + k]);
     }
     if (su[batch.c_lf_active + e] != 0u) {

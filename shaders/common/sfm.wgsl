@@ -83,8 +83,7 @@ fn sfm_push_rect(view: MaybeView, o: ptr<function, SfmObstacles>, rc: Rect) {
 // rescaled by exp(−scale), and the largest exponent (−f32::MAX without any obstacle).
 fn sfm_obstacle_forces(e: u32, pos: vec2<f32>, r0: f32, robot: bool, view: MaybeView, scale: f32) -> vec3<f32> {
     var o = SfmObstacles(pos, r0, scale, vec3<f32>(0.0, 0.0, -0x1.fffffep127f));
-    let pb = e * batch.s_p_x;
-    for (var k = pb; k < pb + su[batch.c_n_plants + e]; k++) {
+    for (var k = at_plant(e, 0u); k < at_plant(e, su[batch.c_n_plants + e]); k += batch.k_plant) {
         sfm_push_disc(view, &o, Disc(sf[batch.c_p_x + k], sf[batch.c_p_y + k], params.plant_radius));
     }
     for (var w = 0u; w < su[batch.c_n_walls + e]; w++) {
@@ -93,14 +92,12 @@ fn sfm_obstacle_forces(e: u32, pos: vec2<f32>, r0: f32, robot: bool, view: Maybe
     for (var t = 0u; t < su[batch.c_n_tables + e]; t++) {
         sfm_push_rect(view, &o, world_table_rect(e, t));
     }
-    let lb = e * batch.s_l_x;
     for (var l = 0u; l < su[batch.c_n_laptops + e]; l++) {
-        if (su[batch.c_l_user + lb + l] == NONE) {
+        if (su[batch.c_l_user + at_laptop(e, l)] == NONE) {
             sfm_push_rect(view, &o, world_laptop_rect(e, l));
         }
     }
-    let gb = e * batch.s_g_x;
-    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
+    for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]); g += batch.k_group) {
         if (su[batch.c_g_kind + g] == GROUP_STANDING) {
             sfm_push_disc(view, &o, perception_group_disc(g));
         }
@@ -116,14 +113,13 @@ fn sfm_obstacle_forces(e: u32, pos: vec2<f32>, r0: f32, robot: bool, view: Maybe
 // Rust `pedestrian_forces`: Σ f_ij over the lone humans, moving-group members and laptop users
 // `view` sees (standing-group members are obstacles through their group's disc).
 fn sfm_pedestrian_forces(e: u32, i: u32, sp: SfmParams, view: MaybeView) -> vec2<f32> {
-    let hb = e * batch.s_h_x;
     let xi = sf[batch.c_h_x + i];
     let yi = sf[batch.c_h_y + i];
     let vix = sf[batch.c_h_vx + i];
     let viy = sf[batch.c_h_vy + i];
     var fx = 0.0;
     var fy = 0.0;
-    for (var j = hb; j < hb + su[batch.c_n_humans + e]; j++) {
+    for (var j = at_human(e, 0u); j < at_human(e, su[batch.c_n_humans + e]); j += batch.k_human) {
         if (j == i || su[batch.c_h_role + j] == ROLE_STANDING_GROUP || !perception_sees_human(view, e, j)) {
             continue;
         }

@@ -52,15 +52,18 @@ fn sn_seen(r: SnRobot, x: f32, y: f32, theta: f32) -> SnSeen {
     return SnSeen(l.x, l.y, math_wrap_angle(theta - r.theta));
 }
 
-// ---- history columns (history/view.rs layout: slot f of env e is row e * F + f) ----
+// ---- history columns (history/view.rs layout: ring slot f of env e is its frame slot f; the
+// frame's people are its frame_person slots f * batch.sn_frame_people + j, and likewise its
+// objects and links) ----
 
+// The frame columns' element of ring slot `slot` of environment e.
 fn sn_frame_row(e: u32, slot: u32) -> u32 {
-    return e * batch.sn_frames + slot;
+    return at_frame(e, slot);
 }
 
 // The ring slot of the frame taken `age` non-terminal steps ago (age < count).
 fn sn_slot_of_age(e: u32, age: u32) -> u32 {
-    return (su[batch.c_sn_newest + e] + batch.sn_frames - age) % batch.sn_frames;
+    return (su[batch.c_sn_newest + at_sngnn(e, 0u)] + batch.sn_frames - age) % batch.sn_frames;
 }
 
 // history::write::clear_slot: every row of ring slot `slot` zero.
@@ -78,7 +81,7 @@ fn sn_clear_slot(e: u32, slot: u32) {
     su[batch.c_sf_n_people + f] = 0u;
     su[batch.c_sf_n_objects + f] = 0u;
     su[batch.c_sf_n_links + f] = 0u;
-    for (var i = f * batch.sn_frame_people; i < (f + 1u) * batch.sn_frame_people; i++) {
+    for (var i = at_frame_person(e, slot * batch.sn_frame_people); i < at_frame_person(e, (slot + 1u) * batch.sn_frame_people); i += batch.k_frame_person) {
         su[batch.c_fp_id + i] = 0u;
         sf[batch.c_fp_x + i] = 0.0;
         sf[batch.c_fp_y + i] = 0.0;
@@ -87,7 +90,7 @@ fn sn_clear_slot(e: u32, slot: u32) {
         sf[batch.c_fp_vy + i] = 0.0;
         sf[batch.c_fp_va + i] = 0.0;
     }
-    for (var i = f * batch.sn_frame_objects; i < (f + 1u) * batch.sn_frame_objects; i++) {
+    for (var i = at_frame_object(e, slot * batch.sn_frame_objects); i < at_frame_object(e, (slot + 1u) * batch.sn_frame_objects); i += batch.k_frame_object) {
         su[batch.c_fo_id + i] = 0u;
         sf[batch.c_fo_x + i] = 0.0;
         sf[batch.c_fo_y + i] = 0.0;
@@ -98,7 +101,7 @@ fn sn_clear_slot(e: u32, slot: u32) {
         sf[batch.c_fo_size_x + i] = 0.0;
         sf[batch.c_fo_size_y + i] = 0.0;
     }
-    for (var i = f * batch.sn_frame_links; i < (f + 1u) * batch.sn_frame_links; i++) {
+    for (var i = at_frame_link(e, slot * batch.sn_frame_links); i < at_frame_link(e, (slot + 1u) * batch.sn_frame_links); i += batch.k_frame_link) {
         su[batch.c_fl_src + i] = 0u;
         su[batch.c_fl_dst + i] = 0u;
     }
@@ -106,14 +109,16 @@ fn sn_clear_slot(e: u32, slot: u32) {
 
 // history::write::begin_frame: a new newest frame (the ring drops the oldest); returns its slot.
 fn sn_begin_frame(e: u32, tick: u32, robot: SnRobot, goal: vec2<f32>, command: vec3<f32>) -> u32 {
-    let count = su[batch.c_sn_frame_count + e];
+    // The environment's element of the history's counters (their kind has one slot).
+    let hist = at_sngnn(e, 0u);
+    let count = su[batch.c_sn_frame_count + hist];
     var slot = 0u;
     if (count != 0u) {
-        slot = (su[batch.c_sn_newest + e] + 1u) % batch.sn_frames;
+        slot = (su[batch.c_sn_newest + hist] + 1u) % batch.sn_frames;
     }
     sn_clear_slot(e, slot);
-    su[batch.c_sn_newest + e] = slot;
-    su[batch.c_sn_frame_count + e] = min(count + 1u, batch.sn_frames);
+    su[batch.c_sn_newest + hist] = slot;
+    su[batch.c_sn_frame_count + hist] = min(count + 1u, batch.sn_frames);
     let f = sn_frame_row(e, slot);
     su[batch.c_sf_tick + f] = tick;
     sf[batch.c_sf_robot_x + f] = robot.x;
@@ -130,7 +135,7 @@ fn sn_begin_frame(e: u32, tick: u32, robot: SnRobot, goal: vec2<f32>, command: v
 // Index of entity `id`'s previous pose (ids 1..=batch.sn_entities; the CPU panics outside, the device
 // clamps so that it never writes out of the environment's rows).
 fn sn_prev_index(e: u32, id: u32) -> u32 {
-    return e * batch.sn_entities + clamp(id, 1u, batch.sn_entities) - 1u;
+    return at_sngnn_entity(e, clamp(id, 1u, batch.sn_entities) - 1u);
 }
 
 fn sn_previous(e: u32, id: u32) -> SnSeen {
@@ -164,7 +169,7 @@ fn sn_push_person(e: u32, slot: u32, id: u32, v: array<f32, 6>) {
     if (j >= batch.sn_frame_people) {
         return;
     }
-    let i = f * batch.sn_frame_people + j;
+    let i = at_frame_person(e, slot * batch.sn_frame_people + j);
     su[batch.c_fp_id + i] = id;
     sf[batch.c_fp_x + i] = v[0];
     sf[batch.c_fp_y + i] = v[1];
@@ -182,7 +187,7 @@ fn sn_push_object(e: u32, slot: u32, id: u32, v: array<f32, 6>, size: vec2<f32>)
     if (j >= batch.sn_frame_objects) {
         return;
     }
-    let i = f * batch.sn_frame_objects + j;
+    let i = at_frame_object(e, slot * batch.sn_frame_objects + j);
     su[batch.c_fo_id + i] = id;
     sf[batch.c_fo_x + i] = v[0];
     sf[batch.c_fo_y + i] = v[1];
@@ -202,7 +207,7 @@ fn sn_push_link(e: u32, slot: u32, src: u32, dst: u32) {
     if (j >= batch.sn_frame_links) {
         return;
     }
-    let i = f * batch.sn_frame_links + j;
+    let i = at_frame_link(e, slot * batch.sn_frame_links + j);
     su[batch.c_fl_src + i] = src;
     su[batch.c_fl_dst + i] = dst;
     su[batch.c_sf_n_links + f] = j + 1u;
@@ -221,8 +226,7 @@ fn sn_command(e: u32) -> vec3<f32> {
 
 // frame::push_people: every human in slot order, remembering each pose.
 fn sn_push_people(e: u32, slot: u32, robot: SnRobot, period_steps: f32) {
-    let hb = e * batch.s_h_x;
-    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]); i += batch.k_human) {
         let id = su[batch.c_h_id + i];
         let now = sn_seen(robot, sf[batch.c_h_x + i], sf[batch.c_h_y + i], sf[batch.c_h_theta + i]);
         let entry = sn_entry(now, sn_previous(e, id), period_steps);
@@ -233,8 +237,7 @@ fn sn_push_people(e: u32, slot: u32, robot: SnRobot, period_steps: f32) {
 
 // frame::push_objects: laptops, plants (2r x 2r), tables.
 fn sn_push_objects(e: u32, slot: u32, robot: SnRobot, period_steps: f32) {
-    let lb = e * batch.s_l_x;
-    for (var i = lb; i < lb + su[batch.c_n_laptops + e]; i++) {
+    for (var i = at_laptop(e, 0u); i < at_laptop(e, su[batch.c_n_laptops + e]); i += batch.k_laptop) {
         let id = su[batch.c_l_id + i];
         let now = sn_seen(robot, sf[batch.c_l_x + i], sf[batch.c_l_y + i], sf[batch.c_l_theta + i]);
         let size = vec2<f32>(params.laptop_length, params.laptop_width);
@@ -242,9 +245,8 @@ fn sn_push_objects(e: u32, slot: u32, robot: SnRobot, period_steps: f32) {
         sn_remember(e, id, now);
         sn_push_object(e, slot, id, entry, size);
     }
-    let pb = e * batch.s_p_x;
     let diameter = 2.0 * params.plant_radius;
-    for (var i = pb; i < pb + su[batch.c_n_plants + e]; i++) {
+    for (var i = at_plant(e, 0u); i < at_plant(e, su[batch.c_n_plants + e]); i += batch.k_plant) {
         let id = su[batch.c_p_id + i];
         let now = sn_seen(robot, sf[batch.c_p_x + i], sf[batch.c_p_y + i], 0.0);
         let size = vec2<f32>(diameter, diameter);
@@ -252,8 +254,7 @@ fn sn_push_objects(e: u32, slot: u32, robot: SnRobot, period_steps: f32) {
         sn_remember(e, id, now);
         sn_push_object(e, slot, id, entry, size);
     }
-    let tb = e * batch.s_t_x;
-    for (var i = tb; i < tb + su[batch.c_n_tables + e]; i++) {
+    for (var i = at_table(e, 0u); i < at_table(e, su[batch.c_n_tables + e]); i += batch.k_table) {
         let id = su[batch.c_t_id + i];
         let now = sn_seen(robot, sf[batch.c_t_x + i], sf[batch.c_t_y + i], sf[batch.c_t_theta + i]);
         let size = vec2<f32>(params.table_length, params.table_width);
@@ -265,13 +266,11 @@ fn sn_push_objects(e: u32, slot: u32, robot: SnRobot, period_steps: f32) {
 
 // frame::push_links: per group, members i < j give j -> i then i -> j; then laptop -> user.
 fn sn_push_links(e: u32, slot: u32) {
-    let hb = e * batch.s_h_x;
-    let gb = e * batch.s_g_first;
-    for (var g = gb; g < gb + su[batch.c_n_groups + e]; g++) {
-        let first = hb + su[batch.c_g_first + g];
+    for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]); g += batch.k_group) {
+        let first = su[batch.c_g_first + g];
         let n = su[batch.c_g_count + g];
-        for (var i = first; i < first + n; i++) {
-            for (var j = i + 1u; j < first + n; j++) {
+        for (var i = at_human(e, first); i < at_human(e, first + n); i += batch.k_human) {
+            for (var j = i + batch.k_human; j < at_human(e, first + n); j += batch.k_human) {
                 let a = su[batch.c_h_id + i];
                 let b = su[batch.c_h_id + j];
                 sn_push_link(e, slot, b, a);
@@ -279,11 +278,9 @@ fn sn_push_links(e: u32, slot: u32) {
             }
         }
     }
-    let ub = e * batch.s_lu_human;
-    let lb = e * batch.s_l_x;
-    for (var u = ub; u < ub + su[batch.c_n_laptop_users + e]; u++) {
-        let human = su[batch.c_h_id + hb + su[batch.c_lu_human + u]];
-        let laptop = su[batch.c_l_id + lb + su[batch.c_lu_laptop + u]];
+    for (var u = at_laptop_user(e, 0u); u < at_laptop_user(e, su[batch.c_n_laptop_users + e]); u += batch.k_laptop_user) {
+        let human = su[batch.c_h_id + at_human(e, su[batch.c_lu_human + u])];
+        let laptop = su[batch.c_l_id + at_laptop(e, su[batch.c_lu_laptop + u])];
         sn_push_link(e, slot, laptop, human);
     }
 }

@@ -142,7 +142,7 @@ fn sn_gap_after(last: u32) -> u32 {
 fn sn_select(e: u32) -> SnSelection {
     var out: SnSelection;
     out.len = 0u;
-    let count = su[batch.c_sn_frame_count + e];
+    let count = su[batch.c_sn_frame_count + at_sngnn(e, 0u)];
     if (count == 0u) {
         return out;
     }
@@ -169,7 +169,7 @@ fn sn_select(e: u32) -> SnSelection {
 
 // frame::wall_ends: wall w's end points (x1, y1, x2, y2) (m, SNGNN axes) seen from `robot`.
 fn sn_wall_ends(e: u32, w: u32, robot: SnRobot) -> vec4<f32> {
-    let i = e * batch.s_w_x + w;
+    let i = at_wall(e, w);
     let half = 0.5 * sf[batch.c_w_length + i];
     let dx = half * sf[batch.c_w_cos + i];
     let dy = half * sf[batch.c_w_sin + i];
@@ -255,14 +255,16 @@ struct SnEntity {
     va: f32,
 }
 
-fn sn_person_of(f: u32, j: u32) -> SnEntity {
-    let i = f * batch.sn_frame_people + j;
+// Person `j` of ring slot `slot` of environment e.
+fn sn_person_of(e: u32, slot: u32, j: u32) -> SnEntity {
+    let i = at_frame_person(e, slot * batch.sn_frame_people + j);
     return SnEntity(su[batch.c_fp_id + i], sf[batch.c_fp_x + i], sf[batch.c_fp_y + i], sf[batch.c_fp_a + i],
         sf[batch.c_fp_vx + i], sf[batch.c_fp_vy + i], sf[batch.c_fp_va + i]);
 }
 
-fn sn_object_of(f: u32, j: u32) -> SnEntity {
-    let i = f * batch.sn_frame_objects + j;
+// Object `j` of ring slot `slot` of environment e.
+fn sn_object_of(e: u32, slot: u32, j: u32) -> SnEntity {
+    let i = at_frame_object(e, slot * batch.sn_frame_objects + j);
     return SnEntity(su[batch.c_fo_id + i], sf[batch.c_fo_x + i], sf[batch.c_fo_y + i], sf[batch.c_fo_a + i],
         sf[batch.c_fo_vx + i], sf[batch.c_fo_vy + i], sf[batch.c_fo_va + i]);
 }
@@ -364,9 +366,9 @@ fn sn_walls(e: u32, base: u32, lay: SnLayout, robot: SnRobot) {
 }
 
 // FrameGraph::wall_person_edges, first half: segment -> person for each person, then segment.
-fn sn_wall_to_person_edges(e: u32, base: u32, f: u32, lay: SnLayout, robot: SnRobot) {
+fn sn_wall_to_person_edges(e: u32, base: u32, slot: u32, lay: SnLayout, robot: SnRobot) {
     for (var j = 0u; j < lay.people; j++) {
-        let p = sn_person_of(f, j);
+        let p = sn_person_of(e, slot, j);
         var node = lay.goal + 1u;
         for (var w = 0u; w < lay.walls; w++) {
             let n = sn_wall_segments[w];
@@ -383,7 +385,7 @@ fn sn_wall_to_person_edges(e: u32, base: u32, f: u32, lay: SnLayout, robot: SnRo
 }
 
 // Second half: person -> segment for each segment, then person.
-fn sn_person_to_wall_edges(e: u32, base: u32, f: u32, lay: SnLayout, robot: SnRobot) {
+fn sn_person_to_wall_edges(e: u32, base: u32, slot: u32, lay: SnLayout, robot: SnRobot) {
     var node = lay.goal + 1u;
     for (var w = 0u; w < lay.walls; w++) {
         let n = sn_wall_segments[w];
@@ -391,7 +393,7 @@ fn sn_person_to_wall_edges(e: u32, base: u32, f: u32, lay: SnLayout, robot: SnRo
         for (var i = 0u; i < n; i++) {
             let seg = sn_segment(split, i, node);
             for (var j = 0u; j < lay.people; j++) {
-                let p = sn_person_of(f, j);
+                let p = sn_person_of(e, slot, j);
                 let d = sn_metres(p, seg);
                 if (d < SN_HUMAN_WALL_THRESHOLD) {
                     sn_push_edge(e, base + p.id, base + node, SN_REL_P_W, d);
@@ -402,17 +404,19 @@ fn sn_person_to_wall_edges(e: u32, base: u32, f: u32, lay: SnLayout, robot: SnRo
     }
 }
 
-// graph::Endpoint: the person or object `id` of frame row f: its /10 position and whether it is
-// a person (w = 1). The CPU panics on an unknown id; the device takes the origin.
-fn sn_endpoint(f: u32, id: u32) -> vec3<f32> {
+// graph::Endpoint: the person or object `id` of ring slot `slot` of environment e: its /10
+// position and whether it is a person (w = 1). The CPU panics on an unknown id; the device takes
+// the origin.
+fn sn_endpoint(e: u32, slot: u32, id: u32) -> vec3<f32> {
+    let f = sn_frame_row(e, slot);
     for (var j = 0u; j < su[batch.c_sf_n_people + f]; j++) {
-        let p = sn_person_of(f, j);
+        let p = sn_person_of(e, slot, j);
         if (p.id == id) {
             return vec3<f32>(p.x / SN_POSITION_SCALE, p.y / SN_POSITION_SCALE, 1.0);
         }
     }
     for (var j = 0u; j < su[batch.c_sf_n_objects + f]; j++) {
-        let o = sn_object_of(f, j);
+        let o = sn_object_of(e, slot, j);
         if (o.id == id) {
             return vec3<f32>(o.x / SN_POSITION_SCALE, o.y / SN_POSITION_SCALE, 0.0);
         }
@@ -432,13 +436,14 @@ fn sn_relation(src_person: bool, dst_person: bool) -> u32 {
 }
 
 // FrameGraph::interaction_edges: each entry src -> dst and back.
-fn sn_interaction_edges(e: u32, base: u32, f: u32) {
+fn sn_interaction_edges(e: u32, base: u32, slot: u32) {
+    let f = sn_frame_row(e, slot);
     for (var k = 0u; k < su[batch.c_sf_n_links + f]; k++) {
-        let i = f * batch.sn_frame_links + k;
+        let i = at_frame_link(e, slot * batch.sn_frame_links + k);
         let src = su[batch.c_fl_src + i];
         let dst = su[batch.c_fl_dst + i];
-        let a = sn_endpoint(f, src);
-        let b = sn_endpoint(f, dst);
+        let a = sn_endpoint(e, slot, src);
+        let b = sn_endpoint(e, slot, dst);
         let dx = a.x - b.x;
         let dy = a.y - b.y;
         let d = sqrt(dx * dx + dy * dy);
@@ -447,9 +452,9 @@ fn sn_interaction_edges(e: u32, base: u32, f: u32) {
     }
 }
 
-// The object sizes as frame records hold them.
-fn sn_object_size(f: u32, j: u32) -> vec2<f32> {
-    let i = f * batch.sn_frame_objects + j;
+// The object sizes as frame records hold them (object `j` of ring slot `slot` of environment e).
+fn sn_object_size(e: u32, slot: u32, j: u32) -> vec2<f32> {
+    let i = at_frame_object(e, slot * batch.sn_frame_objects + j);
     return vec2<f32>(sf[batch.c_fo_size_x + i], sf[batch.c_fo_size_y + i]);
 }
 
@@ -459,17 +464,17 @@ fn sn_add_frame(e: u32, slot: u32, k: u32, lay: SnLayout) {
     let f = sn_frame_row(e, slot);
     sn_room(e, base, f);
     for (var j = 0u; j < su[batch.c_sf_n_people + f]; j++) {
-        sn_person(e, base, sn_person_of(f, j));
+        sn_person(e, base, sn_person_of(e, slot, j));
     }
     for (var j = 0u; j < su[batch.c_sf_n_objects + f]; j++) {
-        sn_object(e, base, sn_object_of(f, j), sn_object_size(f, j));
+        sn_object(e, base, sn_object_of(e, slot, j), sn_object_size(e, slot, j));
     }
     sn_goal(e, base, f, lay);
     let robot = sn_robot(sf[batch.c_sf_robot_x + f], sf[batch.c_sf_robot_y + f], sf[batch.c_sf_robot_theta + f]);
     sn_walls(e, base, lay, robot);
-    sn_wall_to_person_edges(e, base, f, lay, robot);
-    sn_person_to_wall_edges(e, base, f, lay, robot);
-    sn_interaction_edges(e, base, f);
+    sn_wall_to_person_edges(e, base, slot, lay, robot);
+    sn_person_to_wall_edges(e, base, slot, lay, robot);
+    sn_interaction_edges(e, base, slot);
     for (var n = 0u; n < lay.nodes; n++) {
         sn_push_edge(e, base + n, base + n, SN_REL_SELF, 0.0);
         sn_set_feature(e, base + n, SN_F_IS_T + k, 1.0);

@@ -11,7 +11,7 @@ struct Touches {
 }
 
 fn world_wall_rect(e: u32, w: u32) -> Rect {
-    let i = e * batch.s_w_x + w;
+    let i = at_wall(e, w);
     return geo_rect_with_trig(
         sf[batch.c_w_x + i], sf[batch.c_w_y + i], sf[batch.c_w_cos + i], sf[batch.c_w_sin + i], sf[batch.c_w_length + i],
         params.wall_thickness,
@@ -19,7 +19,7 @@ fn world_wall_rect(e: u32, w: u32) -> Rect {
 }
 
 fn world_table_rect(e: u32, t: u32) -> Rect {
-    let i = e * batch.s_t_x + t;
+    let i = at_table(e, t);
     return geo_rect_with_trig(
         sf[batch.c_t_x + i], sf[batch.c_t_y + i], sf[batch.c_t_cos + i], sf[batch.c_t_sin + i], params.table_length,
         params.table_width,
@@ -27,7 +27,7 @@ fn world_table_rect(e: u32, t: u32) -> Rect {
 }
 
 fn world_laptop_rect(e: u32, l: u32) -> Rect {
-    let i = e * batch.s_l_x + l;
+    let i = at_laptop(e, l);
     return geo_rect_with_trig(
         sf[batch.c_l_x + i], sf[batch.c_l_y + i], sf[batch.c_l_cos + i], sf[batch.c_l_sin + i], params.laptop_length,
         params.laptop_width,
@@ -39,8 +39,7 @@ fn world_laptop_rect(e: u32, l: u32) -> Rect {
 fn world_touches(e: u32, d: Disc) -> Touches {
     let shape = params.contact_shape;
     var t = Touches(false, false, false);
-    let hb = e * batch.s_h_x;
-    for (var i = hb; i < hb + su[batch.c_n_humans + e]; i++) {
+    for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]); i += batch.k_human) {
         if (geo_disc_disc_as(shape, d, Disc(sf[batch.c_h_x + i], sf[batch.c_h_y + i], params.human_radius))) {
             t.human = true;
             break;
@@ -53,8 +52,7 @@ fn world_touches(e: u32, d: Disc) -> Touches {
         }
     }
     var plant = false;
-    let pb = e * batch.s_p_x;
-    for (var i = pb; i < pb + su[batch.c_n_plants + e]; i++) {
+    for (var i = at_plant(e, 0u); i < at_plant(e, su[batch.c_n_plants + e]); i += batch.k_plant) {
         if (geo_disc_disc_as(shape, d, Disc(sf[batch.c_p_x + i], sf[batch.c_p_y + i], params.plant_radius))) {
             plant = true;
             break;

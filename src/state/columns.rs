@@ -5,7 +5,8 @@
 //! later, the GPU buffers.
 //!
 //! Every column belongs to a *kind* (per environment, per human slot, ...): its stride is the
-//! capacity of that kind, and element `slot` of environment `env` sits at `env * stride + slot`.
+//! capacity of that kind, and element `slot` of environment `env` sits at `env * stride + slot`
+//! (on the host; the GPU keeps another [`ElementOrder`], and `pack_in`/`unpack_in` convert).
 
 /// Element type of a column, for hashing and GPU upload.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -16,19 +17,92 @@ pub enum Elem {
     U32,
 }
 
+/// Where element `slot` of environment `e` sits in a state column of capacity `cap` on the
+/// device, in a batch of `n` environments: at `e * cap + slot` (environment-major, the CPU's
+/// order: one environment's slots together) or at `slot * n + e` (slot-major: one slot of
+/// consecutive environments together, so that the lanes of a warp, consecutive environments,
+/// touch consecutive words). The shaders never spell either: they index a kind's columns through
+/// the prelude's `at_<kind>(e, slot)`, whose two steps, `e_<kind>` and `k_<kind>`, are
+/// `crate::backend::wgsl::BatchLayout` values; the tables' `pack` and `unpack` convert.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ElementOrder {
+    /// `e * cap + slot`.
+    EnvMajor,
+    /// `slot * n + e`.
+    SlotMajor,
+}
+
+impl ElementOrder {
+    /// The steps `(env, slot)` of a column of capacity `cap` in a batch of `n_envs`: element
+    /// (e, slot) is at `e * env + slot * slot_step` from the column's first word.
+    pub fn steps(self, n_envs: usize, cap: usize) -> (usize, usize) {
+        match self {
+            Self::EnvMajor => (cap, 1),
+            Self::SlotMajor => (1, n_envs),
+        }
+    }
+}
+
 /// A value that can live in a column.
 pub trait ColumnValue: Copy + Default + Send + Sync + 'static {
     /// Its element kind.
     const ELEM: Elem;
     /// Its bits, for fingerprints (`-0.0` is normalised to `+0.0`).
     fn bits(self) -> u32;
-    /// Append `column` to the packed array of its element kind (the GPU buffers hold every
-    /// column of one kind back to back, in declaration order).
-    fn pack(column: &[Self], f32s: &mut Vec<f32>, u32s: &mut Vec<u32>);
-    /// Fill `column` from the packed array of its kind, starting at that array's cursor.
-    fn unpack(column: &mut [Self], f32s: &[f32], u32s: &[u32], cursor: &mut [usize; 2]);
+    /// Append `column` (environment-major, `stride` elements per environment) to the packed
+    /// array of its element kind in `order` (the GPU buffers hold every column of one kind back
+    /// to back).
+    fn pack(
+        column: &[Self],
+        stride: usize,
+        order: ElementOrder,
+        f32s: &mut Vec<f32>,
+        u32s: &mut Vec<u32>,
+    );
+    /// Fill `column` from the packed array of its kind in `order`, starting at that array's
+    /// cursor.
+    fn unpack(
+        column: &mut [Self],
+        stride: usize,
+        order: ElementOrder,
+        f32s: &[f32],
+        u32s: &[u32],
+        cursor: &mut [usize; 2],
+    );
     /// `column` as its 32-bit words (an f32's bits), to be written in place.
     fn words_mut(column: &mut [Self]) -> &mut [u32];
+}
+
+/// Append `column` (environment-major, `stride` elements per environment) to `out` in `order`.
+fn append_in_order<T: Copy>(column: &[T], stride: usize, order: ElementOrder, out: &mut Vec<T>) {
+    match order {
+        ElementOrder::SlotMajor if stride > 1 => {
+            let n = column.len() / stride;
+            out.extend((0..stride).flat_map(|slot| (0..n).map(move |e| column[e * stride + slot])));
+        }
+        _ => out.extend_from_slice(column),
+    }
+}
+
+/// The inverse of [`append_in_order`]: `column` read from `packed` at `cursor` (moved past it).
+fn read_in_order<T: Copy>(
+    column: &mut [T],
+    stride: usize,
+    order: ElementOrder,
+    packed: &[T],
+    cursor: &mut usize,
+) {
+    let words = &packed[*cursor..*cursor + column.len()];
+    match order {
+        ElementOrder::SlotMajor if stride > 1 => {
+            let n = column.len() / stride;
+            for (k, &v) in words.iter().enumerate() {
+                column[(k % n) * stride + k / n] = v;
+            }
+        }
+        _ => column.copy_from_slice(words),
+    }
+    *cursor += column.len();
 }
 
 impl ColumnValue for f32 {
@@ -36,12 +110,24 @@ impl ColumnValue for f32 {
     fn bits(self) -> u32 {
         if self == 0.0 { 0 } else { self.to_bits() }
     }
-    fn pack(column: &[Self], f32s: &mut Vec<f32>, _: &mut Vec<u32>) {
-        f32s.extend_from_slice(column);
+    fn pack(
+        column: &[Self],
+        stride: usize,
+        order: ElementOrder,
+        f32s: &mut Vec<f32>,
+        _: &mut Vec<u32>,
+    ) {
+        append_in_order(column, stride, order, f32s);
     }
-    fn unpack(column: &mut [Self], f32s: &[f32], _: &[u32], cursor: &mut [usize; 2]) {
-        column.copy_from_slice(&f32s[cursor[0]..cursor[0] + column.len()]);
-        cursor[0] += column.len();
+    fn unpack(
+        column: &mut [Self],
+        stride: usize,
+        order: ElementOrder,
+        f32s: &[f32],
+        _: &[u32],
+        cursor: &mut [usize; 2],
+    ) {
+        read_in_order(column, stride, order, f32s, &mut cursor[0]);
     }
     fn words_mut(column: &mut [Self]) -> &mut [u32] {
         bytemuck::cast_slice_mut(column)
@@ -53,12 +139,24 @@ impl ColumnValue for u32 {
     fn bits(self) -> u32 {
         self
     }
-    fn pack(column: &[Self], _: &mut Vec<f32>, u32s: &mut Vec<u32>) {
-        u32s.extend_from_slice(column);
+    fn pack(
+        column: &[Self],
+        stride: usize,
+        order: ElementOrder,
+        _: &mut Vec<f32>,
+        u32s: &mut Vec<u32>,
+    ) {
+        append_in_order(column, stride, order, u32s);
     }
-    fn unpack(column: &mut [Self], _: &[f32], u32s: &[u32], cursor: &mut [usize; 2]) {
-        column.copy_from_slice(&u32s[cursor[1]..cursor[1] + column.len()]);
-        cursor[1] += column.len();
+    fn unpack(
+        column: &mut [Self],
+        stride: usize,
+        order: ElementOrder,
+        _: &[f32],
+        u32s: &[u32],
+        cursor: &mut [usize; 2],
+    ) {
+        read_in_order(column, stride, order, u32s, &mut cursor[1]);
     }
     fn words_mut(column: &mut [Self]) -> &mut [u32] {
         column
@@ -137,15 +235,40 @@ macro_rules! soa {
             }
 
             /// Every column appended to the packed array of its element kind, in declaration
-            /// order (the layout of the GPU buffers; offsets from [`Self::columns`]).
+            /// order (the layout of the GPU buffers; offsets from [`Self::columns`]), each
+            /// column's elements environment-major.
             pub fn pack(&self, f32s: &mut Vec<f32>, u32s: &mut Vec<u32>) {
-                $( <$ty as $crate::state::columns::ColumnValue>::pack(&self.$col, f32s, u32s); )*
+                self.pack_in($crate::state::columns::ElementOrder::EnvMajor, f32s, u32s);
+            }
+
+            /// [`Self::pack`] with each column's elements in `order`.
+            pub fn pack_in(
+                &self,
+                order: $crate::state::columns::ElementOrder,
+                f32s: &mut Vec<f32>,
+                u32s: &mut Vec<u32>,
+            ) {
+                $( <$ty as $crate::state::columns::ColumnValue>::pack(
+                    &self.$col, self.strides.$kind(), order, f32s, u32s,
+                ); )*
             }
 
             /// The inverse of [`Self::pack`]: every column read back from the packed arrays.
             pub fn unpack(&mut self, f32s: &[f32], u32s: &[u32]) {
+                self.unpack_in($crate::state::columns::ElementOrder::EnvMajor, f32s, u32s);
+            }
+
+            /// The inverse of [`Self::pack_in`].
+            pub fn unpack_in(
+                &mut self,
+                order: $crate::state::columns::ElementOrder,
+                f32s: &[f32],
+                u32s: &[u32],
+            ) {
                 let mut cursor = [0usize; 2];
-                $( <$ty as $crate::state::columns::ColumnValue>::unpack(&mut self.$col, f32s, u32s, &mut cursor); )*
+                $( <$ty as $crate::state::columns::ColumnValue>::unpack(
+                    &mut self.$col, self.strides.$kind(), order, f32s, u32s, &mut cursor,
+                ); )*
             }
 
             /// Column `name`'s 32-bit words (an f32 column's bits), to be written in place;

@@ -313,7 +313,7 @@ impl GpuStages {
     ) -> Result<Self, SimError> {
         let n_envs = state.n_envs;
         let (mut f, mut u) = (Vec::new(), Vec::new());
-        state.pack(&mut f, &mut u);
+        state.pack_in(wgsl::DEVICE_ORDER, &mut f, &mut u);
         let state_table = DeviceTable::new(&dev, "state", n_envs, f, u)?;
         let (mut f, mut u) = (Vec::new(), Vec::new());
         outputs.pack(&mut f, &mut u);
@@ -590,7 +590,7 @@ impl GpuStages {
         let t = &mut self.state;
         t.packed_f32.clear();
         t.packed_u32.clear();
-        state.pack(&mut t.packed_f32, &mut t.packed_u32);
+        state.pack_in(wgsl::DEVICE_ORDER, &mut t.packed_f32, &mut t.packed_u32);
         self.write(&self.state);
     }
 
@@ -970,7 +970,7 @@ impl GpuStages {
     /// Read the device's state back into `state` (same batch size and capacities).
     pub fn download_state(&self, state: &mut BatchState) -> Result<(), SimError> {
         let (f, u) = self.read_table(&self.state)?;
-        state.unpack(&f, &u);
+        state.unpack_in(wgsl::DEVICE_ORDER, &f, &u);
         Ok(())
     }
 

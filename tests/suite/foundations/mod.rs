@@ -1,7 +1,8 @@
 //! The pieces under everything: the counter-based random streams (`src/rng.rs`), the accuracy of
-//! `socnav::math`, the shaders' validation and the parts generated into them, and the crate's
-//! module graph.
+//! `socnav::math`, the device's element order, the shaders' validation and the parts generated
+//! into them, and the crate's module graph.
 
+mod element_order;
 mod math_accuracy;
 mod module_graph;
 mod rng;
