@@ -23,7 +23,7 @@ pub enum Elem {
 /// consecutive environments together, so that the lanes of a warp, consecutive environments,
 /// touch consecutive words). The shaders never spell either: they index a kind's columns through
 /// the prelude's `at_<kind>(e, slot)`, whose two steps, `e_<kind>` and `k_<kind>`, are
-/// `crate::backend::wgsl::BatchLayout` values; the tables' `pack` and `unpack` convert.
+/// `crate::backend::wgsl::BatchLayout` values; the tables' `pack_in` and `unpack_in` convert.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ElementOrder {
     /// `e * cap + slot`.
@@ -33,8 +33,8 @@ pub enum ElementOrder {
 }
 
 impl ElementOrder {
-    /// The steps `(env, slot)` of a column of capacity `cap` in a batch of `n_envs`: element
-    /// (e, slot) is at `e * env + slot * slot_step` from the column's first word.
+    /// The steps `(env_step, slot_step)` of a column of capacity `cap` in a batch of `n_envs`:
+    /// element (e, slot) is at `e * env_step + slot * slot_step` from the column's first word.
     pub fn steps(self, n_envs: usize, cap: usize) -> (usize, usize) {
         match self {
             Self::EnvMajor => (cap, 1),
