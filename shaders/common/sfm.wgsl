@@ -142,6 +142,10 @@ fn sfm_pedestrian_forces(e: u32, i: u32, sp: SfmParams, view: MaybeView) -> vec2
         let nx = -ey;
         let ny = ex;
         let d = sfm_length(xi - sf[batch.c_h_x + j], yi - sf[batch.c_h_y + j]);
+        if (d == 0.0 && b == 0.0) {
+            // Rust: two walkers at one point with one velocity exert no force (exp(-0 / 0)).
+            continue;
+        }
         let m = -math_exp(-d / b);
         let a1 = sp.n_prime * b * theta;
         let a2 = sp.n * b * theta;

@@ -357,7 +357,14 @@ pub(super) fn human_params(
         1e9,
         "the social force's range is positive",
     )?;
-    s.sfm_gamma[e] = r.f("sfm_gamma")?;
+    // The interaction's scale B = gamma |D| divides the pair's distance in exp(-d / B): drawn as
+    // 0.25 + 0.01 N, and a negative one makes the force of a distant pedestrian overflow.
+    s.sfm_gamma[e] = r.f_in(
+        "sfm_gamma",
+        f32::MIN_POSITIVE,
+        1e9,
+        "the social force's interaction scale is positive",
+    )?;
     s.sfm_n[e] = r.f("sfm_n")?;
     s.sfm_n_prime[e] = r.f("sfm_n_prime")?;
     s.sfm_lambda[e] = r.f("sfm_lambda")?;

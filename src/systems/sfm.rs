@@ -196,6 +196,11 @@ fn pedestrian_forces(
         let theta = math::acos((ex * tx + ey * ty).clamp(-1.0, 1.0));
         let (nx, ny) = (-ey, ex);
         let d = length(xi - s.h_x[j], yi - s.h_y[j]);
+        if d == 0.0 && b == 0.0 {
+            // Two walkers at one point with one velocity: no direction to push along (e, t and
+            // n are zero) and exp(-0 / 0) is NaN, in 0.1.1's f64 too; the pair exerts no force.
+            continue;
+        }
         let m = -math::exp(-d / b);
         let a1 = sp.n_prime * b * theta;
         let a2 = sp.n * b * theta;

@@ -299,6 +299,58 @@ fn regression_an_overflowing_obstacle_force_sends_the_walker_away_at_its_limit()
     walker["policy"] = serde_json::json!("sfm");
     walker["x"] = serde_json::json!(4.5);
     walker["y"] = serde_json::json!(0.0);
+    for env in stepped_on_every_backend(&doc) {
+        let (s, limit) = (env.state().unwrap(), env.params().human_max_speed);
+        assert_eq!(s.h_speed[0], limit);
+        assert!(s.h_vx[0] < -0.999 * limit, "{}", s.h_vx[0]);
+    }
+}
+
+/// Found by the long run (seed 4150): a document with a negative social-force interaction scale
+/// `sfm_gamma` (-0.25; drawn as 0.25 + 0.01 N) and an SFM walker flung 2,000 km away (the step's
+/// f32 ORCA can fling, and a document may hold it): B = gamma |D| < 0 turned exp(-d / B) for the
+/// distant pair into +inf and the observation into NaN. The scale is now refused unless
+/// positive.
+#[test]
+fn regression_a_non_positive_interaction_scale_is_refused() {
+    let mut env = batch(CONFIGS[0], 269, 2);
+    for gamma in [-0.2525, 0.0] {
+        let mut doc = env.get_state(0).unwrap();
+        doc["human_params"]["sfm_gamma"] = serde_json::json!(gamma);
+        doc["state"]["humans"][0]["x"] = serde_json::json!(-2009607.3);
+        assert_refused(&mut env, &doc, "`human_params.sfm_gamma` is");
+        check(&mut env, &doc);
+    }
+}
+
+/// Two walkers at one point with one velocity (a document can load them; 0.1.1's spawn never
+/// makes them): the pair has no direction (the unit vector between them and D are zero) and
+/// 0.1.1's exp(-0 / 0) is NaN, in f64 too. Such a pair exerts no force, on both backends alike,
+/// and the walker goes on toward its goal (docs/fidelity.md).
+#[test]
+fn walkers_at_one_point_with_one_velocity_exert_no_force_on_each_other() {
+    let mut doc = batch(CONFIGS[0], 877, 0).get_state(0).unwrap();
+    let humans = doc["state"]["humans"].as_array_mut().unwrap();
+    // Any human the walker's social force sees (all but standing groups' members, which are
+    // obstacles through their group's disc).
+    let other = (1..humans.len())
+        .find(|&k| humans[k]["role"] != "standing_group")
+        .expect("exp3 has a second walking or seated human");
+    assert_eq!(humans[0]["role"], "dynamic");
+    humans[0]["policy"] = serde_json::json!("sfm");
+    for key in ["x", "y", "speed", "theta"] {
+        humans[0][key] = humans[other][key].clone();
+    }
+    for env in stepped_on_every_backend(&doc) {
+        let s = env.state().unwrap();
+        assert!(s.h_speed[0] > 0.0, "the walker heads for its goal");
+    }
+}
+
+/// `doc` loaded into a one-environment exp3 batch on the CPU backend and, where there is a
+/// device, on the GPU backend, and stepped once: each keeps its invariants and outputs finite,
+/// and the two agree bit for bit.
+fn stepped_on_every_backend(doc: &Value) -> Vec<BatchEnv> {
     let mut backends = vec![socnav::backend::BackendChoice::Cpu];
     if crate::common::gpu::device().is_some() {
         backends.push(socnav::backend::BackendChoice::Gpu);
@@ -313,12 +365,9 @@ fn regression_an_overflowing_obstacle_force_sends_the_walker_away_at_its_limit()
         let config = Config::from_name_or_path(CONFIGS[0]).unwrap();
         let mut env = BatchEnv::new(config, options).unwrap();
         env.reset(Some(877)).unwrap();
-        env.set_state(0, &doc).unwrap();
+        env.set_state(0, doc).unwrap();
         env.step(Actions::Continuous(&[0.0, 0.0, 0.0])).unwrap();
         assert_clean(&env, &format!("{backend:?}"));
-        let (s, limit) = (env.state().unwrap(), env.params().human_max_speed);
-        assert_eq!(s.h_speed[0], limit, "{backend:?}");
-        assert!(s.h_vx[0] < -0.999 * limit, "{backend:?}: {}", s.h_vx[0]);
         stepped.push(env);
     }
     if let [cpu, gpu] = &stepped[..] {
@@ -331,4 +380,5 @@ fn regression_an_overflowing_obstacle_force_sends_the_walker_away_at_its_limit()
             Vec::<&str>::new()
         );
     }
+    stepped
 }
