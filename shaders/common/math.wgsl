@@ -44,6 +44,11 @@ fn math_is_nan_bits(x: f32) -> bool {
     return (bitcast<u32>(x) & MATH_ABS_MASK) > MATH_INF_BITS;
 }
 
+// Rust `f32::is_finite`, on the bits (no comparison a compiler may assume finite).
+fn math_is_finite_bits(x: f32) -> bool {
+    return (bitcast<u32>(x) & MATH_ABS_MASK) < MATH_INF_BITS;
+}
+
 // ---- sin / cos ----------------------------------------------------------------------------------
 
 const MATH_FRAC_2_PI: f32 = 0x1.45f306p-1f;

@@ -87,7 +87,6 @@ fn orca_obstacles_max_polygons() -> u32 {
 const ORCA_OBSTACLES_INVALID: u32 = 16u;
 // `obstacles_dirty` after a rebuild that failed (see the header).
 const ORCA_OBSTACLES_FAILED: u32 = 2u;
-const ORCA_OBSTACLES_EXP_MASK: u32 = 0x7f800000u;
 
 // One polygon of `for_each_polygon` (see the header).
 struct OrcaObstaclePolygon {
@@ -345,10 +344,6 @@ fn orca_obstacles_box_distance_sq(pos: vec2<f32>, v: array<vec2<f32>, 4>) -> f32
 
 // ---- obstacle_build.rs --------------------------------------------------------------------------
 
-fn orca_obstacles_finite(x: f32) -> bool {
-    return (bitcast<u32>(x) & ORCA_OBSTACLES_EXP_MASK) != ORCA_OBSTACLES_EXP_MASK;
-}
-
 // Rust `validate_polygons` for quadrilaterals: true if every vertex is finite and every edge's
 // squared length a positive finite f32.
 fn orca_obstacles_valid(l: u32) -> bool {
@@ -356,7 +351,7 @@ fn orca_obstacles_valid(l: u32) -> bool {
         let v = orca_obstacles_list_polygon(l, p);
         for (var k = 0u; k < 4u; k++) {
             let a = v[k];
-            if (!orca_obstacles_finite(a.x) || !orca_obstacles_finite(a.y)) {
+            if (!math_is_finite_bits(a.x) || !math_is_finite_bits(a.y)) {
                 return false;
             }
         }
@@ -364,7 +359,7 @@ fn orca_obstacles_valid(l: u32) -> bool {
             let a = v[k];
             let b = v[(k + 1u) % 4u];
             let len_sq = orca_abs_sq(b - a);
-            if (!(len_sq > 0.0 && orca_obstacles_finite(len_sq))) {
+            if (!(len_sq > 0.0 && math_is_finite_bits(len_sq))) {
                 return false;
             }
         }

@@ -52,10 +52,6 @@ fn sfm_obstacle(o: ptr<function, SfmObstacles>, ox: f32, oy: f32, surface_gap: f
     (*o).f.z = max((*o).f.z, a);
 }
 
-fn sfm_is_finite(x: f32) -> bool {
-    return (bitcast<u32>(x) & MATH_ABS_MASK) < MATH_INF_BITS;
-}
-
 // The `disc_gap` closure: the gap (m) between the walker's disc and the disc (ox, oy, ro).
 fn sfm_disc_gap(pos: vec2<f32>, ox: f32, oy: f32, ro: f32) -> f32 {
     return sfm_length(pos.x - ox, pos.y - oy) - ro - params.human_radius;
@@ -172,7 +168,7 @@ fn sfm_velocity(e: u32, i: u32, robot: bool, view: MaybeView) -> vec2<f32> {
     var fdx = params.human_max_speed * du.x;
     var fdy = params.human_max_speed * du.y;
     let fo = sfm_obstacle_forces(e, pos, sp.r0, robot, view, 0.0);
-    if (!(sfm_is_finite(fo.x) && sfm_is_finite(fo.y))) {
+    if (!(math_is_finite_bits(fo.x) && math_is_finite_bits(fo.y))) {
         // Rust `overwhelmed`: the speed limit along the forces rescaled by exp(−top).
         let u = sfm_obstacle_forces(e, pos, sp.r0, robot, view, fo.z);
         let d = sfm_unit(u.x, u.y);

@@ -278,8 +278,7 @@ fn slot_index_functions(state: Columns<'_>) -> String {
 /// columns as `co_<name>`/`so_<name>` in `outf`/`outu` (environment-major: element `k` of
 /// environment `e` at `co + e * so + k`, the rows the host reads); the observation layout
 /// (`obs_dim`, `obs_robot`, and per entity type `obs_offset_<type>`, `obs_capacity_<type>`, per
-/// interaction kind
-/// `pairs_<kind>`); the reset pool's `pool_row` (words per row) and `pool_observation` (the
+/// interaction kind `pairs_<kind>`); the reset pool's `pool_row` (words per row) and `pool_observation` (the
 /// observation's first word in a row); the `scratch` region of an environment
 /// ([`ObstacleScratch`]); and the SNGNN-v2 sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one compiled pipeline serves every
 /// batch size and every config of the same [`SizeClasses`]. The field names are the same for

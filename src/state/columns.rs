@@ -49,18 +49,37 @@ pub trait ColumnValue: Copy + Default + Send + Sync + 'static {
     const ELEM: Elem;
     /// Its bits, for fingerprints (`-0.0` is normalised to `+0.0`).
     fn bits(self) -> u32;
+    /// The packed array of its element kind among the two (the GPU buffers hold every column of
+    /// one kind back to back).
+    fn packed<'a>(f32s: &'a mut Vec<f32>, u32s: &'a mut Vec<u32>) -> &'a mut Vec<Self>;
+    /// [`ColumnValue::packed`], read only.
+    fn packed_ref<'a>(f32s: &'a [f32], u32s: &'a [u32]) -> &'a [Self];
+    /// `column` as its 32-bit words (an f32's bits), to be written in place.
+    fn words_mut(column: &mut [Self]) -> &mut [u32];
+
     /// Append `column` (environment-major, `stride` elements per environment) to the packed
-    /// array of its element kind in `order` (the GPU buffers hold every column of one kind back
-    /// to back).
+    /// array of its element kind in `order`.
     fn pack(
         column: &[Self],
         stride: usize,
         order: ElementOrder,
         f32s: &mut Vec<f32>,
         u32s: &mut Vec<u32>,
-    );
-    /// Fill `column` from the packed array of its kind in `order`, starting at that array's
-    /// cursor.
+    ) {
+        let out = Self::packed(f32s, u32s);
+        match order {
+            ElementOrder::SlotMajor if stride > 1 => {
+                let n = column.len() / stride;
+                out.extend(
+                    (0..stride).flat_map(|slot| (0..n).map(move |e| column[e * stride + slot])),
+                );
+            }
+            _ => out.extend_from_slice(column),
+        }
+    }
+
+    /// The inverse of [`ColumnValue::pack`]: `column` read from the packed array of its kind at
+    /// that array's cursor (moved past it).
     fn unpack(
         column: &mut [Self],
         stride: usize,
@@ -68,41 +87,20 @@ pub trait ColumnValue: Copy + Default + Send + Sync + 'static {
         f32s: &[f32],
         u32s: &[u32],
         cursor: &mut [usize; 2],
-    );
-    /// `column` as its 32-bit words (an f32's bits), to be written in place.
-    fn words_mut(column: &mut [Self]) -> &mut [u32];
-}
-
-/// Append `column` (environment-major, `stride` elements per environment) to `out` in `order`.
-fn append_in_order<T: Copy>(column: &[T], stride: usize, order: ElementOrder, out: &mut Vec<T>) {
-    match order {
-        ElementOrder::SlotMajor if stride > 1 => {
-            let n = column.len() / stride;
-            out.extend((0..stride).flat_map(|slot| (0..n).map(move |e| column[e * stride + slot])));
-        }
-        _ => out.extend_from_slice(column),
-    }
-}
-
-/// The inverse of [`append_in_order`]: `column` read from `packed` at `cursor` (moved past it).
-fn read_in_order<T: Copy>(
-    column: &mut [T],
-    stride: usize,
-    order: ElementOrder,
-    packed: &[T],
-    cursor: &mut usize,
-) {
-    let words = &packed[*cursor..*cursor + column.len()];
-    match order {
-        ElementOrder::SlotMajor if stride > 1 => {
-            let n = column.len() / stride;
-            for (k, &v) in words.iter().enumerate() {
-                column[(k % n) * stride + k / n] = v;
+    ) {
+        let at = &mut cursor[usize::from(Self::ELEM == Elem::U32)];
+        let words = &Self::packed_ref(f32s, u32s)[*at..*at + column.len()];
+        match order {
+            ElementOrder::SlotMajor if stride > 1 => {
+                let n = column.len() / stride;
+                for (k, &v) in words.iter().enumerate() {
+                    column[(k % n) * stride + k / n] = v;
+                }
             }
+            _ => column.copy_from_slice(words),
         }
-        _ => column.copy_from_slice(words),
+        *at += column.len();
     }
-    *cursor += column.len();
 }
 
 impl ColumnValue for f32 {
@@ -110,24 +108,11 @@ impl ColumnValue for f32 {
     fn bits(self) -> u32 {
         if self == 0.0 { 0 } else { self.to_bits() }
     }
-    fn pack(
-        column: &[Self],
-        stride: usize,
-        order: ElementOrder,
-        f32s: &mut Vec<f32>,
-        _: &mut Vec<u32>,
-    ) {
-        append_in_order(column, stride, order, f32s);
+    fn packed<'a>(f32s: &'a mut Vec<f32>, _: &'a mut Vec<u32>) -> &'a mut Vec<Self> {
+        f32s
     }
-    fn unpack(
-        column: &mut [Self],
-        stride: usize,
-        order: ElementOrder,
-        f32s: &[f32],
-        _: &[u32],
-        cursor: &mut [usize; 2],
-    ) {
-        read_in_order(column, stride, order, f32s, &mut cursor[0]);
+    fn packed_ref<'a>(f32s: &'a [f32], _: &'a [u32]) -> &'a [Self] {
+        f32s
     }
     fn words_mut(column: &mut [Self]) -> &mut [u32] {
         bytemuck::cast_slice_mut(column)
@@ -139,24 +124,11 @@ impl ColumnValue for u32 {
     fn bits(self) -> u32 {
         self
     }
-    fn pack(
-        column: &[Self],
-        stride: usize,
-        order: ElementOrder,
-        _: &mut Vec<f32>,
-        u32s: &mut Vec<u32>,
-    ) {
-        append_in_order(column, stride, order, u32s);
+    fn packed<'a>(_: &'a mut Vec<f32>, u32s: &'a mut Vec<u32>) -> &'a mut Vec<Self> {
+        u32s
     }
-    fn unpack(
-        column: &mut [Self],
-        stride: usize,
-        order: ElementOrder,
-        _: &[f32],
-        u32s: &[u32],
-        cursor: &mut [usize; 2],
-    ) {
-        read_in_order(column, stride, order, u32s, &mut cursor[1]);
+    fn packed_ref<'a>(_: &'a [f32], u32s: &'a [u32]) -> &'a [Self] {
+        u32s
     }
     fn words_mut(column: &mut [Self]) -> &mut [u32] {
         column

@@ -376,8 +376,7 @@ impl GpuStages {
         });
         // Group 0, the bindings of the prelude (`backend::wgsl::prelude`): params, sf, su,
         // actions, outf, outu, pool, the batch layout, scratch, the rare work's queues. With the
-        // SNGNN graphs, group 1: the packed
-        // graphs and the frame gaps (`backend::wgsl::sngnn_prelude`), bound only by the shaders
+        // SNGNN graphs, group 1: the packed graphs and the frame gaps (`backend::wgsl::sngnn_prelude`), bound only by the shaders
         // that use them, so that every other shader is the same pipeline as without them.
         let batch = uniform_buffer(&dev, "batch layout", &layout.words());
         let (step_read, read_compiled) = StepReadback::new(
@@ -1031,11 +1030,11 @@ struct PassPipelines {
 /// A pass's pipelines, and how many of them getting them compiled.
 type Built = Option<(PassPipelines, usize)>;
 
-/// The pipeline of pass `stage` over the batch (`prelude`, bind `groups`) and whether it was
-/// compiled now: `None` for a network stage, whose pipelines [`GpuStages::attach_sngnn_net`]
-/// adds. A shader that needs the SNGNN
-/// graphs ([`wgsl::needs_sngnn`]) gets [`wgsl::sngnn_prelude`] and group 1; any other, group 0
-/// alone, whether the batch has the graphs or not.
+/// The pipelines of pass `stage` over the batch (`prelude`, bind `groups`) and how many of them
+/// were compiled now: `None` for a network stage, whose pipelines [`GpuStages::attach_sngnn_net`]
+/// adds. A shader that needs the SNGNN graphs ([`wgsl::needs_sngnn`]) gets
+/// [`wgsl::sngnn_prelude`] and group 1; any other, group 0 alone, whether the batch has the
+/// graphs or not.
 fn build_pass(
     dev: &GpuDevice,
     stage: &'static str,

@@ -1,6 +1,7 @@
 //! `socnav soak`: step configs for a long time with adversarial actions, checking after every
-//! step that every output is finite (the info values the spec defines as NaN or +inf excepted) and that the
-//! state keeps its invariants (`socnav::state::invariants`), sampling the process's memory. The
+//! step that every output is finite (the info values the spec defines as NaN or +inf excepted)
+//! and that the state keeps its invariants (`socnav::state::invariants`), sampling the process's
+//! memory. The
 //! progress (steps, counts of NaN, broken invariants and panics, memory samples) is written to a
 //! JSON file after every chunk, and a run with the same file resumes where it stopped, so a
 //! billion steps can proceed in chunks.
@@ -13,8 +14,7 @@ use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use serde_json::{Value, json};
 use socnav::config::Kinematics;
-use socnav::spec::N_INFO;
-use socnav::spec::info_outside_spec;
+use socnav::spec::{N_INFO, info_outside_spec};
 use socnav::state::invariants::violations;
 use socnav::{Actions, BatchEnv, Config, SimError};
 
