@@ -6,6 +6,13 @@
 // the world frame, the robot's command in its record, a limited field of view and range (visible
 // records compacted to the front of each block, pairs indexing them), and Gaussian noise from the
 // counter-based stream of kind 7. One environment per invocation. Change both in the same commit.
+//
+// On a device that stages observations (`batch.obs_staged`, `GpuDevice::stage_observations`),
+// `main` writes the observation into `scratch`, slot-major (value i of environment e at
+// `batch.x_obs_staged + i * n_envs + e`: `obs_put`), so that the 32 lanes of a warp storing the
+// same value of their environments store 128 consecutive bytes; `rows` then moves it into the
+// environment-major rows of `obs` that the host reads, a tile at a time through workgroup memory.
+// Elsewhere `main` writes the rows in place and `rows` is not dispatched.
 
 // Rust `Frame`: the robot pose and velocities an observation is relative to.
 struct ObsFrame {
@@ -26,6 +33,26 @@ struct ObsFrame {
 }
 
 var<private> fr: ObsFrame;
+// The environment this invocation observes.
+var<private> obs_e: u32;
+
+// Value `i` of this environment's observation row: staged (see the head of this file), or, on
+// a device that does not stage (`batch.obs_staged` 0: a software one, whose barriers are slow),
+// in its row.
+fn obs_put(i: u32, v: f32) {
+    if (batch.obs_staged != 0u) {
+        scratch[batch.x_obs_staged + i * batch.n_envs + obs_e] = bitcast<u32>(v);
+    } else {
+        outf[batch.co_obs + obs_e * batch.so_obs + i] = v;
+    }
+}
+
+fn obs_get(i: u32) -> f32 {
+    if (batch.obs_staged != 0u) {
+        return bitcast<f32>(scratch[batch.x_obs_staged + i * batch.n_envs + obs_e]);
+    }
+    return outf[batch.co_obs + obs_e * batch.so_obs + i];
+}
 
 fn obs_frame(e: u32) -> ObsFrame {
     let theta = sf[batch.c_robot_theta + e];
@@ -98,47 +125,47 @@ fn obs_plant_sin_cos() -> vec2<f32> {
 // record is a scattered write, the observation pass's largest cost.
 fn obs_one_hot(at: u32, kind: u32) {
     for (var k = 0u; k < 6u; k++) {
-        outf[at + k] = select(0.0, 1.0, k == kind);
+        obs_put(at + k, select(0.0, 1.0, k == kind));
     }
 }
 
-fn obs_robot_record(e: u32, row: u32) {
-    obs_one_hot(row, ONE_HOT_ROBOT);
+fn obs_robot_record(e: u32) {
+    obs_one_hot(0u, ONE_HOT_ROBOT);
     if (fr.world) {
-        outf[row + 6u] = sf[batch.c_goal_x + e];
-        outf[row + 7u] = sf[batch.c_goal_y + e];
-        outf[row + 8u] = fr.x;
-        outf[row + 9u] = fr.y;
-        outf[row + 10u] = fr.sin;
-        outf[row + 11u] = fr.cos;
-        outf[row + 12u] = sf[batch.c_robot_vx + e];
-        outf[row + 13u] = sf[batch.c_robot_vy + e];
-        outf[row + 14u] = sf[batch.c_robot_w + e];
-        outf[row + 15u] = params.robot_radius;
+        obs_put(6u, sf[batch.c_goal_x + e]);
+        obs_put(7u, sf[batch.c_goal_y + e]);
+        obs_put(8u, fr.x);
+        obs_put(9u, fr.y);
+        obs_put(10u, fr.sin);
+        obs_put(11u, fr.cos);
+        obs_put(12u, sf[batch.c_robot_vx + e]);
+        obs_put(13u, sf[batch.c_robot_vy + e]);
+        obs_put(14u, sf[batch.c_robot_w + e]);
+        obs_put(15u, params.robot_radius);
         return;
     }
     let g = obs_local(sf[batch.c_goal_x + e], sf[batch.c_goal_y + e]);
-    outf[row + 6u] = g.x;
-    outf[row + 7u] = g.y;
-    outf[row + 8u] = params.robot_radius;
+    obs_put(6u, g.x);
+    obs_put(7u, g.y);
+    obs_put(8u, params.robot_radius);
     if (params.obs_robot_velocity != 0u) {
-        outf[row + 9u] = sf[batch.c_robot_vx + e];
-        outf[row + 10u] = sf[batch.c_robot_vy + e];
-        outf[row + 11u] = sf[batch.c_robot_w + e];
+        obs_put(9u, sf[batch.c_robot_vx + e]);
+        obs_put(10u, sf[batch.c_robot_vy + e]);
+        obs_put(11u, sf[batch.c_robot_w + e]);
     }
 }
 
 // A non-human record at `at`.
 fn obs_object_record(at: u32, kind: u32, px: f32, py: f32, sc: vec2<f32>, radius: f32) {
     obs_one_hot(at, kind);
-    outf[at + 6u] = px;
-    outf[at + 7u] = py;
-    outf[at + 8u] = sc.x;
-    outf[at + 9u] = sc.y;
-    outf[at + 10u] = radius;
-    outf[at + 11u] = fr.object_v;
-    outf[at + 12u] = fr.object_w;
-    outf[at + 13u] = 0.0;
+    obs_put(at + 6u, px);
+    obs_put(at + 7u, py);
+    obs_put(at + 8u, sc.x);
+    obs_put(at + 9u, sc.y);
+    obs_put(at + 10u, radius);
+    obs_put(at + 11u, fr.object_v);
+    obs_put(at + 12u, fr.object_w);
+    obs_put(at + 13u, 0.0);
 }
 
 // 1 if the robot centre lies within the gaze cone of the human at (hx, hy), heading cos hc, sin hs.
@@ -171,25 +198,25 @@ fn obs_humans(e: u32, block: u32) -> u32 {
         k += 1u;
         obs_one_hot(at, ONE_HOT_HUMAN);
         let hsc = math_sin_cos(theta);
-        outf[at + 10u] = params.human_radius;
-        outf[at + 13u] = obs_gaze(x, y, hsc.y, hsc.x);
+        obs_put(at + 10u, params.human_radius);
+        obs_put(at + 13u, obs_gaze(x, y, hsc.y, hsc.x));
         if (fr.world) {
-            outf[at + 6u] = x;
-            outf[at + 7u] = y;
-            outf[at + 8u] = hsc.x;
-            outf[at + 9u] = hsc.y;
-            outf[at + 11u] = sf[batch.c_h_vx + i];
-            outf[at + 12u] = sf[batch.c_h_vy + i];
+            obs_put(at + 6u, x);
+            obs_put(at + 7u, y);
+            obs_put(at + 8u, hsc.x);
+            obs_put(at + 9u, hsc.y);
+            obs_put(at + 11u, sf[batch.c_h_vx + i]);
+            obs_put(at + 12u, sf[batch.c_h_vy + i]);
         } else {
             let sc = math_sin_cos(rel);
             let dvx = sf[batch.c_h_vx + i] - fr.vx;
             let dvy = sf[batch.c_h_vy + i] - fr.vy;
-            outf[at + 6u] = l.x;
-            outf[at + 7u] = l.y;
-            outf[at + 8u] = sc.x;
-            outf[at + 9u] = sc.y;
-            outf[at + 11u] = sqrt(dvx * dvx + dvy * dvy);
-            outf[at + 12u] = math_wrap_angle(wrapped - prev) / params.dt;
+            obs_put(at + 6u, l.x);
+            obs_put(at + 7u, l.y);
+            obs_put(at + 8u, sc.x);
+            obs_put(at + 9u, sc.y);
+            obs_put(at + 11u, sqrt(dvx * dvx + dvy * dvy));
+            obs_put(at + 12u, math_wrap_angle(wrapped - prev) / params.dt);
         }
     }
     return k;
@@ -317,10 +344,10 @@ fn obs_walls(e: u32, block: u32) -> u32 {
 }
 
 // Rust `noise::perturb` of `n` values from row index `first`.
-fn obs_perturb(row: u32, first: u32, n: u32, base: u32, mean: f32, std_dev: f32) {
+fn obs_perturb(first: u32, n: u32, base: u32, mean: f32, std_dev: f32) {
     for (var i = first; i < first + n; i++) {
         var rng = RngStream(base, 2u * i);
-        outf[row + i] = outf[row + i] + rng_gauss(&rng, mean, std_dev);
+        obs_put(i, obs_get(i) + rng_gauss(&rng, mean, std_dev));
     }
 }
 
@@ -349,7 +376,7 @@ fn obs_capacity(t: u32) -> u32 {
 }
 
 // Rust `noise::add_noise`.
-fn obs_noise(e: u32, row: u32, counts_in: array<u32, 5>) {
+fn obs_noise(e: u32, counts_in: array<u32, 5>) {
     var counts = counts_in;
     let stream = rng_new(
         su[batch.c_seed_lo + e],
@@ -360,7 +387,7 @@ fn obs_noise(e: u32, row: u32, counts_in: array<u32, 5>) {
     let rmean = params.obs_noise[2u * NOISE_ROBOT];
     let rstd = params.obs_noise[2u * NOISE_ROBOT + 1u];
     if (rmean != 0.0 || rstd != 0.0) {
-        obs_perturb(row, 6u, 2u, base, rmean, rstd);
+        obs_perturb(6u, 2u, base, rmean, rstd);
     }
     for (var t = 0u; t < 5u; t++) {
         let mean = params.obs_noise[2u * t];
@@ -374,7 +401,7 @@ fn obs_noise(e: u32, row: u32, counts_in: array<u32, 5>) {
         }
         let first = obs_offset(t);
         for (var k = 0u; k < records; k++) {
-            obs_perturb(row, first + k * OBS_RECORD + 6u, OBS_RECORD - 6u, base, mean, std_dev);
+            obs_perturb(first + k * OBS_RECORD + 6u, OBS_RECORD - 6u, base, mean, std_dev);
         }
     }
 }
@@ -467,25 +494,25 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     fr = obs_frame(e);
-    let row = batch.co_obs + e * batch.so_obs;
-    obs_robot_record(e, row);
+    obs_e = e;
+    obs_robot_record(e);
     var counts = array<u32, 5>(0u, 0u, 0u, 0u, 0u);
-    counts[0] = obs_humans(e, row + batch.obs_offset_humans);
-    counts[1] = obs_laptops(e, row + batch.obs_offset_laptops);
-    counts[2] = obs_tables(e, row + batch.obs_offset_tables);
-    counts[3] = obs_plants(e, row + batch.obs_offset_plants);
+    counts[0] = obs_humans(e, batch.obs_offset_humans);
+    counts[1] = obs_laptops(e, batch.obs_offset_laptops);
+    counts[2] = obs_tables(e, batch.obs_offset_tables);
+    counts[3] = obs_plants(e, batch.obs_offset_plants);
     if (batch.obs_capacity_walls > 0u) {
-        counts[4] = obs_walls(e, row + batch.obs_offset_walls);
+        counts[4] = obs_walls(e, batch.obs_offset_walls);
     }
     for (var t = 0u; t < 5u; t++) {
         let first = obs_offset(t) + counts[t] * OBS_RECORD;
         let last = obs_offset(t) + obs_capacity(t) * OBS_RECORD;
         for (var i = first; i < last; i++) {
-            outf[row + i] = 0.0;
+            obs_put(i, 0.0);
         }
     }
     if (params.obs_noise_on != 0u) {
-        obs_noise(e, row, counts);
+        obs_noise(e, counts);
     }
     for (var t = 0u; t < 5u; t++) {
         outu[batch.co_obs_count + e * batch.so_obs_count + t] = counts[t];
@@ -493,4 +520,43 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let pc = batch.co_pair_count + e * batch.so_pair_count;
     outu[pc] = obs_human_human(e);
     outu[pc + 1u] = obs_human_laptop(e);
+}
+
+// A tile of the staged observation: OBS_TILE values of WORKGROUP_SIZE environments, value f of
+// the workgroup's environment j at `f * (WORKGROUP_SIZE + 1) + j` (the extra column keeps the
+// reads of `rows`' second half, a lane per value, on distinct memory banks).
+var<workgroup> obs_tile: array<u32, OBS_TILE * (WORKGROUP_SIZE + 1u)>;
+
+// The staged observation into the rows of `obs`, for the environments that stepped: workgroup
+// (x, y) moves values [y * OBS_TILE, +OBS_TILE) of environments [x * WORKGROUP_SIZE, +WORKGROUP_SIZE).
+// It reads with consecutive lanes on consecutive environments (one value of each) and writes with
+// consecutive lanes on consecutive values of a row, so both sides coalesce. The words are moved,
+// never computed on, so the rows hold the bits `main` staged.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn rows(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let e0 = wg.x * WORKGROUP_SIZE;
+    let f0 = wg.y * OBS_TILE;
+    let values = min(OBS_TILE, batch.so_obs - min(f0, batch.so_obs));
+    let pitch = WORKGROUP_SIZE + 1u;
+    if (e0 + lane < batch.n_envs) {
+        for (var f = 0u; f < values; f++) {
+            obs_tile[f * pitch + lane] = scratch[batch.x_obs_staged + (f0 + f) * batch.n_envs + e0 + lane];
+        }
+    }
+    workgroupBarrier();
+    // Lane `lane` writes value `lane % OBS_TILE` of every (WORKGROUP_SIZE / OBS_TILE)-th
+    // environment from `lane / OBS_TILE` (divisions by a power of two).
+    let f = lane % OBS_TILE;
+    if (f >= values) {
+        return;
+    }
+    for (var j = lane / OBS_TILE; j < WORKGROUP_SIZE; j += WORKGROUP_SIZE / OBS_TILE) {
+        let e = e0 + j;
+        if (e < batch.n_envs && su[batch.c_stepping + e] != 0u) {
+            outf[batch.co_obs + e * batch.so_obs + f0 + f] = bitcast<f32>(obs_tile[f * pitch + j]);
+        }
+    }
 }

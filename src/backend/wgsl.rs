@@ -280,7 +280,8 @@ fn slot_index_functions(state: Columns<'_>) -> String {
 /// (`obs_dim`, `obs_robot`, and per entity type `obs_offset_<type>`, `obs_capacity_<type>`, per
 /// interaction kind `pairs_<kind>`); the reset pool's `pool_row` (words per row) and `pool_observation` (the
 /// observation's first word in a row); the `scratch` region of an environment
-/// ([`ObstacleScratch`]); and the SNGNN-v2 sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one compiled pipeline serves every
+/// ([`ObstacleScratch`]), `x_obs_staged`, where the staged observation starts in it
+/// ([`scratch_words`]), and `obs_staged` (1 when the observation is staged); and the SNGNN-v2 sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one compiled pipeline serves every
 /// batch size and every config of the same [`SizeClasses`]. The field names are the same for
 /// every batch (the column list is fixed), so the WGSL struct is too.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -348,12 +349,26 @@ impl BatchLayout {
         fields.push(("x_obstacle_list".into(), scratch.list));
         fields.push(("x_obstacle_set".into(), scratch.set));
         fields.push(("x_obstacle_stack".into(), scratch.stack));
+        fields.push(("x_obs_staged".into(), n_envs * scratch.words));
+        // 1 when the observation is staged ([`BatchLayout::with_staged_observation`]).
+        fields.push(("obs_staged".into(), 0));
         fields.extend(sngnn_sizes(sngnn));
         let fields = fields
             .into_iter()
             .map(|(name, v)| (name, u32::try_from(v).expect("a layout value fits a u32")))
             .collect();
         Self { fields }
+    }
+
+    /// This layout with the observation staged in `scratch` (`on`) or written into its rows in
+    /// place: `obs_staged` (see [`scratch_words`], `GpuDevice::stage_observations`).
+    pub fn with_staged_observation(mut self, on: bool) -> Self {
+        for (name, v) in &mut self.fields {
+            if name == "obs_staged" {
+                *v = u32::from(on);
+            }
+        }
+        self
     }
 
     /// Value of field `name` (`c_episode`, `obs_dim`, ...), if there is one.
@@ -396,6 +411,31 @@ pub struct ObstacleScratch {
     /// First word of the stack.
     pub stack: usize,
 }
+
+/// Words of the `scratch` buffer of `n_envs` environments: every environment's
+/// [`ObstacleScratch`] region, then, where the observation is staged (`staged_obs_dim`, its
+/// floats, else 0), the observation as the observation pass writes it, slot-major from
+/// `x_obs_staged` of the [`BatchLayout`]: value `i` of environment `e` at `x_obs_staged + i *
+/// n_envs + e`, so that a warp's stores coalesce. The pass's second dispatch
+/// ([`OBS_ROWS_ENTRY`]) moves it into the environment-major rows the host reads, through
+/// workgroup memory.
+pub fn scratch_words(n_envs: usize, state: Columns<'_>, staged_obs_dim: usize) -> usize {
+    n_envs * (ObstacleScratch::of(state).words + staged_obs_dim)
+}
+
+/// The entry point of `shaders/observation.wgsl` dispatched after its `main`: the staged
+/// observation ([`scratch_words`]) into the rows of `obs`, one workgroup per [`WORKGROUP_SIZE`]
+/// environments and [`OBS_ROWS_TILE`] floats.
+pub const OBS_ROWS_ENTRY: &str = "rows";
+
+/// Floats of a row one workgroup of [`OBS_ROWS_ENTRY`] moves (the `OBS_TILE` of its shader): a
+/// tile of `OBS_ROWS_TILE x (WORKGROUP_SIZE + 1)` words, 8,320 bytes of workgroup memory.
+pub const OBS_ROWS_TILE: u32 = 32;
+// `rows` hands each lane one value of every (WORKGROUP_SIZE / OBS_TILE)-th environment.
+const _: () = assert!(WORKGROUP_SIZE.is_multiple_of(OBS_ROWS_TILE));
+
+/// The stage whose shader has the [`OBS_ROWS_ENTRY`] entry point.
+pub const OBS_ROWS_STAGE: &str = "observation";
 
 impl ObstacleScratch {
     /// The region for a state table's obstacle vertex capacity (the stride of `ov_x`), with the
@@ -500,7 +540,7 @@ fn size_class(n: usize, floor: usize) -> usize {
 
 /// The part of every shader's head that depends on neither the config nor the batch: the
 /// constants [`prelude`] lists before the size classes (`WORKGROUP_SIZE`, `INFO_*`, `EP_*`,
-/// `EV_*`, the shared codes and f32 constants, `OBS_RECORD`, [`geometry_constants`]). A kernel
+/// `EV_*`, the shared codes and f32 constants, `OBS_RECORD`, `OBS_TILE`, [`geometry_constants`]). A kernel
 /// built from the shader library outside the step (tests/suite/orca/gpu.rs) starts with it, so the
 /// library's files see the same definitions there as in the step.
 pub fn shared_head() -> String {
@@ -527,6 +567,7 @@ pub fn shared_head() -> String {
         "const OBS_RECORD: u32 = {}u;\n",
         crate::spec::RECORD
     ));
+    out.push_str(&format!("const OBS_TILE: u32 = {OBS_ROWS_TILE}u;\n"));
     out.push_str(&geometry_constants());
     out
 }

@@ -206,7 +206,30 @@ pub fn check_parity_mode(
     runs: usize,
     perturb: Option<Perturb>,
 ) -> Option<[usize; 7]> {
-    let dev = device()?;
+    check_parity_on(device()?, stage, config, mode, n_envs, runs, perturb)
+}
+
+/// The shared device with the other observation path than its default
+/// (`GpuDevice::stage_observations`) and every step's readback in the most pieces
+/// (`GpuDevice::readback_piece_bytes` of 1 KiB), so that tests cover the paths a test-sized batch
+/// on this device would not take.
+pub fn device_other_paths() -> Option<GpuDevice> {
+    let mut dev = device()?;
+    dev.stage_observations = !dev.stage_observations;
+    dev.readback_piece_bytes = 1 << 10;
+    Some(dev)
+}
+
+/// [`check_parity_mode`] on device `dev`.
+pub fn check_parity_on(
+    dev: GpuDevice,
+    stage: &'static str,
+    config: Config,
+    mode: AutoresetMode,
+    n_envs: usize,
+    runs: usize,
+    perturb: Option<Perturb>,
+) -> Option<[usize; 7]> {
     let mut raised = [0usize; 7];
     let env = rolled_out_mode(config, mode, n_envs, 40);
     let p = *env.params();

@@ -116,6 +116,11 @@ pub fn list_adapters() -> Vec<AdapterSummary> {
         .collect()
 }
 
+/// The per-step output bytes of one readback piece ([`GpuDevice::readback_piece_bytes`]): 4 MiB,
+/// about 0.1 ms of DMA at 36 GB/s, several times a submit's cost. exp2 at 65,536 environments
+/// (207 MB a step; padded 60 MB) reads four pieces, at 256 environments (0.9 MB) one.
+pub const DEFAULT_READBACK_PIECE_BYTES: u64 = 4 << 20;
+
 /// An open device and its queue, with the adapter it came from. Clones share the device.
 #[derive(Clone)]
 pub struct GpuDevice {
@@ -127,6 +132,18 @@ pub struct GpuDevice {
     pub adapter: AdapterSummary,
     /// The limits the device was opened with (the adapter's own).
     pub limits: wgpu::Limits,
+    /// Whether batches made on this device stage their observations (`shaders/observation.wgsl`:
+    /// values stored slot-major, then moved into rows through workgroup memory, which coalesces
+    /// a GPU's stores) instead of writing each environment's row in place. On by default on a
+    /// hardware GPU; off on a software one (lavapipe), where the tile's barrier made the pass
+    /// five times slower. Both give the same bits; a clone with the other setting is how a
+    /// caller (or a test) chooses.
+    pub stage_observations: bool,
+    /// Bytes of a step's per-step outputs per readback piece (`backend::gpu::readback`): a batch
+    /// reads them back in one piece per this many bytes, at most four, so that the host copies
+    /// one piece while the device copies the next. [`DEFAULT_READBACK_PIECE_BYTES`] unless a
+    /// clone says otherwise.
+    pub readback_piece_bytes: u64,
     errors: Arc<Mutex<Vec<String>>>,
     /// Why the device was lost, once it has been.
     lost: Arc<Mutex<Option<String>>>,
@@ -210,10 +227,13 @@ impl GpuDevice {
                 Some(format!("{message} ({reason:?})"));
         });
         let disk = super::kit::DiskCache::open(&device, features, &info);
+        let adapter = AdapterSummary::of(&info);
         Ok(Self {
             device,
             queue,
-            adapter: AdapterSummary::of(&info),
+            stage_observations: adapter.hardware,
+            readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
+            adapter,
             limits,
             errors,
             lost,

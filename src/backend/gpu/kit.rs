@@ -391,6 +391,18 @@ pub(crate) fn map_and_read(
     bytes: u64,
     read: impl FnOnce(&[u32]),
 ) -> Result<(), SimError> {
+    map_and_read_after(dev, buffer, bytes, None, read)
+}
+
+/// [`map_and_read`] waiting only for the submit `after` (with `None`, for the work submitted so
+/// far): the submits after it go on while `read` runs.
+pub(crate) fn map_and_read_after(
+    dev: &GpuDevice,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    after: Option<wgpu::SubmissionIndex>,
+    read: impl FnOnce(&[u32]),
+) -> Result<(), SimError> {
     let failed = |e: &dyn std::fmt::Display| SimError::Device(format!("GPU readback failed: {e}"));
     let slice = buffer.slice(..bytes);
     let (tx, rx) = std::sync::mpsc::channel();
@@ -398,9 +410,17 @@ pub(crate) fn map_and_read(
         // The receiver lives until the poll below has delivered this.
         let _ = tx.send(r);
     });
-    dev.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| failed(&e))?;
+    let waited = dev.device.poll(wgpu::PollType::Wait {
+        submission_index: after,
+        timeout: None,
+    });
+    if let Err(e) = waited {
+        // A wait for one submit fails before wgpu's maintenance, which is where a destroyed
+        // device's loss is recorded (`GpuDevice::lost`, through the lost callback): run it, so
+        // that the batch's next call says the device was lost.
+        let _ = dev.device.poll(wgpu::PollType::Poll);
+        return Err(failed(&e));
+    }
     rx.recv().map_err(|e| failed(&e))?.map_err(|e| failed(&e))?;
     {
         let view = slice.get_mapped_range().map_err(|e| failed(&e))?;

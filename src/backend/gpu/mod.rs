@@ -28,7 +28,9 @@ pub(crate) mod readback;
 pub mod sngnn_net;
 
 pub use backend::GpuBackend;
-pub use device::{AdapterPolicy, AdapterSummary, GpuDevice, list_adapters};
+pub use device::{
+    AdapterPolicy, AdapterSummary, DEFAULT_READBACK_PIECE_BYTES, GpuDevice, list_adapters,
+};
 pub use sngnn_net::GpuNet;
 
 use crate::backend::wgsl;
@@ -43,7 +45,7 @@ use crate::sngnn::pieces::Tables;
 use crate::state::BatchState;
 use kit::{
     Binding, CreationScope, Groups, bind_buffers, bytes_of, check_binding, map_and_read,
-    storage_buffer, uniform_buffer,
+    map_and_read_after, storage_buffer, uniform_buffer,
 };
 use readback::{StepReadback, words_to_bytes};
 use sngnn_net::StepBuffers;
@@ -73,6 +75,11 @@ struct DeviceTable {
 pub struct GpuStages {
     dev: GpuDevice,
     n_envs: usize,
+    /// Floats of an observation row (the `rows` dispatch of the observation pass covers them).
+    obs_dim: u32,
+    /// Whether the observation is staged (`GpuDevice::stage_observations`): then the
+    /// observation pass's `rows` dispatch follows its `main`.
+    obs_staged: bool,
     state: DeviceTable,
     outputs: DeviceTable,
     params: wgpu::Buffer,
@@ -183,17 +190,20 @@ fn staging_buffer(dev: &GpuDevice, words: usize) -> wgpu::Buffer {
     })
 }
 
-/// The stages' working memory of `n_envs` environments (`wgsl::ObstacleScratch`), or why the
-/// adapter cannot bind it.
+/// The stages' working memory of `n_envs` environments (`wgsl::scratch_words`: ORCA's obstacles
+/// and, staged, the observation of `staged_obs_dim` floats), or why the adapter cannot bind it.
 fn scratch_buffer(
     dev: &GpuDevice,
     n_envs: usize,
     state: wgsl::Columns<'_>,
+    staged_obs_dim: usize,
 ) -> Result<wgpu::Buffer, SimError> {
-    let bytes = bytes_of::<u32>(n_envs * wgsl::ObstacleScratch::of(state).words);
+    let bytes = bytes_of::<u32>(wgsl::scratch_words(n_envs, state, staged_obs_dim));
     check_binding(
         dev,
-        &format!("the working memory for ORCA's obstacles of {n_envs} environments"),
+        &format!(
+            "the working memory of {n_envs} environments (ORCA's obstacles, the staged observation)"
+        ),
         bytes,
     )?;
     Ok(storage_buffer(dev, "scratch", bytes))
@@ -331,7 +341,13 @@ impl GpuStages {
             pool_bytes,
         )?;
         let pool = storage_buffer(&dev, "reset pool", pool_bytes);
-        let scratch = scratch_buffer(&dev, n_envs, &state.columns())?;
+        let obs_staged = dev.stage_observations;
+        let staged_obs_dim = if obs_staged {
+            outputs.strides.layout.dim
+        } else {
+            0
+        };
+        let scratch = scratch_buffer(&dev, n_envs, &state.columns(), staged_obs_dim)?;
         let rare = storage_buffer(
             &dev,
             "rare work queues",
@@ -346,7 +362,8 @@ impl GpuStages {
                 caps: &state.strides,
                 graphs: &b.layout,
             }),
-        );
+        )
+        .with_staged_observation(obs_staged);
         let layout_at = |column: &str| {
             layout
                 .get(column)
@@ -462,6 +479,8 @@ impl GpuStages {
         let this = Self {
             dev,
             n_envs,
+            obs_dim: layout_at("obs_dim") as u32,
+            obs_staged,
             state: state_table,
             outputs: outputs_table,
             params: params_buf,
@@ -746,7 +765,7 @@ impl GpuStages {
         let rb = &self.step_readback;
         let f_words = self.outputs.packed_f32.len();
         let table_bytes = if selective {
-            self.step_read.copy(&mut enc, &tables, rb)
+            self.step_read.copy_rows(&mut enc, rb)
         } else {
             let (f_bytes, u_bytes) = (
                 words_to_bytes(f_words),
@@ -767,7 +786,12 @@ impl GpuStages {
             enc.copy_buffer_to_buffer(net.status_buffer(), 0, rb, total, e_bytes);
             total += e_bytes;
         }
-        self.dev.queue.submit([enc.finish()]);
+        let (submits, piece_bytes) = if selective {
+            self.step_read.submit_with_pieces(&self.dev, enc, &tables)
+        } else {
+            (vec![self.dev.queue.submit([enc.finish()])], 0)
+        };
+        let mut bytes = total + piece_bytes;
         let working = std::time::Instant::now();
         while_device_works();
         let host_work_s = working.elapsed().as_secs_f64();
@@ -776,12 +800,12 @@ impl GpuStages {
         let table_words = (table_bytes / 4) as usize;
         let mut copy_s = 0.0;
         let mut finished = Ok(0);
-        map_and_read(&self.dev, rb, total, |words| {
+        map_and_read_after(&self.dev, rb, total, Some(submits[0].clone()), |words| {
             let copying = std::time::Instant::now();
             let (table, rest) = words.split_at(table_words);
             let (ep, st) = rest.split_at(episode.len());
             if selective {
-                finished = step_read.read(table, out, pool);
+                finished = step_read.read_rows(table, out);
             } else {
                 let (f, u) = table.split_at(f_words);
                 out.unpack(bytemuck::cast_slice(f), u);
@@ -792,9 +816,11 @@ impl GpuStages {
             } else {
                 status.fill(0);
             }
-            copy_s = copying.elapsed().as_secs_f64();
+            copy_s += copying.elapsed().as_secs_f64();
         })?;
-        let mut bytes = total;
+        if selective {
+            copy_s += step_read.read_pieces(&self.dev, submits, out, pool)?;
+        }
         let mut second = false;
         if selective {
             let count = finished?;
@@ -854,6 +880,10 @@ impl GpuStages {
         }
         pass.set_pipeline(&pipeline.main);
         pass.dispatch_workgroups(workgroups, 1, 1);
+        if let (Some(rows), true) = (&pipeline.rows, self.obs_staged) {
+            pass.set_pipeline(rows);
+            pass.dispatch_workgroups(workgroups, self.obs_dim.div_ceil(wgsl::OBS_ROWS_TILE), 1);
+        }
         Ok(false)
     }
 
@@ -1021,10 +1051,12 @@ impl GpuStages {
 }
 
 /// The pipelines of a pass: `main` and, for a stage of [`wgsl::RARE_WORK_STAGES`], `queue_work`
-/// (dispatched before it, over every environment, to queue those `main` runs for).
+/// (dispatched before it, over every environment, to queue those `main` runs for); for
+/// [`wgsl::OBS_ROWS_STAGE`], `rows` (dispatched after it: the staged observation into its rows).
 struct PassPipelines {
     queue: Option<wgpu::ComputePipeline>,
     main: wgpu::ComputePipeline,
+    rows: Option<wgpu::ComputePipeline>,
 }
 
 /// A pass's pipelines, and how many of them getting them compiled.
@@ -1074,14 +1106,15 @@ fn build_pass(
     let src = wgsl::assemble(&file, &prelude).map_err(SimError::Usage)?;
     let (main, new) = dev.pipelines.pipeline(dev, stage, groups, &src, "main")?;
     let mut compiled = usize::from(new);
-    let queue = if wgsl::RARE_WORK_STAGES.contains(&stage) {
-        let (queue, new) = dev
-            .pipelines
-            .pipeline(dev, stage, groups, &src, wgsl::QUEUE_ENTRY)?;
+    let mut entry = |wanted: bool, name: &str| -> Result<_, SimError> {
+        if !wanted {
+            return Ok(None);
+        }
+        let (pipeline, new) = dev.pipelines.pipeline(dev, stage, groups, &src, name)?;
         compiled += usize::from(new);
-        Some(queue)
-    } else {
-        None
+        Ok(Some(pipeline))
     };
-    Ok(Some((PassPipelines { queue, main }, compiled)))
+    let queue = entry(wgsl::RARE_WORK_STAGES.contains(&stage), wgsl::QUEUE_ENTRY)?;
+    let rows = entry(stage == wgsl::OBS_ROWS_STAGE, wgsl::OBS_ROWS_ENTRY)?;
+    Ok(Some((PassPipelines { queue, main, rows }, compiled)))
 }

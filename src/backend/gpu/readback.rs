@@ -5,8 +5,10 @@
 //! and seed) only for the environments whose episode ended; every other environment keeps those
 //! as they were, on the device and in the host's copy alike. So the submit that runs a step
 //! also runs the finished-rows pass ([`wgsl::finished_rows_shader`]), which packs the finished
-//! environments' rows behind a counter, and copies into the mapped readback buffer the per-step
-//! columns, the counter and the first [`StepReadback::rows_hint`] rows. When more environments
+//! environments' rows behind a counter, and copies into the mapped readback buffer the counter
+//! and the first [`StepReadback::rows_hint`] rows, and the per-step columns into up to
+//! [`MOST_PIECES`] buffers of their own, a submit each after the step's: while the host copies
+//! one piece into its outputs, the device copies the next to host memory. When more environments
 //! finished than that, a second copy fetches the rest and the hint grows; the hint follows twice
 //! the most environments that finished in recent steps. Rows come in the order the device's
 //! atomic counter gave them; each carries its environment, where the host writes it, so the
@@ -15,6 +17,8 @@
 //! Device work that is not read back (a pass run alone, the device-only timing) can change the
 //! finished-only columns without the host seeing which environments finished, so the read after
 //! it copies the whole output table ([`StepReadback::whole_table_next`]).
+
+use std::ops::Range;
 
 use rayon::prelude::*;
 
@@ -25,8 +29,14 @@ use crate::outputs::{FINISHED_ONLY_COLUMNS, Outputs};
 use crate::state::columns::Elem;
 
 use super::GpuDevice;
-use super::kit::{Binding, bind_buffers, bytes_of, check_binding};
+use super::kit::{Binding, bind_buffers, bytes_of, check_binding, map_and_read_after};
 
+/// Most pieces the per-step columns are read back in, each a buffer and a submit of its own: the
+/// host copies piece `k` into its outputs while the device copies piece `k + 1` to host memory,
+/// so only the last piece's copy is not overlapped. A batch takes one piece per
+/// `GpuDevice::readback_piece_bytes` of its per-step columns, at least one and at most these
+/// (a submit costs some tens of microseconds: small reads stay whole).
+pub(crate) const MOST_PIECES: usize = 4;
 /// Rows the first copy always has room for.
 const MIN_ROWS: usize = 16;
 /// Steps whose finished counts set the hint.
@@ -45,10 +55,40 @@ struct Span {
     words: usize,
 }
 
+/// A run of per-step columns that lie back to back in their table: one device copy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Run {
+    u32s: bool,
+    at: usize,
+    words: usize,
+}
+
+/// The per-step columns as runs of neighbours in their tables, in order: each run is one copy
+/// command (every copy has a fixed cost besides its bytes; exp2's 12 per-step columns are 4 runs).
+fn runs_of(spans: &[Span]) -> Vec<Run> {
+    let mut runs: Vec<Run> = Vec::new();
+    for s in spans {
+        match runs.last_mut() {
+            Some(r) if r.u32s == s.u32s && r.at + r.words == s.at => r.words += s.words,
+            _ => runs.push(Run {
+                u32s: s.u32s,
+                at: s.at,
+                words: s.words,
+            }),
+        }
+    }
+    runs
+}
+
 /// The finished-rows pass, the per-step columns and the hint of one batch.
 pub(crate) struct StepReadback {
     spans: Vec<Span>,
+    /// The spans' copies ([`runs_of`]).
+    runs: Vec<Run>,
     span_words: usize,
+    /// Where the spans are read back: piece `k` of `n` holds their words from `span_words * k /
+    /// n` on ([`piece_range`]).
+    pieces: Vec<wgpu::Buffer>,
     /// The finished-only columns in row order, with their strides.
     columns: Vec<(&'static str, usize)>,
     row_words: usize,
@@ -99,6 +139,8 @@ impl StepReadback {
             }
             next[k] += words;
         }
+        // Table by table, in table order, so that neighbours make one copy ([`runs_of`]).
+        spans.sort_by_key(|s| (s.u32s, s.at));
         let columns = wgsl::finished_columns(outputs)
             .into_iter()
             .map(|&(name, _, stride)| (name, stride))
@@ -136,10 +178,26 @@ impl StepReadback {
             &layouts[0],
             &[tables.f32s, tables.u32s, tables.batch, &finished],
         );
-        let span_words = spans.iter().map(|s| s.words).sum();
+        let span_words: usize = spans.iter().map(|s| s.words).sum();
+        let n_pieces = bytes_of::<u32>(span_words)
+            .div_ceil(dev.readback_piece_bytes.max(1))
+            .clamp(1, MOST_PIECES as u64) as usize;
+        let pieces = (0..n_pieces)
+            .map(|k| {
+                let words = piece_range(span_words, k, n_pieces).len();
+                dev.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("step readback piece"),
+                    size: bytes_of::<u32>(words),
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            })
+            .collect();
         let this = Self {
+            runs: runs_of(&spans),
             spans,
             span_words,
+            pieces,
             columns,
             row_words,
             n_envs,
@@ -155,9 +213,10 @@ impl StepReadback {
         Ok((this, compiled))
     }
 
-    /// Words of the readback buffer a step's selective copy needs at most.
+    /// Words of the readback buffer a step's finished rows need at most (the counter, then a
+    /// row per environment); the per-step columns have their pieces.
     pub(crate) fn most_words(&self) -> usize {
-        self.span_words + 1 + self.n_envs * self.row_words
+        1 + self.n_envs * self.row_words
     }
 
     /// Bytes of the device buffer of the finished rows.
@@ -187,24 +246,86 @@ impl StepReadback {
         pass.dispatch_workgroups((self.n_envs as u32).div_ceil(wgsl::WORKGROUP_SIZE), 1, 1);
     }
 
-    /// Copy the per-step columns, the counter and the first [`Self::rows_hint`] rows into `rb`
-    /// from its start; the bytes copied.
-    pub(crate) fn copy(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        tables: &Tables<'_>,
-        rb: &wgpu::Buffer,
-    ) -> u64 {
-        let mut at = 0u64;
-        for s in &self.spans {
-            let src = if s.u32s { tables.u32s } else { tables.f32s };
-            let bytes = words_to_bytes(s.words);
-            enc.copy_buffer_to_buffer(src, words_to_bytes(s.at), rb, at, bytes);
-            at += bytes;
-        }
+    /// Copy the counter and the first [`Self::rows_hint`] rows into `rb` from its start; the
+    /// bytes copied.
+    pub(crate) fn copy_rows(&self, enc: &mut wgpu::CommandEncoder, rb: &wgpu::Buffer) -> u64 {
         let rows = words_to_bytes(1 + self.rows_hint * self.row_words);
-        enc.copy_buffer_to_buffer(&self.finished, 0, rb, at, rows);
-        at + rows
+        enc.copy_buffer_to_buffer(&self.finished, 0, rb, 0, rows);
+        rows
+    }
+
+    /// Copy the first piece of the per-step columns in `enc` (the step's encoder) and submit
+    /// it, then each other piece in a submit of its own, so that the host can read a piece while
+    /// the device copies the next ([`Self::read_pieces`]); the submits in piece order, and the
+    /// bytes the pieces copy.
+    pub(crate) fn submit_with_pieces(
+        &self,
+        dev: &GpuDevice,
+        mut enc: wgpu::CommandEncoder,
+        tables: &Tables<'_>,
+    ) -> (Vec<wgpu::SubmissionIndex>, u64) {
+        let mut bytes = self.copy_piece(&mut enc, tables, 0);
+        let mut submits = vec![dev.queue.submit([enc.finish()])];
+        for k in 1..self.pieces.len() {
+            let mut enc = dev
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("step readback piece"),
+                });
+            bytes += self.copy_piece(&mut enc, tables, k);
+            submits.push(dev.queue.submit([enc.finish()]));
+        }
+        (submits, bytes)
+    }
+
+    /// Read each piece into the per-step columns of `out` as soon as its submit (`submits`, from
+    /// [`Self::submit_with_pieces`]) has finished, long stretches on every thread of `pool`; the
+    /// seconds spent copying.
+    pub(crate) fn read_pieces(
+        &self,
+        dev: &GpuDevice,
+        submits: Vec<wgpu::SubmissionIndex>,
+        out: &mut Outputs,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Result<f64, SimError> {
+        let mut copy_s = 0.0;
+        for (k, submit) in submits.into_iter().enumerate() {
+            let words = piece_range(self.span_words, k, self.pieces.len()).len();
+            if words == 0 {
+                continue;
+            }
+            let mut piece = Ok(());
+            map_and_read_after(
+                dev,
+                &self.pieces[k],
+                words_to_bytes(words),
+                Some(submit),
+                |w| {
+                    let copying = std::time::Instant::now();
+                    piece = self.read_piece(k, w, out, pool);
+                    copy_s += copying.elapsed().as_secs_f64();
+                },
+            )?;
+            piece?;
+        }
+        Ok(copy_s)
+    }
+
+    /// Copy piece `k` of the per-step columns into its buffer; the bytes copied.
+    fn copy_piece(&self, enc: &mut wgpu::CommandEncoder, tables: &Tables<'_>, k: usize) -> u64 {
+        let piece = piece_range(self.span_words, k, self.pieces.len());
+        for (r, start, part) in parts_in(self.runs.iter().map(|r| r.words), piece.clone()) {
+            let r = &self.runs[r];
+            let src = if r.u32s { tables.u32s } else { tables.f32s };
+            enc.copy_buffer_to_buffer(
+                src,
+                words_to_bytes(r.at + part.start - start),
+                &self.pieces[k],
+                words_to_bytes(part.start - piece.start),
+                words_to_bytes(part.len()),
+            );
+        }
+        words_to_bytes(piece.len())
     }
 
     /// The words of the finished rows from row `first` on, where a second copy starts.
@@ -212,23 +333,32 @@ impl StepReadback {
         (&self.finished, words_to_bytes(1 + first * self.row_words))
     }
 
-    /// Write what [`Self::copy`] copied (`words`, from its start) into `out`: the per-step
-    /// columns (large ones on every thread of `pool`) and the rows it holds. Returns how many
-    /// environments finished; rows beyond the hint are for [`Self::scatter`] after a second
-    /// copy.
-    pub(crate) fn read(
+    /// Write piece `k` of the per-step columns (`words`, what [`Self::copy_piece`] copied)
+    /// into their columns of `out`, long stretches on every thread of `pool`.
+    fn read_piece(
         &self,
+        k: usize,
         words: &[u32],
         out: &mut Outputs,
         pool: Option<&rayon::ThreadPool>,
-    ) -> Result<usize, SimError> {
-        let mut at = 0;
-        for s in &self.spans {
-            let dst = column(out, s.name)?;
-            copy_words(dst, &words[at..at + s.words], pool);
-            at += s.words;
+    ) -> Result<(), SimError> {
+        let piece = piece_range(self.span_words, k, self.pieces.len());
+        for (s, start, part) in parts_in(self.spans.iter().map(|s| s.words), piece.clone()) {
+            let dst = &mut column(out, self.spans[s].name)?[part.start - start..part.end - start];
+            copy_words(
+                dst,
+                &words[part.start - piece.start..part.end - piece.start],
+                pool,
+            );
         }
-        let count = words[at] as usize;
+        Ok(())
+    }
+
+    /// Write the rows that [`Self::copy_rows`] copied (`words`, from its start) into `out`.
+    /// Returns how many environments finished; rows beyond the hint are for [`Self::scatter`]
+    /// after a second copy.
+    pub(crate) fn read_rows(&self, words: &[u32], out: &mut Outputs) -> Result<usize, SimError> {
+        let count = words[0] as usize;
         if count > self.n_envs {
             return Err(SimError::Internal(format!(
                 "the finished-rows pass counted {count} rows for {} environments",
@@ -236,7 +366,7 @@ impl StepReadback {
             )));
         }
         let held = count.min(self.rows_hint);
-        self.scatter(&words[at + 1..at + 1 + held * self.row_words], out)?;
+        self.scatter(&words[1..1 + held * self.row_words], out)?;
         Ok(count)
     }
 
@@ -270,6 +400,32 @@ impl StepReadback {
     }
 }
 
+/// The words of the per-step columns (`span_words` of them, back to back in span order) that
+/// piece `k` of `n` holds.
+fn piece_range(span_words: usize, k: usize, n: usize) -> Range<usize> {
+    span_words * k / n..span_words * (k + 1) / n
+}
+
+/// For stretches of `lengths` words laid back to back, the part of each that lies in `piece`:
+/// the stretch's index, its first word and the part (stretches outside `piece` left out).
+fn parts_in(
+    lengths: impl Iterator<Item = usize>,
+    piece: Range<usize>,
+) -> impl Iterator<Item = (usize, usize, Range<usize>)> {
+    lengths
+        .enumerate()
+        .scan(0, move |next, (i, words)| {
+            let start = *next;
+            *next += words;
+            Some((
+                i,
+                start,
+                start.max(piece.start)..(start + words).min(piece.end),
+            ))
+        })
+        .filter(|(_, _, part)| !part.is_empty())
+}
+
 /// Bytes of `words` 32-bit words: an offset or a copy's size (`kit::bytes_of` is a buffer's
 /// size, never below one element).
 pub(crate) fn words_to_bytes(words: usize) -> u64 {
@@ -295,5 +451,55 @@ fn copy_words(dst: &mut [u32], src: &[u32], pool: Option<&rayon::ThreadPool>) {
             });
         }
         _ => dst.copy_from_slice(src),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn span(u32s: bool, at: usize, words: usize) -> Span {
+        Span {
+            name: "",
+            u32s,
+            at,
+            words,
+        }
+    }
+
+    /// Neighbours in one table make one run; a gap, or the other table, starts the next.
+    #[test]
+    fn neighbouring_spans_make_one_copy() {
+        let spans = [
+            span(false, 0, 10),
+            span(false, 10, 2),
+            span(false, 20, 4),
+            span(true, 24, 3),
+            span(true, 27, 1),
+        ];
+        let run = |u32s, at, words| Run { u32s, at, words };
+        assert_eq!(
+            runs_of(&spans),
+            [run(false, 0, 12), run(false, 20, 4), run(true, 24, 4)]
+        );
+        assert_eq!(runs_of(&[]), []);
+    }
+
+    /// The pieces cover the words once, in order; each stretch's parts are where the pieces cut
+    /// it.
+    #[test]
+    fn pieces_cut_the_stretches_where_they_meet() {
+        let total = 103;
+        for n in 1..=MOST_PIECES {
+            let pieces: Vec<Range<usize>> = (0..n).map(|k| piece_range(total, k, n)).collect();
+            assert_eq!(pieces[0].start, 0);
+            assert_eq!(pieces[n - 1].end, total);
+            assert!(pieces.windows(2).all(|w| w[0].end == w[1].start));
+        }
+        let lengths = [10, 0, 50, 43];
+        let parts: Vec<_> = parts_in(lengths.into_iter(), 20..60).collect();
+        assert_eq!(parts, [(2, 10, 20..60)]);
+        let parts: Vec<_> = parts_in(lengths.into_iter(), 5..61).collect();
+        assert_eq!(parts, [(0, 0, 5..10), (2, 10, 10..60), (3, 60, 60..61)]);
     }
 }

@@ -952,9 +952,10 @@ fn main() {
 }
 
 /// The stages whose rare work runs out of the hot pass (`wgsl::RARE_WORK_STAGES`) have the entry
-/// point that queues their environments besides `main`, and no other stage has one.
+/// point that queues their environments besides `main`, the observation has the one that moves
+/// its staged values into rows (`wgsl::OBS_ROWS_ENTRY`), and no other stage has a second one.
 #[test]
-fn rare_work_stages_have_the_queueing_entry_point() {
+fn stages_have_their_second_entry_points() {
     for s in socnav::pipeline::STAGES {
         let file = s.shader_file();
         if wgsl::is_standalone(&file) {
@@ -967,11 +968,14 @@ fn rare_work_stages_have_the_queueing_entry_point() {
             .map(|e| e.name.as_str())
             .collect();
         entries.sort_unstable();
-        let expected = if wgsl::RARE_WORK_STAGES.contains(&s.name) {
-            vec!["main", wgsl::QUEUE_ENTRY]
-        } else {
-            vec!["main"]
-        };
+        let mut expected = vec!["main"];
+        if wgsl::RARE_WORK_STAGES.contains(&s.name) {
+            expected.push(wgsl::QUEUE_ENTRY);
+        }
+        if s.name == wgsl::OBS_ROWS_STAGE {
+            expected.push(wgsl::OBS_ROWS_ENTRY);
+        }
+        expected.sort_unstable();
         assert_eq!(entries, expected, "{}", s.name);
     }
 }

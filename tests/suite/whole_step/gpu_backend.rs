@@ -148,18 +148,36 @@ fn episode_seeds_match_the_cpu() {
 /// the readback's hint had room for (twice the most recent finishers, at least 16); more finishers
 /// than that (here: every environment times out at once) take a second copy. The host's outputs
 /// stay the CPU's bit for bit through it all, and the first read after device work that was not
-/// read back copies the whole table.
+/// read back copies the whole table. On the device's default paths (here one readback piece) and
+/// on the others (`device_other_paths`: four pieces, the other observation path).
 #[test]
 fn a_step_reads_back_only_what_it_hands_the_host() {
+    let Some(other) = device_other_paths() else {
+        return;
+    };
+    reads_back_only_what_it_hands_the_host(None);
+    reads_back_only_what_it_hands_the_host(Some(other));
+}
+
+/// [`a_step_reads_back_only_what_it_hands_the_host`] with the GPU batch on `dev` (`None`: the
+/// shared device).
+fn reads_back_only_what_it_hands_the_host(dev: Option<socnav::backend::gpu::GpuDevice>) {
     use socnav::outputs::FINISHED_ONLY_COLUMNS;
     use socnav::{Actions, AutoresetMode};
-    if device().is_none() {
-        return;
-    }
     let mut c = config("exp2");
     c.episode.length = 10;
     let n = 200;
     let (mut cpu, mut gpu) = cpu_and_gpu(&c, n, 9, AutoresetMode::SameStep);
+    if let Some(dev) = dev {
+        let options = socnav::EnvOptions {
+            n_envs: n,
+            seed: 9,
+            autoreset: AutoresetMode::SameStep,
+            ..Default::default()
+        };
+        gpu = socnav::BatchEnv::on_device(c.clone(), options, dev).expect("batch");
+        gpu.reset(None).expect("reset");
+    }
     let columns = cpu.outputs().columns();
     let words = |finished: bool| -> u64 {
         columns
@@ -230,6 +248,43 @@ fn a_step_reads_back_only_what_it_hands_the_host() {
     let full = gpu.host_path().expect("host path").full_reads;
     gpu.step(Actions::Continuous(&a)).expect("step");
     assert_eq!(gpu.host_path().expect("host path").full_reads, full + 1);
+}
+
+/// Contract: whole steps on the other observation path than the device's default (staged
+/// slot-major and moved into rows through workgroup memory, or written into the rows in place:
+/// `GpuDevice::stage_observations`), read back in four pieces, hand the host the CPU's outputs
+/// bit for bit, SAME_STEP finals (copied from the rows after the move) included, over episodes
+/// that end.
+#[test]
+fn the_other_observation_path_steps_as_the_cpu() {
+    use socnav::{Actions, AutoresetMode};
+    let Some(other) = device_other_paths() else {
+        return;
+    };
+    let mut c = config("exp2");
+    c.episode.length = 10;
+    let n = 67;
+    let options = socnav::EnvOptions {
+        n_envs: n,
+        seed: 5,
+        autoreset: AutoresetMode::SameStep,
+        ..Default::default()
+    };
+    let mut cpu = socnav::BatchEnv::new(c.clone(), options.clone()).expect("CPU batch");
+    let mut gpu = socnav::BatchEnv::on_device(c, options, other).expect("GPU batch");
+    cpu.reset(None).expect("reset");
+    gpu.reset(None).expect("reset");
+    let mut rng = socnav::rng::RngStream::new(4, 0);
+    let mut finals = 0;
+    for t in 0..30 {
+        let a = random_actions(&mut rng, n, false);
+        cpu.step(Actions::Continuous(&a)).expect("step");
+        gpu.step(Actions::Continuous(&a)).expect("step");
+        let differ = cpu.outputs().differing_columns(gpu.outputs());
+        assert!(differ.is_empty(), "step {t}: outputs differ in {differ:?}");
+        finals += cpu.outputs().has_final.iter().filter(|&&f| f != 0).count();
+    }
+    assert!(finals > n, "only {finals} SAME_STEP finals");
 }
 
 /// Stage timing on the GPU backend (what `socnav bench`'s per-pass shares come from): every pass

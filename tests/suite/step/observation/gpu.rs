@@ -15,7 +15,7 @@ use socnav::config::{Gaussian, ObsFrame};
 use socnav::outputs::Outputs;
 use socnav::rng::RngStream;
 use socnav::state::BatchState;
-use socnav::{Config, StepParams};
+use socnav::{AutoresetMode, Config, StepParams};
 
 /// Robot, humans, laptops and plants scattered over the room with random headings (the robot's
 /// exactly 0 now and then), random heading caches, ticks and episodes (new noise draws).
@@ -98,12 +98,34 @@ fn world(mut c: Config) -> Config {
     c
 }
 
-/// Both kinds of run: chained, then from scattered states.
+/// Both kinds of run, chained and from scattered states, on both of the shader's paths: the
+/// observation written into its rows in place and staged slot-major, then moved into the rows
+/// (`GpuDevice::stage_observations`; the device's default path first).
 fn both(c: Config, n_envs: usize, runs: usize) {
-    if check_parity("observation", c.clone(), n_envs, runs, None).is_none() {
+    let (Some(default), Some(other)) = (device(), device_other_paths()) else {
         return;
+    };
+    for dev in [default, other] {
+        let mode = AutoresetMode::NextStep;
+        check_parity_on(
+            dev.clone(),
+            "observation",
+            c.clone(),
+            mode,
+            n_envs,
+            runs,
+            None,
+        );
+        check_parity_on(
+            dev,
+            "observation",
+            c.clone(),
+            mode,
+            n_envs,
+            runs,
+            Some(scatter),
+        );
     }
-    check_parity("observation", c, n_envs, runs, Some(scatter));
 }
 
 /// Contract: `observation` in every shipped config (plain path: robot frame, everything visible,
