@@ -219,9 +219,9 @@ impl StepReadback {
         1 + self.n_envs * self.row_words
     }
 
-    /// Bytes of the device buffer of the finished rows.
+    /// Bytes of its buffers: the finished rows on the device and the readback pieces.
     pub(crate) fn device_bytes(&self) -> u64 {
-        self.finished.size()
+        self.finished.size() + self.pieces.iter().map(wgpu::Buffer::size).sum::<u64>()
     }
 
     /// Rows the next step's first copy takes.

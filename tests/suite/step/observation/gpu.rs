@@ -210,3 +210,29 @@ fn padded() {
         both(partial(world(c)), 256, 10);
     }
 }
+
+/// Contract: a batch on a device that stages observations holds `n_envs × obs_dim` words more
+/// device memory (the staged values in `scratch`) than one on a device that writes rows in place,
+/// and says so (`GpuStages::device_bytes`, which out-of-memory errors report); the readback's
+/// pieces split the same bytes whatever their number.
+#[test]
+fn staging_costs_one_observation_per_environment() {
+    let (Some(a), Some(b)) = (device(), device_other_paths()) else {
+        return;
+    };
+    let n = 67;
+    let env = rolled_out(config("exp2"), n, 1);
+    let p = *env.params();
+    let (state, out) = (env.state().unwrap(), env.outputs());
+    let bytes = |dev| {
+        socnav::backend::gpu::GpuStages::new(dev, &p, state, out, &["observation"])
+            .expect("GPU stages")
+            .device_bytes()
+    };
+    let (staged, in_place) = if a.stage_observations {
+        (bytes(a), bytes(b))
+    } else {
+        (bytes(b), bytes(a))
+    };
+    assert_eq!(staged - in_place, 4 * (n * env.layout().dim) as u64);
+}
