@@ -150,6 +150,11 @@ pub struct BenchArgs {
     /// floats for exp2) instead of the config's.
     #[arg(long)]
     pub padded: bool,
+    /// Also step each batch size as two halves on two host threads, each half's readback and
+    /// copy overlapping the other's device work (what `send`/`recv` on two batches does from
+    /// Python).
+    #[arg(long)]
+    pub halves: bool,
     /// Print one JSON object on stdout instead of the table.
     #[arg(long)]
     pub json: bool,

@@ -1,7 +1,8 @@
 //! `socnav bench`: env-steps/s of the step, in total and per stage, for a table of batch sizes.
 //! Actions are fixed (forward and turning) so the policy costs nothing. On a GPU it also times
 //! the simulation on the device alone (issue 4's first target); `--padded` delivers 0.1.1's
-//! padded observations (walls omitted; the second target) instead of the full ones.
+//! padded observations (walls omitted; the second target) instead of the full ones; `--halves`
+//! also steps each batch size as two halves on two host threads.
 
 use std::time::Instant;
 
@@ -48,27 +49,40 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             .map(|((name, s), b)| (*name, s - b))
             .collect();
         let stage_total: f64 = stages.iter().map(|s| s.1).sum();
+        let stage_clock = env.stage_clock();
+        let parallelism = stage_parallelism(&env);
+        let (state_bytes, obs_floats) = (env.state()?.bytes_per_env(), env.layout().dim);
+        device = env.device();
+        backend = env.backend_name();
+        let halves = if a.halves {
+            // The whole batch's buffers go before the halves take theirs.
+            drop(env);
+            Some(halves_env_steps_per_s(a, &config, n)?)
+        } else {
+            drop(env);
+            None
+        };
         rows.push(json!({
             "envs": n,
             "steps": steps,
             "seconds": secs,
             "env_steps_per_s": (n * steps) as f64 / secs,
             "device_only_env_steps_per_s": device_only,
+            // `--halves`: the same environments as two batches stepped on two host threads.
+            "halves_env_steps_per_s": halves,
             // GPU: the host path's time and bytes per step over the timed steps.
             "host_path": host_path,
-            "state_bytes_per_env": env.state()?.bytes_per_env(),
-            "obs_floats_per_env": env.layout().dim,
+            "state_bytes_per_env": state_bytes,
+            "obs_floats_per_env": obs_floats,
             // CPU stage time is summed over threads: each stage's share of the step's CPU time.
             // GPU stages are timed one submit each, in wall time.
-            "stage_clock": env.stage_clock(),
+            "stage_clock": stage_clock,
             "stage_share": stages.iter().map(|(k, s)| (k.to_string(), json!(s / stage_total))).collect::<serde_json::Map<_, _>>(),
-            "stage_env_steps_per_s": stages.iter().map(|(k, s)| (k.to_string(), json!((n * timed) as f64 / s * stage_parallelism(&env) as f64))).collect::<serde_json::Map<_, _>>(),
+            "stage_env_steps_per_s": stages.iter().map(|(k, s)| (k.to_string(), json!((n * timed) as f64 / s * parallelism as f64))).collect::<serde_json::Map<_, _>>(),
         }));
         if let Some(row) = rows.last().filter(|_| !a.json) {
-            print_row(row, i == 0, &env);
+            print_row(row, i == 0, backend, &device);
         }
-        device = env.device();
-        backend = env.backend_name();
     }
     if a.json {
         let out = json!({"config": a.config, "padded": a.padded, "backend": backend, "device": device, "threads": a.threads, "rows": rows});
@@ -87,13 +101,49 @@ fn stage_parallelism(env: &socnav::BatchEnv) -> usize {
     }
 }
 
-fn print_row(row: &serde_json::Value, header: bool, env: &socnav::BatchEnv) {
+/// `n` environments as two batches of about `n / 2`, each stepped on a host thread of its own
+/// for `a.seconds` after the warm-up: their env-steps per second together.
+fn halves_env_steps_per_s(
+    a: &BenchArgs,
+    config: &Config,
+    n: usize,
+) -> Result<f64, Box<dyn std::error::Error>> {
+    let sizes = [n / 2, n - n / 2];
+    let mut halves = Vec::with_capacity(2);
+    for (k, &size) in sizes.iter().enumerate() {
+        let mut env = make_env(config.clone(), size, 0, a.backend, a.threads)?;
+        // The second half's environments play the episodes the whole batch's second half would.
+        env.reset(Some((k * sizes[0]) as u64))?;
+        let actions: Vec<f32> = [0.8f32, 0.0, 0.3].repeat(size);
+        for _ in 0..WARMUP_STEPS {
+            env.step(Actions::Continuous(&actions))?;
+        }
+        halves.push((env, actions));
+    }
+    let timed: Vec<Result<(usize, f64), socnav::SimError>> = std::thread::scope(|s| {
+        let running: Vec<_> = halves
+            .iter_mut()
+            .map(|(env, actions)| s.spawn(|| timed_steps(env, actions, a.seconds)))
+            .collect();
+        running
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+            .collect()
+    });
+    let (mut env_steps, mut longest) = (0usize, 0.0f64);
+    for (size, result) in sizes.iter().zip(timed) {
+        let (steps, secs) = result?;
+        env_steps += size * steps;
+        longest = longest.max(secs);
+    }
+    Ok(env_steps as f64 / longest)
+}
+
+fn print_row(row: &serde_json::Value, header: bool, backend: &str, device: &str) {
     if header {
         println!(
-            "{} backend on {}; per-stage figures are env-steps/s if the stage ran alone ({})",
-            env.backend_name(),
-            env.device(),
-            env.stage_clock()
+            "{backend} backend on {device}; per-stage figures are env-steps/s if the stage ran alone ({})",
+            row["stage_clock"].as_str().unwrap_or("")
         );
     }
     println!(
@@ -109,6 +159,9 @@ fn print_row(row: &serde_json::Value, header: bool, env: &socnav::BatchEnv) {
         println!(
             "    simulation on the device alone: {d:.0} env-steps/s (no outputs to the host, no reset rows refilled)"
         );
+    }
+    if let Some(h) = row["halves_env_steps_per_s"].as_f64() {
+        println!("    as two halves on two host threads: {h:.0} env-steps/s");
     }
     if let Some(p) = row["host_path"].as_object() {
         let ms = |k: &str| 1e3 * p[k].as_f64().unwrap_or(0.0);
