@@ -278,12 +278,14 @@ fn slot_index_functions(state: Columns<'_>) -> String {
 /// columns as `co_<name>`/`so_<name>` in `outf`/`outu` (environment-major: element `k` of
 /// environment `e` at `co + e * so + k`, the rows the host reads); the observation layout
 /// (`obs_dim`, `obs_robot`, and per entity type `obs_offset_<type>`, `obs_capacity_<type>`, per
-/// interaction kind `pairs_<kind>`); the reset pool's `pool_row` (words per row) and `pool_observation` (the
-/// observation's first word in a row); the `scratch` region of an environment
-/// ([`ObstacleScratch`]), `x_obs_staged`, where the staged observation starts in it
-/// ([`scratch_words`]), and `obs_staged` (1 when the observation is staged); and the SNGNN-v2 sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one compiled pipeline serves every
-/// batch size and every config of the same [`SizeClasses`]. The field names are the same for
-/// every batch (the column list is fixed), so the WGSL struct is too.
+/// interaction kind `pairs_<kind>`); the reset pool's `pool_row` (words per row) and
+/// `pool_observation` (the observation's first word in a row); the `scratch` region of an
+/// environment ([`ObstacleScratch`]), `x_obs_staged`, where the staged observation starts in it
+/// ([`scratch_words`]), and `obs_staged` (1 when the observation is staged); and the SNGNN-v2
+/// sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one
+/// compiled pipeline serves every batch size and every config of the same [`SizeClasses`]. The
+/// field names are the same for every batch (the column list is fixed), so the WGSL struct is
+/// too.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct BatchLayout {
     fields: Vec<(String, u32)>,
@@ -540,9 +542,9 @@ fn size_class(n: usize, floor: usize) -> usize {
 
 /// The part of every shader's head that depends on neither the config nor the batch: the
 /// constants [`prelude`] lists before the size classes (`WORKGROUP_SIZE`, `INFO_*`, `EP_*`,
-/// `EV_*`, the shared codes and f32 constants, `OBS_RECORD`, `OBS_TILE`, [`geometry_constants`]). A kernel
-/// built from the shader library outside the step (tests/suite/orca/gpu.rs) starts with it, so the
-/// library's files see the same definitions there as in the step.
+/// `EV_*`, the shared codes and f32 constants, `OBS_RECORD`, `OBS_TILE`, [`geometry_constants`]).
+/// A kernel built from the shader library outside the step (tests/suite/orca/gpu.rs) starts with
+/// it, so the library's files see the same definitions there as in the step.
 pub fn shared_head() -> String {
     let mut out = format!("const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n");
     for (keys, prefix) in [
