@@ -152,7 +152,7 @@ pub struct BenchArgs {
     pub padded: bool,
     /// Also step each batch size as two halves on two host threads, each half's readback and
     /// copy overlapping the other's device work (what `send`/`recv` on two batches does from
-    /// Python).
+    /// Python). Batch sizes below 2 have no halves.
     #[arg(long)]
     pub halves: bool,
     /// Print one JSON object on stdout instead of the table.

@@ -54,12 +54,11 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
         let (state_bytes, obs_floats) = (env.state()?.bytes_per_env(), env.layout().dim);
         device = env.device();
         backend = env.backend_name();
-        let halves = if a.halves {
-            // The whole batch's buffers go before the halves take theirs.
-            drop(env);
+        // The whole batch's buffers go before the halves take theirs.
+        drop(env);
+        let halves = if a.halves && n >= 2 {
             Some(halves_env_steps_per_s(a, &config, n)?)
         } else {
-            drop(env);
             None
         };
         rows.push(json!({
