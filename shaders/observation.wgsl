@@ -121,8 +121,8 @@ fn obs_plant_sin_cos() -> vec2<f32> {
 }
 
 // The one-hot part of the record at `at` (its first 6 floats): 1 at `kind`, 0 elsewhere. Every
-// float of a record is stored once (no zeroing pass before the values): on a GPU each store of a
-// record is a scattered write, the observation pass's largest cost.
+// float of a record is stored once (no zeroing pass before the values): stores are the
+// observation pass's largest cost on a GPU.
 fn obs_one_hot(at: u32, kind: u32) {
     for (var k = 0u; k < 6u; k++) {
         obs_put(at + k, select(0.0, 1.0, k == kind));

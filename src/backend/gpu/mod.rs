@@ -75,11 +75,9 @@ struct DeviceTable {
 pub struct GpuStages {
     dev: GpuDevice,
     n_envs: usize,
-    /// Floats of an observation row (the `rows` dispatch of the observation pass covers them).
-    obs_dim: u32,
-    /// Whether the observation is staged (`GpuDevice::stage_observations`): then the
-    /// observation pass's `rows` dispatch follows its `main`.
-    obs_staged: bool,
+    /// Workgroups along an observation row of the observation pass's `rows` dispatch
+    /// (`OBS_ROWS_TILE` floats each), made where the observation is staged.
+    obs_row_tiles: u32,
     state: DeviceTable,
     outputs: DeviceTable,
     params: wgpu::Buffer,
@@ -393,8 +391,9 @@ impl GpuStages {
         });
         // Group 0, the bindings of the prelude (`backend::wgsl::prelude`): params, sf, su,
         // actions, outf, outu, pool, the batch layout, scratch, the rare work's queues. With the
-        // SNGNN graphs, group 1: the packed graphs and the frame gaps (`backend::wgsl::sngnn_prelude`), bound only by the shaders
-        // that use them, so that every other shader is the same pipeline as without them.
+        // SNGNN graphs, group 1: the packed graphs and the frame gaps
+        // (`backend::wgsl::sngnn_prelude`), bound only by the shaders that use them, so that
+        // every other shader is the same pipeline as without them.
         let batch = uniform_buffer(&dev, "batch layout", &layout.words());
         let (step_read, read_compiled) = StepReadback::new(
             &dev,
@@ -479,8 +478,7 @@ impl GpuStages {
         let this = Self {
             dev,
             n_envs,
-            obs_dim: layout_at("obs_dim") as u32,
-            obs_staged,
+            obs_row_tiles: (layout_at("obs_dim") as u32).div_ceil(wgsl::OBS_ROWS_TILE),
             state: state_table,
             outputs: outputs_table,
             params: params_buf,
@@ -880,9 +878,9 @@ impl GpuStages {
         }
         pass.set_pipeline(&pipeline.main);
         pass.dispatch_workgroups(workgroups, 1, 1);
-        if let (Some(rows), true) = (&pipeline.rows, self.obs_staged) {
+        if let Some(rows) = &pipeline.rows {
             pass.set_pipeline(rows);
-            pass.dispatch_workgroups(workgroups, self.obs_dim.div_ceil(wgsl::OBS_ROWS_TILE), 1);
+            pass.dispatch_workgroups(workgroups, self.obs_row_tiles, 1);
         }
         Ok(false)
     }
@@ -1052,7 +1050,8 @@ impl GpuStages {
 
 /// The pipelines of a pass: `main` and, for a stage of [`wgsl::RARE_WORK_STAGES`], `queue_work`
 /// (dispatched before it, over every environment, to queue those `main` runs for); for
-/// [`wgsl::OBS_ROWS_STAGE`], `rows` (dispatched after it: the staged observation into its rows).
+/// [`wgsl::OBS_ROWS_STAGE`] on a device that stages observations, `rows` (dispatched after it:
+/// the staged observation into its rows).
 struct PassPipelines {
     queue: Option<wgpu::ComputePipeline>,
     main: wgpu::ComputePipeline,
@@ -1115,6 +1114,7 @@ fn build_pass(
         Ok(Some(pipeline))
     };
     let queue = entry(wgsl::RARE_WORK_STAGES.contains(&stage), wgsl::QUEUE_ENTRY)?;
-    let rows = entry(stage == wgsl::OBS_ROWS_STAGE, wgsl::OBS_ROWS_ENTRY)?;
+    let staged = stage == wgsl::OBS_ROWS_STAGE && dev.stage_observations;
+    let rows = entry(staged, wgsl::OBS_ROWS_ENTRY)?;
     Ok(Some((PassPipelines { queue, main, rows }, compiled)))
 }

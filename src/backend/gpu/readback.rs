@@ -179,20 +179,7 @@ impl StepReadback {
             &[tables.f32s, tables.u32s, tables.batch, &finished],
         );
         let span_words: usize = spans.iter().map(|s| s.words).sum();
-        let n_pieces = bytes_of::<u32>(span_words)
-            .div_ceil(dev.readback_piece_bytes.max(1))
-            .clamp(1, MOST_PIECES as u64) as usize;
-        let pieces = (0..n_pieces)
-            .map(|k| {
-                let words = piece_range(span_words, k, n_pieces).len();
-                dev.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("step readback piece"),
-                    size: bytes_of::<u32>(words),
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                })
-            })
-            .collect();
+        let pieces = piece_buffers(dev, span_words);
         let this = Self {
             runs: runs_of(&spans),
             spans,
@@ -398,6 +385,24 @@ impl StepReadback {
         let most = self.recent.iter().copied().max().unwrap_or(0);
         self.rows_hint = (2 * most).max(MIN_ROWS).min(self.n_envs);
     }
+}
+
+/// The mapped buffers of the pieces of `span_words` words of per-step columns: one piece per
+/// `GpuDevice::readback_piece_bytes`, at least one, at most [`MOST_PIECES`].
+fn piece_buffers(dev: &GpuDevice, span_words: usize) -> Vec<wgpu::Buffer> {
+    let n = bytes_of::<u32>(span_words)
+        .div_ceil(dev.readback_piece_bytes.max(1))
+        .clamp(1, MOST_PIECES as u64) as usize;
+    (0..n)
+        .map(|k| {
+            dev.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("step readback piece"),
+                size: bytes_of::<u32>(piece_range(span_words, k, n).len()),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        })
+        .collect()
 }
 
 /// The words of the per-step columns (`span_words` of them, back to back in span order) that

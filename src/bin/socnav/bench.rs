@@ -24,12 +24,7 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
     let mut rows = Vec::new();
     let (mut device, mut backend) = (String::new(), "");
     for (i, &n) in a.envs.iter().enumerate() {
-        let mut env = make_env(config.clone(), n, 0, a.backend, a.threads)?;
-        env.reset(Some(0))?;
-        let actions: Vec<f32> = [0.8f32, 0.0, 0.3].repeat(n);
-        for _ in 0..WARMUP_STEPS {
-            env.step(Actions::Continuous(&actions))?;
-        }
+        let (mut env, actions) = warmed_up(a, &config, n, 0)?;
         // Throughput with stage timing off (it costs two clock reads per stage and chunk)...
         let path_before = env.host_path();
         let (steps, secs) = timed_steps(&mut env, &actions, a.seconds)?;
@@ -100,6 +95,23 @@ fn stage_parallelism(env: &socnav::BatchEnv) -> usize {
     }
 }
 
+/// A batch of `n` environments of `config` whose environment i plays the episode of seed
+/// `seed + i`, after [`WARMUP_STEPS`] steps with the benchmark's fixed actions; with them.
+fn warmed_up(
+    a: &BenchArgs,
+    config: &Config,
+    n: usize,
+    seed: u64,
+) -> Result<(socnav::BatchEnv, Vec<f32>), socnav::SimError> {
+    let mut env = make_env(config.clone(), n, 0, a.backend, a.threads)?;
+    env.reset(Some(seed))?;
+    let actions: Vec<f32> = [0.8f32, 0.0, 0.3].repeat(n);
+    for _ in 0..WARMUP_STEPS {
+        env.step(Actions::Continuous(&actions))?;
+    }
+    Ok((env, actions))
+}
+
 /// `n` environments as two batches of about `n / 2`, each stepped on a host thread of its own
 /// for `a.seconds` after the warm-up: their env-steps per second together.
 fn halves_env_steps_per_s(
@@ -110,14 +122,8 @@ fn halves_env_steps_per_s(
     let sizes = [n / 2, n - n / 2];
     let mut halves = Vec::with_capacity(2);
     for (k, &size) in sizes.iter().enumerate() {
-        let mut env = make_env(config.clone(), size, 0, a.backend, a.threads)?;
         // The second half's environments play the episodes the whole batch's second half would.
-        env.reset(Some((k * sizes[0]) as u64))?;
-        let actions: Vec<f32> = [0.8f32, 0.0, 0.3].repeat(size);
-        for _ in 0..WARMUP_STEPS {
-            env.step(Actions::Continuous(&actions))?;
-        }
-        halves.push((env, actions));
+        halves.push(warmed_up(a, config, size, (k * sizes[0]) as u64)?);
     }
     let timed: Vec<Result<(usize, f64), socnav::SimError>> = std::thread::scope(|s| {
         let running: Vec<_> = halves

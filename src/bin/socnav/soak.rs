@@ -1,10 +1,9 @@
 //! `socnav soak`: step configs for a long time with adversarial actions, checking after every
 //! step that every output is finite (the info values the spec defines as NaN or +inf excepted)
 //! and that the state keeps its invariants (`socnav::state::invariants`), sampling the process's
-//! memory. The
-//! progress (steps, counts of NaN, broken invariants and panics, memory samples) is written to a
-//! JSON file after every chunk, and a run with the same file resumes where it stopped, so a
-//! billion steps can proceed in chunks.
+//! memory. The progress (steps, counts of NaN, broken invariants and panics, memory samples) is
+//! written to a JSON file after every chunk, and a run with the same file resumes where it
+//! stopped, so a billion steps can proceed in chunks.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
