@@ -29,9 +29,10 @@
 //   its own storage and hands the library one item at a time: `orca_agent_neighbor_candidate`
 //   (one other agent), `orca_obstacle_neighbor_candidate` (one edge), `orca_push_obstacle_line`
 //   (the two end vertices of one selected edge, `orca_vertex`), `orca_push_agent_line` (one
-//   selected neighbour), then `orca_solve` (LP2, LP3 when LP2 fails). A fresh `var` of a list
-//   type is empty; to reuse one for the next agent, set its `len` and `overflow` to 0
-//   (`orca_lines_clear` for lines).
+//   selected neighbour), then `orca_solve` (LP2, LP3 when LP2 fails). Clear a `var` of a list
+//   type before its first use and to reuse it (`orca_agent_neighbors_clear`,
+//   `orca_obstacle_neighbors_clear`, `orca_lines_clear`): the GPU backend's own SPIR-V does not
+//   zero them (src/backend/gpu/spirv.rs), and no function reads an entry at or past `len`.
 // * `orca_compute_new_velocity`: Rust's `compute_new_velocity` over function-scope copies (the
 //   agent's gathered neighbours and its environment's processed vertices), built from the same
 //   blocks.
@@ -354,8 +355,7 @@ fn orca_obstacle_neighbors(
     obstacles: ptr<function, OrcaObstacleVerts>,
     out: ptr<function, OrcaObstacleNeighbors>,
 ) {
-    (*out).len = 0u;
-    (*out).overflow = 0u;
+    orca_obstacle_neighbors_clear(out);
     for (var v = 0u; v < (*obstacles).len; v = v + 1u) {
         let a = (*obstacles).point[v];
         let b = (*obstacles).point[(*obstacles).next[v]];
@@ -364,6 +364,19 @@ fn orca_obstacle_neighbors(
 }
 
 // ---- lines.rs -----------------------------------------------------------------------------------
+
+// The lists' clears. Every function-scope variable of the three list types must be cleared
+// before its first use: the GPU backend's own SPIR-V (src/backend/gpu/spirv.rs, `UNZEROED_TYPES`)
+// does not zero them, since a call reads only the entries below the count it wrote.
+fn orca_agent_neighbors_clear(list: ptr<function, OrcaAgentNeighbors>) {
+    (*list).len = 0u;
+    (*list).overflow = 0u;
+}
+
+fn orca_obstacle_neighbors_clear(list: ptr<function, OrcaObstacleNeighbors>) {
+    (*list).len = 0u;
+    (*list).overflow = 0u;
+}
 
 fn orca_lines_clear(lines: ptr<function, OrcaLines>) {
     (*lines).len = 0u;
@@ -805,9 +818,10 @@ struct OrcaLp3 {
 }
 
 // RVO2's `linearProgram3`. Its working memory (Rust's `proj`, the projected lines) is a variable
-// of its own, not the caller's: naga gives every function-scope variable a zero initialiser, so
-// declared here it is zeroed only by the rare calls that need LP3, not by every ORCA call
-// (issue 19: 3,088 bytes a call at ORCA_MAX_LINES = 192).
+// of its own, not the caller's: where the lists are zeroed (WGSL compiled by wgpu, not the
+// backend's own SPIR-V: src/backend/gpu/spirv.rs), declared here it is zeroed only by the rare
+// calls that need LP3, not by every ORCA call (issue 19: 3,088 bytes a call at ORCA_MAX_LINES =
+// 192).
 fn orca_lp3(
     lines: ptr<function, OrcaLines>,
     num_obst_lines: u32,
@@ -816,6 +830,7 @@ fn orca_lp3(
     result_in: vec2<f32>,
 ) -> OrcaLp3 {
     var proj: OrcaLines;
+    orca_lines_clear(&proj);
     var result = result_in;
     var distance = 0.0;
     for (var i = begin_line; i < (*lines).len; i = i + 1u) {

@@ -206,7 +206,9 @@ fn orca_world_visible(e: u32, v: View, agent: OrcaAgent, seen: u32) -> u32 {
 // of environment e, over e's processed obstacles or, with a view, those of Rust `with_visible`
 // (`compute_new_velocity`).
 fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> OrcaWorldVelocity {
+    // The lists are not zeroed (src/backend/gpu/spirv.rs): their counts are cleared here.
     var nb: OrcaAgentNeighbors;
+    orca_agent_neighbors_clear(&nb);
     orca_world_select(e, first, others, &nb);
 
     var obstacles = ORCA_WORLD_OBSTACLES_CACHED;
@@ -214,7 +216,9 @@ fn orca_world_velocity(e: u32, first: OrcaAgent, others: OrcaWorldOthers) -> Orc
         obstacles = orca_world_visible(e, others.view.view, first, orca_obstacles_list(e));
     }
     var lines: OrcaLines;
+    orca_lines_clear(&lines);
     var onb: OrcaObstacleNeighbors;
+    orca_obstacle_neighbors_clear(&onb);
     var set_overflow = 0u;
     let range_sq = orca_obstacle_range_sq(first.time_horizon_obst, first.max_speed, first.radius);
     if (obstacles == ORCA_WORLD_OBSTACLES_CACHED) {

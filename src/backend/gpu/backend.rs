@@ -406,6 +406,6 @@ impl Backend for GpuBackend {
     }
 
     fn device(&self) -> String {
-        self.gpu.adapter().to_string()
+        self.gpu.device_description()
     }
 }

@@ -144,6 +144,10 @@ pub struct GpuDevice {
     /// one piece while the device copies the next. [`DEFAULT_READBACK_PIECE_BYTES`] unless a
     /// clone says otherwise.
     pub readback_piece_bytes: u64,
+    /// Whether pipelines are built from the backend's own SPIR-V (`super::spirv`: the ORCA
+    /// lists not zeroed at every call), which takes the adapter's `PASSTHROUGH_SHADERS` (every
+    /// Vulkan adapter); otherwise from the WGSL as wgpu compiles it.
+    pub(crate) own_spirv: bool,
     errors: Arc<Mutex<Vec<String>>>,
     /// Why the device was lost, once it has been.
     lost: Arc<Mutex<Option<String>>>,
@@ -200,8 +204,11 @@ impl GpuDevice {
         let limits = adapter.limits();
         // wgpu's pipeline cache, where the backend has one (`kit::DiskCache`), and timestamp
         // queries, which time the passes for `socnav bench` (`GpuStages::time_passes`).
-        let features =
-            adapter.features() & (wgpu::Features::PIPELINE_CACHE | wgpu::Features::TIMESTAMP_QUERY);
+        // SPIR-V of the backend's own writing where the adapter takes it (`super::spirv`).
+        let features = adapter.features()
+            & (wgpu::Features::PIPELINE_CACHE
+                | wgpu::Features::TIMESTAMP_QUERY
+                | wgpu::Features::PASSTHROUGH_SHADERS);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("socnav"),
             required_features: features,
@@ -232,6 +239,7 @@ impl GpuDevice {
             device,
             queue,
             stage_observations: adapter.hardware,
+            own_spirv: features.contains(wgpu::Features::PASSTHROUGH_SHADERS),
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             adapter,
             limits,

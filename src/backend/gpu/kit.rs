@@ -223,12 +223,7 @@ impl PipelineCache {
             return Ok((p.clone(), false));
         }
         let (_, layout) = self.layout(dev, groups);
-        let module = dev
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(label),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
+        let module = shader_module(dev, label, source, entry)?;
         let pipeline = dev
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -252,6 +247,36 @@ impl PipelineCache {
     pub(crate) fn builds(&self) -> usize {
         self.builds.load(Ordering::Relaxed)
     }
+}
+
+/// The shader module of entry point `entry` of WGSL `source`: from the backend's own SPIR-V
+/// where the device takes it ([`super::spirv`]), else from the WGSL through wgpu.
+#[expect(
+    unsafe_code,
+    reason = "wgpu::Device::create_shader_module_passthrough is unsafe; sound here, see below"
+)]
+fn shader_module(
+    dev: &GpuDevice,
+    label: &str,
+    source: &str,
+    entry: &str,
+) -> Result<wgpu::ShaderModule, SimError> {
+    if !dev.own_spirv {
+        return Ok(dev
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            }));
+    }
+    let words = super::spirv::compute_spirv(source, entry)
+        .map_err(|e| SimError::Internal(format!("shader {label}, entry point {entry}: {e}")))?;
+    let desc =
+        super::spirv::passthrough(label, entry, crate::backend::wgsl::WORKGROUP_SIZE, &words);
+    // SAFETY: the words are naga's SPIR-V of a module naga validated, written with the bounds
+    // checks and loop bounding wgpu would add; the only change (`spirv::without_zero_initialisers`)
+    // leaves variables uninitialised that the shaders write before they read.
+    Ok(unsafe { dev.device.create_shader_module_passthrough(desc) })
 }
 
 /// Bytes of `n` elements of `T` (at least one element: a binding may not be empty).

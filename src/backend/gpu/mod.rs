@@ -26,6 +26,7 @@ pub(crate) mod kit;
 pub(crate) mod pool_rows;
 pub(crate) mod readback;
 pub mod sngnn_net;
+pub(crate) mod spirv;
 
 pub use backend::GpuBackend;
 pub use device::{
@@ -512,6 +513,17 @@ impl GpuStages {
     /// The adapter the stages run on.
     pub fn adapter(&self) -> &AdapterSummary {
         &self.dev.adapter
+    }
+
+    /// The adapter, and whether the pipelines run the backend's own SPIR-V (`spirv`: the ORCA
+    /// lists not zeroed) or the WGSL as wgpu compiles it.
+    pub fn device_description(&self) -> String {
+        let shaders = if self.dev.own_spirv {
+            "socnav's SPIR-V"
+        } else {
+            "WGSL through wgpu"
+        };
+        format!("{}; shaders: {shaders}", self.dev.adapter)
     }
 
     /// Bytes of the buffers the batch holds on its device (its network's excepted).

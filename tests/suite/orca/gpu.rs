@@ -179,9 +179,11 @@ fn main_blocks(@builtin(global_invocation_id) gid: vec3<u32>) {
     let sc = load_scene(a);
     let agent = load_agent(a);
     var nb: OrcaAgentNeighbors;
+    orca_agent_neighbors_clear(&nb);
     select_agents(a, sc, agent, &nb);
 
     var onb: OrcaObstacleNeighbors;
+    orca_obstacle_neighbors_clear(&onb);
     let range_sq = orca_obstacle_range_sq(agent.time_horizon_obst, agent.max_speed, agent.radius);
     for (var v = 0u; v < sc.vert_count; v = v + 1u) {
         let g = sc.vert_offset + v;
@@ -189,6 +191,7 @@ fn main_blocks(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 
     var lines: OrcaLines;
+    orca_lines_clear(&lines);
     for (var k = 0u; k < onb.len; k = k + 1u) {
         let o1 = onb.items[k].index;
         let o2 = vert_next(sc.vert_offset + o1);
@@ -213,6 +216,7 @@ fn main_copies(@builtin(global_invocation_id) gid: vec3<u32>) {
     let sc = load_scene(a);
     let agent = load_agent(a);
     var nb: OrcaAgentNeighbors;
+    orca_agent_neighbors_clear(&nb);
     select_agents(a, sc, agent, &nb);
     var gathered: OrcaGathered;
     gathered.len = nb.len;

@@ -1,0 +1,315 @@
+//! The SPIR-V this backend hands a Vulkan driver: naga's, written with the options wgpu uses,
+//! except that the ORCA solver's working lists are not zeroed at every call.
+//!
+//! WGSL gives every function-scope `var` without an initialiser the value zero, and naga's
+//! SPIR-V writer spells that as a zero initialiser on the variable, so a function clears its
+//! local arrays on every call whether it reads them or not. ORCA's lists are sized for the worst
+//! case every shipped config shares (64 agent neighbours, 128 obstacle edges, 192 lines: 4,640
+//! bytes an ordinary call), of which a call reads the few entries it filled (issue 19, item 2;
+//! docs/performance.md, "Zeroed working memory"). The shaders never read an entry of those lists
+//! past their `len`, and clear the lists' counts themselves where they declare them
+//! (`orca_*_clear` in `shaders/common/orca.wgsl`), so the zero initialiser of a function-scope
+//! variable whose type is one of [`UNZEROED_TYPES`] is dropped from the module, which leaves the
+//! arrays' unwritten entries undefined, as their declarations say.
+//!
+//! Where the device has wgpu's `PASSTHROUGH_SHADERS` (Vulkan, lavapipe included) the pipelines are
+//! built from this SPIR-V; elsewhere from the WGSL, as wgpu compiles it (the same results: only
+//! entries that are written before they are read differ in what they hold at the start).
+
+use std::borrow::Cow;
+
+use naga::back::spv;
+
+/// Struct types whose function-scope variables are not zeroed (see the module docs): a count
+/// the declaring function clears and entries read only below it.
+pub(crate) const UNZEROED_TYPES: [&str; 3] =
+    ["OrcaAgentNeighbors", "OrcaObstacleNeighbors", "OrcaLines"];
+
+/// SPIR-V opcodes and the storage class this module reads.
+const OP_NAME: u32 = 5;
+const OP_TYPE_POINTER: u32 = 32;
+const OP_VARIABLE: u32 = 59;
+const STORAGE_CLASS_FUNCTION: u32 = 7;
+/// Words of the module header before the first instruction.
+const HEADER_WORDS: usize = 5;
+
+/// The SPIR-V of entry point `entry` of compute shader `source` (WGSL), with the function-scope
+/// variables of [`UNZEROED_TYPES`] not zeroed. The error names what failed (parse, validation
+/// or the writer) in naga's words.
+pub(crate) fn compute_spirv(source: &str, entry: &str) -> Result<Vec<u32>, String> {
+    let module = naga::front::wgsl::parse_str(source)
+        .map_err(|e| format!("WGSL parse: {}", e.emit_to_string(source)))?;
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .map_err(|e| format!("WGSL validation: {}", e.emit_to_string(source)))?;
+    let words = spv::write_vec(
+        &module,
+        &info,
+        &writer_options(),
+        Some(&spv::PipelineOptions {
+            shader_stage: naga::ShaderStage::Compute,
+            entry_point: entry.to_owned(),
+        }),
+    )
+    .map_err(|e| format!("SPIR-V writer: {e}"))?;
+    Ok(without_zero_initialisers(&words, &UNZEROED_TYPES))
+}
+
+/// The options of wgpu's Vulkan backend that bear on a compute shader (wgpu-hal's
+/// `naga_options` with its default runtime checks): array indices clamped, buffer accesses
+/// clamped (wgpu leaves them to the driver only with `robustBufferAccess2`; clamping is the
+/// safe side), loops bounded, workgroup memory zeroed by the shader. `DEBUG` names the types,
+/// which is how [`without_zero_initialisers`] finds the variables.
+fn writer_options() -> spv::Options<'static> {
+    let clamp = naga::proc::BoundsCheckPolicy::Restrict;
+    spv::Options {
+        lang_version: (1, 3),
+        flags: spv::WriterFlags::DEBUG,
+        bounds_check_policies: naga::proc::BoundsCheckPolicies {
+            index: clamp,
+            buffer: clamp,
+            image_load: clamp,
+            binding_array: naga::proc::BoundsCheckPolicy::Unchecked,
+        },
+        zero_initialize_workgroup_memory: spv::ZeroInitializeWorkgroupMemoryMode::Polyfill,
+        force_loop_bounding: true,
+        ..spv::Options::default()
+    }
+}
+
+/// One instruction of a SPIR-V module: its opcode and its operand words.
+struct Instruction<'a> {
+    opcode: u32,
+    operands: &'a [u32],
+}
+
+/// The instructions of module `words` after its header, in order.
+fn instructions(words: &[u32]) -> impl Iterator<Item = Instruction<'_>> {
+    let mut at = HEADER_WORDS.min(words.len());
+    std::iter::from_fn(move || {
+        let first = *words.get(at)?;
+        let count = ((first >> 16) as usize).max(1);
+        let end = (at + count).min(words.len());
+        let inst = Instruction {
+            opcode: first & 0xffff,
+            operands: &words[at + 1..end],
+        };
+        at = end;
+        Some(inst)
+    })
+}
+
+/// The string of an `OpName`'s operands (after the target id): nul-terminated UTF-8.
+fn literal_string(words: &[u32]) -> String {
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    let end = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
+    String::from_utf8_lossy(&bytes[..end]).into_owned()
+}
+
+/// A function-scope variable of a module: its result id, the name of its type (empty when the
+/// type has none) and whether it has an initialiser.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct FunctionVariable {
+    pub id: u32,
+    pub type_name: String,
+    pub initialised: bool,
+}
+
+/// Every function-scope variable of module `words`, in order.
+pub(crate) fn function_variables(words: &[u32]) -> Vec<FunctionVariable> {
+    let mut names = std::collections::HashMap::new();
+    let mut pointee = std::collections::HashMap::new();
+    let mut out = Vec::new();
+    for inst in instructions(words) {
+        match (inst.opcode, inst.operands) {
+            (OP_NAME, [target, rest @ ..]) => {
+                names.insert(*target, literal_string(rest));
+            }
+            (OP_TYPE_POINTER, [id, _class, ty]) => {
+                pointee.insert(*id, *ty);
+            }
+            (OP_VARIABLE, [ty, id, STORAGE_CLASS_FUNCTION, init @ ..]) => {
+                let type_name = pointee
+                    .get(ty)
+                    .and_then(|t| names.get(t))
+                    .cloned()
+                    .unwrap_or_default();
+                out.push(FunctionVariable {
+                    id: *id,
+                    type_name,
+                    initialised: !init.is_empty(),
+                });
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Module `words` with the initialiser dropped from every function-scope variable whose type is
+/// named in `types`; every other word as it was.
+pub(crate) fn without_zero_initialisers(words: &[u32], types: &[&str]) -> Vec<u32> {
+    let strip: std::collections::HashSet<u32> = function_variables(words)
+        .into_iter()
+        .filter(|v| v.initialised && types.contains(&v.type_name.as_str()))
+        .map(|v| v.id)
+        .collect();
+    let mut out = Vec::with_capacity(words.len());
+    out.extend_from_slice(&words[..HEADER_WORDS.min(words.len())]);
+    for inst in instructions(words) {
+        match (inst.opcode, inst.operands) {
+            (OP_VARIABLE, [ty, id, class @ STORAGE_CLASS_FUNCTION, _init])
+                if strip.contains(id) =>
+            {
+                out.extend_from_slice(&[(4 << 16) | OP_VARIABLE, *ty, *id, *class]);
+            }
+            _ => {
+                let count = (inst.operands.len() as u32 + 1) << 16;
+                out.push(count | inst.opcode);
+                out.extend_from_slice(inst.operands);
+            }
+        }
+    }
+    out
+}
+
+/// The passthrough descriptor of `spirv` for compute entry point `entry`.
+pub(crate) fn passthrough<'a>(
+    label: &'a str,
+    entry: &'a str,
+    workgroup_size: u32,
+    spirv: &'a [u32],
+) -> wgpu::ShaderModuleDescriptorPassthrough<'a> {
+    wgpu::ShaderModuleDescriptorPassthrough {
+        label: Some(label),
+        entry_points: Cow::Owned(vec![wgpu::PassthroughShaderEntryPoint {
+            name: Cow::Borrowed(entry),
+            workgroup_size: (workgroup_size, 1, 1),
+        }]),
+        spirv: Some(Cow::Borrowed(spirv)),
+        ..Default::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SHADER: &str = "
+struct Lines { len: u32, items: array<vec2<f32>, 64> }
+struct Other { len: u32, items: array<f32, 8> }
+@group(0) @binding(0) var<storage, read_write> out: array<f32>;
+fn fill(lines: ptr<function, Lines>, n: u32) {
+    (*lines).len = 0u;
+    for (var i = 0u; i < n; i++) { (*lines).items[i] = vec2<f32>(f32(i), 1.0); (*lines).len += 1u; }
+}
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    var lines: Lines;
+    var other: Other;
+    fill(&lines, gid.x % 8u);
+    other.items[gid.x % 8u] = 2.0;
+    out[gid.x] = lines.items[0].x + other.items[0] + f32(lines.len);
+}
+";
+
+    fn spirv_of(source: &str) -> Vec<u32> {
+        let module = naga::front::wgsl::parse_str(source).unwrap();
+        let info = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        )
+        .validate(&module)
+        .unwrap();
+        spv::write_vec(&module, &info, &writer_options(), None).unwrap()
+    }
+
+    fn initialised(words: &[u32], type_name: &str) -> Vec<bool> {
+        function_variables(words)
+            .into_iter()
+            .filter(|v| v.type_name == type_name)
+            .map(|v| v.initialised)
+            .collect()
+    }
+
+    #[test]
+    fn naga_zeroes_every_function_scope_struct() {
+        let words = spirv_of(SHADER);
+        assert_eq!(initialised(&words, "Lines"), [true]);
+        assert_eq!(initialised(&words, "Other"), [true]);
+    }
+
+    #[test]
+    fn only_the_named_types_lose_their_initialiser() {
+        let words = spirv_of(SHADER);
+        let out = without_zero_initialisers(&words, &["Lines"]);
+        assert_eq!(initialised(&out, "Lines"), [false]);
+        assert_eq!(initialised(&out, "Other"), [true]);
+        // One word fewer per stripped variable, the header and every other instruction kept.
+        assert_eq!(out.len(), words.len() - 1);
+        assert_eq!(out[..HEADER_WORDS], words[..HEADER_WORDS]);
+        let ops = |w: &[u32]| instructions(w).map(|i| i.opcode).collect::<Vec<_>>();
+        assert_eq!(ops(&out), ops(&words));
+    }
+
+    #[test]
+    fn stripping_nothing_changes_nothing() {
+        let words = spirv_of(SHADER);
+        assert_eq!(without_zero_initialisers(&words, &[]), words);
+        assert_eq!(without_zero_initialisers(&words, &["Absent"]), words);
+    }
+
+    /// Stage shader `path` as the GPU backend assembles it for a batch of experiment 2.
+    fn exp2_stage(path: &str) -> String {
+        use crate::backend::wgsl;
+        let env = crate::BatchEnv::new(
+            crate::Config::from_name_or_path("exp2").unwrap(),
+            crate::EnvOptions::default(),
+        )
+        .unwrap();
+        let columns = env.state().unwrap().columns();
+        let prelude = wgsl::prelude(
+            &columns,
+            &env.outputs().columns(),
+            &wgsl::SizeClasses::of(&columns),
+        );
+        wgsl::assemble(path, &prelude).unwrap()
+    }
+
+    #[test]
+    fn the_orca_stages_hand_the_driver_their_lists_unzeroed() {
+        for stage in [
+            "group_velocities.wgsl",
+            "human_motion.wgsl",
+            "shadow_robot.wgsl",
+        ] {
+            let zeroed = spirv_of(&exp2_stage(stage));
+            let ours = compute_spirv(&exp2_stage(stage), "main").unwrap();
+            for ty in UNZEROED_TYPES {
+                // Each list type is declared (by `orca_world_velocity`, and LP3's lines) and
+                // naga zeroes it; the module the driver gets does not.
+                assert!(initialised(&zeroed, ty).contains(&true), "{stage}: {ty}");
+                let kept = initialised(&ours, ty);
+                assert!(
+                    !kept.is_empty() && !kept.contains(&true),
+                    "{stage}: {ty} {kept:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_bad_shader_is_an_error_naming_the_stage() {
+        let e = compute_spirv("fn main( {", "main").unwrap_err();
+        assert!(e.starts_with("WGSL parse"), "{e}");
+        let e = compute_spirv(
+            "@compute @workgroup_size(1) fn main() { let x: u32 = 1.5; }",
+            "main",
+        )
+        .unwrap_err();
+        assert!(e.starts_with("WGSL"), "{e}");
+    }
+}
