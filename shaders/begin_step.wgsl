@@ -4,9 +4,14 @@
 // an environment that finished at the previous step under NEXT_STEP (it returns its first
 // observation with reward 0 and takes no dynamics this step), and count the tick of every
 // environment that steps, first, as 0.1.1 does.
+//
+// Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
+// environment, clears the flags, counts the tick and queues the environments that reset; `main`
+// resets one queued environment per lane (a reset copies a whole state row and observation, which
+// a warp's other lanes would otherwise wait for). Each environment's operations keep their order.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
     if (e >= batch.n_envs) {
         return;
@@ -18,10 +23,20 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if (su[batch.c_pending_reset + e] != 0u) {
         su[batch.c_stepping + e] = 0u;
-        reset_and_observe(e);
+        rare_push(RARE_BEGIN_STEP, e);
     } else {
         let stepping = select(0u, 1u, su[batch.c_done + e] == 0u);
         su[batch.c_stepping + e] = stepping;
         su[batch.c_tick + e] += stepping;
     }
+}
+
+// The reset of one queued environment per lane.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = rare_env(RARE_BEGIN_STEP, gid.x);
+    if (e == NONE) {
+        return;
+    }
+    reset_and_observe(e);
 }

@@ -351,7 +351,10 @@ fn walkers_at_one_point_with_one_velocity_exert_no_force_on_each_other() {
 /// device, on the GPU backend, and stepped once: each keeps its invariants and outputs finite,
 /// and the two agree bit for bit.
 fn stepped_on_every_backend(doc: &Value) -> Vec<BatchEnv> {
-    #[cfg_attr(not(feature = "gpu"), expect(unused_mut, reason = "no GPU backend to add"))]
+    #[cfg_attr(
+        not(feature = "gpu"),
+        expect(unused_mut, reason = "no GPU backend to add")
+    )]
     let mut backends = vec![socnav::backend::BackendChoice::Cpu];
     #[cfg(feature = "gpu")]
     if crate::common::gpu::device().is_some() {
