@@ -145,8 +145,8 @@ pub struct GpuDevice {
     /// clone says otherwise.
     pub readback_piece_bytes: u64,
     /// Whether pipelines are built from the backend's own SPIR-V (`super::spirv`: the ORCA
-    /// lists not zeroed at every call), which takes the adapter's `PASSTHROUGH_SHADERS` (every
-    /// Vulkan adapter); otherwise from the WGSL as wgpu compiles it.
+    /// lists not zeroed at every call), which takes a Vulkan adapter with `PASSTHROUGH_SHADERS`
+    /// (every one wgpu 30 opens); otherwise from the WGSL as wgpu compiles it.
     pub(crate) own_spirv: bool,
     errors: Arc<Mutex<Vec<String>>>,
     /// Why the device was lost, once it has been.
@@ -204,11 +204,13 @@ impl GpuDevice {
         let limits = adapter.limits();
         // wgpu's pipeline cache, where the backend has one (`kit::DiskCache`), and timestamp
         // queries, which time the passes for `socnav bench` (`GpuStages::time_passes`).
-        // SPIR-V of the backend's own writing where the adapter takes it (`super::spirv`).
-        let features = adapter.features()
-            & (wgpu::Features::PIPELINE_CACHE
-                | wgpu::Features::TIMESTAMP_QUERY
-                | wgpu::Features::PASSTHROUGH_SHADERS);
+        // SPIR-V of the backend's own writing where the adapter takes it (`super::spirv`): on
+        // Vulkan only (passthrough elsewhere takes the backend's own languages, not SPIR-V).
+        let mut wanted = wgpu::Features::PIPELINE_CACHE | wgpu::Features::TIMESTAMP_QUERY;
+        if info.backend == wgpu::Backend::Vulkan {
+            wanted |= wgpu::Features::PASSTHROUGH_SHADERS;
+        }
+        let features = adapter.features() & wanted;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("socnav"),
             required_features: features,
