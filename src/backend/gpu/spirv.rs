@@ -302,6 +302,30 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 
     #[test]
+    fn every_entry_point_of_every_stage_is_written() {
+        use crate::backend::wgsl;
+        for stage in crate::pipeline::STAGES {
+            let file = stage.shader_file();
+            if wgsl::is_standalone(&file) || wgsl::needs_sngnn(&file) {
+                continue;
+            }
+            let source = exp2_stage(&file);
+            let module = naga::front::wgsl::parse_str(&source).unwrap();
+            for entry in &module.entry_points {
+                let words = compute_spirv(&source, &entry.name)
+                    .unwrap_or_else(|e| panic!("{file} {}: {e}", entry.name));
+                assert!(
+                    function_variables(&words)
+                        .iter()
+                        .all(|v| !(v.initialised && UNZEROED_TYPES.contains(&v.type_name.as_str()))),
+                    "{file} {}",
+                    entry.name
+                );
+            }
+        }
+    }
+
+    #[test]
     fn a_bad_shader_is_an_error_naming_the_stage() {
         let e = compute_spirv("fn main( {", "main").unwrap_err();
         assert!(e.starts_with("WGSL parse"), "{e}");
