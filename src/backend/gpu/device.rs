@@ -116,6 +116,30 @@ pub fn list_adapters() -> Vec<AdapterSummary> {
         .collect()
 }
 
+/// The environment variable that chooses how pipelines are built on Vulkan: `spirv` (the
+/// default, also when unset or empty) from the backend's own SPIR-V (`super::spirv`: the ORCA
+/// lists not zeroed at every call), `wgsl` from the WGSL as wgpu compiles it, the way every other
+/// API does. The second is the way back should a driver refuse the first, and the other half of
+/// a comparison of the two on hardware (`scripts/bench-gpu`).
+pub const SHADERS_VAR: &str = "SOCNAV_SHADERS";
+
+/// Whether [`SHADERS_VAR`] asks for the backend's own SPIR-V.
+fn own_spirv_wanted() -> Result<bool, SimError> {
+    own_spirv_from(std::env::var(SHADERS_VAR).ok().as_deref())
+}
+
+/// Whether a value of [`SHADERS_VAR`] asks for the backend's own SPIR-V; an error names a value
+/// that is neither `spirv` nor `wgsl`.
+fn own_spirv_from(value: Option<&str>) -> Result<bool, SimError> {
+    match value {
+        None | Some("" | "spirv") => Ok(true),
+        Some("wgsl") => Ok(false),
+        Some(other) => Err(SimError::Usage(format!(
+            "{SHADERS_VAR}={other:?}: expected \"spirv\" (the default) or \"wgsl\""
+        ))),
+    }
+}
+
 /// The per-step output bytes of one readback piece ([`GpuDevice::readback_piece_bytes`]): 4 MiB,
 /// about 0.1 ms of DMA at 36 GB/s, several times a submit's cost. exp2 at 65,536 environments
 /// (207 MB a step; padded 60 MB) reads four pieces, at 256 environments (0.9 MB) one.
@@ -166,14 +190,24 @@ impl std::fmt::Debug for GpuDevice {
 impl GpuDevice {
     /// The device of the best adapter the policy allows (see the module docs), opened on the
     /// first call and shared by every later call with the same policy and the same
-    /// `WGPU_ADAPTER_NAME`/`WGPU_BACKEND`, so that batches reuse the pipelines it compiled
+    /// `WGPU_ADAPTER_NAME`/`WGPU_BACKEND`/[`SHADERS_VAR`], so that batches reuse the pipelines it compiled
     /// ([`GpuDevice::pipeline_builds`]). A shared device that was lost is forgotten, and a new one
     /// opened in its place.
     pub fn open(policy: AdapterPolicy) -> Result<Self, SimError> {
-        type Key = (AdapterPolicy, Option<String>, Option<String>);
+        type Key = (
+            AdapterPolicy,
+            Option<String>,
+            Option<String>,
+            Option<String>,
+        );
         static OPEN: Mutex<Vec<(Key, GpuDevice)>> = Mutex::new(Vec::new());
         let var = |name: &str| std::env::var(name).ok().filter(|s| !s.is_empty());
-        let key = (policy, var("WGPU_ADAPTER_NAME"), var("WGPU_BACKEND"));
+        let key = (
+            policy,
+            var("WGPU_ADAPTER_NAME"),
+            var("WGPU_BACKEND"),
+            var(SHADERS_VAR),
+        );
         // Held while opening, so that threads asking at once share one device.
         let mut open = OPEN
             .lock()
@@ -192,6 +226,7 @@ impl GpuDevice {
     /// loss or destruction touches only the batches made on it
     /// ([`crate::BatchEnv::on_device`]).
     pub fn open_private(policy: AdapterPolicy) -> Result<Self, SimError> {
+        let own_spirv = own_spirv_wanted()?;
         let (instance, backends) = instance();
         let adapters = pollster::block_on(instance.enumerate_adapters(backends));
         let name_filter = std::env::var("WGPU_ADAPTER_NAME")
@@ -207,7 +242,7 @@ impl GpuDevice {
         // SPIR-V of the backend's own writing where the adapter takes it (`super::spirv`): on
         // Vulkan only (passthrough elsewhere takes the backend's own languages, not SPIR-V).
         let mut wanted = wgpu::Features::PIPELINE_CACHE | wgpu::Features::TIMESTAMP_QUERY;
-        if info.backend == wgpu::Backend::Vulkan {
+        if own_spirv && info.backend == wgpu::Backend::Vulkan {
             wanted |= wgpu::Features::PASSTHROUGH_SHADERS;
         }
         let features = adapter.features() & wanted;
@@ -348,4 +383,19 @@ fn choose(
                 AdapterPolicy::Any => format!("no GPU adapter found; {INSTALL_HINT}"),
             })
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shaders_variable_chooses_the_spirv_or_names_its_bad_value() {
+        for value in [None, Some(""), Some("spirv")] {
+            assert!(own_spirv_from(value).unwrap(), "{value:?}");
+        }
+        assert!(!own_spirv_from(Some("wgsl")).unwrap());
+        let e = own_spirv_from(Some("SPIR-V")).unwrap_err().to_string();
+        assert!(e.contains(SHADERS_VAR) && e.contains("\"SPIR-V\""), "{e}");
+    }
 }

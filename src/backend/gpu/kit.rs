@@ -234,7 +234,14 @@ impl PipelineCache {
                 compilation_options: Default::default(),
                 cache: self.disk.as_ref().map(|d| &d.cache),
             });
-        dev.take_errors()?;
+        dev.take_errors().map_err(|e| match e {
+            SimError::Device(msg) if dev.own_spirv => SimError::Device(format!(
+                "{msg} (pipeline {label} built from socnav's SPIR-V; {}=wgsl builds it from \
+                 the WGSL through wgpu instead)",
+                super::device::SHADERS_VAR
+            )),
+            e => e,
+        })?;
         self.builds.fetch_add(1, Ordering::Relaxed);
         if let Some(disk) = &self.disk {
             disk.save();
