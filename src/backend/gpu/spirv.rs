@@ -12,9 +12,10 @@
 //! variable whose type is one of [`UNZEROED_TYPES`] is dropped from the module, which leaves the
 //! arrays' unwritten entries undefined, as their declarations say.
 //!
-//! Where the device has wgpu's `PASSTHROUGH_SHADERS` (Vulkan, lavapipe included) the pipelines are
-//! built from this SPIR-V; elsewhere from the WGSL, as wgpu compiles it (the same results: only
-//! entries that are written before they are read differ in what they hold at the start).
+//! On Vulkan (lavapipe included), through wgpu's `PASSTHROUGH_SHADERS`, the pipelines are built
+//! from this SPIR-V unless `SOCNAV_SHADERS=wgsl` ([`super::SHADERS_VAR`]); elsewhere from the
+//! WGSL, as wgpu compiles it. The results are the same: only entries that are written before
+//! they are read differ in what they hold at the start.
 
 use std::borrow::Cow;
 
