@@ -149,8 +149,9 @@ pub const RESET_PASS: &str = "reset";
 
 /// The stages whose rare work runs out of the hot pass (issue 19, item 4: the resets of
 /// `begin_step` and `autoreset`, the regroupings and obstacle rebuilds of `formation` and
-/// `social_events`), in the order of their queues: each shader has a second entry point, [`QUEUE_ENTRY`], dispatched before `main` over
-/// every environment, which queues the environments that have something to do this step
+/// `social_events`), in the order of their queues: each shader has a second entry point,
+/// [`QUEUE_ENTRY`], dispatched before `main` over every environment, which queues the
+/// environments that have something to do this step
 /// (`rare_push(RARE_<STAGE>, e)`); `main` then runs with one lane per queued environment
 /// (`rare_env(RARE_<STAGE>, lane)`), so a warp's lanes all do the rare work instead of waiting
 /// for the one lane in 32 that does. The queues are the `rare` binding: a counter per stage, then

@@ -190,9 +190,9 @@ impl std::fmt::Debug for GpuDevice {
 impl GpuDevice {
     /// The device of the best adapter the policy allows (see the module docs), opened on the
     /// first call and shared by every later call with the same policy and the same
-    /// `WGPU_ADAPTER_NAME`/`WGPU_BACKEND`/[`SHADERS_VAR`], so that batches reuse the pipelines it compiled
-    /// ([`GpuDevice::pipeline_builds`]). A shared device that was lost is forgotten, and a new one
-    /// opened in its place.
+    /// `WGPU_ADAPTER_NAME`/`WGPU_BACKEND`/[`SHADERS_VAR`], so that batches reuse the pipelines
+    /// it compiled ([`GpuDevice::pipeline_builds`]). A shared device that was lost is forgotten,
+    /// and a new one opened in its place.
     pub fn open(policy: AdapterPolicy) -> Result<Self, SimError> {
         type Key = (
             AdapterPolicy,
@@ -239,8 +239,9 @@ impl GpuDevice {
         let limits = adapter.limits();
         // wgpu's pipeline cache, where the backend has one (`kit::DiskCache`), and timestamp
         // queries, which time the passes for `socnav bench` (`GpuStages::time_passes`).
-        // SPIR-V of the backend's own writing where the adapter takes it (`super::spirv`): on
-        // Vulkan only (passthrough elsewhere takes the backend's own languages, not SPIR-V).
+        // Shader passthrough, for the backend's own SPIR-V (`super::spirv`): on Vulkan only, and
+        // unless SHADERS_VAR says `wgsl` (elsewhere passthrough takes the platform's own shader
+        // languages, not SPIR-V).
         let mut wanted = wgpu::Features::PIPELINE_CACHE | wgpu::Features::TIMESTAMP_QUERY;
         if own_spirv && info.backend == wgpu::Backend::Vulkan {
             wanted |= wgpu::Features::PASSTHROUGH_SHADERS;
