@@ -22,6 +22,21 @@ fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
+// Environment e's `n` words of f32 output column `src` copied into column `dst` (Rust
+// `copy_from_slice` of the row).
+fn keep_f32(e: u32, src: u32, dst: u32, n: u32) {
+    for (var k = 0u; k < n; k++) {
+        outf[dst + e * n + k] = outf[src + e * n + k];
+    }
+}
+
+// `keep_f32` for u32 output columns.
+fn keep_u32(e: u32, src: u32, dst: u32, n: u32) {
+    for (var k = 0u; k < n; k++) {
+        outu[dst + e * n + k] = outu[src + e * n + k];
+    }
+}
+
 // SAME_STEP's finals and reset of one queued environment per lane.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -29,24 +44,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (e == NONE) {
         return;
     }
-    for (var k = 0u; k < batch.so_obs; k++) {
-        outf[batch.co_final_obs + e * batch.so_obs + k] = outf[batch.co_obs + e * batch.so_obs + k];
-    }
-    for (var k = 0u; k < batch.so_info; k++) {
-        outf[batch.co_final_info + e * batch.so_info + k] = outf[batch.co_info + e * batch.so_info + k];
-    }
-    for (var k = 0u; k < batch.so_obs_count; k++) {
-        outu[batch.co_final_obs_count + e * batch.so_obs_count + k] = outu[batch.co_obs_count + e * batch.so_obs_count + k];
-    }
-    for (var k = 0u; k < batch.so_hh_pairs; k++) {
-        outu[batch.co_final_hh_pairs + e * batch.so_hh_pairs + k] = outu[batch.co_hh_pairs + e * batch.so_hh_pairs + k];
-    }
-    for (var k = 0u; k < batch.so_hl_pairs; k++) {
-        outu[batch.co_final_hl_pairs + e * batch.so_hl_pairs + k] = outu[batch.co_hl_pairs + e * batch.so_hl_pairs + k];
-    }
-    for (var k = 0u; k < batch.so_pair_count; k++) {
-        outu[batch.co_final_pair_count + e * batch.so_pair_count + k] = outu[batch.co_pair_count + e * batch.so_pair_count + k];
-    }
+    keep_f32(e, batch.co_obs, batch.co_final_obs, batch.so_obs);
+    keep_f32(e, batch.co_info, batch.co_final_info, batch.so_info);
+    keep_u32(e, batch.co_obs_count, batch.co_final_obs_count, batch.so_obs_count);
+    keep_u32(e, batch.co_hh_pairs, batch.co_final_hh_pairs, batch.so_hh_pairs);
+    keep_u32(e, batch.co_hl_pairs, batch.co_final_hl_pairs, batch.so_hl_pairs);
+    keep_u32(e, batch.co_pair_count, batch.co_final_pair_count, batch.so_pair_count);
     outu[batch.co_has_final + e] = 1u;
     reset_and_observe_keep_step_outputs(e);
 }
