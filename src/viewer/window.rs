@@ -55,7 +55,10 @@ impl Window {
         }
         let mut inner = minifb::Window::new(title, width, height, WindowOptions::default())
             .map_err(|e| {
-                SimError::Display(format!("cannot open a {width}x{height} window: {e}"))
+                SimError::Display(format!(
+                    "cannot open a {width}x{height} window: {}",
+                    minifb_reason(&e)
+                ))
             })?;
         // The caller paces the frames itself.
         inner.set_target_fps(0);
@@ -93,7 +96,7 @@ impl Window {
         }
         self.inner
             .update_with_buffer(pixels, w, h)
-            .map_err(|e| SimError::Display(format!("cannot show a frame: {e}")))
+            .map_err(|e| SimError::Display(format!("cannot show a frame: {}", minifb_reason(&e))))
     }
 
     /// The keys held and the commands pressed since the last call (see [`Command`]; the
@@ -119,6 +122,17 @@ impl Window {
     }
 }
 
+/// minifb's error with its reason: its `Display` says only "Failed to create window" and drops
+/// which X11 call failed (`XOpenDisplay failed`, `Failed to setup X IM via XOpenIM.`, ...).
+fn minifb_reason(e: &minifb::Error) -> String {
+    match e {
+        minifb::Error::WindowCreate(why) | minifb::Error::UpdateFailed(why) => {
+            format!("{e} ({why})")
+        }
+        other => other.to_string(),
+    }
+}
+
 fn command_of(key: Key) -> Option<Command> {
     Some(match key {
         Key::Escape => Command::Quit,
@@ -129,4 +143,22 @@ fn command_of(key: Key) -> Option<Command> {
         Key::Minus | Key::NumPadMinus => Command::Slower,
         _ => return None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn window_errors_keep_the_failing_x11_call() {
+        let e = minifb::Error::WindowCreate("XOpenDisplay failed".into());
+        assert_eq!(
+            minifb_reason(&e),
+            "Failed to create window (XOpenDisplay failed)"
+        );
+        assert_eq!(
+            minifb_reason(&minifb::Error::MenusNotSupported),
+            "Menus not supported"
+        );
+    }
 }
