@@ -5,7 +5,7 @@ use crate::backend::{Backend, BackendChoice};
 use crate::config::{Config, Kinematics, RewardKind};
 use crate::document;
 use crate::error::SimError;
-use crate::outputs::Outputs;
+use crate::outputs::{Outputs, StepOutputs};
 use crate::params::{AutoresetMode, StepParams};
 use crate::pipeline::STAGES;
 use crate::sngnn::SngnnReward;
@@ -58,6 +58,7 @@ pub struct BatchEnv {
     layout: ObsLayout,
     backend: Box<dyn Backend>,
     actions: Vec<f32>,
+    step_outputs: StepOutputs,
 }
 
 impl std::fmt::Debug for BatchEnv {
@@ -169,6 +170,7 @@ impl BatchEnv {
             layout,
             backend,
             actions,
+            step_outputs: StepOutputs::ALL,
         })
     }
 
@@ -374,6 +376,21 @@ impl BatchEnv {
     /// The outputs of the last step or reset (overwritten by the next one).
     pub fn outputs(&self) -> &Outputs {
         self.backend.outputs()
+    }
+
+    /// Deliver only the optional per-step output columns `which` selects, from the next step
+    /// or reset on (every column by default). A learner that reads the observation, reward and
+    /// flags alone takes [`StepOutputs::LEAN`]: the GPU backend then reads a third fewer bytes
+    /// back for exp2 with padded observations. A column left out is not kept current (see
+    /// [`StepOutputs`]).
+    pub fn set_step_outputs(&mut self, which: StepOutputs) {
+        self.step_outputs = which;
+        self.backend.set_step_outputs(which);
+    }
+
+    /// The optional per-step output columns delivered ([`BatchEnv::set_step_outputs`]).
+    pub fn step_outputs(&self) -> StepOutputs {
+        self.step_outputs
     }
 
     /// The batch state (read-only).

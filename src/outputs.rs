@@ -126,3 +126,99 @@ impl Outputs {
         Self::zeroed(n_envs, OutStrides { layout })
     }
 }
+
+/// The per-step output columns a caller can leave out of what a step delivers (each `true` by
+/// default: every column delivered). The observation and its counts, the reward, the flags and
+/// the finished-only columns of the environments that finished are always delivered.
+///
+/// A column left out is not kept current: the GPU backend does not read it back from the device
+/// (fewer bytes a step: for exp2 with padded observations the interactions and the events are
+/// a fifth of them, the info a seventh), so the host's copy keeps what it last held; the CPU
+/// backend writes its outputs in place and keeps writing it. Read it only while it is selected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StepOutputs {
+    /// `info`: the step's metrics ([`crate::spec::INFO_KEYS`]).
+    pub info: bool,
+    /// `hh_pairs`, `hl_pairs` and `pair_count`: the interactions of the observation.
+    pub interactions: bool,
+    /// `events`: the social events of the step.
+    pub events: bool,
+}
+
+impl Default for StepOutputs {
+    fn default() -> Self {
+        Self::ALL
+    }
+}
+
+impl StepOutputs {
+    /// Every per-step column.
+    pub const ALL: Self = Self {
+        info: true,
+        interactions: true,
+        events: true,
+    };
+    /// Only the columns always delivered (observation, counts, reward, flags).
+    pub const LEAN: Self = Self {
+        info: false,
+        interactions: false,
+        events: false,
+    };
+    /// The columns that can be left out, in output order.
+    pub const OPTIONAL: [&'static str; 5] =
+        ["hh_pairs", "hl_pairs", "pair_count", "info", "events"];
+
+    /// Whether a step delivers output column `name` (the [`FINISHED_ONLY_COLUMNS`] are
+    /// delivered for the environments that finished, always).
+    pub fn delivers(&self, name: &str) -> bool {
+        match name {
+            "info" => self.info,
+            "hh_pairs" | "hl_pairs" | "pair_count" => self.interactions,
+            "events" => self.events,
+            _ => true,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use crate::spec::ObsLayout;
+    use crate::state::Caps;
+
+    #[test]
+    fn every_optional_column_is_a_per_step_output() {
+        let config = Config::from_name_or_path("exp2").expect("a shipped config");
+        let caps = Caps::from_config(&config);
+        let out = Outputs::new(1, ObsLayout::new(&caps, &config.observation));
+        let names: Vec<_> = out.columns().iter().map(|c| c.0).collect();
+        for column in StepOutputs::OPTIONAL {
+            assert!(names.contains(&column), "{column} is no output column");
+            assert!(!FINISHED_ONLY_COLUMNS.contains(&column), "{column}");
+            assert!(!StepOutputs::LEAN.delivers(column), "{column}");
+            assert!(StepOutputs::ALL.delivers(column), "{column}");
+        }
+        for always in [
+            "obs",
+            "obs_count",
+            "reward",
+            "terminated",
+            "truncated",
+            "has_final",
+        ] {
+            assert!(StepOutputs::LEAN.delivers(always), "{always}");
+        }
+        let info_only = StepOutputs {
+            info: true,
+            ..StepOutputs::LEAN
+        };
+        assert!(info_only.delivers("info") && !info_only.delivers("hh_pairs"));
+        let left_out: Vec<&str> = names
+            .iter()
+            .copied()
+            .filter(|c| !StepOutputs::LEAN.delivers(c))
+            .collect();
+        assert_eq!(left_out, StepOutputs::OPTIONAL, "in output order");
+    }
+}

@@ -798,6 +798,21 @@ impl Batch {
         Ok(())
     }
 
+    /// Deliver only these optional per-step outputs from the next step on (every one by
+    /// default; `BatchEnv::set_step_outputs`): `info`, the interactions (`hh_pairs`,
+    /// `hl_pairs`, `pair_count`) and `events`. A buffer left out is not kept current.
+    #[pyo3(signature = (*, info=true, interactions=true, events=true))]
+    fn set_step_outputs(&self, info: bool, interactions: bool, events: bool) -> PyResult<()> {
+        self.lock()?
+            .env
+            .set_step_outputs(socnav::outputs::StepOutputs {
+                info,
+                interactions,
+                events,
+            });
+        Ok(())
+    }
+
     /// Seconds spent per stage while stage timing was on: `{stage name: seconds}`.
     fn stage_seconds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);

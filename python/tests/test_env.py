@@ -9,6 +9,7 @@ from gymnasium.utils.env_checker import check_env
 from gymnasium.vector import AutoresetMode
 
 import socnav
+from socnav._socnav import Batch
 
 FORWARD = np.array([0.8, 0.0, 0.3], dtype=np.float32)
 
@@ -22,6 +23,32 @@ def test_make_vec_steps_a_batch():
     assert terminated.dtype == np.bool_ and truncated.shape == (64,)
     assert info["PATH_LENGTH"].shape == (64,) and info["_PATH_LENGTH"].all()
     assert env.observation_space["humans"].shape == (64,) + env.single_observation_space["humans"].shape
+
+
+def test_step_info_false_leaves_the_metrics_out_and_keeps_the_episode_statistics():
+    lean = socnav.make_vec({"base": "exp1", "episode": {"length": 5}}, num_envs=4, seed=2, step_info=False)
+    full = socnav.make_vec({"base": "exp1", "episode": {"length": 5}}, num_envs=4, seed=2)
+    assert lean.step_info is False and full.step_info is True
+    _, info = lean.reset()
+    assert "PATH_LENGTH" not in info and "_PATH_LENGTH" not in info
+    full.reset()
+    ended = False
+    for _ in range(6):
+        a = np.zeros((4, 3), np.float32)
+        lo, lr, lt, lu, linfo = lean.step(a)
+        fo, fr, ft, fu, finfo = full.step(a)
+        for key in fo:
+            np.testing.assert_array_equal(lo[key], fo[key])
+        np.testing.assert_array_equal(lr, fr)
+        assert not any(key in linfo for key in Batch.keys()["info"])
+        if "episode" in finfo:
+            ended = True
+            np.testing.assert_array_equal(linfo["_episode"], finfo["_episode"])
+            for key, values in finfo["episode"].items():
+                np.testing.assert_array_equal(linfo["episode"][key], values, err_msg=key)
+    assert ended
+    with pytest.raises(ValueError, match="step_info=False"):
+        socnav.make_vec("exp1", num_envs=2, step_info=False, reward_fn=lambda inputs: inputs.reward)
 
 
 def test_outputs_are_views_overwritten_in_place_unless_copied():
@@ -217,8 +244,10 @@ def test_gpu_backend_steps_like_the_cpu_backend():
     for _ in range(120):
         a = rng.uniform(-1, 1, size=(256, 3)).astype(np.float32)
         a[:, 1] = 0.0
-        og, rg, tg, ug, _ = gpu.step(a)
-        oc, rc, tc, uc, _ = cpu.step(a)
+        og, rg, tg, ug, ig = gpu.step(a)
+        oc, rc, tc, uc, ic = cpu.step(a)
+        for key in Batch.keys()["info"]:  # read back without the interactions and events
+            np.testing.assert_array_equal(ig[key], ic[key], err_msg=key)
         np.testing.assert_array_equal(og, oc)
         np.testing.assert_array_equal(rg, rc)
         np.testing.assert_array_equal(tg, tc)

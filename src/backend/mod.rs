@@ -175,6 +175,10 @@ pub trait Backend: Send + Sync {
     }
     /// What runs the batch, for logs and benchmark records: the CPU threads, or the GPU adapter.
     fn device(&self) -> String;
+    /// Deliver only the optional per-step columns `which` selects from the next step on (see
+    /// [`crate::outputs::StepOutputs`]): the GPU backend reads the others back no more; the CPU
+    /// backend, which writes its outputs in place, keeps writing every column.
+    fn set_step_outputs(&mut self, _which: crate::outputs::StepOutputs) {}
     /// The host path's totals (`None` on the CPU backend, which has none).
     fn host_path(&self) -> Option<HostPath> {
         None

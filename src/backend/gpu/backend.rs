@@ -320,6 +320,10 @@ impl Backend for GpuBackend {
         self.run(true)
     }
 
+    fn set_step_outputs(&mut self, which: crate::outputs::StepOutputs) {
+        self.gpu.set_step_outputs(which);
+    }
+
     fn host_path(&self) -> Option<crate::backend::HostPath> {
         let mut path = self.gpu.host_path();
         path.refill_s = self.refill_s;

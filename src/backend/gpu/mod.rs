@@ -861,6 +861,12 @@ impl GpuStages {
         Ok(())
     }
 
+    /// Read back only the optional per-step columns `which` selects from the next step on
+    /// ([`crate::outputs::StepOutputs`]).
+    pub fn set_step_outputs(&mut self, which: crate::outputs::StepOutputs) {
+        self.step_read.select(&self.dev, which);
+    }
+
     /// The host path's totals so far (the pool refill's time is the backend's to add).
     pub fn host_path(&self) -> crate::backend::HostPath {
         self.step_read.stats

@@ -14,6 +14,9 @@
 //! atomic counter gave them; each carries its environment, where the host writes it, so the
 //! host's outputs are the same bits whatever that order.
 //!
+//! The caller can leave optional per-step columns out ([`StepOutputs`]: info, interactions,
+//! events); those are then not read back at all ([`StepReadback::select`]).
+//!
 //! Device work that is not read back (a pass run alone, the device-only timing) can change the
 //! finished-only columns without the host seeing which environments finished, so the read after
 //! it copies the whole output table ([`StepReadback::whole_table_next`]).
@@ -25,7 +28,7 @@ use rayon::prelude::*;
 use crate::backend::HostPath;
 use crate::backend::wgsl::{self, Columns};
 use crate::error::SimError;
-use crate::outputs::{FINISHED_ONLY_COLUMNS, Outputs};
+use crate::outputs::{FINISHED_ONLY_COLUMNS, Outputs, StepOutputs};
 use crate::state::columns::Elem;
 
 use super::GpuDevice;
@@ -82,6 +85,9 @@ fn runs_of(spans: &[Span]) -> Vec<Run> {
 
 /// The finished-rows pass, the per-step columns and the hint of one batch.
 pub(crate) struct StepReadback {
+    /// Every per-step column, in table order.
+    every: Vec<Span>,
+    /// The per-step columns the caller takes (`StepOutputs`), in table order: what is read back.
     spans: Vec<Span>,
     /// The spans' copies ([`runs_of`]).
     runs: Vec<Run>,
@@ -182,6 +188,7 @@ impl StepReadback {
         let pieces = piece_buffers(dev, span_words);
         let this = Self {
             runs: runs_of(&spans),
+            every: spans.clone(),
             spans,
             span_words,
             pieces,
@@ -198,6 +205,20 @@ impl StepReadback {
             stats: HostPath::default(),
         };
         Ok((this, compiled))
+    }
+
+    /// Read back only the per-step columns `which` delivers from the next step on (new pieces
+    /// for the new sizes).
+    pub(crate) fn select(&mut self, dev: &GpuDevice, which: StepOutputs) {
+        self.spans = self
+            .every
+            .iter()
+            .filter(|s| which.delivers(s.name))
+            .copied()
+            .collect();
+        self.runs = runs_of(&self.spans);
+        self.span_words = self.spans.iter().map(|s| s.words).sum();
+        self.pieces = piece_buffers(dev, self.span_words);
     }
 
     /// Words of the readback buffer a step's finished rows need at most (the counter, then a

@@ -88,6 +88,30 @@ impl From<BackendChoice> for socnav::backend::BackendChoice {
     }
 }
 
+/// Which optional per-step outputs a step delivers (`socnav::outputs::StepOutputs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StepOutputsChoice {
+    /// Every output column (`BatchEnv`'s default).
+    All,
+    /// What Python's `make_vec` hands out: the metrics (`info`), no interactions or events.
+    Vector,
+    /// Only the observation, its counts, reward and flags (`make_vec(step_info=False)`).
+    Lean,
+}
+
+impl From<StepOutputsChoice> for socnav::outputs::StepOutputs {
+    fn from(c: StepOutputsChoice) -> Self {
+        match c {
+            StepOutputsChoice::All => Self::ALL,
+            StepOutputsChoice::Vector => Self {
+                info: true,
+                ..Self::LEAN
+            },
+            StepOutputsChoice::Lean => Self::LEAN,
+        }
+    }
+}
+
 /// How actions are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum PolicyChoice {
@@ -155,6 +179,9 @@ pub struct BenchArgs {
     /// Python). Batch sizes below 2 have no halves.
     #[arg(long)]
     pub halves: bool,
+    /// The optional per-step outputs each step delivers (on the GPU backend: reads back).
+    #[arg(long, value_enum, default_value_t = StepOutputsChoice::All)]
+    pub step_outputs: StepOutputsChoice,
     /// Print one JSON object on stdout instead of the table.
     #[arg(long)]
     pub json: bool,

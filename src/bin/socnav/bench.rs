@@ -2,7 +2,8 @@
 //! Actions are fixed (forward and turning) so the policy costs nothing. On a GPU it also times
 //! the simulation on the device alone (issue 4's first target); `--padded` delivers 0.1.1's
 //! padded observations (walls omitted; the second target) instead of the full ones; `--halves`
-//! also steps each batch size as two halves on two host threads.
+//! also steps each batch size as two halves on two host threads; `--step-outputs` chooses the
+//! optional per-step outputs delivered (every one by default).
 
 use std::time::Instant;
 
@@ -79,7 +80,7 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     if a.json {
-        let out = json!({"config": a.config, "padded": a.padded, "backend": backend, "device": device, "threads": a.threads, "rows": rows});
+        let out = json!({"config": a.config, "padded": a.padded, "step_outputs": format!("{:?}", a.step_outputs).to_lowercase(), "backend": backend, "device": device, "threads": a.threads, "rows": rows});
         println!("{}", serde_json::to_string_pretty(&out)?);
     }
     Ok(())
@@ -104,6 +105,7 @@ fn warmed_up(
     seed: u64,
 ) -> Result<(socnav::BatchEnv, Vec<f32>), socnav::SimError> {
     let mut env = make_env(config.clone(), n, 0, a.backend, a.threads)?;
+    env.set_step_outputs(a.step_outputs.into());
     env.reset(Some(seed))?;
     let actions: Vec<f32> = [0.8f32, 0.0, 0.3].repeat(n);
     for _ in 0..WARMUP_STEPS {

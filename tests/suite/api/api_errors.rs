@@ -443,3 +443,22 @@ fn a_batch_too_large_for_the_machine_is_refused_before_allocating() {
     }
     make(config("exp1"), 4, 0);
 }
+
+/// Contract (`BatchEnv::set_step_outputs`): the choice is kept, and on the CPU backend, which
+/// writes its outputs in place, a lean batch steps to the same state and the same outputs, every
+/// column included, as one that delivers everything.
+#[test]
+fn step_outputs_change_nothing_on_the_cpu() {
+    use socnav::outputs::StepOutputs;
+    let mut all = make(config("exp2"), 8, 5);
+    let mut lean = make(config("exp2"), 8, 5);
+    assert_eq!(all.step_outputs(), StepOutputs::ALL);
+    lean.set_step_outputs(StepOutputs::LEAN);
+    assert_eq!(lean.step_outputs(), StepOutputs::LEAN);
+    for t in 0..30 {
+        let a = actions(8, t);
+        all.step(Actions::Continuous(&a)).unwrap();
+        lean.step(Actions::Continuous(&a)).unwrap();
+        assert_eq!(fingerprints(&all), fingerprints(&lean), "step {t}");
+    }
+}

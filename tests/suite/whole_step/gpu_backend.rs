@@ -149,19 +149,31 @@ fn episode_seeds_match_the_cpu() {
 /// than that (here: every environment times out at once) take a second copy. The host's outputs
 /// stay the CPU's bit for bit through it all, and the first read after device work that was not
 /// read back copies the whole table. On the device's default paths (here one readback piece) and
-/// on the others (`device_other_paths`: four pieces, the other observation path).
+/// on the others (`device_other_paths`: four pieces, the other observation path). With optional
+/// per-step columns left out (`StepOutputs`), those are not read back: their bytes are not moved
+/// and the host's copy keeps what it held, while every delivered column stays the CPU's.
 #[test]
 fn a_step_reads_back_only_what_it_hands_the_host() {
+    use socnav::outputs::StepOutputs;
     let Some(other) = device_other_paths() else {
         return;
     };
-    reads_back_only_what_it_hands_the_host(None);
-    reads_back_only_what_it_hands_the_host(Some(other));
+    reads_back_only_what_it_hands_the_host(None, StepOutputs::ALL);
+    reads_back_only_what_it_hands_the_host(Some(other), StepOutputs::ALL);
+    reads_back_only_what_it_hands_the_host(None, StepOutputs::LEAN);
+    let info_only = StepOutputs {
+        info: true,
+        ..StepOutputs::LEAN
+    };
+    reads_back_only_what_it_hands_the_host(None, info_only);
 }
 
 /// [`a_step_reads_back_only_what_it_hands_the_host`] with the GPU batch on `dev` (`None`: the
-/// shared device).
-fn reads_back_only_what_it_hands_the_host(dev: Option<socnav::backend::gpu::GpuDevice>) {
+/// shared device), delivering `which`.
+fn reads_back_only_what_it_hands_the_host(
+    dev: Option<socnav::backend::gpu::GpuDevice>,
+    which: socnav::outputs::StepOutputs,
+) {
     use socnav::outputs::FINISHED_ONLY_COLUMNS;
     use socnav::{Actions, AutoresetMode};
     let mut c = config("exp2");
@@ -178,22 +190,29 @@ fn reads_back_only_what_it_hands_the_host(dev: Option<socnav::backend::gpu::GpuD
         gpu = socnav::BatchEnv::on_device(c.clone(), options, dev).expect("batch");
         gpu.reset(None).expect("reset");
     }
+    gpu.set_step_outputs(which);
+    assert_eq!(gpu.step_outputs(), which);
+    // What the host holds of the columns left out, which no step may change.
+    let held = gpu.outputs().clone();
     let columns = cpu.outputs().columns();
     let words = |finished: bool| -> u64 {
         columns
             .iter()
             .filter(|c| FINISHED_ONLY_COLUMNS.contains(&c.0) == finished)
+            .filter(|c| which.delivers(c.0))
             .map(|c| c.2 as u64)
             .sum()
     };
+    let every_column_words: u64 = columns.iter().map(|c| c.2 as u64).sum();
     let n64 = n as u64;
     // Per-step columns and the episode counters, then the counter of finished rows.
     let fixed = 4 * (n64 * words(false) + n64 + 1);
     let row = 4 * (1 + words(true));
-    let whole_table = 4 * n64 * (words(false) + words(true));
+    let whole_table = 4 * n64 * every_column_words;
     let mut rng = socnav::rng::RngStream::new(3, 0);
     let mut recent: Vec<u64> = Vec::new();
     let (mut second_reads, mut finished_total) = (0, 0);
+    let mut left_out_changed = false;
     for t in 0..40 {
         let before = gpu.host_path().expect("the GPU backend's host path");
         let a = random_actions(&mut rng, n, false);
@@ -232,9 +251,33 @@ fn reads_back_only_what_it_hands_the_host(dev: Option<socnav::backend::gpu::GpuD
         second_reads += after.second_reads - before.second_reads;
         finished_total += finished;
         recent.push(finished);
-        let differ = cpu.outputs().differing_columns(gpu.outputs());
+        let differ: Vec<_> = cpu
+            .outputs()
+            .differing_columns(gpu.outputs())
+            .into_iter()
+            .filter(|c| which.delivers(c))
+            .collect();
         assert!(differ.is_empty(), "step {t}: outputs differ in {differ:?}");
+        let changed: Vec<_> = held
+            .differing_columns(gpu.outputs())
+            .into_iter()
+            .filter(|c| !which.delivers(c))
+            .collect();
+        assert!(
+            changed.is_empty(),
+            "step {t}: columns left out were read back: {changed:?}"
+        );
+        left_out_changed |= held
+            .differing_columns(cpu.outputs())
+            .into_iter()
+            .any(|c| !which.delivers(c));
     }
+    // The columns left out did change on the device: the check above could fail.
+    assert_eq!(
+        left_out_changed,
+        which != socnav::outputs::StepOutputs::ALL,
+        "the columns left out never changed in 40 steps"
+    );
     assert!(
         second_reads >= 1,
         "no step overflowed the hint: the second copy is untested"
