@@ -303,8 +303,9 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
 
     def _info(self, *, final: bool) -> dict[str, Any]:
         """Every metric as an array with its ``_key`` mask (all true: every environment reports
-        every metric; none with ``step_info=False``); the statistics of episodes that just ended under ``"episode"``; under
-        SAME_STEP the finishing steps' observation and info as ``final_obs`` / ``final_info``."""
+        every metric; none with ``step_info=False``); the statistics of episodes that just
+        ended under ``"episode"``; under SAME_STEP the finishing steps' observation and info as
+        ``final_obs`` / ``final_info``."""
         b = self._buf
         info: dict[str, Any] = {}
         if self.step_info:
