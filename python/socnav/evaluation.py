@@ -200,6 +200,7 @@ def evaluate(
         autoreset_mode="disabled",
         backend=backend,
         threads=threads,
+        step_info=False,  # only the statistics of finished episodes are read
     )
     start = time.perf_counter()
     limit = 1 << 64

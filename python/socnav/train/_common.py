@@ -63,7 +63,8 @@ def seed_everything(seed: int, threads: int) -> np.random.Generator:
 
 def make_train_env(config: str, num_envs: int, seed: int, threads: int, action_type: str) -> Any:
     """The batch a run trains on: flat observations, SAME_STEP autoreset (a finished
-    environment's last observation is in ``info["final_obs"]``), stage timing on."""
+    environment's last observation is in ``info["final_obs"]``), no per-step metrics (the
+    learners read the finished episodes' statistics alone), stage timing on."""
     env = socnav.make_vec(
         config,
         num_envs=num_envs,
@@ -72,6 +73,7 @@ def make_train_env(config: str, num_envs: int, seed: int, threads: int, action_t
         action_type=action_type,
         autoreset_mode="same_step",
         threads=threads,
+        step_info=False,
     )
     env.unwrapped._batch.set_stage_timing(True)
     return env

@@ -37,6 +37,12 @@ pub fn make_env(
 pub fn run(a: &RunArgs) -> Result<(), Box<dyn std::error::Error>> {
     let config = Config::from_name_or_path(&a.config)?;
     let mut env = make_env(config, a.envs, a.seed, a.backend, a.threads)?;
+    // The rollout reads the observations (the goal policy), the events and the statistics of
+    // finished episodes: the GPU backend reads back no metrics or interactions.
+    env.set_step_outputs(socnav::outputs::StepOutputs {
+        events: true,
+        ..socnav::outputs::StepOutputs::LEAN
+    });
     env.reset(Some(a.seed))?;
     let mut policy = Policy::new(a.policy, a.seed, &env);
     let mut actions = vec![0.0f32; 3 * a.envs];
