@@ -38,6 +38,13 @@ const HEADER_WORDS: usize = 5;
 /// variables of [`UNZEROED_TYPES`] not zeroed. The error names what failed (parse, validation
 /// or the writer) in naga's words.
 pub(crate) fn compute_spirv(source: &str, entry: &str) -> Result<Vec<u32>, String> {
+    let words = naga_spirv(source, Some(entry))?;
+    Ok(without_zero_initialisers(&words, &UNZEROED_TYPES))
+}
+
+/// naga's SPIR-V of WGSL `source` as it writes it, zero initialisers included: of entry point
+/// `entry` alone, or of every entry point when `None`.
+fn naga_spirv(source: &str, entry: Option<&str>) -> Result<Vec<u32>, String> {
     let module = naga::front::wgsl::parse_str(source)
         .map_err(|e| format!("WGSL parse: {}", e.emit_to_string(source)))?;
     let info = naga::valid::Validator::new(
@@ -46,17 +53,12 @@ pub(crate) fn compute_spirv(source: &str, entry: &str) -> Result<Vec<u32>, Strin
     )
     .validate(&module)
     .map_err(|e| format!("WGSL validation: {}", e.emit_to_string(source)))?;
-    let words = spv::write_vec(
-        &module,
-        &info,
-        &writer_options(),
-        Some(&spv::PipelineOptions {
-            shader_stage: naga::ShaderStage::Compute,
-            entry_point: entry.to_owned(),
-        }),
-    )
-    .map_err(|e| format!("SPIR-V writer: {e}"))?;
-    Ok(without_zero_initialisers(&words, &UNZEROED_TYPES))
+    let pipeline = entry.map(|entry| spv::PipelineOptions {
+        shader_stage: naga::ShaderStage::Compute,
+        entry_point: entry.to_owned(),
+    });
+    spv::write_vec(&module, &info, &writer_options(), pipeline.as_ref())
+        .map_err(|e| format!("SPIR-V writer: {e}"))
 }
 
 /// The options of wgpu's Vulkan backend that bear on a compute shader (wgpu-hal's
@@ -218,14 +220,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 ";
 
     fn spirv_of(source: &str) -> Vec<u32> {
-        let module = naga::front::wgsl::parse_str(source).unwrap();
-        let info = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
-        )
-        .validate(&module)
-        .unwrap();
-        spv::write_vec(&module, &info, &writer_options(), None).unwrap()
+        naga_spirv(source, None).unwrap()
     }
 
     fn initialised(words: &[u32], type_name: &str) -> Vec<bool> {
@@ -287,8 +282,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             "human_motion.wgsl",
             "shadow_robot.wgsl",
         ] {
-            let zeroed = spirv_of(&exp2_stage(stage));
-            let ours = compute_spirv(&exp2_stage(stage), "main").unwrap();
+            let source = exp2_stage(stage);
+            let zeroed = spirv_of(&source);
+            let ours = compute_spirv(&source, "main").unwrap();
             for ty in UNZEROED_TYPES {
                 // Each list type is declared (by `orca_world_velocity`, and LP3's lines) and
                 // naga zeroes it; the module the driver gets does not.
@@ -327,7 +323,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 
     #[test]
-    fn a_bad_shader_is_an_error_naming_the_stage() {
+    fn a_bad_shader_is_an_error_saying_where_it_failed() {
         let e = compute_spirv("fn main( {", "main").unwrap_err();
         assert!(e.starts_with("WGSL parse"), "{e}");
         let e = compute_spirv(
