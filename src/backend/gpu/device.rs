@@ -123,6 +123,71 @@ pub fn list_adapters() -> Vec<AdapterSummary> {
 /// a comparison of the two on hardware (`scripts/bench-gpu`).
 pub const SHADERS_VAR: &str = "SOCNAV_SHADERS";
 
+/// Whether `device` is a Vulkan device that wgpu opened with `robustBufferAccess2` enabled: wgpu-hal
+/// enables `VK_EXT_robustness2` wherever the driver offers it, with that feature where the
+/// physical device has it (its adapter's `naga_options` then leave buffer bounds unchecked), but
+/// does not say so; this asks the driver the same question. `false` off Vulkan.
+#[cfg(any(
+    windows,
+    target_os = "linux",
+    target_os = "android",
+    target_os = "freebsd"
+))]
+#[expect(
+    unsafe_code,
+    reason = "wgpu exposes the Vulkan handles only through the unsafe `as_hal`; sound here, see below"
+)]
+fn robust_buffer_access2(device: &wgpu::Device) -> bool {
+    use ash::vk;
+    // SAFETY: the handles are only read, to query features of the physical device, while the
+    // guard keeps the device alive; nothing is created or destroyed.
+    let Some(hal) = (unsafe { device.as_hal::<wgpu::hal::api::Vulkan>() }) else {
+        return false;
+    };
+    if !hal
+        .enabled_device_extensions()
+        .contains(&ash::ext::robustness2::NAME)
+    {
+        return false;
+    }
+    let shared = hal.shared_instance();
+    let mut robustness2 = vk::PhysicalDeviceRobustness2FeaturesEXT::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut robustness2);
+    if shared.instance_api_version() >= vk::API_VERSION_1_1 {
+        // SAFETY: a Vulkan 1.1 instance has the entry point; the physical device is its own.
+        unsafe {
+            shared
+                .raw_instance()
+                .get_physical_device_features2(hal.raw_physical_device(), &mut features);
+        }
+    } else if shared
+        .extensions()
+        .contains(&ash::khr::get_physical_device_properties2::NAME)
+    {
+        let loader = ash::khr::get_physical_device_properties2::Instance::new(
+            shared.entry(),
+            shared.raw_instance(),
+        );
+        // SAFETY: the instance enabled the extension; the physical device is its own.
+        unsafe { loader.get_physical_device_features2(hal.raw_physical_device(), &mut features) };
+    } else {
+        return false;
+    }
+    robustness2.robust_buffer_access2 == vk::TRUE
+}
+
+/// No Vulkan backend on this platform (wgpu's `vulkan` feature covers Windows, Linux, Android and
+/// FreeBSD).
+#[cfg(not(any(
+    windows,
+    target_os = "linux",
+    target_os = "android",
+    target_os = "freebsd"
+)))]
+fn robust_buffer_access2(_: &wgpu::Device) -> bool {
+    false
+}
+
 /// Whether [`SHADERS_VAR`] asks for the backend's own SPIR-V.
 fn own_spirv_wanted() -> Result<bool, SimError> {
     own_spirv_from(std::env::var(SHADERS_VAR).ok().as_deref())
@@ -172,6 +237,11 @@ pub struct GpuDevice {
     /// lists not zeroed at every call), which takes a Vulkan adapter with `PASSTHROUGH_SHADERS`
     /// (every one wgpu 30 opens); otherwise from the WGSL as wgpu compiles it.
     pub(crate) own_spirv: bool,
+    /// Whether the device enabled Vulkan's `robustBufferAccess2` (`VK_EXT_robustness2`), which
+    /// makes every storage-buffer access out of bounds read zero and write nothing: wgpu then
+    /// leaves buffer bounds to the driver, and so does the backend's own SPIR-V
+    /// (`super::spirv::Checks`).
+    pub(crate) driver_checks_buffers: bool,
     errors: Arc<Mutex<Vec<String>>>,
     /// Why the device was lost, once it has been.
     lost: Arc<Mutex<Option<String>>>,
@@ -273,11 +343,13 @@ impl GpuDevice {
         });
         let disk = super::kit::DiskCache::open(&device, features, &info);
         let adapter = AdapterSummary::of(&info);
+        let own_spirv = features.contains(wgpu::Features::PASSTHROUGH_SHADERS);
         Ok(Self {
+            driver_checks_buffers: own_spirv && robust_buffer_access2(&device),
             device,
             queue,
             stage_observations: adapter.hardware,
-            own_spirv: features.contains(wgpu::Features::PASSTHROUGH_SHADERS),
+            own_spirv,
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             adapter,
             limits,

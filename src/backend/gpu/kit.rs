@@ -276,7 +276,12 @@ fn shader_module(
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             }));
     }
-    let words = super::spirv::compute_spirv(source, entry)
+    let buffers = if dev.driver_checks_buffers {
+        super::spirv::BufferBounds::Driver
+    } else {
+        super::spirv::BufferBounds::Clamped
+    };
+    let words = super::spirv::compute_spirv(source, entry, buffers)
         .map_err(|e| SimError::Internal(format!("shader {label}, entry point {entry}: {e}")))?;
     let desc =
         super::spirv::passthrough(label, entry, crate::backend::wgsl::WORKGROUP_SIZE, &words);

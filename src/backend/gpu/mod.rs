@@ -519,10 +519,12 @@ impl GpuStages {
     /// The adapter, and whether the pipelines run the backend's own SPIR-V (`spirv`: the ORCA
     /// lists not zeroed) or the WGSL as wgpu compiles it.
     pub fn device_description(&self) -> String {
-        let shaders = if self.dev.own_spirv {
-            "socnav's SPIR-V"
-        } else {
-            "WGSL through wgpu"
+        let shaders = match (self.dev.own_spirv, self.dev.driver_checks_buffers) {
+            (true, true) => {
+                "socnav's SPIR-V, buffer bounds checked by the driver (robustBufferAccess2)"
+            }
+            (true, false) => "socnav's SPIR-V, buffer bounds clamped in the shaders",
+            (false, _) => "WGSL through wgpu",
         };
         format!("{}; shaders: {shaders}", self.dev.adapter)
     }

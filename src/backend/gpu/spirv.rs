@@ -16,6 +16,12 @@
 //! from this SPIR-V unless `SOCNAV_SHADERS=wgsl` ([`super::SHADERS_VAR`]); elsewhere from the
 //! WGSL, as wgpu compiles it. The results are the same: only entries that are written before
 //! they are read differ in what they hold at the start.
+//!
+//! The bounds checks are wgpu's: every index of a local or uniform array clamped, and the
+//! indices of storage buffers clamped unless the device enabled `robustBufferAccess2`, which
+//! makes an access out of bounds read zero and write nothing ([`BufferBounds`]). Clamping them
+//! everywhere, as this module once did, costs llvmpipe dearly wherever a stage's body is a
+//! called function (docs/performance.md, "Fused passes").
 
 use std::borrow::Cow;
 
@@ -25,6 +31,18 @@ use naga::back::spv;
 /// the declaring function clears and entries read only below it.
 pub(crate) const UNZEROED_TYPES: [&str; 3] =
     ["OrcaAgentNeighbors", "OrcaObstacleNeighbors", "OrcaLines"];
+
+/// Who keeps storage-buffer accesses in bounds: the shader, clamping each index to the buffer's
+/// length (naga's `BoundsCheckPolicy::Restrict`), or the driver (`Unchecked`), as wgpu decides
+/// for its own SPIR-V: the driver where the device enabled `robustBufferAccess2`
+/// (`GpuDevice::driver_checks_buffers`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum BufferBounds {
+    /// Every storage-buffer index clamped in the shader.
+    Clamped,
+    /// Left to the driver's `robustBufferAccess2`.
+    Driver,
+}
 
 /// SPIR-V opcodes and the storage class this module reads.
 const OP_NAME: u32 = 5;
@@ -37,14 +55,22 @@ const HEADER_WORDS: usize = 5;
 /// The SPIR-V of entry point `entry` of compute shader `source` (WGSL), with the function-scope
 /// variables of [`UNZEROED_TYPES`] not zeroed. The error names what failed (parse, validation
 /// or the writer) in naga's words.
-pub(crate) fn compute_spirv(source: &str, entry: &str) -> Result<Vec<u32>, String> {
-    let words = naga_spirv(source, Some(entry))?;
+pub(crate) fn compute_spirv(
+    source: &str,
+    entry: &str,
+    buffers: BufferBounds,
+) -> Result<Vec<u32>, String> {
+    let words = naga_spirv(source, Some(entry), buffers)?;
     Ok(without_zero_initialisers(&words, &UNZEROED_TYPES))
 }
 
 /// naga's SPIR-V of WGSL `source` as it writes it, zero initialisers included: of entry point
 /// `entry` alone, or of every entry point when `None`.
-fn naga_spirv(source: &str, entry: Option<&str>) -> Result<Vec<u32>, String> {
+fn naga_spirv(
+    source: &str,
+    entry: Option<&str>,
+    buffers: BufferBounds,
+) -> Result<Vec<u32>, String> {
     let module = naga::front::wgsl::parse_str(source)
         .map_err(|e| format!("WGSL parse: {}", e.emit_to_string(source)))?;
     let info = naga::valid::Validator::new(
@@ -57,23 +83,26 @@ fn naga_spirv(source: &str, entry: Option<&str>) -> Result<Vec<u32>, String> {
         shader_stage: naga::ShaderStage::Compute,
         entry_point: entry.to_owned(),
     });
-    spv::write_vec(&module, &info, &writer_options(), pipeline.as_ref())
+    spv::write_vec(&module, &info, &writer_options(buffers), pipeline.as_ref())
         .map_err(|e| format!("SPIR-V writer: {e}"))
 }
 
 /// The options of wgpu's Vulkan backend that bear on a compute shader (wgpu-hal's
-/// `naga_options` with its default runtime checks): array indices clamped, buffer accesses
-/// clamped (wgpu leaves them to the driver only with `robustBufferAccess2`; clamping is the
-/// safe side), loops bounded, workgroup memory zeroed by the shader. `DEBUG` names the types,
-/// which is how [`without_zero_initialisers`] finds the variables.
-fn writer_options() -> spv::Options<'static> {
+/// `naga_options` with its default runtime checks): array indices clamped, storage-buffer
+/// indices clamped unless the driver checks them (`buffers`), loops bounded, workgroup memory
+/// zeroed by the shader. `DEBUG` names the types, which is how [`without_zero_initialisers`]
+/// finds the variables.
+fn writer_options(buffers: BufferBounds) -> spv::Options<'static> {
     let clamp = naga::proc::BoundsCheckPolicy::Restrict;
     spv::Options {
         lang_version: (1, 3),
         flags: spv::WriterFlags::DEBUG,
         bounds_check_policies: naga::proc::BoundsCheckPolicies {
             index: clamp,
-            buffer: clamp,
+            buffer: match buffers {
+                BufferBounds::Clamped => clamp,
+                BufferBounds::Driver => naga::proc::BoundsCheckPolicy::Unchecked,
+            },
             image_load: clamp,
             binding_array: naga::proc::BoundsCheckPolicy::Unchecked,
         },
@@ -220,7 +249,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 ";
 
     fn spirv_of(source: &str) -> Vec<u32> {
-        naga_spirv(source, None).unwrap()
+        naga_spirv(source, None, BufferBounds::Clamped).unwrap()
     }
 
     fn initialised(words: &[u32], type_name: &str) -> Vec<bool> {
@@ -284,7 +313,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         ] {
             let source = exp2_stage(stage);
             let zeroed = spirv_of(&source);
-            let ours = compute_spirv(&source, "main").unwrap();
+            let ours = compute_spirv(&source, "main", BufferBounds::Clamped).unwrap();
             for ty in UNZEROED_TYPES {
                 // Each list type is declared (by `orca_world_velocity`, and LP3's lines) and
                 // naga zeroes it; the module the driver gets does not.
@@ -309,7 +338,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             let source = exp2_stage(&file);
             let module = naga::front::wgsl::parse_str(&source).unwrap();
             for entry in &module.entry_points {
-                let words = compute_spirv(&source, &entry.name)
+                let words = compute_spirv(&source, &entry.name, BufferBounds::Clamped)
                     .unwrap_or_else(|e| panic!("{file} {}: {e}", entry.name));
                 assert!(
                     function_variables(&words)
@@ -324,13 +353,42 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 
     #[test]
     fn a_bad_shader_is_an_error_saying_where_it_failed() {
-        let e = compute_spirv("fn main( {", "main").unwrap_err();
+        let e = compute_spirv("fn main( {", "main", BufferBounds::Clamped).unwrap_err();
         assert!(e.starts_with("WGSL parse"), "{e}");
         let e = compute_spirv(
             "@compute @workgroup_size(1) fn main() { let x: u32 = 1.5; }",
             "main",
+            BufferBounds::Clamped,
         )
         .unwrap_err();
         assert!(e.starts_with("WGSL"), "{e}");
+    }
+
+    /// Clamped, every storage-buffer index is clamped to the buffer's length (an `OpArrayLength`
+    /// per runtime-sized buffer the code indexes, in the function that indexes it); left to the
+    /// driver, none is, while the local array's index stays clamped either way.
+    #[test]
+    fn buffer_bounds_are_clamped_only_where_the_driver_does_not_check_them() {
+        const OP_ARRAY_LENGTH: u32 = 68;
+        let source = "
+@group(0) @binding(0) var<storage, read_write> data: array<u32>;
+fn bump(i: u32) { data[i] = data[i] + 1u; }
+@compute @workgroup_size(1)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    var local = array<u32, 4>(1u, 2u, 3u, 4u);
+    bump(gid.x + local[gid.y]);
+}
+";
+        let lengths = |buffers| {
+            let words = compute_spirv(source, "main", buffers).unwrap();
+            instructions(&words)
+                .filter(|i| i.opcode == OP_ARRAY_LENGTH)
+                .count()
+        };
+        assert!(lengths(BufferBounds::Clamped) > 0);
+        assert_eq!(lengths(BufferBounds::Driver), 0);
+        let clamped = compute_spirv(source, "main", BufferBounds::Clamped).unwrap();
+        let driver = compute_spirv(source, "main", BufferBounds::Driver).unwrap();
+        assert!(driver.len() < clamped.len());
     }
 }
