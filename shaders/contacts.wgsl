@@ -89,12 +89,9 @@ fn push_out(e: u32, i: u32) {
     }
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = gid.x;
-    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
-        return;
-    }
+// The stage over environment `e`, which steps this tick: its fused pass's entry point
+// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+fn stage_contacts(e: u32) {
     for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]); i += batch.k_human) {
         push_out(e, i);
     }

@@ -5,12 +5,9 @@
 // Gaussian noise per member and axis; the stored centre then becomes the members' centroid.
 // Standing groups never move. Change both files in the same commit.
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = gid.x;
-    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
-        return;
-    }
+// The stage over environment `e`, which steps this tick: its fused pass's entry point
+// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+fn stage_group_motion(e: u32) {
     // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
     var rng = rng_new(
         su[batch.c_seed_lo + e],

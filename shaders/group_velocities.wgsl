@@ -11,12 +11,9 @@
 //
 // If the ORCA lists overflow (common/orca_world.wgsl), the group's velocity becomes NaN.
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = gid.x;
-    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
-        return;
-    }
+// The stage over environment `e`, which steps this tick: its fused pass's entry point
+// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+fn stage_group_velocities(e: u32) {
     for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]); g += batch.k_group) {
         if (su[batch.c_g_kind + g] != GROUP_MOVING) {
             continue;

@@ -198,12 +198,9 @@ fn write_episode(e: u32) {
     outf[out + EP_DISCOMFORT_SNGNN] = sf[batch.c_ep_sum_sngnn + e];
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = gid.x;
-    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
-        return;
-    }
+// The stage over environment `e`, which steps this tick: its fused pass's entry point
+// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+fn stage_metrics(e: u32) {
     let row = info_row(e);
     let tick = f32(su[batch.c_tick + e]);
     progress(e);

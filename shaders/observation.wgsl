@@ -8,11 +8,12 @@
 // counter-based stream of kind 7. One environment per invocation. Change both in the same commit.
 //
 // On a device that stages observations (`batch.obs_staged`, `GpuDevice::stage_observations`),
-// `main` writes the observation into `scratch`, slot-major (value i of environment e at
+// `stage_observation` writes the observation into `scratch`, slot-major (value i of environment e at
 // `batch.x_obs_staged + i * n_envs + e`: `obs_put`), so that the 32 lanes of a warp storing the
 // same value of their environments store 128 consecutive bytes; `rows` then moves it into the
 // environment-major rows of `obs` that the host reads, a tile at a time through workgroup memory.
-// Elsewhere `main` writes the rows in place and `rows` is not dispatched.
+// Elsewhere `stage_observation` writes the rows in place and `rows` is not dispatched. `rows` is
+// an entry point of the fused pass that holds the observation (`backend::wgsl::FUSED_PASSES`).
 
 // Rust `Frame`: the robot pose and velocities an observation is relative to.
 struct ObsFrame {
@@ -487,12 +488,9 @@ fn obs_human_laptop(e: u32) -> u32 {
     return n;
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = gid.x;
-    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
-        return;
-    }
+// The stage over environment `e`, which steps this tick: its fused pass's entry point
+// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+fn stage_observation(e: u32) {
     fr = obs_frame(e);
     obs_e = e;
     obs_robot_record(e);
@@ -531,7 +529,7 @@ var<workgroup> obs_tile: array<u32, OBS_TILE * (WORKGROUP_SIZE + 1u)>;
 // (x, y) moves values [y * OBS_TILE, +OBS_TILE) of environments [x * WORKGROUP_SIZE, +WORKGROUP_SIZE).
 // It reads with consecutive lanes on consecutive environments (one value of each) and writes with
 // consecutive lanes on consecutive values of a row, so both sides coalesce. The words are moved,
-// never computed on, so the rows hold the bits `main` staged.
+// never computed on, so the rows hold the bits `stage_observation` staged.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn rows(
     @builtin(workgroup_id) wg: vec3<u32>,

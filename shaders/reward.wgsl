@@ -129,12 +129,9 @@ fn clamp_unit(x: f32) -> f32 {
     return x;
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = gid.x;
-    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
-        return;
-    }
+// The stage over environment `e`, which steps this tick: its fused pass's entry point
+// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+fn stage_reward(e: u32) {
     let row = batch.co_info + e * batch.so_info;
     var r: f32;
     if (outf[row + INFO_OUT_OF_MAP] != 0.0) {

@@ -18,12 +18,9 @@ fn command(e: u32) -> vec3<f32> {
     return vec3<f32>(vx, vy, wz);
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = gid.x;
-    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
-        return;
-    }
+// The stage over environment `e`, which steps this tick: its fused pass's entry point
+// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+fn stage_robot_motion(e: u32) {
     let cmd = command(e);
     sf[batch.c_robot_vx + e] = cmd.x;
     sf[batch.c_robot_vy + e] = cmd.y;

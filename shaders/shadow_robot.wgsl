@@ -29,12 +29,9 @@ fn command_from_velocity(theta: f32, vx: f32, vy: f32) -> vec3<f32> {
     return vec3<f32>(clamp(sqrt(vx * vx + vy * vy), -v, v), 0.0, w);
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = gid.x;
-    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
-        return;
-    }
+// The stage over environment `e`, which steps this tick: its fused pass's entry point
+// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+fn stage_shadow_robot(e: u32) {
     if (su[batch.c_shadow_collided + e] != 0u || su[batch.c_shadow_reached + e] != 0u) {
         return;
     }

@@ -25,12 +25,9 @@ fn shadow_outcome(e: u32) {
     }
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = gid.x;
-    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
-        return;
-    }
+// The stage over environment `e`, which steps this tick: its fused pass's entry point
+// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+fn stage_termination(e: u32) {
     let x = sf[batch.c_robot_x + e];
     let y = sf[batch.c_robot_y + e];
     let out_of_map = abs(x) > 0.5 * sf[batch.c_map_x + e] || abs(y) > 0.5 * sf[batch.c_map_y + e];

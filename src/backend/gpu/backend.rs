@@ -270,7 +270,7 @@ fn downloaded(cell: &mut OnceLock<BatchState>) -> Result<&mut BatchState, SimErr
 
 /// The passes of a step: the stages of `STAGES`, in order, those only the SNGNN-v2 reward runs
 /// included when it is the reward.
-fn step_passes(sngnn: bool) -> Vec<&'static str> {
+pub(super) fn step_passes(sngnn: bool) -> Vec<&'static str> {
     STAGES
         .iter()
         .filter(|s| sngnn || !s.sngnn_reward_only)

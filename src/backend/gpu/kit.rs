@@ -26,18 +26,37 @@ pub(crate) enum Binding {
     },
     /// A uniform buffer.
     Uniform,
+    /// A uniform of [`DYNAMIC_UNIFORM_BYTES`] at an offset given with each `set_bind_group`.
+    DynamicUniform,
 }
+
+/// Bytes of a [`Binding::DynamicUniform`] (a `vec4<u32>`).
+pub(crate) const DYNAMIC_UNIFORM_BYTES: u64 = 16;
 
 impl Binding {
     fn ty(self) -> wgpu::BindingType {
-        let ty = match self {
-            Self::Storage { read_only } => wgpu::BufferBindingType::Storage { read_only },
-            Self::Uniform => wgpu::BufferBindingType::Uniform,
+        let (ty, has_dynamic_offset) = match self {
+            Self::Storage { read_only } => (wgpu::BufferBindingType::Storage { read_only }, false),
+            Self::Uniform => (wgpu::BufferBindingType::Uniform, false),
+            Self::DynamicUniform => (wgpu::BufferBindingType::Uniform, true),
         };
         wgpu::BindingType::Buffer {
             ty,
-            has_dynamic_offset: false,
+            has_dynamic_offset,
             min_binding_size: None,
+        }
+    }
+
+    /// What binds `buffer` as this kind of binding: the whole buffer, or a dynamic uniform's
+    /// window.
+    pub(crate) fn resource(self, buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+        match self {
+            Self::DynamicUniform => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer,
+                offset: 0,
+                size: wgpu::BufferSize::new(DYNAMIC_UNIFORM_BYTES),
+            }),
+            Self::Storage { .. } | Self::Uniform => buffer.as_entire_binding(),
         }
     }
 }
@@ -406,11 +425,26 @@ pub(crate) fn bind_buffers(
     layout: &wgpu::BindGroupLayout,
     buffers: &[&wgpu::Buffer],
 ) -> wgpu::BindGroup {
+    let bound: Vec<(&wgpu::Buffer, Binding)> = buffers
+        .iter()
+        .map(|&b| (b, Binding::Storage { read_only: false }))
+        .collect();
+    bind_kinds(dev, label, layout, &bound)
+}
+
+/// A bind group of `layout` with `bound` at bindings 0, 1, ..., each bound as its kind says
+/// ([`Binding::resource`]).
+pub(crate) fn bind_kinds(
+    dev: &GpuDevice,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    bound: &[(&wgpu::Buffer, Binding)],
+) -> wgpu::BindGroup {
     let entries: Vec<wgpu::BindGroupEntry<'_>> = (0u32..)
-        .zip(buffers)
-        .map(|(binding, buf)| wgpu::BindGroupEntry {
+        .zip(bound)
+        .map(|(binding, &(buf, kind))| wgpu::BindGroupEntry {
             binding,
-            resource: buf.as_entire_binding(),
+            resource: kind.resource(buf),
         })
         .collect();
     dev.device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -46,7 +46,7 @@ use crate::sngnn::packed::PackedLayout;
 use crate::sngnn::pieces::Tables;
 use crate::state::BatchState;
 use kit::{
-    Binding, CreationScope, Groups, bind_buffers, bytes_of, check_binding, map_and_read,
+    Binding, CreationScope, Groups, bind_kinds, bytes_of, check_binding, map_and_read,
     map_and_read_after, storage_buffer, uniform_buffer,
 };
 use readback::{StepReadback, words_to_bytes};
@@ -108,8 +108,13 @@ pub struct GpuStages {
     episode_offset: usize,
     /// Group 0 (the prelude's bindings), and group 1 (the SNGNN graphs) when the batch has them.
     bind_groups: Vec<wgpu::BindGroup>,
-    /// The passes built, by name: their pipelines, or `None` for the network stage
-    /// ([`Shader::Network`], recorded by [`GpuNet`]).
+    /// The member masks of the fused passes (`wgsl::FUSED_PASSES`), mask `m` at byte
+    /// `m * mask_stride`: binding 10 of group 0, at a dynamic offset per dispatch.
+    #[expect(dead_code, reason = "kept alive for the bind group that binds it")]
+    member_masks: wgpu::Buffer,
+    mask_stride: u32,
+    /// The passes built, by name (`wgsl::pass_of`): their pipelines, or `None` for the network
+    /// stage ([`Shader::Network`], recorded by [`GpuNet`]).
     pipelines: Vec<(&'static str, Option<PassPipelines>)>,
     /// How many pipelines building this batch compiled rather than found on its device.
     compiled: usize,
@@ -420,6 +425,7 @@ impl GpuStages {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let (member_masks, mask_stride) = member_mask_table(&dev);
         let storage = |read_only| Binding::Storage { read_only };
         let mut bound = vec![vec![
             (&params_buf, storage(true)),
@@ -432,6 +438,7 @@ impl GpuStages {
             (&batch, Binding::Uniform),
             (&scratch, storage(false)),
             (&rare, storage(false)),
+            (&member_masks, Binding::DynamicUniform),
         ]];
         let gaps = sngnn.as_ref().map(|b| {
             let gaps = storage_buffer(
@@ -458,10 +465,7 @@ impl GpuStages {
         let bind_groups = bound
             .iter()
             .zip(&bind_layouts)
-            .map(|(g, l)| {
-                let buffers: Vec<&wgpu::Buffer> = g.iter().map(|&(b, _)| b).collect();
-                bind_buffers(&dev, "stage bindings", l, &buffers)
-            })
+            .map(|(g, l)| bind_kinds(&dev, "stage bindings", l, g))
             .collect();
         let columns = state.columns();
         let prelude = wgsl::prelude(
@@ -470,12 +474,16 @@ impl GpuStages {
             &wgsl::SizeClasses::of(&columns),
         );
         let pool_staging = staging_buffer(&dev, POOL_STAGING_ROWS * pool_row_words);
-        let mut pipelines = Vec::with_capacity(stages.len());
+        let mut pipelines: Vec<(&'static str, _)> = Vec::with_capacity(stages.len());
         let mut compiled = usize::from(read_compiled);
         for &stage in stages {
-            let built = build_pass(&dev, stage, &groups, &prelude)?;
+            let pass = wgsl::pass_of(stage);
+            if pipelines.iter().any(|(p, _)| *p == pass) {
+                continue;
+            }
+            let built = build_pass(&dev, stage, pass, &groups, &prelude)?;
             compiled += built.as_ref().map_or(0, |b| b.1);
-            pipelines.push((stage, built.map(|b| b.0)));
+            pipelines.push((pass, built.map(|b| b.0)));
         }
         let this = Self {
             dev,
@@ -498,6 +506,8 @@ impl GpuStages {
             step_read,
             episode_offset,
             bind_groups,
+            member_masks,
+            mask_stride,
             pipelines,
             compiled,
             sngnn_graphs,
@@ -517,7 +527,8 @@ impl GpuStages {
     }
 
     /// The adapter, and whether the pipelines run the backend's own SPIR-V (`spirv`: the ORCA
-    /// lists not zeroed) or the WGSL as wgpu compiles it.
+    /// lists not zeroed), with its storage-buffer bounds checked by the driver or clamped in the
+    /// shaders (`spirv::BufferBounds`), or the WGSL as wgpu compiles it.
     pub fn device_description(&self) -> String {
         let shaders = match (self.dev.own_spirv, self.dev.driver_checks_buffers) {
             (true, true) => {
@@ -757,8 +768,8 @@ impl GpuStages {
                 timestamp_writes: None,
             });
             self.bind(&mut pass);
-            for &stage in stages {
-                self.sngnn_unread |= self.record(&mut pass, stage)?;
+            for dispatch in plan(stages) {
+                self.sngnn_unread |= self.record(&mut pass, &dispatch)?;
             }
             if selective {
                 self.step_read.record(&mut pass);
@@ -874,10 +885,15 @@ impl GpuStages {
         self.step_read.stats
     }
 
-    /// Record stage `stage` into `pass` (whose bind groups are the batch's): its dispatch, or the
-    /// network's. Returns whether the network ran.
-    fn record(&self, pass: &mut wgpu::ComputePass<'_>, stage: &str) -> Result<bool, SimError> {
-        let Some((_, pipeline)) = self.pipelines.iter().find(|(s, _)| *s == stage) else {
+    /// Record `dispatch` into `pass` (whose bind groups are the batch's): its pass's dispatches,
+    /// or the network's. Returns whether the network ran.
+    fn record(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        dispatch: &Dispatch<'_>,
+    ) -> Result<bool, SimError> {
+        let stage = dispatch.first;
+        let Some((_, pipeline)) = self.pipelines.iter().find(|(p, _)| *p == dispatch.pass) else {
             return Err(SimError::Usage(format!(
                 "stage {stage:?} was not built for this batch"
             )));
@@ -898,8 +914,13 @@ impl GpuStages {
             pass.dispatch_workgroups(workgroups, 1, 1);
         }
         pass.set_pipeline(&pipeline.main);
+        if let Some(members) = dispatch.members {
+            pass.set_bind_group(0, &self.bind_groups[0], &[members * self.mask_stride]);
+        }
         pass.dispatch_workgroups(workgroups, 1, 1);
-        if let Some(rows) = &pipeline.rows {
+        if let Some(rows) = &pipeline.rows
+            && dispatch.runs(wgsl::OBS_ROWS_STAGE)
+        {
             pass.set_pipeline(rows);
             pass.dispatch_workgroups(workgroups, self.obs_row_tiles, 1);
         }
@@ -969,7 +990,9 @@ impl GpuStages {
                 }),
             });
             self.bind(&mut pass);
-            self.sngnn_unread |= self.record(&mut pass, stage)?;
+            for dispatch in plan(&[stage]) {
+                self.sngnn_unread |= self.record(&mut pass, &dispatch)?;
+            }
         }
         enc.resolve_query_set(&set, 0..count, &resolved, 0);
         enc.copy_buffer_to_buffer(&resolved, 0, &read, 0, bytes);
@@ -988,10 +1011,12 @@ impl GpuStages {
         Ok(Some(seconds))
     }
 
-    /// Set the batch's bind groups on `pass`.
+    /// Set the batch's bind groups on `pass` (group 0 with the member mask table at mask 0, which
+    /// a fused pass's dispatch replaces with its own).
     fn bind(&self, pass: &mut wgpu::ComputePass<'_>) {
         for (index, group) in (0u32..).zip(&self.bind_groups) {
-            pass.set_bind_group(index, group, &[]);
+            let offsets: &[u32] = if index == 0 { &[0] } else { &[] };
+            pass.set_bind_group(index, group, offsets);
         }
     }
 
@@ -1069,6 +1094,78 @@ impl GpuStages {
     }
 }
 
+/// One dispatch of a step: the pass that runs it (`wgsl::pass_of`), and for a fused pass the mask
+/// of the members it runs (`wgsl::FUSED_PASSES`); `first` names its first stage in errors.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Dispatch<'a> {
+    pass: &'a str,
+    members: Option<u32>,
+    first: &'a str,
+}
+
+impl Dispatch<'_> {
+    /// Whether this dispatch runs stage `stage`.
+    fn runs(&self, stage: &str) -> bool {
+        match (self.members, wgsl::fused_pass_of(stage)) {
+            (Some(members), Some((pass, bit))) => pass == self.pass && members & (1 << bit) != 0,
+            (None, None) => self.pass == stage,
+            _ => false,
+        }
+    }
+}
+
+/// The dispatches that run `stages` in order: consecutive members of one fused pass, in the
+/// pass's order, share a dispatch; any other stage is one of its own.
+fn plan<'a>(stages: &[&'a str]) -> Vec<Dispatch<'a>> {
+    let mut out: Vec<Dispatch<'a>> = Vec::with_capacity(stages.len());
+    for &stage in stages {
+        let Some((pass, bit)) = wgsl::fused_pass_of(stage) else {
+            out.push(Dispatch {
+                pass: stage,
+                members: None,
+                first: stage,
+            });
+            continue;
+        };
+        if let Some(Dispatch {
+            pass: last,
+            members: Some(members),
+            ..
+        }) = out.last_mut()
+            && *last == pass
+            && *members >> bit == 0
+        {
+            *members |= 1 << bit;
+            continue;
+        }
+        out.push(Dispatch {
+            pass,
+            members: Some(1 << bit),
+            first: stage,
+        });
+    }
+    out
+}
+
+/// The member masks of the fused passes as a uniform table: mask `m` (a `vec4<u32>` with `m`
+/// first) at byte `m * stride`, the stride the device's dynamic uniform offsets allow.
+fn member_mask_table(dev: &GpuDevice) -> (wgpu::Buffer, u32) {
+    let stride = dev
+        .device
+        .limits()
+        .min_uniform_buffer_offset_alignment
+        .max(kit::DYNAMIC_UNIFORM_BYTES as u32);
+    let words_per = (stride / 4) as usize;
+    let mut words = vec![0u32; wgsl::MEMBER_MASKS * words_per];
+    for m in 0..wgsl::MEMBER_MASKS {
+        words[m * words_per] = m as u32;
+    }
+    (
+        uniform_buffer(dev, "fused pass member masks", &words),
+        stride,
+    )
+}
+
 /// The pipelines of a pass: `main` and, for a stage of [`wgsl::RARE_WORK_STAGES`], `queue_work`
 /// (dispatched before it, over every environment, to queue those `main` runs for); for
 /// [`wgsl::OBS_ROWS_STAGE`] on a device that stages observations, `rows` (dispatched after it:
@@ -1082,7 +1179,7 @@ struct PassPipelines {
 /// A pass's pipelines, and how many of them getting them compiled.
 type Built = Option<(PassPipelines, usize)>;
 
-/// The pipelines of pass `stage` over the batch (`prelude`, bind `groups`) and how many of them
+/// The pipelines of pass `pass` (`wgsl::pass_of(stage)`) over the batch (`prelude`, bind `groups`) and how many of them
 /// were compiled now: `None` for a network stage, whose pipelines [`GpuStages::attach_sngnn_net`]
 /// adds. A shader that needs the SNGNN graphs ([`wgsl::needs_sngnn`]) gets
 /// [`wgsl::sngnn_prelude`] and group 1; any other, group 0 alone, whether the batch has the
@@ -1090,6 +1187,7 @@ type Built = Option<(PassPipelines, usize)>;
 fn build_pass(
     dev: &GpuDevice,
     stage: &'static str,
+    pass: &'static str,
     groups: &[Vec<Binding>],
     prelude: &str,
 ) -> Result<Built, SimError> {
@@ -1112,9 +1210,11 @@ fn build_pass(
             return Ok(None);
         }
     }
-    let file = format!("{stage}.wgsl");
-    let files = wgsl::resolve(&file).map_err(SimError::Usage)?;
-    let needs_sngnn = files.iter().any(|f| wgsl::needs_sngnn(f));
+    let mut needs_sngnn = false;
+    for file in wgsl::pass_files(pass) {
+        let files = wgsl::resolve(&file).map_err(SimError::Usage)?;
+        needs_sngnn |= files.iter().any(|f| wgsl::needs_sngnn(f));
+    }
     if needs_sngnn && !has_sngnn {
         return Err(missing_graphs());
     }
@@ -1123,19 +1223,92 @@ fn build_pass(
     } else {
         (prelude.to_owned(), &groups[..1])
     };
-    let src = wgsl::assemble(&file, &prelude).map_err(SimError::Usage)?;
-    let (main, new) = dev.pipelines.pipeline(dev, stage, groups, &src, "main")?;
+    let src = wgsl::assemble_pass(pass, &prelude).map_err(SimError::Usage)?;
+    let (main, new) = dev.pipelines.pipeline(dev, pass, groups, &src, "main")?;
     let mut compiled = usize::from(new);
     let mut entry = |wanted: bool, name: &str| -> Result<_, SimError> {
         if !wanted {
             return Ok(None);
         }
-        let (pipeline, new) = dev.pipelines.pipeline(dev, stage, groups, &src, name)?;
+        let (pipeline, new) = dev.pipelines.pipeline(dev, pass, groups, &src, name)?;
         compiled += usize::from(new);
         Ok(Some(pipeline))
     };
     let queue = entry(wgsl::RARE_WORK_STAGES.contains(&stage), wgsl::QUEUE_ENTRY)?;
-    let staged = stage == wgsl::OBS_ROWS_STAGE && dev.stage_observations;
+    let staged = pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE) && dev.stage_observations;
     let rows = entry(staged, wgsl::OBS_ROWS_ENTRY)?;
     Ok(Some((PassPipelines { queue, main, rows }, compiled)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::backend::step_passes as step;
+    use super::{Dispatch, plan};
+    use crate::backend::wgsl;
+
+    fn passes<'a>(dispatches: &[Dispatch<'a>]) -> Vec<(&'a str, Option<u32>)> {
+        dispatches.iter().map(|d| (d.pass, d.members)).collect()
+    }
+
+    /// A step without SNGNN-v2 runs each fused pass in one dispatch with every member; eleven
+    /// stages become two dispatches.
+    #[test]
+    fn a_step_runs_each_fused_pass_once() {
+        let stages = step(false);
+        let planned = plan(&stages);
+        assert_eq!(
+            passes(&planned),
+            [
+                ("begin_step", None),
+                ("motion", Some(0b11_1111)),
+                ("formation", None),
+                ("outcome", Some(0b1_1111)),
+                ("social_events", None),
+                ("autoreset", None),
+            ]
+        );
+        assert_eq!(stages.len() - planned.len(), 11 - 2);
+        for stage in stages {
+            assert_eq!(
+                planned.iter().filter(|d| d.runs(stage)).count(),
+                1,
+                "{stage}"
+            );
+        }
+    }
+
+    /// With SNGNN-v2's graph and network between `termination` and `reward`, the outcome pass
+    /// runs twice, each time with the members on its side of them.
+    #[test]
+    fn stages_between_members_split_the_dispatch() {
+        let planned = plan(&step(true));
+        let outcome: Vec<Option<u32>> = planned
+            .iter()
+            .filter(|d| d.pass == "outcome")
+            .map(|d| d.members)
+            .collect();
+        assert_eq!(outcome, [Some(0b11), Some(0b1_1100)]);
+        let at = |pass: &str, first: &str| {
+            planned
+                .iter()
+                .position(|d| d.pass == pass && d.first == first)
+                .unwrap()
+        };
+        assert!(at("outcome", "contacts") < at("sngnn_graph", "sngnn_graph"));
+        assert!(at("sngnn_score", "sngnn_score") < at("outcome", "reward"));
+    }
+
+    /// Members asked for out of their pass's order, or one stage alone, keep the order asked for.
+    #[test]
+    fn a_dispatch_never_reorders_stages() {
+        assert_eq!(
+            passes(&plan(&["goals", "robot_motion", "shadow_robot"])),
+            [("motion", Some(0b10_0000)), ("motion", Some(0b11))]
+        );
+        assert_eq!(passes(&plan(&["metrics"])), [("outcome", Some(0b1000))]);
+        assert_eq!(passes(&plan(&["reset"])), [("reset", None)]);
+        let alone = plan(&["observation"]);
+        assert!(alone[0].runs("observation") && !alone[0].runs("metrics"));
+        assert_eq!(wgsl::pass_of("observation"), "outcome");
+    }
 }

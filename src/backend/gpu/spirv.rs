@@ -287,8 +287,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         assert_eq!(without_zero_initialisers(&words, &["Absent"]), words);
     }
 
-    /// Stage shader `path` as the GPU backend assembles it for a batch of experiment 2.
-    fn exp2_stage(path: &str) -> String {
+    /// Pass `pass` (`wgsl::passes`) as the GPU backend assembles it for a batch of experiment 2.
+    fn exp2_pass(pass: &str) -> String {
         use crate::backend::wgsl;
         let env = crate::BatchEnv::new(
             crate::Config::from_name_or_path("exp2").unwrap(),
@@ -301,17 +301,19 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             &env.outputs().columns(),
             &wgsl::SizeClasses::of(&columns),
         );
-        wgsl::assemble(path, &prelude).unwrap()
+        wgsl::assemble_pass(pass, &prelude).unwrap()
     }
 
     #[test]
     fn the_orca_stages_hand_the_driver_their_lists_unzeroed() {
-        for stage in [
-            "group_velocities.wgsl",
-            "human_motion.wgsl",
-            "shadow_robot.wgsl",
-        ] {
-            let source = exp2_stage(stage);
+        use crate::backend::wgsl;
+        let mut orca_passes: Vec<&str> = ["group_velocities", "human_motion", "shadow_robot"]
+            .into_iter()
+            .map(wgsl::pass_of)
+            .collect();
+        orca_passes.dedup();
+        for stage in orca_passes {
+            let source = exp2_pass(stage);
             let zeroed = spirv_of(&source);
             let ours = compute_spirv(&source, "main", BufferBounds::Clamped).unwrap();
             for ty in UNZEROED_TYPES {
@@ -328,14 +330,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 
     #[test]
-    fn every_entry_point_of_every_stage_is_written() {
+    fn every_entry_point_of_every_pass_is_written() {
         use crate::backend::wgsl;
-        for stage in crate::pipeline::STAGES {
-            let file = stage.shader_file();
-            if wgsl::is_standalone(&file) || wgsl::needs_sngnn(&file) {
+        for file in wgsl::passes() {
+            if wgsl::pass_files(file).iter().any(|f| wgsl::needs_sngnn(f)) {
                 continue;
             }
-            let source = exp2_stage(&file);
+            let source = exp2_pass(file);
             let module = naga::front::wgsl::parse_str(&source).unwrap();
             for entry in &module.entry_points {
                 let words = compute_spirv(&source, &entry.name, BufferBounds::Clamped)

@@ -108,19 +108,61 @@ fn validate_assembled(path: &str) -> Result<naga::Module, String> {
     if wgsl::needs_sngnn(path) {
         return validate_assembled_sngnn(path);
     }
+    let src = wgsl::assemble(path, &exp2_prelude())?;
+    validate_source(&src, &format!("{path} (assembled)"))
+}
+
+/// The prelude of a batch of experiment 2 (every column kind in use).
+fn exp2_prelude() -> String {
     let env = socnav::BatchEnv::new(
         socnav::Config::from_name_or_path("exp2").expect("exp2"),
         socnav::EnvOptions::default(),
     )
     .expect("batch");
     let columns = env.state().unwrap().columns();
-    let prelude = wgsl::prelude(
+    wgsl::prelude(
         &columns,
         &env.outputs().columns(),
         &wgsl::SizeClasses::of(&columns),
-    );
-    let src = wgsl::assemble(path, &prelude)?;
-    validate_source(&src, &format!("{path} (assembled)"))
+    )
+}
+
+/// Pass `pass` (`wgsl::passes`) as the GPU backend assembles it for a batch of experiment 2,
+/// with the SNGNN-v2 reward where the pass builds SNGNN graphs.
+fn validate_pass(pass: &str) -> Result<naga::Module, String> {
+    let sngnn = wgsl::pass_files(pass).iter().any(|f| wgsl::needs_sngnn(f));
+    let prelude = if sngnn {
+        sngnn_prelude()
+    } else {
+        exp2_prelude()
+    };
+    let src = wgsl::assemble_pass(pass, &prelude)?;
+    validate_source(&src, &format!("pass {pass} (assembled)"))
+}
+
+/// Every module the GPU backend compiles from `shaders/`, by name: each pass
+/// (`wgsl::passes`), then each network shader (standalone).
+fn compiled_modules() -> Vec<(String, naga::Module)> {
+    let mut out: Vec<(String, naga::Module)> = wgsl::passes()
+        .into_iter()
+        .map(|p| {
+            (
+                p.to_owned(),
+                validate_pass(p).unwrap_or_else(|e| panic!("{e}")),
+            )
+        })
+        .collect();
+    for s in socnav::pipeline::STAGES {
+        let file = s.shader_file();
+        if wgsl::is_standalone(&file) {
+            let src = wgsl::assemble_standalone(&file).expect("assembled");
+            out.push((
+                s.name.to_owned(),
+                validate_source(&src, &file).expect("validates"),
+            ));
+        }
+    }
+    out
 }
 
 /// An SNGNN shader as `GpuStages::with_sngnn_graphs` assembles it for experiment 2 with the
@@ -182,8 +224,10 @@ fn all_wgsl_shaders_validate() {
 }
 
 /// The top of `shaders/` is the step: one file per stage of `pipeline::STAGES` (named after it),
-/// plus the reset pass (`wgsl::RESET_PASS`), nothing else. A batch shader has the entry point
-/// `main`; a network shader assembles on its own (`wgsl::is_standalone`).
+/// plus the reset pass (`wgsl::RESET_PASS`), nothing else. A batch shader in a fused pass
+/// (`wgsl::FUSED_PASSES`) defines `stage_<name>` and no `main`, and its pass has `main`;
+/// any other batch shader has the entry point `main`; a network shader assembles on its own
+/// (`wgsl::is_standalone`).
 #[test]
 fn top_level_shaders_are_the_stages_and_the_reset_pass() {
     use socnav::pipeline::{STAGES, Shader};
@@ -203,10 +247,23 @@ fn top_level_shaders_are_the_stages_and_the_reset_pass() {
             Shader::Batch => {
                 assert!(!wgsl::is_standalone(&path), "{path} has the batch prelude");
                 let module = validate_assembled(&path).unwrap_or_else(|e| panic!("{e}"));
+                let pass =
+                    validate_pass(wgsl::pass_of(stage.name)).unwrap_or_else(|e| panic!("{e}"));
                 assert!(
-                    module.entry_points.iter().any(|ep| ep.name == "main"),
-                    "shaders/{path} has no entry point `main`"
+                    pass.entry_points.iter().any(|ep| ep.name == "main"),
+                    "the pass of shaders/{path} has no entry point `main`"
                 );
+                if wgsl::fused_pass_of(stage.name).is_some() {
+                    let function = format!("stage_{}", stage.name);
+                    assert!(
+                        module.entry_points.iter().all(|ep| ep.name != "main")
+                            && module
+                                .functions
+                                .iter()
+                                .any(|(_, f)| f.name.as_deref() == Some(function.as_str())),
+                        "shaders/{path}, a member of a fused pass, defines `{function}` and no `main`"
+                    );
+                }
             }
             Shader::Network => {
                 assert!(wgsl::is_standalone(&path), "{path} stands alone");
@@ -666,48 +723,25 @@ fn holds_array(module: &naga::Module, ty: naga::Handle<naga::Type>) -> bool {
 /// every shipped config shares so that each stage shader compiles once (issue 14).
 #[test]
 fn zeroed_function_scope_arrays_do_not_grow() {
-    // Stage::function, bytes zeroed per call (exp2's assembly).
+    // Pass::function, bytes zeroed per call (exp2's assembly; `wgsl::passes`).
     const BUDGET: &[(&str, u32)] = &[
+        ("motion::state_permute_humans", 512),
+        ("motion::state_permute_groups", 512),
+        ("motion::state_permute_laptop_users", 256),
+        ("motion::state_permute_laptops", 512),
+        ("motion::orca_lp3", 3088),
+        ("motion::orca_obstacles_corners", 32),
+        ("motion::orca_obstacles_polygon", 72),
+        ("motion::orca_world_velocity", 4640),
+        ("outcome::state_permute_humans", 512),
+        ("outcome::state_permute_groups", 512),
+        ("outcome::state_permute_laptop_users", 256),
+        ("outcome::state_permute_laptops", 512),
+        ("outcome::obs_noise", 20),
         ("begin_step::state_permute_humans", 512),
         ("begin_step::state_permute_groups", 512),
         ("begin_step::state_permute_laptop_users", 256),
         ("begin_step::state_permute_laptops", 512),
-        ("robot_motion::state_permute_humans", 512),
-        ("robot_motion::state_permute_groups", 512),
-        ("robot_motion::state_permute_laptop_users", 256),
-        ("robot_motion::state_permute_laptops", 512),
-        ("shadow_robot::state_permute_humans", 512),
-        ("shadow_robot::state_permute_groups", 512),
-        ("shadow_robot::state_permute_laptop_users", 256),
-        ("shadow_robot::state_permute_laptops", 512),
-        ("shadow_robot::orca_lp3", 3088),
-        ("shadow_robot::orca_obstacles_corners", 32),
-        ("shadow_robot::orca_obstacles_polygon", 72),
-        ("shadow_robot::orca_world_velocity", 4640),
-        ("group_velocities::state_permute_humans", 512),
-        ("group_velocities::state_permute_groups", 512),
-        ("group_velocities::state_permute_laptop_users", 256),
-        ("group_velocities::state_permute_laptops", 512),
-        ("group_velocities::orca_lp3", 3088),
-        ("group_velocities::orca_obstacles_corners", 32),
-        ("group_velocities::orca_obstacles_polygon", 72),
-        ("group_velocities::orca_world_velocity", 4640),
-        ("human_motion::state_permute_humans", 512),
-        ("human_motion::state_permute_groups", 512),
-        ("human_motion::state_permute_laptop_users", 256),
-        ("human_motion::state_permute_laptops", 512),
-        ("human_motion::orca_lp3", 3088),
-        ("human_motion::orca_obstacles_corners", 32),
-        ("human_motion::orca_obstacles_polygon", 72),
-        ("human_motion::orca_world_velocity", 4640),
-        ("group_motion::state_permute_humans", 512),
-        ("group_motion::state_permute_groups", 512),
-        ("group_motion::state_permute_laptop_users", 256),
-        ("group_motion::state_permute_laptops", 512),
-        ("goals::state_permute_humans", 512),
-        ("goals::state_permute_groups", 512),
-        ("goals::state_permute_laptop_users", 256),
-        ("goals::state_permute_laptops", 512),
         ("formation::state_permute_humans", 512),
         ("formation::state_permute_groups", 512),
         ("formation::state_permute_laptop_users", 256),
@@ -721,32 +755,11 @@ fn zeroed_function_scope_arrays_do_not_grow() {
         ("formation::regroup_canonicalize", 1040),
         ("formation::form_crowd", 128),
         ("formation::form_approximate_crowd", 128),
-        ("contacts::state_permute_humans", 512),
-        ("contacts::state_permute_groups", 512),
-        ("contacts::state_permute_laptop_users", 256),
-        ("contacts::state_permute_laptops", 512),
-        ("termination::state_permute_humans", 512),
-        ("termination::state_permute_groups", 512),
-        ("termination::state_permute_laptop_users", 256),
-        ("termination::state_permute_laptops", 512),
         ("sngnn_graph::state_permute_humans", 512),
         ("sngnn_graph::state_permute_groups", 512),
         ("sngnn_graph::state_permute_laptop_users", 256),
         ("sngnn_graph::state_permute_laptops", 512),
         ("sngnn_graph::sn_select", 16),
-        ("reward::state_permute_humans", 512),
-        ("reward::state_permute_groups", 512),
-        ("reward::state_permute_laptop_users", 256),
-        ("reward::state_permute_laptops", 512),
-        ("metrics::state_permute_humans", 512),
-        ("metrics::state_permute_groups", 512),
-        ("metrics::state_permute_laptop_users", 256),
-        ("metrics::state_permute_laptops", 512),
-        ("observation::state_permute_humans", 512),
-        ("observation::state_permute_groups", 512),
-        ("observation::state_permute_laptop_users", 256),
-        ("observation::state_permute_laptops", 512),
-        ("observation::obs_noise", 20),
         ("social_events::state_permute_humans", 512),
         ("social_events::state_permute_groups", 512),
         ("social_events::state_permute_laptop_users", 256),
@@ -766,17 +779,17 @@ fn zeroed_function_scope_arrays_do_not_grow() {
         ("autoreset::state_permute_groups", 512),
         ("autoreset::state_permute_laptop_users", 256),
         ("autoreset::state_permute_laptops", 512),
+        ("reset::state_permute_humans", 512),
+        ("reset::state_permute_groups", 512),
+        ("reset::state_permute_laptop_users", 256),
+        ("reset::state_permute_laptops", 512),
     ];
     let mut report = Vec::new();
     let mut over = Vec::new();
-    for s in socnav::pipeline::STAGES {
-        let file = s.shader_file();
-        if wgsl::is_standalone(&file) {
-            continue;
-        }
-        let module = validate_assembled(&file).expect("assembled");
+    for pass in wgsl::passes() {
+        let module = validate_pass(pass).expect("assembled");
         for (function, bytes) in zeroed_local_array_bytes(&module) {
-            let key = format!("{}::{function}", s.name);
+            let key = format!("{pass}::{function}");
             let budget = BUDGET.iter().find(|(k, _)| *k == key).map_or(0, |b| b.1);
             if bytes > budget {
                 over.push(format!("{key}: {bytes} bytes (budget {budget})"));
@@ -905,18 +918,11 @@ fn unread_zeroed_local_arrays(module: &naga::Module) -> Vec<String> {
 #[test]
 fn every_zeroed_function_scope_array_is_read() {
     let mut unread = Vec::new();
-    for s in socnav::pipeline::STAGES {
-        let file = s.shader_file();
-        let module = if wgsl::is_standalone(&file) {
-            let src = wgsl::assemble_standalone(&file).expect("assembled");
-            validate_source(&src, &file).expect("validates")
-        } else {
-            validate_assembled(&file).expect("validates")
-        };
+    for (name, module) in compiled_modules() {
         unread.extend(
             unread_zeroed_local_arrays(&module)
                 .into_iter()
-                .map(|u| format!("{}::{u}", s.name)),
+                .map(|u| format!("{name}::{u}")),
         );
     }
     assert!(unread.is_empty(), "zeroed and never read: {unread:?}");
@@ -951,17 +957,14 @@ fn main() {
     );
 }
 
-/// The stages whose rare work runs out of the hot pass (`wgsl::RARE_WORK_STAGES`) have the entry
-/// point that queues their environments besides `main`, the observation has the one that moves
-/// its staged values into rows (`wgsl::OBS_ROWS_ENTRY`), and no other stage has a second one.
+/// The passes of the stages whose rare work runs out of the hot pass (`wgsl::RARE_WORK_STAGES`)
+/// have the entry point that queues their environments besides `main`, the pass of the
+/// observation has the one that moves its staged values into rows (`wgsl::OBS_ROWS_ENTRY`), and
+/// no other pass has a second one.
 #[test]
-fn stages_have_their_second_entry_points() {
-    for s in socnav::pipeline::STAGES {
-        let file = s.shader_file();
-        if wgsl::is_standalone(&file) {
-            continue;
-        }
-        let module = validate_assembled(&file).expect("validates");
+fn passes_have_their_second_entry_points() {
+    for pass in wgsl::passes() {
+        let module = validate_pass(pass).expect("validates");
         let mut entries: Vec<&str> = module
             .entry_points
             .iter()
@@ -969,13 +972,53 @@ fn stages_have_their_second_entry_points() {
             .collect();
         entries.sort_unstable();
         let mut expected = vec!["main"];
-        if wgsl::RARE_WORK_STAGES.contains(&s.name) {
+        if wgsl::RARE_WORK_STAGES.contains(&pass) {
             expected.push(wgsl::QUEUE_ENTRY);
         }
-        if s.name == wgsl::OBS_ROWS_STAGE {
+        if pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE) {
             expected.push(wgsl::OBS_ROWS_ENTRY);
         }
         expected.sort_unstable();
-        assert_eq!(entries, expected, "{}", s.name);
+        assert_eq!(entries, expected, "{pass}");
     }
+}
+
+/// A fused pass (`wgsl::FUSED_PASSES`) holds stages of the step that one lane can run in a row:
+/// batch shaders in the order of `pipeline::STAGES` with nothing between them but the stages only
+/// the SNGNN-v2 reward runs (so a step without it runs the pass in one dispatch), none with rare
+/// work queued across environments, none that builds SNGNN graphs, each in one pass, at most
+/// `wgsl::MAX_FUSED_MEMBERS` of them; and each member's bit selects it alone.
+#[test]
+fn fused_passes_hold_consecutive_stages_of_one_environment() {
+    use socnav::pipeline::{STAGES, Shader};
+    let index = |name: &str| STAGES.iter().position(|s| s.name == name).expect("a stage");
+    let mut seen = Vec::new();
+    for (pass, members) in wgsl::FUSED_PASSES {
+        assert!(members.len() <= wgsl::MAX_FUSED_MEMBERS, "{pass}");
+        assert!(!members.is_empty(), "{pass}");
+        for (bit, m) in members.iter().enumerate() {
+            let s = &STAGES[index(m)];
+            assert_eq!(s.shader, Shader::Batch, "{pass}: {m}");
+            assert!(
+                !s.sngnn_reward_only && !wgsl::RARE_WORK_STAGES.contains(m),
+                "{pass}: {m}"
+            );
+            assert!(!seen.contains(m), "{m} is in two fused passes");
+            seen.push(*m);
+            assert_eq!(wgsl::fused_pass_of(m), Some((pass, bit as u32)));
+            assert_eq!(wgsl::pass_of(m), pass);
+        }
+        for pair in members.windows(2) {
+            let (a, b) = (index(pair[0]), index(pair[1]));
+            assert!(a < b, "{pass}: {} before {}", pair[0], pair[1]);
+            assert!(
+                STAGES[a + 1..b].iter().all(|s| s.sngnn_reward_only),
+                "{pass}: a stage of every step comes between {} and {}",
+                pair[0],
+                pair[1]
+            );
+        }
+    }
+    assert_eq!(wgsl::pass_of("begin_step"), "begin_step");
+    assert_eq!(wgsl::pass_of(wgsl::RESET_PASS), wgsl::RESET_PASS);
 }
