@@ -176,11 +176,12 @@ pub fn rare_work_words(n_envs: usize) -> usize {
 /// backend runs every stage over a chunk before the next. A member's file defines
 /// `fn stage_<name>(e: u32)` for an environment that steps, and no `main`; the pass's `main`
 /// (generated: [`assemble_pass`]) skips the lanes past the batch and the environments that do
-/// not step, then calls each member whose bit (its index here) is set in the dispatch's member mask,
-/// `pass_members` (binding 10: the mask `m` is the entry at dynamic offset `m` times the table's
-/// stride, [`MEMBER_MASKS`] entries). So a step runs a pass's members in one dispatch where no
-/// other stage comes between them (SNGNN-v2's graph and network come between `termination` and
-/// `reward`), and a test or a timing runs one member alone, with the same pipeline.
+/// not step, then calls each member whose bit (its index here) is set in the dispatch's member
+/// mask, `pass_members` (binding 10: the mask `m` is the entry at dynamic offset `m` times the
+/// table's stride, [`MEMBER_MASKS`] entries). So a step runs a pass's members in one dispatch
+/// where no other stage comes between them (SNGNN-v2's graph and network come between
+/// `termination` and `reward`), and a test or a timing runs one member alone, with the same
+/// pipeline.
 pub const FUSED_PASSES: [(&str, &[&str]); 2] = [
     (
         "motion",

@@ -397,8 +397,8 @@ impl GpuStages {
             mapped_at_creation: false,
         });
         // Group 0, the bindings of the prelude (`backend::wgsl::prelude`): params, sf, su,
-        // actions, outf, outu, pool, the batch layout, scratch, the rare work's queues. With the
-        // SNGNN graphs, group 1: the packed graphs and the frame gaps
+        // actions, outf, outu, pool, the batch layout, scratch, the rare work's queues, the fused
+        // passes' member masks (a dynamic offset per dispatch). With the SNGNN graphs, group 1: the packed graphs and the frame gaps
         // (`backend::wgsl::sngnn_prelude`), bound only by the shaders that use them, so that
         // every other shader is the same pipeline as without them.
         let batch = uniform_buffer(&dev, "batch layout", &layout.words());
