@@ -368,20 +368,47 @@ fn orca_obstacle_neighbors(
 // The lists' clears. Every function-scope variable of the three list types must be cleared
 // before its first use: the GPU backend's own SPIR-V (src/backend/gpu/spirv.rs, `UNZEROED_TYPES`)
 // does not zero them, since a call reads only the entries below the count it wrote.
+// The lists' entries are left as they were (on Vulkan the backend's SPIR-V does not zero them:
+// backend::gpu::spirv); no entry at or past `len` is ever read. With ORCA_POISON_LISTS (a
+// generated constant, true only in the builds of the test that checks this:
+// `GpuDevice::poison_orca_lists`) a clear fills every entry with NaN and an index no list
+// holds, so an entry read before it is written shows in the results.
+const ORCA_POISON_INDEX: u32 = 0xfffffffeu;
+
+fn orca_poison_f32() -> f32 {
+    return bitcast<f32>(0x7fc00001u);
+}
+
 fn orca_agent_neighbors_clear(list: ptr<function, OrcaAgentNeighbors>) {
     (*list).len = 0u;
     (*list).overflow = 0u;
+    if (ORCA_POISON_LISTS) {
+        for (var i = 0u; i < ORCA_MAX_AGENT_NEIGHBORS; i++) {
+            (*list).items[i] = OrcaNeighborKey(orca_poison_f32(), ORCA_POISON_INDEX);
+        }
+    }
 }
 
 fn orca_obstacle_neighbors_clear(list: ptr<function, OrcaObstacleNeighbors>) {
     (*list).len = 0u;
     (*list).overflow = 0u;
+    if (ORCA_POISON_LISTS) {
+        for (var i = 0u; i < ORCA_MAX_OBSTACLE_NEIGHBORS; i++) {
+            (*list).items[i] = OrcaNeighborKey(orca_poison_f32(), ORCA_POISON_INDEX);
+        }
+    }
 }
 
 fn orca_lines_clear(lines: ptr<function, OrcaLines>) {
     (*lines).len = 0u;
     (*lines).num_obstacle_lines = 0u;
     (*lines).overflow = 0u;
+    if (ORCA_POISON_LISTS) {
+        let nan = vec2<f32>(orca_poison_f32(), orca_poison_f32());
+        for (var i = 0u; i < ORCA_MAX_LINES; i++) {
+            (*lines).items[i] = OrcaLine(nan, nan);
+        }
+    }
 }
 
 fn orca_lines_push(lines: ptr<function, OrcaLines>, line: OrcaLine) {

@@ -679,8 +679,24 @@ pub fn shared_head() -> String {
         crate::spec::RECORD
     ));
     out.push_str(&format!("const OBS_TILE: u32 = {OBS_ROWS_TILE}u;\n"));
+    out.push_str(ORCA_LISTS_KEPT);
     out.push_str(&geometry_constants());
     out
+}
+
+/// The line of [`shared_head`] that leaves the ORCA lists' entries as they were at a clear
+/// (`shaders/common/orca.wgsl`); [`with_poisoned_orca_lists`] turns it.
+const ORCA_LISTS_KEPT: &str = "const ORCA_POISON_LISTS: bool = false;\n";
+
+/// `src` (a prelude, or a shader assembled from one) with the ORCA lists poisoned at every clear:
+/// every entry NaN, every index one no list holds (`GpuDevice::poison_orca_lists`, for the test
+/// that no entry is read before it is written).
+pub fn with_poisoned_orca_lists(src: &str) -> String {
+    src.replacen(
+        ORCA_LISTS_KEPT,
+        "const ORCA_POISON_LISTS: bool = true;\n",
+        1,
+    )
 }
 
 /// The generated head of every shader: [`shared_head`] (the constants shared with the Rust stages:
@@ -1293,6 +1309,23 @@ fn concatenate(mut src: String, order: &[&str]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The poisoned build differs from the normal one exactly in the constant that turns the
+    /// ORCA lists' poison on, which every prelude declares once.
+    #[test]
+    fn poisoning_turns_the_one_constant() {
+        let head = shared_head();
+        assert_eq!(head.matches(ORCA_LISTS_KEPT).count(), 1);
+        let poisoned = with_poisoned_orca_lists(&head);
+        assert_eq!(
+            poisoned,
+            head.replace(
+                "ORCA_POISON_LISTS: bool = false",
+                "ORCA_POISON_LISTS: bool = true"
+            )
+        );
+        assert_ne!(poisoned, head);
+    }
 
     /// The WGSL types come from the Rust types through `WgslValue`, with no annotation: scalars
     /// keep their type, arrays (two-component ones included) are flat, and `_pad` is `pad`, as

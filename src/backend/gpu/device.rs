@@ -233,6 +233,11 @@ pub struct GpuDevice {
     /// one piece while the device copies the next. [`DEFAULT_READBACK_PIECE_BYTES`] unless a
     /// clone says otherwise.
     pub readback_piece_bytes: u64,
+    /// For tests: whether the batches made on this device fill the ORCA lists with NaN at every
+    /// clear (`backend::wgsl::with_poisoned_orca_lists`). The lists are not zeroed
+    /// (`super::spirv`) and no entry is read before it is written, so the results are the same
+    /// bits either way; a test compares them. Off unless a clone says otherwise.
+    pub poison_orca_lists: bool,
     /// Whether pipelines are built from the backend's own SPIR-V (`super::spirv`: the ORCA
     /// lists not zeroed at every call), which takes a Vulkan adapter with `PASSTHROUGH_SHADERS`
     /// (every one wgpu 30 opens); otherwise from the WGSL as wgpu compiles it.
@@ -351,6 +356,7 @@ impl GpuDevice {
             stage_observations: adapter.hardware,
             own_spirv,
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
+            poison_orca_lists: false,
             adapter,
             limits,
             errors,

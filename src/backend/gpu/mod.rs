@@ -468,11 +468,14 @@ impl GpuStages {
             .map(|(g, l)| bind_kinds(&dev, "stage bindings", l, g))
             .collect();
         let columns = state.columns();
-        let prelude = wgsl::prelude(
+        let mut prelude = wgsl::prelude(
             &columns,
             &outputs.columns(),
             &wgsl::SizeClasses::of(&columns),
         );
+        if dev.poison_orca_lists {
+            prelude = wgsl::with_poisoned_orca_lists(&prelude);
+        }
         let pool_staging = staging_buffer(&dev, POOL_STAGING_ROWS * pool_row_words);
         let mut pipelines: Vec<(&'static str, _)> = Vec::with_capacity(stages.len());
         let mut compiled = usize::from(read_compiled);

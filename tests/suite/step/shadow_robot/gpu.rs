@@ -94,3 +94,29 @@ fn shadow_robot() {
     check("shadow_robot", config("exp1"));
     check("shadow_robot", holonomic(actual(config("corridor_mixed"))));
 }
+
+/// Issue 19: the backend's SPIR-V does not zero the ORCA lists (`backend::gpu::spirv`), so an
+/// entry read before it is written would hold whatever the lane's memory held. With every entry
+/// NaN and every index one no list holds at every clear (`GpuDevice::poison_orca_lists`), the
+/// three ORCA stages stay bit-identical to the CPU from scattered agents (collisions, LP3,
+/// goals under the agent), with neighbours at their actual velocities: no entry is read before
+/// it is written. The three share one pipeline (the fused pass `motion`), compiled once more
+/// for the poison.
+#[test]
+fn orca_lists_are_written_before_they_are_read() {
+    let Some(mut dev) = device() else {
+        return;
+    };
+    dev.poison_orca_lists = true;
+    for stage in ["shadow_robot", "group_velocities", "human_motion"] {
+        check_parity_on(
+            dev.clone(),
+            stage,
+            actual(config("exp2")),
+            socnav::AutoresetMode::NextStep,
+            256,
+            RUNS,
+            Some(scatter_agents),
+        );
+    }
+}
