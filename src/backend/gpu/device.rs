@@ -123,10 +123,10 @@ pub fn list_adapters() -> Vec<AdapterSummary> {
 /// a comparison of the two on hardware (`scripts/bench-gpu`).
 pub const SHADERS_VAR: &str = "SOCNAV_SHADERS";
 
-/// Whether `device` is a Vulkan device that wgpu opened with `robustBufferAccess2` enabled: wgpu-hal
-/// enables `VK_EXT_robustness2` wherever the driver offers it, with that feature where the
-/// physical device has it (its adapter's `naga_options` then leave buffer bounds unchecked), but
-/// does not say so; this asks the driver the same question. `false` off Vulkan.
+/// Whether `device` is a Vulkan device that wgpu opened with `robustBufferAccess2` enabled:
+/// wgpu-hal enables `VK_EXT_robustness2` wherever the driver offers it, with that feature where
+/// the physical device has it (its adapter's `naga_options` then leave buffer bounds unchecked),
+/// but does not say so; this asks the driver the same question. `false` off Vulkan.
 #[cfg(any(
     windows,
     target_os = "linux",
@@ -245,7 +245,7 @@ pub struct GpuDevice {
     /// Whether the device enabled Vulkan's `robustBufferAccess2` (`VK_EXT_robustness2`), which
     /// makes every storage-buffer access out of bounds read zero and write nothing: wgpu then
     /// leaves buffer bounds to the driver, and so does the backend's own SPIR-V
-    /// (`super::spirv::Checks`).
+    /// (`super::spirv::BufferBounds`).
     pub(crate) driver_checks_buffers: bool,
     errors: Arc<Mutex<Vec<String>>>,
     /// Why the device was lost, once it has been.

@@ -6,7 +6,8 @@
 //! cleared so the shadows move), with neighbour velocities zero (0.1.1) and actual, diff-drive
 //! and holonomic robots, and a time step other than 1 s. The harness: `tests/common/gpu.rs`.
 //!
-//! This module holds the harness of both and `shadow_robot`'s test; `group_velocities`'s is in
+//! This module holds the harness of both, `shadow_robot`'s test and the test that the ORCA lists
+//! are written before they are read (all three ORCA stages); `group_velocities`'s is in
 //! `step/group_velocities.rs`, and the check of the shipped configs' capacities against the ORCA
 //! list limits in `orca/gpu.rs`.
 
