@@ -162,7 +162,7 @@ pub trait Backend: Send + Sync {
     /// Seconds spent in each stage while timing was on (order of `STAGES`).
     fn stage_seconds(&self) -> Vec<f64>;
     /// How the stages are timed, for reports: CPU time per chunk, GPU timestamps around each
-    /// pass, or the wall time of a submit per pass.
+    /// stage run alone, or the wall time of a submit per stage.
     fn stage_clock(&self) -> &'static str {
         "CPU time of each stage per chunk, summed over threads"
     }

@@ -1,7 +1,8 @@
 //! [`GpuBackend`]: the whole step on the device, one submit per step.
 //!
-//! Per step the host uploads the actions, records one compute pass with one dispatch per stage of
-//! [`STAGES`] (wgpu orders the dispatches through their storage-buffer barriers), copies the
+//! Per step the host uploads the actions, records one compute pass with the dispatches of the
+//! stages of [`STAGES`] in order (one per stage, or one for consecutive members of a fused pass,
+//! `wgsl::FUSED_PASSES`; wgpu orders the dispatches through their storage-buffer barriers), copies the
 //! outputs and the episode counters into a mapped readback buffer in the same submit, and reads
 //! them into the host outputs it keeps ([`Backend::outputs`]) without allocating.
 //!
@@ -62,8 +63,8 @@ pub struct GpuBackend {
     timing: bool,
     stage_seconds: Vec<f64>,
     actions_mask: Vec<f32>,
-    /// The passes of a step ([`step_passes`]).
-    step_passes: Vec<&'static str>,
+    /// The stages of a step ([`step_stages`]).
+    step_stages: Vec<&'static str>,
     /// Seconds spent refilling the reset pool before submitting, and while the device worked.
     refill_s: f64,
     refill_ahead_s: f64,
@@ -95,14 +96,14 @@ impl GpuBackend {
         threads: Option<usize>,
         sngnn: Option<&SngnnReward>,
     ) -> Result<Self, SimError> {
-        let step_passes = step_passes(sngnn.is_some());
-        let mut passes = step_passes.clone();
-        passes.push(crate::backend::wgsl::RESET_PASS);
+        let step_stages = step_stages(sngnn.is_some());
+        let mut stages = step_stages.clone();
+        stages.push(crate::backend::wgsl::RESET_PASS);
         let gpu = match sngnn {
-            None => GpuStages::new(dev, &params, &state, &out, &passes)?,
+            None => GpuStages::new(dev, &params, &state, &out, &stages)?,
             Some(r) => {
                 let mut gpu =
-                    GpuStages::with_sngnn_graphs(dev, &params, &state, &out, &passes, r.graphs)?;
+                    GpuStages::with_sngnn_graphs(dev, &params, &state, &out, &stages, r.graphs)?;
                 gpu.attach_sngnn_net(r.scorer.model(), r.scorer.tables())?;
                 gpu
             }
@@ -134,7 +135,7 @@ impl GpuBackend {
             timing: false,
             stage_seconds: vec![0.0; STAGES.len()],
             actions_mask: vec![0.0; 3 * n],
-            step_passes,
+            step_stages,
             refill_s: 0.0,
             refill_ahead_s: 0.0,
         })
@@ -178,12 +179,12 @@ impl GpuBackend {
         Ok(())
     }
 
-    /// Run the step's passes, or the reset pass alone (one submit, or one per pass and timed),
+    /// Run the step's stages, or the reset pass alone (one submit, or one per stage and timed),
     /// read the outputs and episode counters back, and account for the pool rows consumed.
     fn run(&mut self, step: bool) -> Result<(), SimError> {
         let _ = self.state.take();
-        let passes: &[&'static str] = if step {
-            &self.step_passes
+        let stages: &[&'static str] = if step {
+            &self.step_stages
         } else {
             &[crate::backend::wgsl::RESET_PASS]
         };
@@ -208,21 +209,21 @@ impl GpuBackend {
             ahead_s = start.elapsed().as_secs_f64();
         };
         if self.timing && step {
-            if let Some(times) = self.gpu.time_passes(passes)? {
-                for (pass, t) in passes.iter().zip(times) {
-                    self.stage_seconds[stage_of(pass)] += t;
+            if let Some(times) = self.gpu.time_passes(stages)? {
+                for (stage, t) in stages.iter().zip(times) {
+                    self.stage_seconds[stage_of(stage)] += t;
                 }
             } else {
-                for pass in passes {
+                for stage in stages {
                     let start = Instant::now();
-                    self.gpu.run(pass)?;
+                    self.gpu.run(stage)?;
                     self.gpu.wait()?;
-                    self.stage_seconds[stage_of(pass)] += start.elapsed().as_secs_f64();
+                    self.stage_seconds[stage_of(stage)] += start.elapsed().as_secs_f64();
                 }
             }
             self.gpu.run_stages(&[], Some(read), ahead)?;
         } else {
-            self.gpu.run_stages(passes, Some(read), ahead)?;
+            self.gpu.run_stages(stages, Some(read), ahead)?;
         }
         self.refill_ahead_s += ahead_s;
         // They reach the pool before the next submit; this step read the other rows. Writing
@@ -268,9 +269,9 @@ fn downloaded(cell: &mut OnceLock<BatchState>) -> Result<&mut BatchState, SimErr
         .ok_or_else(|| SimError::Internal("the host state was not downloaded first".into()))
 }
 
-/// The passes of a step: the stages of `STAGES`, in order, those only the SNGNN-v2 reward runs
-/// included when it is the reward.
-pub(super) fn step_passes(sngnn: bool) -> Vec<&'static str> {
+/// The stages of a step: those of `STAGES`, in order, those only the SNGNN-v2 reward runs
+/// included when it is the reward (`GpuStages` plans their dispatches).
+pub(super) fn step_stages(sngnn: bool) -> Vec<&'static str> {
     STAGES
         .iter()
         .filter(|s| sngnn || !s.sngnn_reward_only)
@@ -278,16 +279,16 @@ pub(super) fn step_passes(sngnn: bool) -> Vec<&'static str> {
         .collect()
 }
 
-/// The index in `STAGES` of a pass of the step, for its time.
+/// The index in `STAGES` of a stage of the step, for its time.
 #[expect(
     clippy::expect_used,
-    reason = "the passes are taken from STAGES (step_passes)"
+    reason = "the stages are taken from STAGES (step_stages)"
 )]
-fn stage_of(pass: &str) -> usize {
+fn stage_of(stage: &str) -> usize {
     STAGES
         .iter()
-        .position(|s| s.name == pass)
-        .expect("every pass of the step is a stage")
+        .position(|s| s.name == stage)
+        .expect("every stage of the step is in STAGES")
 }
 
 impl Backend for GpuBackend {
@@ -342,7 +343,7 @@ impl Backend for GpuBackend {
         self.gpu.wait()?;
         let start = Instant::now();
         for _ in 0..steps {
-            self.gpu.run_stages(&self.step_passes, None, || {})?;
+            self.gpu.run_stages(&self.step_stages, None, || {})?;
         }
         self.gpu.wait()?;
         Ok(Some(start.elapsed().as_secs_f64()))
@@ -399,9 +400,9 @@ impl Backend for GpuBackend {
 
     fn stage_clock(&self) -> &'static str {
         if self.gpu.has_timestamps() {
-            "GPU timestamps around each pass, all passes in one submit"
+            "GPU timestamps around each stage run alone, all in one submit"
         } else {
-            "wall time of a submit and wait per pass"
+            "wall time of a submit and wait per stage"
         }
     }
 

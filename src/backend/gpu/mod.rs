@@ -1245,7 +1245,7 @@ fn build_pass(
 
 #[cfg(test)]
 mod tests {
-    use super::backend::step_passes as step;
+    use super::backend::step_stages as step;
     use super::{Dispatch, plan};
     use crate::backend::wgsl;
 

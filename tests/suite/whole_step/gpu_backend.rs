@@ -330,8 +330,9 @@ fn the_other_observation_path_steps_as_the_cpu() {
     assert!(finals > n, "only {finals} SAME_STEP finals");
 }
 
-/// Stage timing on the GPU backend (what `socnav bench`'s per-pass shares come from): every pass
-/// of the step gets a positive time (GPU timestamps around each pass where the device has them,
+/// Stage timing on the GPU backend (what `socnav bench`'s per-stage shares come from): every
+/// stage of the step gets a positive time (GPU timestamps around each stage run alone, members
+/// of a fused pass included, where the device has them,
 /// as lavapipe does), those only the SNGNN-v2 reward runs none, and the steps so timed (their
 /// outputs read back whole) stay the CPU's bit for bit.
 #[test]
