@@ -182,18 +182,14 @@ pub fn rare_work_words(n_envs: usize) -> usize {
 /// where no other stage comes between them (SNGNN-v2's graph and network come between
 /// `termination` and `reward`), and a test or a timing runs one member alone, with the same
 /// pipeline.
-pub const FUSED_PASSES: [(&str, &[&str]); 2] = [
+///
+/// A pass holds at most [`MAX_ORCA_STAGES_PER_PASS`] stages that run ORCA.
+pub const FUSED_PASSES: [(&str, &[&str]); 3] = [
     (
         "motion",
-        &[
-            "robot_motion",
-            "shadow_robot",
-            "group_velocities",
-            "human_motion",
-            "group_motion",
-            "goals",
-        ],
+        &["robot_motion", "shadow_robot", "group_velocities"],
     ),
+    ("crowd", &["human_motion", "group_motion", "goals"]),
     (
         "outcome",
         &[
@@ -206,8 +202,15 @@ pub const FUSED_PASSES: [(&str, &[&str]); 2] = [
     ),
 ];
 
+/// The most stages that run ORCA (`orca_world_velocity`: `shadow_robot`, `group_velocities`,
+/// `human_motion`) in one fused pass. NVIDIA's driver (580.159, H100) fails to compile a pipeline
+/// with all three, from naga's SPIR-V as from the backend's own (`VK_ERROR_UNKNOWN`, which loses
+/// the wgpu device); each alone, and the first two together, compile. Each ORCA call inlines its
+/// own neighbour and line lists, about 8 KB of private memory per lane.
+pub const MAX_ORCA_STAGES_PER_PASS: usize = 2;
+
 /// The most members a fused pass has ([`FUSED_PASSES`]): a member mask has this many bits.
-pub const MAX_FUSED_MEMBERS: usize = 6;
+pub const MAX_FUSED_MEMBERS: usize = 5;
 
 /// Entries of the member-mask table (binding 10): one per mask of [`MAX_FUSED_MEMBERS`] bits.
 pub const MEMBER_MASKS: usize = 1 << MAX_FUSED_MEMBERS;

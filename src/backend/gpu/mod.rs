@@ -1254,7 +1254,7 @@ mod tests {
     }
 
     /// A step without SNGNN-v2 runs each fused pass in one dispatch with every member; eleven
-    /// stages become two dispatches.
+    /// stages become three dispatches.
     #[test]
     fn a_step_runs_each_fused_pass_once() {
         let stages = step(false);
@@ -1263,14 +1263,15 @@ mod tests {
             passes(&planned),
             [
                 ("begin_step", None),
-                ("motion", Some(0b11_1111)),
+                ("motion", Some(0b111)),
+                ("crowd", Some(0b111)),
                 ("formation", None),
                 ("outcome", Some(0b1_1111)),
                 ("social_events", None),
                 ("autoreset", None),
             ]
         );
-        assert_eq!(stages.len() - planned.len(), 11 - 2);
+        assert_eq!(stages.len() - planned.len(), 11 - 3);
         for stage in stages {
             assert_eq!(
                 planned.iter().filter(|d| d.runs(stage)).count(),
@@ -1305,8 +1306,8 @@ mod tests {
     #[test]
     fn a_dispatch_never_reorders_stages() {
         assert_eq!(
-            passes(&plan(&["goals", "robot_motion", "shadow_robot"])),
-            [("motion", Some(0b10_0000)), ("motion", Some(0b11))]
+            passes(&plan(&["group_velocities", "robot_motion", "shadow_robot"])),
+            [("motion", Some(0b100)), ("motion", Some(0b11))]
         );
         assert_eq!(passes(&plan(&["metrics"])), [("outcome", Some(0b1000))]);
         assert_eq!(passes(&plan(&["reset"])), [("reset", None)]);

@@ -733,6 +733,14 @@ fn zeroed_function_scope_arrays_do_not_grow() {
         ("motion::orca_obstacles_corners", 32),
         ("motion::orca_obstacles_polygon", 72),
         ("motion::orca_world_velocity", 4640),
+        ("crowd::state_permute_humans", 512),
+        ("crowd::state_permute_groups", 512),
+        ("crowd::state_permute_laptop_users", 256),
+        ("crowd::state_permute_laptops", 512),
+        ("crowd::orca_lp3", 3088),
+        ("crowd::orca_obstacles_corners", 32),
+        ("crowd::orca_obstacles_polygon", 72),
+        ("crowd::orca_world_velocity", 4640),
         ("outcome::state_permute_humans", 512),
         ("outcome::state_permute_groups", 512),
         ("outcome::state_permute_laptop_users", 256),
@@ -987,15 +995,33 @@ fn passes_have_their_second_entry_points() {
 /// batch shaders in the order of `pipeline::STAGES` with nothing between them but the stages only
 /// the SNGNN-v2 reward runs (so a step without it runs the pass in one dispatch), none with rare
 /// work queued across environments, none that builds SNGNN graphs, each in one pass, at most
-/// `wgsl::MAX_FUSED_MEMBERS` of them; and each member's bit selects it alone.
+/// `wgsl::MAX_FUSED_MEMBERS` of them, at most `wgsl::MAX_ORCA_STAGES_PER_PASS` that run ORCA;
+/// and each member's bit selects it alone.
 #[test]
 fn fused_passes_hold_consecutive_stages_of_one_environment() {
     use socnav::pipeline::{STAGES, Shader};
     let index = |name: &str| STAGES.iter().position(|s| s.name == name).expect("a stage");
+    let runs_orca = |m: &str| {
+        let file = wgsl::source(&format!("{m}.wgsl")).expect("a stage shader");
+        file.contains("orca_world_velocity(")
+    };
+    assert_eq!(
+        STAGES
+            .iter()
+            .filter(|s| s.shader == Shader::Batch && runs_orca(s.name))
+            .count(),
+        3,
+        "the stages that run ORCA: shadow_robot, group_velocities, human_motion"
+    );
     let mut seen = Vec::new();
     for (pass, members) in wgsl::FUSED_PASSES {
         assert!(members.len() <= wgsl::MAX_FUSED_MEMBERS, "{pass}");
         assert!(!members.is_empty(), "{pass}");
+        let orca = members.iter().filter(|m| runs_orca(m)).count();
+        assert!(
+            orca <= wgsl::MAX_ORCA_STAGES_PER_PASS,
+            "{pass}: {orca} stages run ORCA"
+        );
         for (bit, m) in members.iter().enumerate() {
             let s = &STAGES[index(m)];
             assert_eq!(s.shader, Shader::Batch, "{pass}: {m}");
