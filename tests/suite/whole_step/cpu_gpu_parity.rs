@@ -21,9 +21,11 @@
 
 use crate::common;
 
-use common::gpu::{device, diverged_envs, first_differences, uniform};
+use common::gpu::{
+    MAX_DIVERGED, Parity, TOLERANCE, device, diverged_envs, first_differences, most_diverged,
+    parity_mode, uniform,
+};
 use socnav::backend::BackendChoice;
-use socnav::backend::gpu::AdapterSummary;
 use socnav::config::RewardKind;
 use socnav::rng::RngStream;
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions};
@@ -90,35 +92,6 @@ fn assert_same(name: &str, step: usize, cpu: &BatchEnv, gpu: &BatchEnv) {
     );
 }
 
-/// Absolute and relative tolerance of a float after one step from identical states, on
-/// adapters that round differently from lavapipe: a few float32 ulps of per-operation
-/// rounding, amplified by the iterative parts of the step (ORCA's linear programs, the social
-/// force sums) by at most two orders of magnitude.
-const TOLERANCE: (f32, f32) = (1e-5, 1e-4);
-/// The largest share of environment-steps allowed to diverge in lockstep (decisions within
-/// rounding of their threshold: collisions, goal reached, ORCA constraint choices).
-const MAX_DIVERGED: f64 = 0.01;
-
-/// How the two backends are compared.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Parity {
-    /// Bit for bit over whole trajectories (lavapipe).
-    Exact,
-    /// One step at a time from identical states, within [`TOLERANCE`].
-    Lockstep,
-}
-
-/// Exact on lavapipe (Vulkan on llvmpipe; llvmpipe under wgpu's GL backend rounds differently),
-/// lockstep elsewhere, unless `SOCNAV_PARITY` says otherwise.
-fn parity_mode(adapter: &AdapterSummary) -> Parity {
-    match std::env::var("SOCNAV_PARITY").as_deref() {
-        Ok("exact") => Parity::Exact,
-        Ok("tolerance") => Parity::Lockstep,
-        _ if adapter.name.contains("llvmpipe") && adapter.backend == "Vulkan" => Parity::Exact,
-        _ => Parity::Lockstep,
-    }
-}
-
 /// What a comparison went through: episodes ended, and environment-steps whose SNGNN-v2
 /// discomfort was positive (0 with the DSRNN reward).
 #[derive(Debug, Default)]
@@ -153,6 +126,7 @@ fn lockstep(
     let mut a = vec![0.0f32; 3 * n_envs];
     let mut tally = Tally::default();
     let (mut diverged, mut worst, mut worst_column) = (0usize, 0.0f32, "");
+    let mut by_column = Vec::new();
     for _ in 0..steps {
         actions(&cpu, &mut rng, &mut a);
         gpu.copy_state_from(&cpu).expect("same shape");
@@ -160,14 +134,14 @@ fn lockstep(
         gpu.step(Actions::Continuous(&a)).expect("GPU step");
         let (cs, gs) = (cpu.state().unwrap(), gpu.state().unwrap());
         let (co, go) = (cpu.outputs(), gpu.outputs());
-        let (in_state, w1, c1) = diverged_envs(
+        let in_state = diverged_envs(
             &cs.columns(),
             n_envs,
             |f, u| cs.pack(f, u),
             |f, u| gs.pack(f, u),
             TOLERANCE,
         );
-        let (in_outputs, w2, c2) = diverged_envs(
+        let in_outputs = diverged_envs(
             &co.columns(),
             n_envs,
             |f, u| co.pack(f, u),
@@ -175,13 +149,15 @@ fn lockstep(
             TOLERANCE,
         );
         diverged += in_state
+            .envs
             .iter()
-            .zip(&in_outputs)
+            .zip(&in_outputs.envs)
             .filter(|(a, b)| **a || **b)
             .count();
-        for (w, c) in [(w1, c1), (w2, c2)] {
-            if w > worst {
-                (worst, worst_column) = (w, c);
+        for d in [&in_state, &in_outputs] {
+            d.tally_columns(&mut by_column);
+            if d.worst > worst {
+                (worst, worst_column) = (d.worst, d.worst_column);
             }
         }
         tally.add(&cpu);
@@ -198,19 +174,22 @@ fn lockstep(
     };
     println!(
         "{name} ({mode:?}) in lockstep on {}: {diverged} of {} environment-steps diverged ({:.3} %), \
-         {agreement}; {} episodes ended, SNGNN-v2 discomfort positive in {} environment-steps",
+         {agreement}; {} episodes ended, SNGNN-v2 discomfort positive in {} environment-steps; \
+         diverged most in: {}",
         gpu.device(),
         steps * n_envs,
         100.0 * share,
         tally.ended,
         tally.sngnn_scored,
+        most_diverged(&by_column, 8),
     );
     assert!(
         share <= MAX_DIVERGED,
         "{name}: {diverged} of {} environment-steps diverged beyond the tolerance {TOLERANCE:?} \
-         (more than {:.1} %)",
+         (more than {:.1} %; most in: {})",
         steps * n_envs,
-        100.0 * MAX_DIVERGED
+        100.0 * MAX_DIVERGED,
+        most_diverged(&by_column, 8)
     );
     Some(tally)
 }
