@@ -6,8 +6,6 @@
 //! Needs a GPU adapter (lavapipe will do: `apt-get install mesa-vulkan-drivers`). Without one the
 //! tests print why and pass, unless `REQUIRE_GPU=1`, which CI sets.
 
-use std::sync::OnceLock;
-
 use socnav::backend::gpu::{AdapterPolicy, AdapterSummary, GpuDevice, GpuStages};
 use socnav::backend::reset_pool;
 use socnav::outputs::Outputs;
@@ -20,11 +18,12 @@ use socnav::state::columns::Elem;
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, StepParams};
 
 /// The shared device, or `None` (after saying why) when there is none and none is required.
+/// `GpuDevice::open` shares one device between the tests and opens a new one once it is lost, so
+/// a test that loses it (a pipeline its driver cannot compile) fails alone, not every test after
+/// it.
 pub fn device() -> Option<GpuDevice> {
-    static DEVICE: OnceLock<Result<GpuDevice, String>> = OnceLock::new();
-    let dev = DEVICE.get_or_init(|| GpuDevice::open(AdapterPolicy::Any).map_err(|e| e.to_string()));
-    match dev {
-        Ok(d) => Some(d.clone()),
+    match GpuDevice::open(AdapterPolicy::Any) {
+        Ok(d) => Some(d),
         Err(e) if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") => {
             panic!("REQUIRE_GPU=1 but no GPU adapter: {e}")
         }

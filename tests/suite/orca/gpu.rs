@@ -289,10 +289,17 @@ impl Kernel {
                         compilation_options: Default::default(),
                         cache: None,
                     });
+                // Each entry point checked on its own, so that a driver that cannot compile
+                // one (and loses the device) names it.
+                if let Err(e) = dev.take_errors() {
+                    panic!(
+                        "the test kernel's entry point {entry} compiles on {}: {e}",
+                        dev.adapter
+                    );
+                }
                 (entry, p)
             })
             .collect();
-        dev.take_errors().expect("the test kernel compiles");
         Self { dev, pipelines }
     }
 
