@@ -444,7 +444,7 @@ pub struct Divergence {
 }
 
 impl Divergence {
-    /// Add `other`'s per-column counts to `counts`, keeping each column once.
+    /// Add this comparison's per-column counts to `counts`, keeping each column once.
     pub fn tally_columns(&self, counts: &mut Vec<(&'static str, usize)>) {
         for &(name, n) in &self.by_column {
             match counts.iter_mut().find(|(c, _)| *c == name) {
