@@ -246,7 +246,7 @@ pub fn check_parity_on(
         "most environments step ({stepping} of {n_envs})"
     );
     let mode = parity_mode(gpu.adapter());
-    let (mut diverged, mut by_column) = (0usize, Vec::new());
+    let mut lockstep = Lockstep::default();
     for run in 0..runs {
         if let Some(perturb) = perturb {
             perturb(&mut cpu, &mut cpu_out, &p, &mut rng);
@@ -277,28 +277,7 @@ pub fn check_parity_on(
             }
         }
         if mode == Parity::Lockstep {
-            let in_state = diverged_envs(
-                &cpu.columns(),
-                n_envs,
-                |f, u| cpu.pack(f, u),
-                |f, u| from_gpu.pack(f, u),
-                TOLERANCE,
-            );
-            let in_outputs = diverged_envs(
-                &cpu_out.columns(),
-                n_envs,
-                |f, u| cpu_out.pack(f, u),
-                |f, u| from_gpu_out.pack(f, u),
-                TOLERANCE,
-            );
-            in_state.tally_columns(&mut by_column);
-            in_outputs.tally_columns(&mut by_column);
-            diverged += in_state
-                .envs
-                .iter()
-                .zip(&in_outputs.envs)
-                .filter(|(a, b)| **a || **b)
-                .count();
+            lockstep.add(n_envs, (&cpu, &from_gpu), Some((&cpu_out, &from_gpu_out)));
             continue;
         }
         let differ = cpu.differing_columns(&from_gpu);
@@ -321,23 +300,7 @@ pub fn check_parity_on(
         );
     }
     if mode == Parity::Lockstep {
-        let share = diverged as f64 / (runs * n_envs) as f64;
-        println!(
-            "{stage}: {diverged} of {} environment-runs beyond the tolerance {TOLERANCE:?} on {} \
-             (most in: {})",
-            runs * n_envs,
-            gpu.adapter(),
-            most_diverged(&by_column, 5)
-        );
-        assert!(
-            share <= MAX_DIVERGED,
-            "{stage} on {}: {diverged} of {} environment-runs diverged beyond the tolerance \
-             {TOLERANCE:?} (more than {:.1} %; most in: {})",
-            gpu.adapter(),
-            runs * n_envs,
-            100.0 * MAX_DIVERGED,
-            most_diverged(&by_column, 5)
-        );
+        lockstep.check(stage, gpu.adapter());
         return Some(raised);
     }
     println!(
@@ -447,11 +410,16 @@ impl Divergence {
     /// Add this comparison's per-column counts to `counts`, keeping each column once.
     pub fn tally_columns(&self, counts: &mut Vec<(&'static str, usize)>) {
         for &(name, n) in &self.by_column {
-            match counts.iter_mut().find(|(c, _)| *c == name) {
-                Some((_, total)) => *total += n,
-                None => counts.push((name, n)),
-            }
+            tally_column(counts, name, n);
         }
+    }
+}
+
+/// Add `n` divergences of column `name` to `counts`, keeping each column once.
+pub fn tally_column(counts: &mut Vec<(&'static str, usize)>, name: &'static str, n: usize) {
+    match counts.iter_mut().find(|(c, _)| *c == name) {
+        Some((_, total)) => *total += n,
+        None => counts.push((name, n)),
     }
 }
 
@@ -465,6 +433,96 @@ pub fn most_diverged(counts: &[(&'static str, usize)], k: usize) -> String {
         .map(|(c, n)| format!("{c} ({n})"))
         .collect();
     names.join(", ")
+}
+
+/// How far apart two floats may be under `(atol, rtol)`: `atol + rtol·max(|a|, |b|)`.
+fn bound(a: f32, b: f32, (atol, rtol): (f32, f32)) -> f32 {
+    atol + rtol * a.abs().max(b.abs())
+}
+
+/// Whether `a` and `b` are a whole turn (2π) apart within the bound: the same angle, wrapped the
+/// other way at ±π.
+fn a_turn_apart(a: f32, b: f32, tolerance: (f32, f32)) -> bool {
+    ((a - b).abs() - std::f32::consts::TAU).abs() <= bound(a, b, tolerance)
+}
+
+/// Whether two floats agree under `tolerance` as [`diverged_envs`] judges them: equal, both NaN,
+/// within the bound, or a turn apart.
+pub fn floats_agree(a: f32, b: f32, tolerance: (f32, f32)) -> bool {
+    a == b
+        || (a.is_nan() && b.is_nan())
+        || (a - b).abs() <= bound(a, b, tolerance)
+        || a_turn_apart(a, b, tolerance)
+}
+
+/// A lockstep comparison accumulated over runs (adapters other than lavapipe: [`Parity`]):
+/// environment-runs compared, those that diverged beyond [`TOLERANCE`], and the columns they
+/// diverged in.
+#[derive(Debug, Default)]
+pub struct Lockstep {
+    pub compared: usize,
+    pub diverged: usize,
+    pub by_column: Vec<(&'static str, usize)>,
+}
+
+impl Lockstep {
+    /// Compare one run's state (and outputs, where given) of `n_envs` environments, CPU against
+    /// GPU; an environment diverged when any of them did.
+    pub fn add(
+        &mut self,
+        n_envs: usize,
+        (cpu, gpu): (&BatchState, &BatchState),
+        outputs: Option<(&Outputs, &Outputs)>,
+    ) {
+        let in_state = diverged_envs(
+            &cpu.columns(),
+            n_envs,
+            |f, u| cpu.pack(f, u),
+            |f, u| gpu.pack(f, u),
+            TOLERANCE,
+        );
+        in_state.tally_columns(&mut self.by_column);
+        let mut envs = in_state.envs;
+        if let Some((co, go)) = outputs {
+            let in_outputs = diverged_envs(
+                &co.columns(),
+                n_envs,
+                |f, u| co.pack(f, u),
+                |f, u| go.pack(f, u),
+                TOLERANCE,
+            );
+            in_outputs.tally_columns(&mut self.by_column);
+            for (d, o) in envs.iter_mut().zip(&in_outputs.envs) {
+                *d |= *o;
+            }
+        }
+        self.add_envs(&envs);
+    }
+
+    /// Count one run's per-environment verdicts (true: diverged).
+    pub fn add_envs(&mut self, diverged: &[bool]) {
+        self.compared += diverged.len();
+        self.diverged += diverged.iter().filter(|&&d| d).count();
+    }
+
+    /// Say what was found for `what` on `adapter`, and fail when more than [`MAX_DIVERGED`] of
+    /// the environment-runs diverged.
+    pub fn check(&self, what: &str, adapter: &AdapterSummary) {
+        let most = most_diverged(&self.by_column, 5);
+        println!(
+            "{what}: {} of {} environment-runs beyond the tolerance {TOLERANCE:?} on {adapter} \
+             (most in: {most})",
+            self.diverged, self.compared
+        );
+        assert!(
+            self.diverged as f64 <= MAX_DIVERGED * self.compared as f64,
+            "{what} on {adapter}: {} of {} environment-runs diverged beyond the tolerance \
+             {TOLERANCE:?} (more than {:.1} %; most in: {most})",
+            self.diverged,
+            self.compared,
+            100.0 * MAX_DIVERGED
+        );
+    }
 }
 
 /// Per-environment comparison of two packed tables under a tolerance: an environment
@@ -498,15 +556,11 @@ pub fn diverged_envs(
                 Elem::U32 => here[env] |= cu[i] != gu[i],
                 Elem::F32 => {
                     let (a, b) = (cf[i], gf[i]);
-                    if a == b || (a.is_nan() && b.is_nan()) {
+                    let tolerance = (atol, rtol);
+                    if a == b || (a.is_nan() && b.is_nan()) || a_turn_apart(a, b, tolerance) {
                         continue;
                     }
-                    let bound = atol + rtol * a.abs().max(b.abs());
-                    let ratio = (a - b).abs() / bound;
-                    let wrapped = ((a - b).abs() - std::f32::consts::TAU).abs() <= bound;
-                    if wrapped {
-                        continue;
-                    }
+                    let ratio = (a - b).abs() / bound(a, b, tolerance);
                     if ratio.is_nan() || ratio > 1.0 {
                         here[env] = true;
                     } else {

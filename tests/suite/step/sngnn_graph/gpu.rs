@@ -18,7 +18,10 @@
 
 use crate::common;
 
-use common::gpu::{device, first_differences};
+use common::gpu::{
+    Lockstep, Parity, TOLERANCE, device, diverged_envs, first_differences, floats_agree,
+    parity_mode, tally_column,
+};
 use common::sngnn_rollout::SngnnRollout;
 use socnav::Config;
 use socnav::backend::gpu::GpuStages;
@@ -41,6 +44,8 @@ fn check(name: &str, dt: f32, steps: usize, every_relation: bool) {
     let mut from_gpu = r.s.clone();
     let mut rng = RngStream::new(5, 2);
     let mut scored = 0;
+    let mode = parity_mode(gpu.adapter());
+    let mut lockstep = Lockstep::default();
     for step in 0..steps {
         let actions = r.random_actions(&mut rng);
         r.step_to_reward(&actions);
@@ -49,6 +54,34 @@ fn check(name: &str, dt: f32, steps: usize, every_relation: bool) {
         scored += r.score();
         gpu.run("sngnn_graph").expect("the pass runs");
         gpu.download_state(&mut from_gpu).expect("readback");
+        if mode == Parity::Lockstep {
+            let in_state = diverged_envs(
+                &r.s.columns(),
+                N_ENVS,
+                |f, u| r.s.pack(f, u),
+                |f, u| from_gpu.pack(f, u),
+                TOLERANCE,
+            );
+            in_state.tally_columns(&mut lockstep.by_column);
+            let (gu, gf) = gpu
+                .download_sngnn_graphs()
+                .expect("readback")
+                .expect("graph buffers");
+            let in_graphs = graphs_diverged(&r, &gu, &gf);
+            let graphs = in_graphs.iter().filter(|&&d| d).count();
+            if graphs > 0 {
+                tally_column(&mut lockstep.by_column, "packed graph", graphs);
+            }
+            let envs: Vec<bool> = in_state
+                .envs
+                .iter()
+                .zip(&in_graphs)
+                .map(|(a, b)| *a || *b)
+                .collect();
+            lockstep.add_envs(&envs);
+            r.finish_step(&actions);
+            continue;
+        }
         let differ = r.s.differing_columns(&from_gpu);
         assert!(
             differ.is_empty(),
@@ -67,11 +100,18 @@ fn check(name: &str, dt: f32, steps: usize, every_relation: bool) {
         r.finish_step(&actions);
     }
     let (nodes, edges, frames) = r.largest;
-    println!(
-        "{name} at dt {dt} s: {scored} frames and graphs over {steps} steps bit-identical \
-         (largest {nodes} nodes, {edges} edges, {frames} frames; capacity {:?})",
-        r.graphs
-    );
+    if mode == Parity::Lockstep {
+        lockstep.check(
+            &format!("{name} at dt {dt} s, frames and graphs"),
+            gpu.adapter(),
+        );
+    } else {
+        println!(
+            "{name} at dt {dt} s: {scored} frames and graphs over {steps} steps bit-identical \
+             (largest {nodes} nodes, {edges} edges, {frames} frames; capacity {:?})",
+            r.graphs
+        );
+    }
     assert!(scored > N_ENVS && frames == 3, "{name}: three-frame graphs");
     println!("{name}: edges per relation {:?}", r.relations);
     assert!(
@@ -79,6 +119,18 @@ fn check(name: &str, dt: f32, steps: usize, every_relation: bool) {
         "{name}: every relation was built ({:?})",
         r.relations
     );
+}
+
+/// Per environment, whether its packed graph diverged from the CPU's: a word of its structure
+/// differs (node and edge counts, edge endpoints and relations) or a feature beyond the tolerance.
+fn graphs_diverged(r: &SngnnRollout, gu: &[u32], gf: &[f32]) -> Vec<bool> {
+    let (us, fs) = (r.graphs.u32_stride(), r.graphs.f32_stride());
+    (0..N_ENVS)
+        .map(|e| {
+            (e * us..(e + 1) * us).any(|i| gu[i] != r.packed_u32[i])
+                || (e * fs..(e + 1) * fs).any(|i| !floats_agree(r.packed_f32[i], gf[i], TOLERANCE))
+        })
+        .collect()
 }
 
 /// Every word of every environment's packed graph, naming the first difference.

@@ -139,6 +139,8 @@ pub(crate) fn parity(
     let mut from_gpu_out = cpu_out.clone();
     let mut rng = RngStream::new(9, 2);
     let mut seen = Seen::default();
+    let mode = parity_mode(gpu.adapter());
+    let mut lockstep = Lockstep::default();
     for run in 0..runs {
         perturb(&mut cpu, &mut cpu_out, &p, &mut rng);
         gpu.upload_state(&cpu);
@@ -164,6 +166,10 @@ pub(crate) fn parity(
                 seen.rebuilds_with_splits += usize::from(cpu.n_obstacle_vertices[e] > inputs);
             }
         }
+        if mode == Parity::Lockstep {
+            lockstep.add(n_envs, (&cpu, &from_gpu), Some((&cpu_out, &from_gpu_out)));
+            continue;
+        }
         let differ_envs: Vec<usize> = (0..n_envs)
             .filter(|&e| cpu.fingerprint_env(e, 0) != from_gpu.fingerprint_env(e, 0))
             .collect();
@@ -185,6 +191,11 @@ pub(crate) fn parity(
                 |f, u| from_gpu_out.pack(f, u)
             ),
         );
+    }
+    if mode == Parity::Lockstep {
+        lockstep.check(stage, gpu.adapter());
+        println!("{stage}: {seen:?}");
+        return Some(seen);
     }
     println!(
         "{stage}: {runs} runs over {n_envs} environments bit-identical on {}; {seen:?}",
