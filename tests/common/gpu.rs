@@ -456,47 +456,72 @@ pub fn floats_agree(a: f32, b: f32, tolerance: (f32, f32)) -> bool {
 }
 
 /// A lockstep comparison accumulated over runs (adapters other than lavapipe: [`Parity`]):
-/// environment-runs compared, those that diverged beyond [`TOLERANCE`], and the columns they
-/// diverged in.
+/// environment-runs compared, those that diverged beyond [`TOLERANCE`], the columns they
+/// diverged in, and among the floats that agreed the one closest to its bound.
 #[derive(Debug, Default)]
 pub struct Lockstep {
     pub compared: usize,
     pub diverged: usize,
     pub by_column: Vec<(&'static str, usize)>,
+    /// The largest float difference relative to its bound in an environment that did not
+    /// diverge, and its column ("" while every float was identical).
+    pub worst: f32,
+    pub worst_column: &'static str,
 }
 
 impl Lockstep {
     /// Compare one run's state (and outputs, where given) of `n_envs` environments, CPU against
-    /// GPU; an environment diverged when any of them did.
+    /// GPU, and count it; an environment diverged when any of them did.
     pub fn add(
         &mut self,
         n_envs: usize,
-        (cpu, gpu): (&BatchState, &BatchState),
+        state: (&BatchState, &BatchState),
         outputs: Option<(&Outputs, &Outputs)>,
     ) {
-        let in_state = diverged_envs(
-            &cpu.columns(),
-            n_envs,
-            |f, u| cpu.pack(f, u),
-            |f, u| gpu.pack(f, u),
-            TOLERANCE,
-        );
-        in_state.tally_columns(&mut self.by_column);
-        let mut envs = in_state.envs;
-        if let Some((co, go)) = outputs {
-            let in_outputs = diverged_envs(
-                &co.columns(),
+        let mut envs = self.state_verdicts(n_envs, state);
+        if let Some((cpu, gpu)) = outputs {
+            let in_outputs = self.verdicts(
                 n_envs,
-                |f, u| co.pack(f, u),
-                |f, u| go.pack(f, u),
-                TOLERANCE,
+                &cpu.columns(),
+                |f, u| cpu.pack(f, u),
+                |f, u| gpu.pack(f, u),
             );
-            in_outputs.tally_columns(&mut self.by_column);
-            for (d, o) in envs.iter_mut().zip(&in_outputs.envs) {
+            for (d, o) in envs.iter_mut().zip(&in_outputs) {
                 *d |= *o;
             }
         }
         self.add_envs(&envs);
+    }
+
+    /// Per environment, whether its state diverged (its columns tallied, not yet counted: the
+    /// caller adds the verdicts with [`Lockstep::add_envs`], with its own where it has more).
+    pub fn state_verdicts(
+        &mut self,
+        n_envs: usize,
+        (cpu, gpu): (&BatchState, &BatchState),
+    ) -> Vec<bool> {
+        self.verdicts(
+            n_envs,
+            &cpu.columns(),
+            |f, u| cpu.pack(f, u),
+            |f, u| gpu.pack(f, u),
+        )
+    }
+
+    /// [`diverged_envs`] of two packed tables, its columns and its worst agreeing float tallied.
+    fn verdicts(
+        &mut self,
+        n_envs: usize,
+        columns: &[(&'static str, Elem, usize)],
+        pack_cpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
+        pack_gpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
+    ) -> Vec<bool> {
+        let d = diverged_envs(columns, n_envs, pack_cpu, pack_gpu, TOLERANCE);
+        d.tally_columns(&mut self.by_column);
+        if d.worst > self.worst {
+            (self.worst, self.worst_column) = (d.worst, d.worst_column);
+        }
+        d.envs
     }
 
     /// Count one run's per-environment verdicts (true: diverged).

@@ -22,7 +22,7 @@
 use crate::common;
 
 use common::gpu::{
-    MAX_DIVERGED, Parity, TOLERANCE, device, diverged_envs, first_differences, most_diverged,
+    Lockstep, MAX_DIVERGED, Parity, TOLERANCE, device, first_differences, most_diverged,
     parity_mode, uniform,
 };
 use socnav::backend::BackendChoice;
@@ -125,48 +125,31 @@ fn lockstep(
     let mut rng = RngStream::new(77, 0);
     let mut a = vec![0.0f32; 3 * n_envs];
     let mut tally = Tally::default();
-    let (mut diverged, mut worst, mut worst_column) = (0usize, 0.0f32, "");
-    let mut by_column = Vec::new();
+    let mut lockstep = Lockstep::default();
     for _ in 0..steps {
         actions(&cpu, &mut rng, &mut a);
         gpu.copy_state_from(&cpu).expect("same shape");
         cpu.step(Actions::Continuous(&a)).expect("CPU step");
         gpu.step(Actions::Continuous(&a)).expect("GPU step");
-        let (cs, gs) = (cpu.state().unwrap(), gpu.state().unwrap());
-        let (co, go) = (cpu.outputs(), gpu.outputs());
-        let in_state = diverged_envs(
-            &cs.columns(),
+        lockstep.add(
             n_envs,
-            |f, u| cs.pack(f, u),
-            |f, u| gs.pack(f, u),
-            TOLERANCE,
+            (cpu.state().unwrap(), gpu.state().unwrap()),
+            Some((cpu.outputs(), gpu.outputs())),
         );
-        let in_outputs = diverged_envs(
-            &co.columns(),
-            n_envs,
-            |f, u| co.pack(f, u),
-            |f, u| go.pack(f, u),
-            TOLERANCE,
-        );
-        diverged += in_state
-            .envs
-            .iter()
-            .zip(&in_outputs.envs)
-            .filter(|(a, b)| **a || **b)
-            .count();
-        for d in [&in_state, &in_outputs] {
-            d.tally_columns(&mut by_column);
-            if d.worst > worst {
-                (worst, worst_column) = (d.worst, d.worst_column);
-            }
-        }
         tally.add(&cpu);
         let done: Vec<bool> = cpu.outputs().episode_done.iter().map(|&d| d != 0).collect();
         if mode == AutoresetMode::Disabled && done.iter().any(|&d| d) {
             cpu.reset_envs(&done).expect("CPU masked reset");
         }
     }
-    let share = diverged as f64 / (steps * n_envs) as f64;
+    let Lockstep {
+        compared,
+        diverged,
+        by_column,
+        worst,
+        worst_column,
+    } = lockstep;
+    let share = diverged as f64 / compared as f64;
     let agreement = if worst_column.is_empty() {
         "every other float identical".to_string()
     } else {
@@ -177,7 +160,7 @@ fn lockstep(
          {agreement}; {} episodes ended, SNGNN-v2 discomfort positive in {} environment-steps; \
          diverged most in: {}",
         gpu.device(),
-        steps * n_envs,
+        compared,
         100.0 * share,
         tally.ended,
         tally.sngnn_scored,
@@ -187,7 +170,7 @@ fn lockstep(
         share <= MAX_DIVERGED,
         "{name}: {diverged} of {} environment-steps diverged beyond the tolerance {TOLERANCE:?} \
          (more than {:.1} %; most in: {})",
-        steps * n_envs,
+        compared,
         100.0 * MAX_DIVERGED,
         most_diverged(&by_column, 8)
     );

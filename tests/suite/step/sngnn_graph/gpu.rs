@@ -19,8 +19,7 @@
 use crate::common;
 
 use common::gpu::{
-    Lockstep, Parity, TOLERANCE, device, diverged_envs, first_differences, floats_agree,
-    parity_mode, tally_column,
+    Lockstep, Parity, TOLERANCE, device, first_differences, floats_agree, parity_mode, tally_column,
 };
 use common::sngnn_rollout::SngnnRollout;
 use socnav::Config;
@@ -55,14 +54,7 @@ fn check(name: &str, dt: f32, steps: usize, every_relation: bool) {
         gpu.run("sngnn_graph").expect("the pass runs");
         gpu.download_state(&mut from_gpu).expect("readback");
         if mode == Parity::Lockstep {
-            let in_state = diverged_envs(
-                &r.s.columns(),
-                N_ENVS,
-                |f, u| r.s.pack(f, u),
-                |f, u| from_gpu.pack(f, u),
-                TOLERANCE,
-            );
-            in_state.tally_columns(&mut lockstep.by_column);
+            let in_state = lockstep.state_verdicts(N_ENVS, (&r.s, &from_gpu));
             let (gu, gf) = gpu
                 .download_sngnn_graphs()
                 .expect("readback")
@@ -73,7 +65,6 @@ fn check(name: &str, dt: f32, steps: usize, every_relation: bool) {
                 tally_column(&mut lockstep.by_column, "packed graph", graphs);
             }
             let envs: Vec<bool> = in_state
-                .envs
                 .iter()
                 .zip(&in_graphs)
                 .map(|(a, b)| *a || *b)
