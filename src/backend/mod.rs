@@ -122,12 +122,12 @@ pub struct HostPath {
     /// Reads of the whole output table (after device work that was not read back).
     pub full_reads: u64,
     /// Seconds of reset-pool work on the critical path: generating the rows of the next episodes
-    /// that are missing before a submit, and handing every new row to the device (one queue
-    /// write to a staging buffer, copied into place at the next submit).
+    /// that are missing before a submit (normally none) and handing them to the device.
     pub refill_s: f64,
     /// Seconds generating reset-pool rows while the device runs a step (the rows two episodes
-    /// ahead of the environments that reset): off the critical path unless longer than the
-    /// device's work.
+    /// ahead of the environments that reset) and handing them to the device (one queue write to
+    /// a staging buffer, copied into place at the next submit): off the critical path unless
+    /// longer than the device's work.
     pub refill_ahead_s: f64,
     /// Seconds from submitting the device work to its readback being mapped, less the host's
     /// work meanwhile (`refill_ahead_s`).

@@ -737,7 +737,7 @@ impl GpuStages {
 
     /// Run stage `stage` over every environment (one dispatch, one submit).
     pub fn run(&mut self, stage: &str) -> Result<(), SimError> {
-        self.run_stages(&[stage], None, || {})
+        self.run_stages(&[stage], None, |_| {})
     }
 
     /// Run `stages` in order over every environment, one dispatch each, in one submit; with
@@ -746,12 +746,13 @@ impl GpuStages {
     /// that finished, or the whole output table after device work that was not read back) and
     /// the episode counters into the step readback buffer, which is read into `read`'s outputs
     /// and counters. The host runs `while_device_works` between the submit and the wait for the
-    /// readback.
+    /// readback; it may stage pool rows ([`GpuStages::stage_pool_rows`]), which reach the pool at
+    /// the start of the next submit.
     pub fn run_stages(
         &mut self,
         stages: &[&str],
         read: Option<StepRead<'_>>,
-        while_device_works: impl FnOnce(),
+        while_device_works: impl FnOnce(&mut Self),
     ) -> Result<(), SimError> {
         let started = std::time::Instant::now();
         let mut enc = self
@@ -780,7 +781,7 @@ impl GpuStages {
         }
         let Some(read) = read else {
             self.dev.queue.submit([enc.finish()]);
-            while_device_works();
+            while_device_works(self);
             self.step_read.whole_table_next = true;
             return self.dev.take_errors();
         };
@@ -789,21 +790,22 @@ impl GpuStages {
             u32s: &self.outputs.u32s,
             batch: &self.batch,
         };
-        let rb = &self.step_readback;
         let f_words = self.outputs.packed_f32.len();
         let table_bytes = if selective {
-            self.step_read.copy_rows(&mut enc, rb)
+            self.step_read.copy_rows(&mut enc, &self.step_readback)
         } else {
             let (f_bytes, u_bytes) = (
                 words_to_bytes(f_words),
                 words_to_bytes(self.outputs.packed_u32.len()),
             );
+            let rb = &self.step_readback;
             enc.copy_buffer_to_buffer(&self.outputs.f32s, 0, rb, 0, f_bytes);
             enc.copy_buffer_to_buffer(&self.outputs.u32s, 0, rb, f_bytes, u_bytes);
             f_bytes + u_bytes
         };
         let e_bytes = words_to_bytes(self.n_envs);
         let episode_at = words_to_bytes(self.episode_offset);
+        let rb = &self.step_readback;
         enc.copy_buffer_to_buffer(&self.state.u32s, episode_at, rb, table_bytes, e_bytes);
         let mut total = table_bytes + e_bytes;
         // Stage timing runs the passes without a read (`time_passes`, or a submit per pass) and
@@ -820,8 +822,9 @@ impl GpuStages {
         };
         let mut bytes = total + piece_bytes;
         let working = std::time::Instant::now();
-        while_device_works();
+        while_device_works(self);
         let host_work_s = working.elapsed().as_secs_f64();
+        let rb = &self.step_readback;
         let (status, step_read) = (&mut self.sngnn_status, &self.step_read);
         let StepRead { out, episode, pool } = read;
         let table_words = (table_bytes / 4) as usize;
