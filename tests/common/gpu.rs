@@ -493,6 +493,31 @@ impl Lockstep {
         self.add_envs(&envs);
     }
 
+    /// [`Lockstep::add`] of a step whose outputs the GPU batch delivered in part: its output
+    /// columns that `delivered` rejects are not compared (their host copies are stale).
+    pub fn add_delivered(
+        &mut self,
+        n_envs: usize,
+        state: (&BatchState, &BatchState),
+        (cpu, gpu): (&Outputs, &Outputs),
+        delivered: impl Fn(&str) -> bool,
+    ) {
+        let mut envs = self.state_verdicts(n_envs, state);
+        let d = diverged_envs_in(
+            &cpu.columns(),
+            delivered,
+            n_envs,
+            |f, u| cpu.pack(f, u),
+            |f, u| gpu.pack(f, u),
+            TOLERANCE,
+        );
+        self.tally(&d);
+        for (e, o) in envs.iter_mut().zip(&d.envs) {
+            *e |= *o;
+        }
+        self.add_envs(&envs);
+    }
+
     /// Per environment, whether its state diverged (its columns tallied, not yet counted: the
     /// caller adds the verdicts with [`Lockstep::add_envs`], with its own where it has more).
     pub fn state_verdicts(
@@ -517,11 +542,16 @@ impl Lockstep {
         pack_gpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
     ) -> Vec<bool> {
         let d = diverged_envs(columns, n_envs, pack_cpu, pack_gpu, TOLERANCE);
+        self.tally(&d);
+        d.envs
+    }
+
+    /// Tally `d`'s columns and its worst agreeing float.
+    fn tally(&mut self, d: &Divergence) {
         d.tally_columns(&mut self.by_column);
         if d.worst > self.worst {
             (self.worst, self.worst_column) = (d.worst, d.worst_column);
         }
-        d.envs
     }
 
     /// Count one run's per-environment verdicts (true: diverged).
@@ -533,10 +563,21 @@ impl Lockstep {
     /// Say what was found for `what` on `adapter`, and fail when more than [`MAX_DIVERGED`] of
     /// the environment-runs diverged.
     pub fn check(&self, what: &str, adapter: &AdapterSummary) {
-        let most = most_diverged(&self.by_column, 5);
+        let most = match most_diverged(&self.by_column, 5) {
+            m if m.is_empty() => "none".to_string(),
+            m => m,
+        };
+        let agreement = if self.worst_column.is_empty() {
+            "every other float identical".to_string()
+        } else {
+            format!(
+                "the others within {:.2} of the tolerance (worst in {})",
+                self.worst, self.worst_column
+            )
+        };
         println!(
             "{what}: {} of {} environment-runs beyond the tolerance {TOLERANCE:?} on {adapter} \
-             (most in: {most})",
+             (most in: {most}); {agreement}",
             self.diverged, self.compared
         );
         assert!(
@@ -560,6 +601,19 @@ pub fn diverged_envs(
     n_envs: usize,
     pack_cpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
     pack_gpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
+    tolerance: (f32, f32),
+) -> Divergence {
+    diverged_envs_in(columns, |_| true, n_envs, pack_cpu, pack_gpu, tolerance)
+}
+
+/// [`diverged_envs`] over the columns `compared` accepts alone (the others are skipped: columns a
+/// batch does not deliver, whose host copies are stale by design).
+pub fn diverged_envs_in(
+    columns: &[(&'static str, Elem, usize)],
+    compared: impl Fn(&str) -> bool,
+    n_envs: usize,
+    pack_cpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
+    pack_gpu: impl Fn(&mut Vec<f32>, &mut Vec<u32>),
     (atol, rtol): (f32, f32),
 ) -> Divergence {
     let (mut cf, mut cu, mut gf, mut gu) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -573,6 +627,9 @@ pub fn diverged_envs(
         let k = usize::from(elem == Elem::U32);
         let start = offset[k];
         offset[k] += n_envs * stride;
+        if !compared(name) {
+            continue;
+        }
         let mut here = vec![false; n_envs];
         for j in 0..n_envs * stride {
             let env = j / stride.max(1);
@@ -611,5 +668,118 @@ pub fn diverged_envs(
         worst,
         worst_column,
         by_column,
+    }
+}
+
+/// A batch on the CPU backend and its twin on the GPU backend, stepped with the same actions and
+/// compared after every step as the adapter allows ([`Parity`]). *Exact*: every state column and
+/// every output column the GPU batch delivers (`BatchEnv::step_outputs`) bit for bit, the first
+/// difference named at once. *Lockstep*: before every step the GPU batch takes the CPU batch's
+/// state ([`BatchEnv::copy_state_from`]), and [`Twins::finish`] requires the steps' state and
+/// delivered outputs to agree within [`TOLERANCE`] in all but [`MAX_DIVERGED`] of the
+/// environment-steps. Taking the state also resets the GPU backend's host bookkeeping (episode
+/// counters, next seeds, reset-pool rows) from it, so what only the host computes, the same code
+/// on every adapter, is checked by the exact comparison on lavapipe, which CI runs; lockstep
+/// checks the device's arithmetic.
+pub struct Twins {
+    pub cpu: BatchEnv,
+    pub gpu: BatchEnv,
+    pub mode: Parity,
+    steps: usize,
+    lockstep: Lockstep,
+}
+
+impl Twins {
+    /// `cpu` and `gpu`, reset alike, compared in the mode of the GPU batch's adapter (the
+    /// process's shared device, [`device`]).
+    pub fn new(cpu: BatchEnv, gpu: BatchEnv) -> Self {
+        let adapter = device()
+            .expect("a GPU batch exists, so an adapter does")
+            .adapter;
+        Self {
+            cpu,
+            gpu,
+            mode: parity_mode(&adapter),
+            steps: 0,
+            lockstep: Lockstep::default(),
+        }
+    }
+
+    /// Step both batches with `actions` (3 floats per environment) and compare them.
+    pub fn step(&mut self, actions: &[f32]) {
+        if self.mode == Parity::Lockstep {
+            self.gpu
+                .copy_state_from(&self.cpu)
+                .expect("twins of one shape");
+        }
+        self.cpu
+            .step(Actions::Continuous(actions))
+            .expect("CPU step");
+        self.gpu
+            .step(Actions::Continuous(actions))
+            .expect("GPU step");
+        self.steps += 1;
+        self.compare();
+    }
+
+    /// Reset the environments of `mask` (a caller's reset under DISABLED) and compare. In
+    /// lockstep the GPU batch takes the CPU's reset state before its next step instead.
+    pub fn reset_envs(&mut self, mask: &[bool]) {
+        self.cpu.reset_envs(mask).expect("CPU masked reset");
+        if self.mode == Parity::Exact {
+            self.gpu.reset_envs(mask).expect("GPU masked reset");
+            self.compare();
+        }
+    }
+
+    /// Compare the twins as they stand: bit for bit (and fail at once), or tallied in lockstep.
+    pub fn compare(&mut self) {
+        let (cs, gs) = (self.cpu.state().unwrap(), self.gpu.state().unwrap());
+        let (co, go) = (self.cpu.outputs(), self.gpu.outputs());
+        let which = self.gpu.step_outputs();
+        if self.mode == Parity::Lockstep {
+            let n = self.cpu.n_envs();
+            self.lockstep
+                .add_delivered(n, (cs, gs), (co, go), |c| which.delivers(c));
+            return;
+        }
+        let differ = cs.differing_columns(gs);
+        let differ_out: Vec<_> = co
+            .differing_columns(go)
+            .into_iter()
+            .filter(|c| which.delivers(c))
+            .collect();
+        assert!(
+            differ.is_empty() && differ_out.is_empty(),
+            "step {}: state columns {differ:?} and output columns {differ_out:?} differ between \
+             CPU and GPU on {}; first differences: {}; {}",
+            self.steps,
+            self.gpu.device(),
+            first_differences(&cs.columns(), |f, u| cs.pack(f, u), |f, u| gs.pack(f, u)),
+            first_differences(&co.columns(), |f, u| co.pack(f, u), |f, u| go.pack(f, u)),
+        );
+    }
+
+    /// The lockstep tally so far (empty in the exact mode).
+    pub fn lockstep(&self) -> &Lockstep {
+        &self.lockstep
+    }
+
+    /// Say what the comparison found for `what`, and in lockstep fail when more than
+    /// [`MAX_DIVERGED`] of the environment-steps diverged (the exact comparison has failed
+    /// already if anything differed).
+    pub fn finish(&self, what: &str) {
+        match self.mode {
+            Parity::Lockstep => {
+                let adapter = device().expect("an adapter").adapter;
+                self.lockstep.check(what, &adapter);
+            }
+            Parity::Exact => println!(
+                "{what}: {} steps of {} environments bit-identical on {}",
+                self.steps,
+                self.cpu.n_envs(),
+                self.gpu.device()
+            ),
+        }
     }
 }

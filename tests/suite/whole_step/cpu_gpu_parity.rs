@@ -11,24 +11,22 @@
 //!
 //! On adapters other than lavapipe (whose rounding the shaders are written against), hardware
 //! drivers may contract `a·b + c` into a fused multiply-add or use faster division and square
-//! roots, so whole trajectories drift apart: there the tests run in *lockstep* instead. Before
-//! every step the GPU batch takes the CPU batch's state ([`BatchEnv::copy_state_from`]), both
-//! step, and the step's state and outputs must agree within [`TOLERANCE`] per float; an
-//! environment whose integers differ or whose floats exceed it has *diverged* (a decision taken
-//! the other way at a threshold), which at most [`MAX_DIVERGED`] of the environment-steps may do.
+//! roots, so whole trajectories drift apart: there the tests run in *lockstep* instead
+//! (`common::gpu::Twins`). Before every step the GPU batch takes the CPU batch's state
+//! (`BatchEnv::copy_state_from`), both step, and the step's state and outputs must agree within
+//! `TOLERANCE` per float; an environment whose integers differ or whose floats exceed it has
+//! *diverged* (a decision taken the other way at a threshold), which at most `MAX_DIVERGED` of
+//! the environment-steps may do.
 //! `SOCNAV_PARITY=exact` or `=tolerance` forces a mode (the tolerance mode on lavapipe finds no
 //! difference at all, which `lockstep_mode_runs_on_this_adapter` checks).
 
 use crate::common;
 
-use common::gpu::{
-    Lockstep, MAX_DIVERGED, Parity, TOLERANCE, device, first_differences, most_diverged,
-    parity_mode, uniform,
-};
+use common::gpu::{Parity, Twins, device, parity_mode, uniform};
 use socnav::backend::BackendChoice;
 use socnav::config::RewardKind;
 use socnav::rng::RngStream;
-use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions};
+use socnav::{AutoresetMode, BatchEnv, Config, EnvOptions};
 
 fn batch(config: Config, n_envs: usize, mode: AutoresetMode, backend: BackendChoice) -> BatchEnv {
     let mut env = BatchEnv::new(
@@ -75,23 +73,6 @@ fn actions(env: &BatchEnv, rng: &mut RngStream, out: &mut [f32]) {
     }
 }
 
-/// Assert that the two batches hold the same state and outputs, naming the first differences.
-fn assert_same(name: &str, step: usize, cpu: &BatchEnv, gpu: &BatchEnv) {
-    let (cs, gs) = (cpu.state().unwrap(), gpu.state().unwrap());
-    let (co, go) = (cpu.outputs(), gpu.outputs());
-    let differ = cs.differing_columns(gs);
-    let differ_out = co.differing_columns(go);
-    if differ.is_empty() && differ_out.is_empty() {
-        return;
-    }
-    panic!(
-        "{name}, step {step}: state columns {differ:?} and output columns {differ_out:?} differ \
-         between CPU and GPU; first differences: {}; {}",
-        first_differences(&cs.columns(), |f, u| cs.pack(f, u), |f, u| gs.pack(f, u)),
-        first_differences(&co.columns(), |f, u| co.pack(f, u), |f, u| go.pack(f, u)),
-    );
-}
-
 /// What a comparison went through: episodes ended, and environment-steps whose SNGNN-v2
 /// discomfort was positive (0 with the DSRNN reward).
 #[derive(Debug, Default)]
@@ -110,110 +91,52 @@ impl Tally {
     }
 }
 
-/// Step `name` in lockstep (see the module docs) and check the share of diverged
-/// environment-steps.
-fn lockstep(
+/// Step `name` for `steps` steps on both backends ([`Twins`]: bit for bit on lavapipe, in
+/// lockstep elsewhere) and compare after the reset and every step, in the mode `parity` names
+/// (`None`: the adapter's). Under DISABLED the finished environments are reset with a mask after
+/// each step, as a caller would.
+fn compared(
     name: &str,
     config: Config,
     n_envs: usize,
     steps: usize,
     mode: AutoresetMode,
-) -> Option<Tally> {
+    parity: Option<Parity>,
+) -> Option<(Tally, Twins)> {
     device()?;
-    let mut cpu = batch(config.clone(), n_envs, mode, BackendChoice::Cpu);
-    let mut gpu = batch(config, n_envs, mode, BackendChoice::Gpu);
-    let mut rng = RngStream::new(77, 0);
-    let mut a = vec![0.0f32; 3 * n_envs];
-    let mut tally = Tally::default();
-    let mut lockstep = Lockstep::default();
-    for _ in 0..steps {
-        actions(&cpu, &mut rng, &mut a);
-        gpu.copy_state_from(&cpu).expect("same shape");
-        cpu.step(Actions::Continuous(&a)).expect("CPU step");
-        gpu.step(Actions::Continuous(&a)).expect("GPU step");
-        lockstep.add(
-            n_envs,
-            (cpu.state().unwrap(), gpu.state().unwrap()),
-            Some((cpu.outputs(), gpu.outputs())),
-        );
-        tally.add(&cpu);
-        let done: Vec<bool> = cpu.outputs().episode_done.iter().map(|&d| d != 0).collect();
-        if mode == AutoresetMode::Disabled && done.iter().any(|&d| d) {
-            cpu.reset_envs(&done).expect("CPU masked reset");
-        }
-    }
-    let Lockstep {
-        compared,
-        diverged,
-        by_column,
-        worst,
-        worst_column,
-    } = lockstep;
-    let share = diverged as f64 / compared as f64;
-    let agreement = if worst_column.is_empty() {
-        "every other float identical".to_string()
-    } else {
-        format!("the others within {worst:.2} of the tolerance (worst in {worst_column})")
-    };
-    println!(
-        "{name} ({mode:?}) in lockstep on {}: {diverged} of {} environment-steps diverged ({:.3} %), \
-         {agreement}; {} episodes ended, SNGNN-v2 discomfort positive in {} environment-steps; \
-         diverged most in: {}",
-        gpu.device(),
-        compared,
-        100.0 * share,
-        tally.ended,
-        tally.sngnn_scored,
-        most_diverged(&by_column, 8),
-    );
-    assert!(
-        share <= MAX_DIVERGED,
-        "{name}: {diverged} of {} environment-steps diverged beyond the tolerance {TOLERANCE:?} \
-         (more than {:.1} %; most in: {})",
-        compared,
-        100.0 * MAX_DIVERGED,
-        most_diverged(&by_column, 8)
-    );
-    Some(tally)
-}
-
-/// Step `name` for `steps` steps on both backends and compare after the reset and every step.
-/// Under DISABLED the finished environments are reset with a mask after each step, as a caller
-/// would.
-fn parity(
-    name: &str,
-    config: Config,
-    n_envs: usize,
-    steps: usize,
-    mode: AutoresetMode,
-) -> Option<Tally> {
-    device()?;
-    let mut cpu = batch(config.clone(), n_envs, mode, BackendChoice::Cpu);
-    let mut gpu = batch(config, n_envs, mode, BackendChoice::Gpu);
+    let cpu = batch(config.clone(), n_envs, mode, BackendChoice::Cpu);
+    let gpu = batch(config, n_envs, mode, BackendChoice::Gpu);
     assert_eq!(gpu.backend_name(), "gpu");
-    assert_same(name, 0, &cpu, &gpu);
+    let mut twins = Twins::new(cpu, gpu);
+    if let Some(parity) = parity {
+        twins.mode = parity;
+    }
+    twins.compare();
     let mut rng = RngStream::new(77, 0);
     let mut a = vec![0.0f32; 3 * n_envs];
     let mut tally = Tally::default();
-    for step in 1..=steps {
-        actions(&cpu, &mut rng, &mut a);
-        cpu.step(Actions::Continuous(&a)).expect("CPU step");
-        gpu.step(Actions::Continuous(&a)).expect("GPU step");
-        assert_same(name, step, &cpu, &gpu);
-        tally.add(&cpu);
-        let done: Vec<bool> = cpu.outputs().episode_done.iter().map(|&d| d != 0).collect();
+    for _ in 0..steps {
+        actions(&twins.cpu, &mut rng, &mut a);
+        twins.step(&a);
+        tally.add(&twins.cpu);
+        let done: Vec<bool> = twins
+            .cpu
+            .outputs()
+            .episode_done
+            .iter()
+            .map(|&d| d != 0)
+            .collect();
         if mode == AutoresetMode::Disabled && done.iter().any(|&d| d) {
-            cpu.reset_envs(&done).expect("CPU masked reset");
-            gpu.reset_envs(&done).expect("GPU masked reset");
-            assert_same(name, step, &cpu, &gpu);
+            twins.reset_envs(&done);
         }
     }
+    twins.finish(&format!("{name} ({mode:?})"));
     println!(
-        "{name} ({mode:?}): {steps} steps of {n_envs} environments bit-identical, {} episodes \
-         ended, SNGNN-v2 discomfort positive in {} environment-steps",
+        "{name} ({mode:?}): {} episodes ended, SNGNN-v2 discomfort positive in {} \
+         environment-steps",
         tally.ended, tally.sngnn_scored
     );
-    Some(tally)
+    Some((tally, twins))
 }
 
 /// [`check_config`] for a shipped config whose episodes last [`LENGTH`] steps at most.
@@ -235,13 +158,8 @@ fn check_sngnn(name: &str, length: u32, n_envs: usize, steps: usize, mode: Autor
 }
 
 fn check_config(name: &str, config: Config, n_envs: usize, steps: usize, mode: AutoresetMode) {
-    let Some(dev) = device() else { return };
-    let run = match parity_mode(&dev.adapter) {
-        Parity::Exact => parity,
-        Parity::Lockstep => lockstep,
-    };
     let sngnn = config.reward.kind == RewardKind::Sngnn;
-    if let Some(tally) = run(name, config, n_envs, steps, mode) {
+    if let Some((tally, _)) = compared(name, config, n_envs, steps, mode, None) {
         assert!(
             tally.ended >= n_envs,
             "{name}: only {} episodes ended in {steps} steps: autoresets barely tested",
@@ -308,16 +226,24 @@ fn stress() {
 }
 
 /// Contract: the lockstep comparison of other adapters works here too: on lavapipe nothing
-/// diverges, and the state copy between backends leaves the GPU batch stepping like the CPU's.
+/// diverges and every float is identical, so the state copy between backends leaves the GPU
+/// batch stepping like the CPU's.
 #[test]
 fn lockstep_mode_runs_on_this_adapter() {
-    lockstep(
-        "exp1",
-        common::load_config("exp1"),
-        ENVS,
-        60,
-        AutoresetMode::NextStep,
-    );
+    let config = common::load_config("exp1");
+    let mode = AutoresetMode::NextStep;
+    let Some((_, twins)) = compared("exp1", config, ENVS, 60, mode, Some(Parity::Lockstep)) else {
+        return;
+    };
+    let lockstep = twins.lockstep();
+    assert!(lockstep.compared >= 60 * ENVS);
+    if parity_mode(&device().expect("an adapter").adapter) == Parity::Exact {
+        assert_eq!(
+            (lockstep.diverged, lockstep.worst_column),
+            (0, ""),
+            "lockstep on lavapipe: environment-steps diverged, or floats differed"
+        );
+    }
 }
 
 /// Contract: the SNGNN-v2 reward of experiment 2 (frames, graphs and the network on the device),

@@ -1,17 +1,17 @@
 //! The batch layout is data (issue 14): a shader's text holds no batch size and, through the size
 //! classes (`backend::wgsl::SizeClasses`), the same text serves every shipped config, so a second batch
 //! on a device compiles no pipeline, whatever its size; and batches whose size is 1 or not a
-//! multiple of the workgroup step bit for bit like the CPU.
+//! multiple of the workgroup step like the CPU (bit for bit on lavapipe, `common::gpu::Twins`).
 //!
 //! Each batch counts the pipelines it compiled itself (`BatchEnv::pipelines_compiled`), so tests
 //! running beside it on the process's shared device do not move the count.
 
 use crate::common;
 
-use common::gpu::device;
+use common::gpu::{Twins, device};
 use socnav::backend::BackendChoice;
 use socnav::rng::RngStream;
-use socnav::{Actions, BatchEnv, Config, EnvOptions};
+use socnav::{BatchEnv, Config, EnvOptions};
 
 /// A reset batch of `name` with `n_envs` environments on `backend`.
 fn batch(name: &str, n_envs: usize, backend: BackendChoice) -> BatchEnv {
@@ -30,26 +30,19 @@ fn batch(name: &str, n_envs: usize, backend: BackendChoice) -> BatchEnv {
 }
 
 /// Step `name` with `n_envs` environments on both backends with the same random actions and
-/// assert every state and output column equal, bit for bit, after each step. Returns how many
-/// pipelines the GPU batch compiled.
+/// compare every state and output column after each step ([`Twins`]: bit for bit on lavapipe, in
+/// lockstep elsewhere). Returns how many pipelines the GPU batch compiled.
 fn same_on_both(name: &str, n_envs: usize, steps: usize) -> usize {
-    let mut cpu = batch(name, n_envs, BackendChoice::Cpu);
-    let mut gpu = batch(name, n_envs, BackendChoice::Gpu);
-    let holonomic = cpu.params().holonomic != 0;
+    let cpu = batch(name, n_envs, BackendChoice::Cpu);
+    let gpu = batch(name, n_envs, BackendChoice::Gpu);
+    let mut twins = Twins::new(cpu, gpu);
+    let holonomic = twins.cpu.params().holonomic != 0;
     let mut rng = RngStream::new(3, 0);
-    for step in 0..steps {
-        let a = common::gpu::random_actions(&mut rng, n_envs, holonomic);
-        cpu.step(Actions::Continuous(&a)).expect("CPU step");
-        gpu.step(Actions::Continuous(&a)).expect("GPU step");
-        let state = cpu.state().unwrap().differing_columns(gpu.state().unwrap());
-        let outputs = cpu.outputs().differing_columns(gpu.outputs());
-        assert!(
-            state.is_empty() && outputs.is_empty(),
-            "{name}, {n_envs} environments, step {step}: state columns {state:?} and output \
-             columns {outputs:?} differ"
-        );
+    for _ in 0..steps {
+        twins.step(&common::gpu::random_actions(&mut rng, n_envs, holonomic));
     }
-    gpu.pipelines_compiled()
+    twins.finish(&format!("{name}, {n_envs} environments"));
+    twins.gpu.pipelines_compiled()
 }
 
 #[test]
