@@ -33,9 +33,9 @@
 //   type before its first use and to reuse it (`orca_agent_neighbors_clear`,
 //   `orca_obstacle_neighbors_clear`, `orca_lines_clear`): the GPU backend's own SPIR-V does not
 //   zero them (src/backend/gpu/spirv.rs), and no function reads an entry at or past `len`.
-// * `orca_compute_new_velocity`: Rust's `compute_new_velocity` over function-scope copies (the
-//   agent's gathered neighbours and its environment's processed vertices), built from the same
-//   blocks.
+//   (A form over function-scope copies of the agent's neighbours and its environment's
+//   vertices, as Rust's `compute_new_velocity` takes them, is not kept: no stage used it, and its
+//   7 KB copy per lane did not compile on NVIDIA's driver.)
 // Lists live in fixed-size function-scope arrays; the limits are the ORCA_MAX_* constants below.
 // Where Rust would grow a list past a limit, the result carries an ORCA_OVERFLOW_* bit and is not
 // the CPU's: a stage must treat a non-zero `overflow` as an error (or bound its capacities by
@@ -48,9 +48,6 @@ const ORCA_MAX_OBSTACLE_NEIGHBORS: u32 = 128u;
 // Most ORCA lines of one agent: one per obstacle edge at most, plus one per agent neighbour, so
 // lines never overflow when the neighbour lists do not.
 const ORCA_MAX_LINES: u32 = ORCA_MAX_AGENT_NEIGHBORS + ORCA_MAX_OBSTACLE_NEIGHBORS;
-// Most processed obstacle vertices in `OrcaObstacleVerts` (the copy `orca_compute_new_velocity`
-// reads; the building blocks have no such limit).
-const ORCA_MAX_OBSTACLE_VERTICES: u32 = 256u;
 
 const ORCA_OVERFLOW_AGENT_NEIGHBORS: u32 = 1u;
 const ORCA_OVERFLOW_OBSTACLE_NEIGHBORS: u32 = 2u;
@@ -155,29 +152,12 @@ struct OrcaObstacleNeighbors {
     items: array<OrcaNeighborKey, ORCA_MAX_OBSTACLE_NEIGHBORS>,
 }
 
-// Gathered agent neighbours in order (Rust `&[OrcaNeighbor]`).
-struct OrcaGathered {
-    len: u32,
-    items: array<OrcaNeighbor, ORCA_MAX_AGENT_NEIGHBORS>,
-}
-
 // An agent's ORCA lines: obstacle lines first (`num_obstacle_lines` of them), then agent lines.
 struct OrcaLines {
     len: u32,
     num_obstacle_lines: u32,
     overflow: u32,
     items: array<OrcaLine, ORCA_MAX_LINES>,
-}
-
-// Rust `ObstacleVerts` as a function-scope copy (see `orca_compute_new_velocity`).
-struct OrcaObstacleVerts {
-    len: u32,
-    overflow: u32,
-    point: array<vec2<f32>, ORCA_MAX_OBSTACLE_VERTICES>,
-    dir: array<vec2<f32>, ORCA_MAX_OBSTACLE_VERTICES>,
-    next: array<u32, ORCA_MAX_OBSTACLE_VERTICES>,
-    prev: array<u32, ORCA_MAX_OBSTACLE_VERTICES>,
-    convex: array<u32, ORCA_MAX_OBSTACLE_VERTICES>,
 }
 
 // What an obstacle line reads of one processed vertex `index`: `point(index)`, `dir(index)`,
@@ -345,21 +325,6 @@ fn orca_obstacle_neighbor_candidate(
     let s = orca_left_of(a, b, pos);
     if (s < 0.0 && s * s / orca_abs_sq(b - a) < range_sq) {
         orca_insert_obstacle_neighbor(list, vertex, a, b, pos, range_sq);
-    }
-}
-
-// Rust `obstacle_neighbors` over a function-scope copy of the vertices; `out` is cleared.
-fn orca_obstacle_neighbors(
-    pos: vec2<f32>,
-    range_sq: f32,
-    obstacles: ptr<function, OrcaObstacleVerts>,
-    out: ptr<function, OrcaObstacleNeighbors>,
-) {
-    orca_obstacle_neighbors_clear(out);
-    for (var v = 0u; v < (*obstacles).len; v = v + 1u) {
-        let a = (*obstacles).point[v];
-        let b = (*obstacles).point[(*obstacles).next[v]];
-        orca_obstacle_neighbor_candidate(out, pos, range_sq, v, a, b);
     }
 }
 
@@ -628,32 +593,6 @@ fn orca_push_obstacle_line(
     }
 }
 
-// `OrcaVertex` of vertex `i` of a function-scope copy.
-fn orca_verts_vertex(obstacles: ptr<function, OrcaObstacleVerts>, i: u32) -> OrcaVertex {
-    return orca_vertex(
-        i,
-        (*obstacles).point[i],
-        (*obstacles).dir[i],
-        (*obstacles).dir[(*obstacles).prev[i]],
-        (*obstacles).convex[i],
-    );
-}
-
-// Rust `push_obstacle_lines` over a function-scope copy; sets `num_obstacle_lines`.
-fn orca_push_obstacle_lines(
-    agent: OrcaAgent,
-    obstacles: ptr<function, OrcaObstacleVerts>,
-    neighbors: ptr<function, OrcaObstacleNeighbors>,
-    lines: ptr<function, OrcaLines>,
-) {
-    for (var k = 0u; k < (*neighbors).len; k = k + 1u) {
-        let o1 = (*neighbors).items[k].index;
-        let o2 = (*obstacles).next[o1];
-        orca_push_obstacle_line(agent, orca_verts_vertex(obstacles, o1), orca_verts_vertex(obstacles, o2), lines);
-    }
-    (*lines).num_obstacle_lines = (*lines).len;
-}
-
 // Rust `agent_line`: RVO2's reciprocal ORCA line against one neighbour.
 fn orca_agent_line(
     pos: vec2<f32>,
@@ -714,18 +653,6 @@ fn orca_push_agent_line(
 ) {
     let inv_t = 1.0 / agent.time_horizon;
     orca_lines_push(lines, orca_agent_line(agent.pos, agent.vel, agent.radius, other, inv_t, time_step));
-}
-
-// Rust `push_agent_lines` over gathered neighbours.
-fn orca_push_agent_lines(
-    agent: OrcaAgent,
-    neighbors: ptr<function, OrcaGathered>,
-    time_step: f32,
-    lines: ptr<function, OrcaLines>,
-) {
-    for (var k = 0u; k < (*neighbors).len; k = k + 1u) {
-        orca_push_agent_line(agent, (*neighbors).items[k], time_step, lines);
-    }
 }
 
 // ---- lp.rs --------------------------------------------------------------------------------------
@@ -908,27 +835,4 @@ fn orca_solve(agent: OrcaAgent, lines: ptr<function, OrcaLines>) -> OrcaResult {
     }
     let r3 = orca_lp3(lines, (*lines).num_obstacle_lines, r2.fail, agent.max_speed, r2.result);
     return OrcaResult(r3.result, 1u, (*lines).overflow | r3.overflow);
-}
-
-// Rust `compute_new_velocity`: obstacle edges by brute force from the copy `obstacles`, ORCA
-// lines for them and for the gathered `agent_neighbors` (selected and sorted, e.g. with
-// `orca_agent_neighbor_candidate`), then LP2/LP3. `obstacle_neighbors` and `lines` are working
-// memory (separate variables; the edges and lines stay readable afterwards). The caller ORs the
-// agent neighbour list's overflow into the result's.
-fn orca_compute_new_velocity(
-    agent: OrcaAgent,
-    agent_neighbors: ptr<function, OrcaGathered>,
-    obstacles: ptr<function, OrcaObstacleVerts>,
-    time_step: f32,
-    obstacle_neighbors: ptr<function, OrcaObstacleNeighbors>,
-    lines: ptr<function, OrcaLines>,
-) -> OrcaResult {
-    let range_sq = orca_obstacle_range_sq(agent.time_horizon_obst, agent.max_speed, agent.radius);
-    orca_obstacle_neighbors(agent.pos, range_sq, obstacles, obstacle_neighbors);
-    orca_lines_clear(lines);
-    orca_push_obstacle_lines(agent, obstacles, obstacle_neighbors, lines);
-    orca_push_agent_lines(agent, agent_neighbors, time_step, lines);
-    var r = orca_solve(agent, lines);
-    r.overflow = r.overflow | (*obstacle_neighbors).overflow | (*obstacles).overflow;
-    return r;
 }

@@ -4,9 +4,8 @@
 //! hash of their bits) must equal what `agent_neighbors` + `compute_new_velocity` (the
 //! brute-force core the GPU mirrors) give on the CPU.
 //!
-//! A test kernel, built here, runs one agent per invocation from its own storage buffers, in two
-//! ways: through the library's building blocks reading storage (as a stage shader will), and
-//! through `orca_compute_new_velocity` over function-scope copies. Scenes: RVO2's reference data
+//! A test kernel, built here, runs one agent per invocation from its own storage buffers through
+//! the library's building blocks reading storage, as the stage shaders do. Scenes: RVO2's reference data
 //! (the one-step cases, the edge-split scenes, crossing4, corridor and every sampled Circle250
 //! state; `SOCNAV_REF_DIR` or `tests/data/ref/orca_sfm`, as in tests/suite/orca/reference.rs) and
 //! thousands of seeded random scenes with agents and polygon obstacles, crowded ones included so
@@ -47,7 +46,7 @@ const SCENE_U: usize = 5;
 /// Words per agent in the output (see [`Expected`]).
 const OUT: usize = 11;
 
-/// Bindings and the two entry points. Everything ORCA comes from the library; this only loads
+/// Bindings and the entry point. Everything ORCA comes from the library; this only loads
 /// the data, selects the agent neighbours by brute force and writes what the test compares.
 const KERNEL: &str = r"
 @group(0) @binding(0) var<storage, read> scene_u: array<u32>;
@@ -205,45 +204,6 @@ fn main_blocks(@builtin(global_invocation_id) gid: vec3<u32>) {
     r.overflow = r.overflow | nb.overflow | onb.overflow;
     write_out(a, r, &nb, &onb, &lines);
 }
-
-// `orca_compute_new_velocity` over function-scope copies.
-@compute @workgroup_size(64)
-fn main_copies(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let a = gid.x;
-    if (a >= arrayLength(&agent_u) / 2u) {
-        return;
-    }
-    let sc = load_scene(a);
-    let agent = load_agent(a);
-    var nb: OrcaAgentNeighbors;
-    orca_agent_neighbors_clear(&nb);
-    select_agents(a, sc, agent, &nb);
-    var gathered: OrcaGathered;
-    gathered.len = nb.len;
-    for (var k = 0u; k < nb.len; k = k + 1u) {
-        gathered.items[k] = load_neighbor(sc.agent_offset + nb.items[k].index);
-    }
-
-    var obst: OrcaObstacleVerts;
-    obst.len = min(sc.vert_count, ORCA_MAX_OBSTACLE_VERTICES);
-    if (sc.vert_count > ORCA_MAX_OBSTACLE_VERTICES) {
-        obst.overflow = ORCA_OVERFLOW_OBSTACLE_VERTICES;
-    }
-    for (var v = 0u; v < obst.len; v = v + 1u) {
-        let g = sc.vert_offset + v;
-        obst.point[v] = vert_point(g);
-        obst.dir[v] = vert_dir(g);
-        obst.next[v] = vert_u[3u * g];
-        obst.prev[v] = vert_u[3u * g + 1u];
-        obst.convex[v] = vert_u[3u * g + 2u];
-    }
-
-    var onb: OrcaObstacleNeighbors;
-    var lines: OrcaLines;
-    var r = orca_compute_new_velocity(agent, &gathered, &obst, sc.time_step, &onb, &lines);
-    r.overflow = r.overflow | nb.overflow;
-    write_out(a, r, &nb, &onb, &lines);
-}
 ";
 
 /// The kernel's WGSL: the constants the step's shaders share with Rust, the library with its
@@ -259,8 +219,8 @@ fn kernel_source() -> String {
     src
 }
 
-/// The two entry points of the test kernel.
-const ENTRY_POINTS: [&str; 2] = ["main_blocks", "main_copies"];
+/// The entry points of the test kernel (one: the form the stages use).
+const ENTRY_POINTS: [&str; 1] = ["main_blocks"];
 
 /// The compiled kernel: one pipeline per entry point.
 struct Kernel {
@@ -531,7 +491,7 @@ fn obstacles(polygons: &[Polygon]) -> ObstacleSet {
     set
 }
 
-/// Runs both entry points over `batch` and compares every agent with the CPU; panics listing
+/// Runs the entry points over `batch` and compares every agent with the CPU; panics listing
 /// the first mismatches. `name` labels the printed counts.
 fn check(kernel: &Kernel, name: &str, batch: &Batch) {
     assert!(batch.agents() > 0, "{name}: no agents");
