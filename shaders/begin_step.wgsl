@@ -6,9 +6,10 @@
 // environment that steps, first, as 0.1.1 does.
 //
 // Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
-// environment, clears the flags, counts the tick and queues the environments that reset; `main`
-// resets one queued environment per lane (a reset copies a whole state row and observation, which
-// a warp's other lanes would otherwise wait for). Each environment's operations keep their order.
+// environment, clears the flags, counts the tick and queues the pool row of each environment that
+// resets (`pool_row_of`, chosen before the reset moves the episode counter on); `main` resets
+// each queued environment with a team of lanes (a reset copies a whole state row and
+// observation: common/pool_reset.wgsl). Each environment's operations keep their order.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -23,7 +24,7 @@ fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if (su[batch.c_pending_reset + e] != 0u) {
         su[batch.c_stepping + e] = 0u;
-        rare_push(RARE_BEGIN_STEP, e);
+        rare_push(RARE_BEGIN_STEP, pool_row_of(e));
     } else {
         let stepping = select(0u, 1u, su[batch.c_done + e] == 0u);
         su[batch.c_stepping + e] = stepping;
@@ -31,12 +32,18 @@ fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
-// The reset of one queued environment per lane.
+// The queued resets, each by a team of RESET_LANES lanes (common/pool_reset.wgsl).
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = rare_env(RARE_BEGIN_STEP, gid.x);
-    if (e == NONE) {
-        return;
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let lane = gid.x % RESET_LANES;
+    for (var k = gid.x / RESET_LANES; ; k += reset_teams(groups.x)) {
+        let row = rare_env(RARE_BEGIN_STEP, k);
+        if (row == NONE) {
+            break;
+        }
+        reset_and_observe(pool_env_of(row), row, lane, RESET_LANES);
     }
-    reset_and_observe(e);
 }

@@ -14,5 +14,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     su[batch.c_pending_reset + e] = 0u;
     outu[batch.co_has_final + e] = 0u;
     outu[batch.co_episode_done + e] = 0u;
-    reset_and_observe(e);
+    // One lane per environment: the pass runs only for `Backend::reset`, off the step.
+    reset_and_observe(e, pool_row_of(e), 0u, 1u);
 }

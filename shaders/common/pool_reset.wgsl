@@ -8,25 +8,43 @@
 // parity of their episode counters chooses (`pool_row_of`). A reset here copies the next
 // episode's row; the host notices the consumed row by the environment's episode counter, which it
 // reads back with the outputs, and writes the row two episodes ahead into the freed place while
-// the device runs the following step. `pool_row_of`, `pool_copy_state` and
+// the device runs the following step. `pool_row_of`, `pool_env_of`, `pool_copy_state` and
 // `pool_copy_observation` are generated with the prelude.
 
-// Reset environment `e` and write its first observation; reward 0, flags cleared, info zeroed.
-fn reset_and_observe(e: u32) {
-    outf[batch.co_reward + e] = 0.0;
-    outu[batch.co_terminated + e] = 0u;
-    outu[batch.co_truncated + e] = 0u;
-    reset_and_observe_keep_step_outputs(e);
+// Resets by many lanes. A reset is about 1,500 words (exp2) copied from the pool, a chain of
+// loads and stores that one lane runs at memory latency. The queued resets of a step
+// (`begin_step`, `autoreset`) run on teams of RESET_LANES lanes (generated: 1, or
+// WORKGROUP_SIZE on a GPU, `GpuDevice::resets_in_workgroups`): a team takes the queue's entries
+// `team, team + reset_teams(...), ...` and its lanes share each reset (`first` = the lane in the
+// team, `stride` = RESET_LANES), each lane reading and writing the same slots `first,
+// first + stride, ...` of every column. No lane reads a word another lane writes, so they need
+// no barrier: the queue holds pool rows, chosen by `queue_work` before any reset (`pool_row_of`
+// reads the episode counter, which the copy moves on), and a caller that reads outputs the reset
+// overwrites (autoreset's finals) reads them in the same slots.
+
+// Teams of RESET_LANES lanes in a dispatch of `workgroups` workgroups.
+fn reset_teams(workgroups: u32) -> u32 {
+    return workgroups * (WORKGROUP_SIZE / RESET_LANES);
 }
 
-// Reset environment `e` and write its first observation and a zeroed info, keeping this step's
-// reward and flags (SAME_STEP autoreset returns those of the finishing step).
-fn reset_and_observe_keep_step_outputs(e: u32) {
-    // Chosen before the copy, which moves the episode counter on.
-    let row = pool_row_of(e);
-    pool_copy_state(e, row);
-    for (var k = 0u; k < batch.so_info; k++) {
+// Reset environment `e` from pool row `row` and write its first observation; reward 0, flags
+// cleared, info zeroed: this lane's share (`first`, `stride`).
+fn reset_and_observe(e: u32, row: u32, first: u32, stride: u32) {
+    if (first == 0u) {
+        outf[batch.co_reward + e] = 0.0;
+        outu[batch.co_terminated + e] = 0u;
+        outu[batch.co_truncated + e] = 0u;
+    }
+    reset_and_observe_keep_step_outputs(e, row, first, stride);
+}
+
+// Reset environment `e` from pool row `row` and write its first observation and a zeroed info,
+// keeping this step's reward and flags (SAME_STEP autoreset returns those of the finishing
+// step): this lane's share.
+fn reset_and_observe_keep_step_outputs(e: u32, row: u32, first: u32, stride: u32) {
+    pool_copy_state(e, row, first, stride);
+    for (var k = first; k < batch.so_info; k += stride) {
         outf[batch.co_info + e * batch.so_info + k] = 0.0;
     }
-    pool_copy_observation(e, row);
+    pool_copy_observation(e, row, first, stride);
 }

@@ -683,6 +683,7 @@ pub fn shared_head() -> String {
     ));
     out.push_str(&format!("const OBS_TILE: u32 = {OBS_ROWS_TILE}u;\n"));
     out.push_str(ORCA_LISTS_KEPT);
+    out.push_str(RESETS_BY_ONE_LANE);
     out.push_str(&geometry_constants());
     out
 }
@@ -698,6 +699,20 @@ pub fn with_poisoned_orca_lists(src: &str) -> String {
     src.replacen(
         ORCA_LISTS_KEPT,
         "const ORCA_POISON_LISTS: bool = true;\n",
+        1,
+    )
+}
+
+/// The line of [`shared_head`] that gives each reset of a step one lane
+/// (`shaders/common/pool_reset.wgsl`); [`with_resets_in_workgroups`] turns it.
+const RESETS_BY_ONE_LANE: &str = "const RESET_LANES: u32 = 1u;\n";
+
+/// `src` (a prelude, or a shader assembled from one) with each reset of a step run by all the
+/// lanes of a workgroup (`GpuDevice::resets_in_workgroups`).
+pub fn with_resets_in_workgroups(src: &str) -> String {
+    src.replacen(
+        RESETS_BY_ONE_LANE,
+        "const RESET_LANES: u32 = WORKGROUP_SIZE;\n",
         1,
     )
 }
@@ -848,10 +863,15 @@ fn pool_outputs<'a>(
 /// The generated copies of a pool row (`batch.pool_row` words from `row * batch.pool_row`) into
 /// environment `e`'s state (`pool_copy_state`) and first-observation outputs
 /// (`pool_copy_observation`), one loop per column (layout: [`pool_row_words`]), and the row an
-/// environment's next reset copies (`pool_row_of`): the pool holds two rows per environment, the
-/// next episode's and the one after it, in two halves of `batch.n_envs` rows chosen by the parity
-/// of the episode counter the row starts, so that the host can write the second while the
-/// device consumes the first (`GpuBackend`'s refill).
+/// environment's next reset copies (`pool_row_of`, and back: `pool_env_of`): the pool holds two
+/// rows per environment, the next episode's and the one after it, in two halves of
+/// `batch.n_envs` rows chosen by the parity of the episode counter the row starts, so that the
+/// host can write the second while the device consumes the first (`GpuBackend`'s refill).
+///
+/// Each copy takes the slots `first, first + stride, ...` of every column: one lane copies a
+/// whole row with `(0, 1)`, and a workgroup's lanes share one with `(lane, WORKGROUP_SIZE)`, each
+/// lane then writing the same slots of every column, so the lanes of a reset never touch one
+/// word twice (`shaders/common/pool_reset.wgsl`).
 fn pool_functions(state: Columns<'_>, outputs: Columns<'_>) -> String {
     let copy = |name: &str, elem: Elem, prefix: (&str, &str), out: &mut String| {
         let (c, s) = prefix;
@@ -867,13 +887,14 @@ fn pool_functions(state: Columns<'_>, outputs: Columns<'_>) -> String {
             None => format!("e * batch.{s}{name} + j"),
         };
         out.push_str(&format!(
-            "    for (var j = 0u; j < batch.{s}{name}; j++) {{ {buf}[batch.{c}{name} + {at}] = {value}; }}\n\
+            "    for (var j = first; j < batch.{s}{name}; j += stride) {{ {buf}[batch.{c}{name} + {at}] = {value}; }}\n\
              \x20   w += batch.{s}{name};\n"
         ));
     };
     let mut out = String::from(
         "fn pool_row_of(e: u32) -> u32 {\n    return ((su[batch.c_episode + e] + 1u) & 1u) * batch.n_envs + e;\n}\n\
-         fn pool_copy_state(e: u32, row: u32) {\n    var w = row * batch.pool_row;\n",
+         fn pool_env_of(row: u32) -> u32 {\n    return row % batch.n_envs;\n}\n\
+         fn pool_copy_state(e: u32, row: u32, first: u32, stride: u32) {\n    var w = row * batch.pool_row;\n",
     );
     for elem in [Elem::F32, Elem::U32] {
         for &(name, el, _) in state.iter().filter(|c| c.1 == elem) {
@@ -881,7 +902,7 @@ fn pool_functions(state: Columns<'_>, outputs: Columns<'_>) -> String {
         }
     }
     out.push_str(
-        "}\nfn pool_copy_observation(e: u32, row: u32) {\n    var w = row * batch.pool_row + batch.pool_observation;\n",
+        "}\nfn pool_copy_observation(e: u32, row: u32, first: u32, stride: u32) {\n    var w = row * batch.pool_row + batch.pool_observation;\n",
     );
     for &(name, el, _) in pool_outputs(outputs) {
         copy(name, el, ("co_", "so_"), &mut out);

@@ -228,6 +228,14 @@ pub struct GpuDevice {
     /// five times slower. Both give the same bits; a clone with the other setting is how a
     /// caller (or a test) chooses.
     pub stage_observations: bool,
+    /// Whether the resets of a step (`begin_step`, `autoreset`) run each queued environment on
+    /// all the lanes of a workgroup (`backend::wgsl::with_resets_in_workgroups`) instead of one
+    /// lane: a reset copies about 1,500 words from the pool, a chain of loads and stores one
+    /// lane runs at memory latency. On by default on a hardware GPU; off on a software one
+    /// (lavapipe), which runs a workgroup's lanes as SIMD loops on one core and so does more work
+    /// for one reset shared than for one reset per lane. Both give the same bits; a clone with
+    /// the other setting is how a caller (or a test) chooses.
+    pub resets_in_workgroups: bool,
     /// Bytes of a step's per-step outputs per readback piece (`backend::gpu::readback`): a batch
     /// reads them back in one piece per this many bytes, at most four, so that the host copies
     /// one piece while the device copies the next. [`DEFAULT_READBACK_PIECE_BYTES`] unless a
@@ -354,6 +362,7 @@ impl GpuDevice {
             device,
             queue,
             stage_observations: adapter.hardware,
+            resets_in_workgroups: adapter.hardware,
             own_spirv,
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             poison_orca_lists: false,

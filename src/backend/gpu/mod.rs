@@ -476,6 +476,9 @@ impl GpuStages {
         if dev.poison_orca_lists {
             prelude = wgsl::with_poisoned_orca_lists(&prelude);
         }
+        if dev.resets_in_workgroups {
+            prelude = wgsl::with_resets_in_workgroups(&prelude);
+        }
         let pool_staging = staging_buffer(&dev, POOL_STAGING_ROWS * pool_row_words);
         let mut pipelines: Vec<(&'static str, _)> = Vec::with_capacity(stages.len());
         let mut compiled = usize::from(read_compiled);
@@ -529,9 +532,11 @@ impl GpuStages {
         &self.dev.adapter
     }
 
-    /// The adapter, and whether the pipelines run the backend's own SPIR-V (`spirv`: the ORCA
-    /// lists not zeroed), with its storage-buffer bounds checked by the driver or clamped in the
-    /// shaders (`spirv::BufferBounds`), or the WGSL as wgpu compiles it.
+    /// The adapter, and the ways taken: whether the pipelines run the backend's own SPIR-V
+    /// (`spirv`: the ORCA lists not zeroed), with its storage-buffer bounds checked by the driver
+    /// or clamped in the shaders (`spirv::BufferBounds`), or the WGSL as wgpu compiles it; how
+    /// the observations are written (`GpuDevice::stage_observations`) and the resets run
+    /// (`GpuDevice::resets_in_workgroups`).
     pub fn device_description(&self) -> String {
         let shaders = match (self.dev.own_spirv, self.dev.driver_checks_buffers) {
             (true, true) => {
@@ -540,7 +545,20 @@ impl GpuStages {
             (true, false) => "socnav's SPIR-V, buffer bounds clamped in the shaders",
             (false, _) => "WGSL through wgpu",
         };
-        format!("{}; shaders: {shaders}", self.dev.adapter)
+        let observations = if self.dev.stage_observations {
+            "staged through workgroup memory"
+        } else {
+            "written in place"
+        };
+        let resets = if self.dev.resets_in_workgroups {
+            "a workgroup's lanes each"
+        } else {
+            "one lane each"
+        };
+        format!(
+            "{}; shaders: {shaders}; observations {observations}; resets on {resets}",
+            self.dev.adapter
+        )
     }
 
     /// Bytes of the buffers the batch holds on its device (its network's excepted).

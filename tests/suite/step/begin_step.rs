@@ -32,10 +32,23 @@ pub(crate) fn scatter_ends(
 }
 
 /// Contract: `begin_step`: flags cleared, ticks counted, and NEXT_STEP resets copied from the
-/// reset pool equal the CPU's in-place resets (state, first observation, zeroed info).
+/// reset pool equal the CPU's in-place resets (state, first observation, zeroed info), each reset
+/// run by one lane and by a workgroup's lanes (`GpuDevice::resets_in_workgroups`).
 #[test]
 fn begin_step() {
-    for name in ["exp1", "exp3", "lroom_mixed"] {
-        check_parity("begin_step", config(name), 256, 10, Some(scatter_ends));
+    for dev in devices_both_reset_ways() {
+        for name in ["exp1", "exp3", "lroom_mixed"] {
+            let mode = socnav::AutoresetMode::NextStep;
+            let config = config(name);
+            check_parity_on(
+                dev.clone(),
+                "begin_step",
+                config,
+                mode,
+                256,
+                10,
+                Some(scatter_ends),
+            );
+        }
     }
 }

@@ -8,16 +8,28 @@ use crate::step::begin_step::scatter_ends;
 use socnav::AutoresetMode;
 
 /// Contract: `autoreset` in each mode: SAME_STEP keeps the final observation, pairs and info
-/// and resets from the pool keeping the step's reward and flags; NEXT_STEP marks the reset.
+/// and resets from the pool keeping the step's reward and flags, each reset run by one lane and
+/// by a workgroup's lanes (`GpuDevice::resets_in_workgroups`); NEXT_STEP marks the reset.
 #[test]
 fn autoreset() {
-    for mode in [
-        AutoresetMode::SameStep,
-        AutoresetMode::NextStep,
-        AutoresetMode::Disabled,
-    ] {
-        for name in ["exp2", "corridor_mixed"] {
-            check_parity_mode("autoreset", config(name), mode, 256, 10, Some(scatter_ends));
+    for dev in devices_both_reset_ways() {
+        for mode in [
+            AutoresetMode::SameStep,
+            AutoresetMode::NextStep,
+            AutoresetMode::Disabled,
+        ] {
+            for name in ["exp2", "corridor_mixed"] {
+                let config = config(name);
+                check_parity_on(
+                    dev.clone(),
+                    "autoreset",
+                    config,
+                    mode,
+                    256,
+                    10,
+                    Some(scatter_ends),
+                );
+            }
         }
     }
 }
