@@ -182,6 +182,11 @@ pub struct BenchArgs {
     /// The optional per-step outputs each step delivers (on the GPU backend: reads back).
     #[arg(long, value_enum, default_value_t = StepOutputsChoice::All)]
     pub step_outputs: StepOutputsChoice,
+    /// GPU backend only: take the paths a software adapter takes (observations written in place,
+    /// each reset on one lane) instead of the device's defaults, so that a run with and one
+    /// without measure what the hardware paths buy (compare the per-stage shares).
+    #[arg(long)]
+    pub lane_paths: bool,
     /// Print one JSON object on stdout instead of the table.
     #[arg(long)]
     pub json: bool,

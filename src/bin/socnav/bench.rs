@@ -3,7 +3,8 @@
 //! the simulation on the device alone (issue 4's first target); `--padded` delivers 0.1.1's
 //! padded observations (walls omitted; the second target) instead of the full ones; `--halves`
 //! also steps each batch size as two halves on two host threads; `--step-outputs` chooses the
-//! optional per-step outputs delivered (every one by default).
+//! optional per-step outputs delivered (every one by default); `--lane-paths` takes a software
+//! adapter's paths on the GPU, for comparison.
 
 use std::time::Instant;
 
@@ -17,6 +18,13 @@ use crate::run::make_env;
 const WARMUP_STEPS: usize = 50;
 
 pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
+    if a.lane_paths && a.backend != crate::args::BackendChoice::Gpu {
+        return Err(format!(
+            "--lane-paths chooses paths of the GPU backend: give --backend gpu (not {:?})",
+            a.backend
+        )
+        .into());
+    }
     let mut config = Config::from_name_or_path(&a.config)?;
     if a.padded {
         // 0.1.1's `get_padded_observations`: every type padded to its capacity, walls omitted.
@@ -104,7 +112,11 @@ fn warmed_up(
     n: usize,
     seed: u64,
 ) -> Result<(socnav::BatchEnv, Vec<f32>), socnav::SimError> {
-    let mut env = make_env(config.clone(), n, 0, a.backend, a.threads)?;
+    let mut env = if a.lane_paths {
+        on_lane_paths(config, n, 0, a.threads)?
+    } else {
+        make_env(config.clone(), n, 0, a.backend, a.threads)?
+    };
     env.set_step_outputs(a.step_outputs.into());
     env.reset(Some(seed))?;
     let actions: Vec<f32> = [0.8f32, 0.0, 0.3].repeat(n);
@@ -112,6 +124,40 @@ fn warmed_up(
         env.step(Actions::Continuous(&actions))?;
     }
     Ok((env, actions))
+}
+
+/// A batch of `n` environments of `config` (seed `seed`) on the GPU backend with the paths a
+/// software adapter takes (`--lane-paths`).
+#[cfg(feature = "gpu")]
+fn on_lane_paths(
+    config: &Config,
+    n: usize,
+    seed: u64,
+    threads: Option<usize>,
+) -> Result<socnav::BatchEnv, socnav::SimError> {
+    use socnav::backend::gpu::{AdapterPolicy, GpuDevice};
+    let mut dev = GpuDevice::open(AdapterPolicy::Any)?;
+    dev.stage_observations = false;
+    dev.resets_in_workgroups = false;
+    let options = socnav::EnvOptions {
+        n_envs: n,
+        seed,
+        threads,
+        ..Default::default()
+    };
+    socnav::BatchEnv::on_device(config.clone(), options, dev)
+}
+
+#[cfg(not(feature = "gpu"))]
+fn on_lane_paths(
+    _: &Config,
+    _: usize,
+    _: u64,
+    _: Option<usize>,
+) -> Result<socnav::BatchEnv, socnav::SimError> {
+    Err(socnav::SimError::BackendUnavailable(
+        "--lane-paths needs the GPU backend, and this build has none".into(),
+    ))
 }
 
 /// `n` environments as two batches of about `n / 2`, each stepped on a host thread of its own

@@ -88,3 +88,48 @@ fn a_closed_pipe_ends_the_tool_quietly() {
         out.status
     );
 }
+
+/// `socnav bench --lane-paths` takes a software adapter's paths on the GPU backend and says so in
+/// its device line; without `--backend gpu` it is refused with an error naming the backend given.
+#[test]
+fn bench_lane_paths_names_the_paths_it_took() {
+    let bench = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_socnav"))
+            .args([
+                "bench",
+                "--json",
+                "--config",
+                "exp1",
+                "--envs",
+                "3",
+                "--seconds",
+                "0.1",
+            ])
+            .args(args)
+            .output()
+            .expect("socnav runs")
+    };
+    let refused = bench(&["--lane-paths", "--backend", "cpu"]);
+    assert!(!refused.status.success(), "--lane-paths on the CPU ran");
+    let why = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        why.contains("--lane-paths") && why.contains("Cpu"),
+        "unclear refusal: {why}"
+    );
+    if common::gpu::device().is_none() {
+        return;
+    }
+    let out = bench(&["--lane-paths", "--backend", "gpu"]);
+    assert!(
+        out.status.success(),
+        "socnav bench --lane-paths failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+    let device = report["device"].as_str().expect("a device line");
+    assert!(
+        device.contains("observations written in place")
+            && device.contains("resets on one lane each"),
+        "{device}"
+    );
+}
