@@ -188,6 +188,30 @@ fn robust_buffer_access2(_: &wgpu::Device) -> bool {
     false
 }
 
+/// The environment variable that chooses the paths of the devices this process opens: `device`
+/// (the default) takes the adapter's (on a hardware GPU the observation staged through workgroup
+/// memory and each reset on a workgroup's lanes: [`GpuDevice::stage_observations`],
+/// [`GpuDevice::resets_in_workgroups`]), `lane` a software adapter's on any adapter: the way back
+/// should a driver refuse a hardware path's pipeline.
+pub const PATHS_VAR: &str = "SOCNAV_GPU_PATHS";
+
+/// Whether [`PATHS_VAR`] asks for a software adapter's paths on every adapter.
+fn lane_paths_wanted() -> Result<bool, SimError> {
+    lane_paths_from(std::env::var(PATHS_VAR).ok().as_deref())
+}
+
+/// Whether a value of [`PATHS_VAR`] asks for a software adapter's paths; an error names a value
+/// that is neither `device` nor `lane`.
+fn lane_paths_from(value: Option<&str>) -> Result<bool, SimError> {
+    match value {
+        None | Some("" | "device") => Ok(false),
+        Some("lane") => Ok(true),
+        Some(other) => Err(SimError::Usage(format!(
+            "{PATHS_VAR}={other:?}: expected \"device\" (the default) or \"lane\""
+        ))),
+    }
+}
+
 /// Whether [`SHADERS_VAR`] asks for the backend's own SPIR-V.
 fn own_spirv_wanted() -> Result<bool, SimError> {
     own_spirv_from(std::env::var(SHADERS_VAR).ok().as_deref())
@@ -273,12 +297,13 @@ impl std::fmt::Debug for GpuDevice {
 impl GpuDevice {
     /// The device of the best adapter the policy allows (see the module docs), opened on the
     /// first call and shared by every later call with the same policy and the same
-    /// `WGPU_ADAPTER_NAME`/`WGPU_BACKEND`/[`SHADERS_VAR`], so that batches reuse the pipelines
+    /// `WGPU_ADAPTER_NAME`/`WGPU_BACKEND`/[`SHADERS_VAR`]/[`PATHS_VAR`], so that batches reuse the pipelines
     /// it compiled ([`GpuDevice::pipeline_builds`]). A shared device that was lost is forgotten,
     /// and a new one opened in its place.
     pub fn open(policy: AdapterPolicy) -> Result<Self, SimError> {
         type Key = (
             AdapterPolicy,
+            Option<String>,
             Option<String>,
             Option<String>,
             Option<String>,
@@ -290,6 +315,7 @@ impl GpuDevice {
             var("WGPU_ADAPTER_NAME"),
             var("WGPU_BACKEND"),
             var(SHADERS_VAR),
+            var(PATHS_VAR),
         );
         // Held while opening, so that threads asking at once share one device.
         let mut open = OPEN
@@ -310,6 +336,7 @@ impl GpuDevice {
     /// ([`crate::BatchEnv::on_device`]).
     pub fn open_private(policy: AdapterPolicy) -> Result<Self, SimError> {
         let own_spirv = own_spirv_wanted()?;
+        let lane_paths = lane_paths_wanted()?;
         let (instance, backends) = instance();
         let adapters = pollster::block_on(instance.enumerate_adapters(backends));
         let name_filter = std::env::var("WGPU_ADAPTER_NAME")
@@ -361,8 +388,8 @@ impl GpuDevice {
             driver_checks_buffers: own_spirv && robust_buffer_access2(&device),
             device,
             queue,
-            stage_observations: adapter.hardware,
-            resets_in_workgroups: adapter.hardware,
+            stage_observations: adapter.hardware && !lane_paths,
+            resets_in_workgroups: adapter.hardware && !lane_paths,
             own_spirv,
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             poison_orca_lists: false,
@@ -485,5 +512,15 @@ mod tests {
         assert!(!own_spirv_from(Some("wgsl")).unwrap());
         let e = own_spirv_from(Some("SPIR-V")).unwrap_err().to_string();
         assert!(e.contains(SHADERS_VAR) && e.contains("\"SPIR-V\""), "{e}");
+    }
+
+    #[test]
+    fn the_paths_variable_chooses_the_lane_paths_or_names_its_bad_value() {
+        for value in [None, Some(""), Some("device")] {
+            assert!(!lane_paths_from(value).unwrap(), "{value:?}");
+        }
+        assert!(lane_paths_from(Some("lane")).unwrap());
+        let e = lane_paths_from(Some("lanes")).unwrap_err().to_string();
+        assert!(e.contains(PATHS_VAR) && e.contains("\"lanes\""), "{e}");
     }
 }

@@ -256,8 +256,13 @@ impl PipelineCache {
         dev.take_errors().map_err(|e| match e {
             SimError::Device(msg) if dev.own_spirv => SimError::Device(format!(
                 "{msg} (pipeline {label} built from socnav's SPIR-V; {}=wgsl builds it from \
-                 the WGSL through wgpu instead)",
-                super::device::SHADERS_VAR
+                 the WGSL through wgpu instead, and {}=lane takes a software adapter's paths)",
+                super::device::SHADERS_VAR,
+                super::device::PATHS_VAR
+            )),
+            SimError::Device(msg) => SimError::Device(format!(
+                "{msg} (pipeline {label}; {}=lane takes a software adapter's paths)",
+                super::device::PATHS_VAR
             )),
             e => e,
         })?;

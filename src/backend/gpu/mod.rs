@@ -30,7 +30,7 @@ pub(crate) mod spirv;
 
 pub use backend::GpuBackend;
 pub use device::{
-    AdapterPolicy, AdapterSummary, DEFAULT_READBACK_PIECE_BYTES, GpuDevice, SHADERS_VAR,
+    AdapterPolicy, AdapterSummary, DEFAULT_READBACK_PIECE_BYTES, GpuDevice, PATHS_VAR, SHADERS_VAR,
     list_adapters,
 };
 pub use sngnn_net::GpuNet;
