@@ -670,11 +670,25 @@ fn orca_obstacles_store(e: u32) {
     su[batch.c_n_obstacle_vertices + e] = n;
 }
 
+// With ORCA_POISON_LISTS (a test's: `GpuDevice::poison_orca_lists`), every word of environment
+// e's working memory made one no list, set or stack holds, so that a word read before it is
+// written shows in the results (the working memory is not zeroed: backend::gpu::spirv).
+fn orca_obstacles_poison_region(e: u32) {
+    if (!ORCA_POISON_LISTS) {
+        return;
+    }
+    let r = orca_obstacles_region(e);
+    for (var k = 0u; k < batch.s_scratch; k++) {
+        scratch[r + k] = 0xffffffffu;
+    }
+}
+
 // Rust `rebuild_if_dirty` (see the header).
 fn orca_obstacles_rebuild_if_dirty(e: u32) {
     if (su[batch.c_obstacles_dirty + e] == 0u) {
         return;
     }
+    orca_obstacles_poison_region(e);
     orca_obstacles_gather(e, orca_obstacles_list(e));
     orca_obstacles_process(e);
     orca_obstacles_store(e);

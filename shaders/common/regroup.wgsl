@@ -7,7 +7,8 @@
 // `regroup_to_lone_static`, `regroup_stop` and `regroup_canonicalize` (stable insertion sorts of
 // the slots back into observation order, the permutation of every column of each slot kind by the
 // prelude's generated `state_permute_*`, the remapping of every slot index, the recount, the
-// renumbering of the lists and the rebuild of the ORCA obstacles). Library file (no entry point,
+// renumbering of the lists; the rebuild of the ORCA obstacles that Rust runs there follows in the
+// pass's `rebuild` dispatch, `regroup_rebuild_queued`). Library file (no entry point,
 // reads and writes the prelude's `sf`/`su`). Same operations in the same order as the Rust file;
 // change both in the same commit. `i` arguments are global human slots (as the Rust `usize`
 // slots), `e` the environment.
@@ -283,6 +284,17 @@ fn regroup_canonicalize(e: u32) {
     regroup_remap(e, &perms);
     // Compact list positions, as a loaded document numbers them.
     regroup_number_lists(e);
+    // Rust rebuilds the obstacles here; on the GPU the pass's `rebuild` dispatch does, after
+    // `main` (`regroup_rebuild_queued`): nothing before it reads the `ov_*` columns.
     su[batch.c_obstacles_dirty + e] = 1u;
-    orca_obstacles_rebuild_if_dirty(e);
+}
+
+// The ORCA obstacle rebuild of entry `k` of queue `queue` (a pass's environments, which its
+// `main` may have regrouped), if it has one and its obstacles are dirty. The rebuild entry points
+// of the passes that regroup are generated over it (src/backend/wgsl.rs, `rebuild_entries`).
+fn regroup_rebuild_queued(queue: u32, k: u32) {
+    let e = rare_env(queue, k);
+    if (e != NONE) {
+        orca_obstacles_rebuild_if_dirty(e);
+    }
 }

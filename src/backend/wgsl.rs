@@ -164,6 +164,82 @@ pub const RARE_WORK_STAGES: [&str; 4] = ["begin_step", "formation", "social_even
 /// The entry point of a [`RARE_WORK_STAGES`] shader that queues its environments.
 pub const QUEUE_ENTRY: &str = "queue_work";
 
+/// The passes whose `main` regroups environments (`regroup_canonicalize` in
+/// `shaders/common/regroup.wgsl`), leaving their ORCA obstacles to rebuild: a third entry point,
+/// generated (`rebuild_entries`), rebuilds them after `main`, before any later stage reads the
+/// `ov_*` columns (only the ORCA velocities of the next step's `motion` and `crowd` do). One
+/// rebuild per environment and pass, at the end of it, gives the columns the CPU's stage leaves,
+/// since a rebuild depends on the obstacles alone: the CPU rebuilds inside each regrouping.
+pub const REBUILD_PASSES: [&str; 2] = ["formation", "social_events"];
+
+/// The entry point of a [`REBUILD_PASSES`] shader that rebuilds the obstacles of one queued
+/// environment per lane, its working memory in the environment's region of `scratch`.
+pub const REBUILD_ENTRY: &str = "rebuild";
+
+/// The entry point of a [`REBUILD_PASSES`] shader that rebuilds the obstacles of one queued
+/// environment per workgroup, in its first lane, its working memory in workgroup memory (built
+/// from [`with_obstacles_in_workgroup`]'s source; a dispatch of one workgroup per environment of
+/// the batch): the GPU backend's choice on hardware adapters
+/// (`GpuDevice::obstacles_in_workgroups`), where a rebuild over `scratch` is a chain of dependent
+/// storage-buffer accesses (2.4 of exp2's 5.1 ms a step on an H100). One environment per
+/// invocation: llvmpipe ends the loops of an invocation after 65,535 iterations in all.
+pub const REBUILD_IN_WORKGROUPS_ENTRY: &str = "rebuild_in_workgroups";
+
+/// The [`REBUILD_PASSES`] pass `pass`'s two rebuild entry points, over its queue.
+fn rebuild_entries(pass: &str) -> String {
+    let queue = format!("RARE_{}", pass.to_uppercase());
+    format!(
+        "\n// The ORCA obstacle rebuilds of the environments `main` regrouped (generated: \
+         src/backend/wgsl.rs, `rebuild_entries`).\n\
+         @compute @workgroup_size(WORKGROUP_SIZE)\n\
+         fn {REBUILD_ENTRY}(@builtin(global_invocation_id) gid: vec3<u32>) {{\n\
+         \x20   regroup_rebuild_queued({queue}, gid.x);\n}}\n\
+         @compute @workgroup_size(WORKGROUP_SIZE)\n\
+         fn {REBUILD_IN_WORKGROUPS_ENTRY}(\n\
+         \x20   @builtin(workgroup_id) wid: vec3<u32>,\n\
+         \x20   @builtin(num_workgroups) groups: vec3<u32>,\n\
+         \x20   @builtin(local_invocation_index) lane: u32,\n) {{\n\
+         \x20   if (lane == 0u) {{\n\
+         \x20       regroup_rebuild_queued({queue}, wid.x + wid.y * groups.x);\n    }}\n}}\n"
+    )
+}
+
+/// Words of workgroup memory [`REBUILD_IN_WORKGROUPS_ENTRY`] keeps an environment's obstacle
+/// region in ([`ObstacleScratch`]): 16 KiB, the workgroup memory every WebGPU adapter has (wgpu's
+/// default `max_compute_workgroup_storage_size`). Every shipped config's region fits (stress,
+/// the largest, 3,348 words); a larger one stays in the `scratch` buffer.
+pub const OBSTACLES_IN_WORKGROUP_WORDS: usize = 4096;
+
+/// The obstacle library's region function as `shaders/common/orca_obstacles.wgsl` writes it.
+const OBSTACLE_REGION_IN_SCRATCH: &str =
+    "fn orca_obstacles_region(e: u32) -> u32 {\n    return e * batch.s_scratch;\n}\n";
+
+/// `src`, a [`REBUILD_PASSES`] pass assembled by [`assemble_pass`], with the obstacle library's
+/// working memory (the polygon list, the processed set, the tree build's stack) in a workgroup
+/// array of [`OBSTACLES_IN_WORKGROUP_WORDS`] words instead of the environment's region of
+/// `scratch`: one dependent chain of accesses at the latency of workgroup memory rather than of
+/// a storage buffer. Sound for [`REBUILD_IN_WORKGROUPS_ENTRY`] alone, which rebuilds one
+/// environment per workgroup in its first lane, and because nothing in the region outlives the
+/// call that fills it; never compile another entry point from it (lanes would share the array).
+/// `None` when `src` has no obstacle library.
+pub fn with_obstacles_in_workgroup(src: &str) -> Option<String> {
+    if !src.contains(OBSTACLE_REGION_IN_SCRATCH) {
+        return None;
+    }
+    let out = src
+        .replacen(
+            OBSTACLE_REGION_IN_SCRATCH,
+            "fn orca_obstacles_region(e: u32) -> u32 {\n    return 0u;\n}\n",
+            1,
+        )
+        .replace("scratch[", "obstacle_wg[");
+    Some(format!(
+        "{out}\n// The obstacle library's working memory (src/backend/wgsl.rs, \
+         `with_obstacles_in_workgroup`).\nvar<workgroup> obstacle_wg: array<u32, \
+         {OBSTACLES_IN_WORKGROUP_WORDS}>;\n"
+    ))
+}
+
 /// Words of the `rare` binding for `n_envs` environments: the counters, then the lists.
 pub fn rare_work_words(n_envs: usize) -> usize {
     RARE_WORK_STAGES.len() * (1 + n_envs)
@@ -1165,10 +1241,16 @@ pub fn assemble(path: &str, prelude: &str) -> Result<String, String> {
 
 /// The complete source of pass `pass` ([`passes`]) for a batch: for a fused pass
 /// ([`FUSED_PASSES`]), the prelude, every member's requirements and file (each file once), then
-/// the generated entry point; for any other, [`assemble`] of `<pass>.wgsl`.
+/// the generated entry point; for any other, [`assemble`] of `<pass>.wgsl`, with the generated
+/// rebuild entry points of a [`REBUILD_PASSES`] pass ([`REBUILD_ENTRY`],
+/// [`REBUILD_IN_WORKGROUPS_ENTRY`]).
 pub fn assemble_pass(pass: &str, prelude: &str) -> Result<String, String> {
     let Some((_, members)) = FUSED_PASSES.iter().find(|(p, _)| *p == pass) else {
-        return assemble(&format!("{pass}.wgsl"), prelude);
+        let src = assemble(&format!("{pass}.wgsl"), prelude)?;
+        if REBUILD_PASSES.contains(&pass) {
+            return Ok(src + &rebuild_entries(pass));
+        }
+        return Ok(src);
     };
     let mut order: Vec<&'static str> = Vec::new();
     for file in pass_files(pass) {

@@ -190,9 +190,10 @@ fn robust_buffer_access2(_: &wgpu::Device) -> bool {
 
 /// The environment variable that chooses the paths of the devices this process opens: `device`
 /// (the default) takes the adapter's (on a hardware GPU the observation staged through workgroup
-/// memory and each reset on a workgroup's lanes: [`GpuDevice::stage_observations`],
-/// [`GpuDevice::resets_in_workgroups`]), `lane` a software adapter's on any adapter: the way back
-/// should a driver refuse a hardware path's pipeline.
+/// memory, each reset on a workgroup's lanes and each obstacle rebuild in workgroup memory:
+/// [`GpuDevice::stage_observations`], [`GpuDevice::resets_in_workgroups`],
+/// [`GpuDevice::obstacles_in_workgroups`]), `lane` a software adapter's on any adapter: the way
+/// back should a driver refuse a hardware path's pipeline.
 pub const PATHS_VAR: &str = "SOCNAV_GPU_PATHS";
 
 /// Whether [`PATHS_VAR`] asks for a software adapter's paths on every adapter.
@@ -260,6 +261,14 @@ pub struct GpuDevice {
     /// for one reset shared than for one reset per lane. Both give the same bits; a clone with
     /// the other setting is how a caller (or a test) chooses.
     pub resets_in_workgroups: bool,
+    /// Whether the passes that regroup (`backend::wgsl::REBUILD_PASSES`) rebuild the ORCA
+    /// obstacles of each regrouped environment in a workgroup of its own, the rebuild's working
+    /// memory in workgroup memory (`backend::wgsl::REBUILD_IN_WORKGROUPS_ENTRY`), instead of one
+    /// per lane over the `scratch` buffer, a chain of dependent storage-buffer accesses (2.4 of
+    /// exp2's 5.1 ms a step on an H100). On by default on a hardware GPU; off on a software one.
+    /// Both give the same bits; a clone with the other setting is how a caller (or a test)
+    /// chooses.
+    pub obstacles_in_workgroups: bool,
     /// Bytes of a step's per-step outputs per readback piece (`backend::gpu::readback`): a batch
     /// reads them back in one piece per this many bytes, at most four, so that the host copies
     /// one piece while the device copies the next. [`DEFAULT_READBACK_PIECE_BYTES`] unless a
@@ -390,6 +399,7 @@ impl GpuDevice {
             queue,
             stage_observations: adapter.hardware && !lane_paths,
             resets_in_workgroups: adapter.hardware && !lane_paths,
+            obstacles_in_workgroups: adapter.hardware && !lane_paths,
             own_spirv,
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             poison_orca_lists: false,

@@ -479,6 +479,16 @@ impl GpuStages {
         if dev.resets_in_workgroups {
             prelude = wgsl::with_resets_in_workgroups(&prelude);
         }
+        // The obstacle rebuilds in workgroup memory where the device asks for it and the
+        // environment's region fits.
+        let fits = wgsl::ObstacleScratch::of(&columns).words <= wgsl::OBSTACLES_IN_WORKGROUP_WORDS
+            && dev.limits.max_compute_workgroup_storage_size as usize
+                >= 4 * wgsl::OBSTACLES_IN_WORKGROUP_WORDS;
+        let rebuild = if dev.obstacles_in_workgroups && fits {
+            Rebuild::InWorkgroups
+        } else {
+            Rebuild::PerLane
+        };
         let pool_staging = staging_buffer(&dev, POOL_STAGING_ROWS * pool_row_words);
         let mut pipelines: Vec<(&'static str, _)> = Vec::with_capacity(stages.len());
         let mut compiled = usize::from(read_compiled);
@@ -487,7 +497,7 @@ impl GpuStages {
             if pipelines.iter().any(|(p, _)| *p == pass) {
                 continue;
             }
-            let built = build_pass(&dev, stage, pass, &groups, &prelude)?;
+            let built = build_pass(&dev, stage, pass, &groups, &prelude, rebuild)?;
             compiled += built.as_ref().map_or(0, |b| b.1);
             pipelines.push((pass, built.map(|b| b.0)));
         }
@@ -535,8 +545,9 @@ impl GpuStages {
     /// The adapter, and the ways taken: whether the pipelines run the backend's own SPIR-V
     /// (`spirv`: the ORCA lists not zeroed), with its storage-buffer bounds checked by the driver
     /// or clamped in the shaders (`spirv::BufferBounds`), or the WGSL as wgpu compiles it; how
-    /// the observations are written (`GpuDevice::stage_observations`) and the resets run
-    /// (`GpuDevice::resets_in_workgroups`).
+    /// the observations are written (`GpuDevice::stage_observations`), the resets run
+    /// (`GpuDevice::resets_in_workgroups`) and the obstacles are rebuilt
+    /// (`GpuDevice::obstacles_in_workgroups`, where the batch's passes rebuild any).
     pub fn device_description(&self) -> String {
         let shaders = match (self.dev.own_spirv, self.dev.driver_checks_buffers) {
             (true, true) => {
@@ -555,8 +566,18 @@ impl GpuStages {
         } else {
             "one lane each"
         };
+        let in_workgroups = self.pipelines.iter().any(|(_, p)| {
+            p.as_ref()
+                .is_some_and(|p| matches!(p.rebuild, Some((_, Rebuild::InWorkgroups))))
+        });
+        let rebuilds = if in_workgroups {
+            "in workgroup memory"
+        } else {
+            "over the scratch buffer"
+        };
         format!(
-            "{}; shaders: {shaders}; observations {observations}; resets on {resets}",
+            "{}; shaders: {shaders}; observations {observations}; resets on {resets}; obstacle \
+             rebuilds {rebuilds}",
             self.dev.adapter
         )
     }
@@ -942,6 +963,21 @@ impl GpuStages {
             pass.set_bind_group(0, &self.bind_groups[0], &[members * self.mask_stride]);
         }
         pass.dispatch_workgroups(workgroups, 1, 1);
+        match &pipeline.rebuild {
+            Some((rebuild, Rebuild::PerLane)) => {
+                pass.set_pipeline(rebuild);
+                pass.dispatch_workgroups(workgroups, 1, 1);
+            }
+            Some((rebuild, Rebuild::InWorkgroups)) => {
+                // A workgroup per environment of the batch (a queued one each), in rows of at
+                // most the device's workgroups per dimension.
+                let per_dimension = self.dev.limits.max_compute_workgroups_per_dimension;
+                let (x, y) = workgroup_grid(self.n_envs, per_dimension);
+                pass.set_pipeline(rebuild);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            None => {}
+        }
         if let Some(rows) = &pipeline.rows
             && dispatch.runs(wgsl::OBS_ROWS_STAGE)
         {
@@ -1198,6 +1234,25 @@ struct PassPipelines {
     queue: Option<wgpu::ComputePipeline>,
     main: wgpu::ComputePipeline,
     rows: Option<wgpu::ComputePipeline>,
+    /// A [`wgsl::REBUILD_PASSES`] pass's rebuild after `main`, and how it runs.
+    rebuild: Option<(wgpu::ComputePipeline, Rebuild)>,
+}
+
+/// How a pass rebuilds the ORCA obstacles of its regrouped environments.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Rebuild {
+    /// [`wgsl::REBUILD_ENTRY`]: one queued environment per lane, over `scratch`.
+    PerLane,
+    /// [`wgsl::REBUILD_IN_WORKGROUPS_ENTRY`]: one per workgroup, in workgroup memory; dispatched
+    /// with a workgroup per environment of the batch.
+    InWorkgroups,
+}
+
+/// A grid of at least `n` workgroups in rows of at most `per_dimension`: (columns, rows).
+fn workgroup_grid(n: usize, per_dimension: u32) -> (u32, u32) {
+    let n = u32::try_from(n.max(1)).unwrap_or(u32::MAX);
+    let columns = n.min(per_dimension.max(1));
+    (columns, n.div_ceil(columns))
 }
 
 /// A pass's pipelines, and how many of them getting them compiled.
@@ -1214,6 +1269,7 @@ fn build_pass(
     pass: &'static str,
     groups: &[Vec<Binding>],
     prelude: &str,
+    rebuild: Rebuild,
 ) -> Result<Built, SimError> {
     let has_sngnn = groups.len() > 1;
     let missing_graphs = || {
@@ -1261,7 +1317,26 @@ fn build_pass(
     let queue = entry(wgsl::RARE_WORK_STAGES.contains(&stage), wgsl::QUEUE_ENTRY)?;
     let staged = pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE) && dev.stage_observations;
     let rows = entry(staged, wgsl::OBS_ROWS_ENTRY)?;
-    Ok(Some((PassPipelines { queue, main, rows }, compiled)))
+    let rebuild = match (wgsl::REBUILD_PASSES.contains(&pass), rebuild) {
+        (false, _) => None,
+        (true, Rebuild::PerLane) => entry(true, wgsl::REBUILD_ENTRY)?.map(|p| (p, rebuild)),
+        (true, Rebuild::InWorkgroups) => {
+            let moved = wgsl::with_obstacles_in_workgroup(&src).ok_or_else(|| {
+                SimError::Internal(format!("pass {pass} has no ORCA obstacle library"))
+            })?;
+            let entry = wgsl::REBUILD_IN_WORKGROUPS_ENTRY;
+            let (p, new) = dev.pipelines.pipeline(dev, pass, groups, &moved, entry)?;
+            compiled += usize::from(new);
+            Some((p, rebuild))
+        }
+    };
+    let pipelines = PassPipelines {
+        queue,
+        main,
+        rows,
+        rebuild,
+    };
+    Ok(Some((pipelines, compiled)))
 }
 
 #[cfg(test)]
@@ -1272,6 +1347,21 @@ mod tests {
 
     fn passes<'a>(dispatches: &[Dispatch<'a>]) -> Vec<(&'a str, Option<u32>)> {
         dispatches.iter().map(|d| (d.pass, d.members)).collect()
+    }
+
+    /// One workgroup per environment, in rows of at most the device's workgroups per dimension:
+    /// never fewer workgroups than environments, never a dimension past the limit.
+    #[test]
+    fn a_workgroup_grid_covers_the_batch_within_the_limit() {
+        use super::workgroup_grid;
+        assert_eq!(workgroup_grid(65_536, 65_535), (65_535, 2));
+        assert_eq!(workgroup_grid(100, 65_535), (100, 1));
+        assert_eq!(workgroup_grid(0, 65_535), (1, 1));
+        for (n, limit) in [(1_000_001, 65_535), (7, 3), (9, 3)] {
+            let (x, y) = workgroup_grid(n, limit);
+            assert!(x <= limit && y <= limit, "{n}, {limit}: {x} x {y}");
+            assert!((x as usize) * (y as usize) >= n, "{n}, {limit}: {x} x {y}");
+        }
     }
 
     /// A step without SNGNN-v2 runs each fused pass in one dispatch with every member; eleven

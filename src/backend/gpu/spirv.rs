@@ -12,6 +12,14 @@
 //! variable whose type is one of [`UNZEROED_TYPES`] is dropped from the module, which leaves the
 //! arrays' unwritten entries undefined, as their declarations say.
 //!
+//! Nor is workgroup memory zeroed, which WGSL also promises and naga spells as a store of zero
+//! into every workgroup variable at the start of each workgroup. The shaders' two workgroup
+//! arrays are read only where written: the observation's tile (`rows` in
+//! `shaders/observation.wgsl` reads the values its lanes stored before the barrier) and the
+//! obstacle rebuild's working memory (`backend::wgsl::with_obstacles_in_workgroup`, written
+//! before read as in `scratch`, which a test poisons: `GpuDevice::poison_orca_lists`). Zeroing
+//! the latter's 16 KiB in every workgroup made llvmpipe take minutes to compile its pipelines.
+//!
 //! On Vulkan (lavapipe included), through wgpu's `PASSTHROUGH_SHADERS`, the pipelines are built
 //! from this SPIR-V unless `SOCNAV_SHADERS=wgsl` ([`super::SHADERS_VAR`]); elsewhere from the
 //! WGSL, as wgpu compiles it. The results are the same: only entries that are written before
@@ -89,9 +97,9 @@ fn naga_spirv(
 
 /// The options of wgpu's Vulkan backend that bear on a compute shader (wgpu-hal's
 /// `naga_options` with its default runtime checks): array indices clamped, storage-buffer
-/// indices clamped unless the driver checks them (`buffers`), loops bounded, workgroup memory
-/// zeroed by the shader. `DEBUG` names the types, which is how [`without_zero_initialisers`]
-/// finds the variables.
+/// indices clamped unless the driver checks them (`buffers`), loops bounded; except that
+/// workgroup memory is not zeroed (see the module docs). `DEBUG` names the types, which is how
+/// [`without_zero_initialisers`] finds the variables.
 fn writer_options(buffers: BufferBounds) -> spv::Options<'static> {
     let clamp = naga::proc::BoundsCheckPolicy::Restrict;
     spv::Options {
@@ -106,7 +114,7 @@ fn writer_options(buffers: BufferBounds) -> spv::Options<'static> {
             image_load: clamp,
             binding_array: naga::proc::BoundsCheckPolicy::Unchecked,
         },
-        zero_initialize_workgroup_memory: spv::ZeroInitializeWorkgroupMemoryMode::Polyfill,
+        zero_initialize_workgroup_memory: spv::ZeroInitializeWorkgroupMemoryMode::None,
         force_loop_bounding: true,
         ..spv::Options::default()
     }

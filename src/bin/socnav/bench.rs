@@ -139,6 +139,7 @@ fn on_lane_paths(
     let mut dev = GpuDevice::open(AdapterPolicy::Any)?;
     dev.stage_observations = false;
     dev.resets_in_workgroups = false;
+    dev.obstacles_in_workgroups = false;
     let options = socnav::EnvOptions {
         n_envs: n,
         seed,

@@ -129,7 +129,8 @@ fn bench_lane_paths_names_the_paths_it_took() {
     let device = report["device"].as_str().expect("a device line");
     assert!(
         device.contains("observations written in place")
-            && device.contains("resets on one lane each"),
+            && device.contains("resets on one lane each")
+            && device.contains("obstacle rebuilds over the scratch buffer"),
         "{device}"
     );
 }

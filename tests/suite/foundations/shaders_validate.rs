@@ -967,8 +967,9 @@ fn main() {
 
 /// The passes of the stages whose rare work runs out of the hot pass (`wgsl::RARE_WORK_STAGES`)
 /// have the entry point that queues their environments besides `main`, the pass of the
-/// observation has the one that moves its staged values into rows (`wgsl::OBS_ROWS_ENTRY`), and
-/// no other pass has a second one.
+/// observation has the one that moves its staged values into rows (`wgsl::OBS_ROWS_ENTRY`), the
+/// passes that regroup the two that rebuild ORCA obstacles (`wgsl::REBUILD_PASSES`), and no
+/// other pass has another.
 #[test]
 fn passes_have_their_second_entry_points() {
     for pass in wgsl::passes() {
@@ -986,8 +987,65 @@ fn passes_have_their_second_entry_points() {
         if pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE) {
             expected.push(wgsl::OBS_ROWS_ENTRY);
         }
+        if wgsl::REBUILD_PASSES.contains(&pass) {
+            expected.extend([wgsl::REBUILD_ENTRY, wgsl::REBUILD_IN_WORKGROUPS_ENTRY]);
+        }
         expected.sort_unstable();
         assert_eq!(entries, expected, "{pass}");
+    }
+}
+
+/// The passes that rebuild ORCA obstacles (`wgsl::REBUILD_PASSES`) validate with the obstacle
+/// library's working memory in a workgroup array (`wgsl::with_obstacles_in_workgroup`), as the
+/// GPU backend builds their `wgsl::REBUILD_IN_WORKGROUPS_ENTRY` on hardware adapters: no access
+/// to `scratch` left, one workgroup variable of `OBSTACLES_IN_WORKGROUP_WORDS` words, which every
+/// shipped config's obstacle region fits; no pass but those regroups, and none of their `main`s
+/// rebuilds (the rebuild entry points do, after it).
+#[test]
+fn rebuild_passes_keep_their_obstacles_in_workgroup_memory() {
+    for pass in wgsl::passes() {
+        let src = wgsl::assemble_pass(pass, &exp2_prelude()).expect("assembled");
+        if !wgsl::REBUILD_PASSES.contains(&pass) {
+            assert!(
+                !src.contains("regroup_canonicalize("),
+                "{pass}: a pass that regroups without rebuilding after it"
+            );
+            continue;
+        }
+        let moved = wgsl::with_obstacles_in_workgroup(&src)
+            .unwrap_or_else(|| panic!("{pass}: no obstacle library"));
+        assert!(!moved.contains("scratch["), "{pass}: scratch still read");
+        let module = validate_source(&moved, &format!("pass {pass} (obstacles in workgroup)"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let workgroup: Vec<u32> = module
+            .global_variables
+            .iter()
+            .filter(|(_, v)| v.space == naga::AddressSpace::WorkGroup)
+            .map(|(_, v)| match module.types[v.ty].inner {
+                naga::TypeInner::Array {
+                    size: naga::ArraySize::Constant(n),
+                    ..
+                } => n.get(),
+                _ => 0,
+            })
+            .collect();
+        assert_eq!(
+            workgroup,
+            [wgsl::OBSTACLES_IN_WORKGROUP_WORDS as u32],
+            "{pass}: one workgroup array"
+        );
+    }
+    for name in socnav::Config::shipped_names() {
+        let env = socnav::BatchEnv::new(
+            socnav::Config::from_name_or_path(name).expect("shipped"),
+            socnav::EnvOptions::default(),
+        )
+        .expect("batch");
+        let words = wgsl::ObstacleScratch::of(&env.state().expect("state").columns()).words;
+        assert!(
+            words <= wgsl::OBSTACLES_IN_WORKGROUP_WORDS,
+            "{name}: {words} words of obstacle region"
+        );
     }
 }
 

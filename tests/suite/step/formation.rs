@@ -19,7 +19,12 @@ use socnav::systems::social_events;
 /// walkers brought to their slots (the crowd forms), held together near the centre for the last
 /// step before an approximate crowd, partly arrived, or left walking; laptop walkers brought to
 /// their seats or not.
-fn perturb_formation(s: &mut BatchState, _: &mut Outputs, p: &StepParams, rng: &mut RngStream) {
+pub(crate) fn perturb_formation(
+    s: &mut BatchState,
+    _: &mut Outputs,
+    p: &StepParams,
+    rng: &mut RngStream,
+) {
     next_run(s, rng);
     for e in 0..s.n_envs {
         let walkers = free_walkers(s, e);
