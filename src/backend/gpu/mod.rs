@@ -1248,11 +1248,12 @@ enum Rebuild {
     InWorkgroups,
 }
 
-/// A grid of at least `n` workgroups in rows of at most `per_dimension`: (columns, rows).
+/// A grid of at least `n` workgroups, and fewer than `n` + rows, in as few rows of at most
+/// `per_dimension` as hold them: (columns, rows).
 fn workgroup_grid(n: usize, per_dimension: u32) -> (u32, u32) {
     let n = u32::try_from(n.max(1)).unwrap_or(u32::MAX);
-    let columns = n.min(per_dimension.max(1));
-    (columns, n.div_ceil(columns))
+    let rows = n.div_ceil(per_dimension.max(1));
+    (n.div_ceil(rows), rows)
 }
 
 /// A pass's pipelines, and how many of them getting them compiled.
@@ -1350,17 +1351,22 @@ mod tests {
     }
 
     /// One workgroup per environment, in rows of at most the device's workgroups per dimension:
-    /// never fewer workgroups than environments, never a dimension past the limit.
+    /// never fewer workgroups than environments, less than a row more, never a dimension past
+    /// the limit.
     #[test]
     fn a_workgroup_grid_covers_the_batch_within_the_limit() {
         use super::workgroup_grid;
-        assert_eq!(workgroup_grid(65_536, 65_535), (65_535, 2));
+        assert_eq!(workgroup_grid(65_536, 65_535), (32_768, 2));
         assert_eq!(workgroup_grid(100, 65_535), (100, 1));
         assert_eq!(workgroup_grid(0, 65_535), (1, 1));
-        for (n, limit) in [(1_000_001, 65_535), (7, 3), (9, 3)] {
+        for (n, limit) in [(1_000_001, 65_535), (7, 3), (9, 3), (131_071, 65_535)] {
             let (x, y) = workgroup_grid(n, limit);
             assert!(x <= limit && y <= limit, "{n}, {limit}: {x} x {y}");
-            assert!((x as usize) * (y as usize) >= n, "{n}, {limit}: {x} x {y}");
+            let total = (x as usize) * (y as usize);
+            assert!(
+                total >= n && total < n + y as usize,
+                "{n}, {limit}: {x} x {y}"
+            );
         }
     }
 
