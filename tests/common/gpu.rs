@@ -209,14 +209,16 @@ pub fn check_parity_mode(
 }
 
 /// The shared device with the other observation path than its default
-/// (`GpuDevice::stage_observations`), the other way of running the step's resets
-/// (`GpuDevice::resets_in_workgroups`) and every step's readback in the most pieces
+/// (`GpuDevice::stage_observations`), the other ways of running the step's resets
+/// (`GpuDevice::resets_in_workgroups`) and its obstacle rebuilds
+/// (`GpuDevice::obstacles_in_workgroups`), and every step's readback in the most pieces
 /// (`GpuDevice::readback_piece_bytes` of 1 KiB), so that tests cover the paths a test-sized batch
 /// on this device would not take.
 pub fn device_other_paths() -> Option<GpuDevice> {
     let mut dev = device()?;
     dev.stage_observations = !dev.stage_observations;
     dev.resets_in_workgroups = !dev.resets_in_workgroups;
+    dev.obstacles_in_workgroups = !dev.obstacles_in_workgroups;
     dev.readback_piece_bytes = 1 << 10;
     Some(dev)
 }

@@ -271,19 +271,24 @@ fn reads_back_only_what_it_hands_the_host(
     assert_eq!(gpu.host_path().expect("host path").full_reads, full + 1);
 }
 
-/// Contract: whole steps on the other observation path than the device's default (staged
-/// slot-major and moved into rows through workgroup memory, or written into the rows in place:
-/// `GpuDevice::stage_observations`), read back in four pieces, hand the host the CPU's outputs
+/// Contract: whole steps on the other paths than the device's defaults (the observation staged
+/// slot-major and moved into rows through workgroup memory, or written into the rows in place;
+/// the resets and the obstacle rebuilds on a workgroup's lanes, or on one lane each:
+/// `common::gpu::device_other_paths`), read back in four pieces, hand the host the CPU's outputs
 /// bit for bit, SAME_STEP finals (copied from the rows after the move) included, over episodes
-/// that end.
+/// that end and social events that regroup.
 #[test]
 fn the_other_observation_path_steps_as_the_cpu() {
     use socnav::AutoresetMode;
+    use socnav::spec::{N_EVENTS, event};
     let Some(other) = device_other_paths() else {
         return;
     };
     let mut c = config("exp2");
     c.episode.length = 10;
+    // exp2's laptop events (0.01 a step each) made frequent, so that environments regroup.
+    c.events.laptop_dispersal_probability = 0.2;
+    c.events.laptop_formation_probability = 0.2;
     let n = 67;
     let options = socnav::EnvOptions {
         n_envs: n,
@@ -297,19 +302,28 @@ fn the_other_observation_path_steps_as_the_cpu() {
     gpu.reset(None).expect("reset");
     let mut twins = Twins::new(cpu, gpu);
     let mut rng = socnav::rng::RngStream::new(4, 0);
-    let mut finals = 0;
+    let (mut finals, mut regroupings) = (0, 0);
+    // The events after which an environment regroups, and its obstacles are rebuilt.
+    let regrouping = [
+        event::CROWD_DISPERSAL,
+        event::LAPTOP_DISPERSAL,
+        event::CROWD_FORMATION_COMPLETE,
+        event::CROWD_FORMATION_APPROXIMATE,
+        event::LAPTOP_FORMATION_COMPLETE,
+    ];
     for _ in 0..30 {
         twins.step(&random_actions(&mut rng, n, false));
-        finals += twins
-            .cpu
-            .outputs()
-            .has_final
-            .iter()
-            .filter(|&&f| f != 0)
-            .count();
+        let out = twins.cpu.outputs();
+        finals += out.has_final.iter().filter(|&&f| f != 0).count();
+        regroupings += out
+            .events
+            .chunks_exact(N_EVENTS)
+            .map(|ev| regrouping.iter().map(|&k| ev[k] as usize).sum::<usize>())
+            .sum::<usize>();
     }
-    twins.finish("the other observation path");
+    twins.finish("the other paths");
     assert!(finals > n, "only {finals} SAME_STEP finals");
+    assert!(regroupings > 0, "no regrouping: the rebuilds went untested");
 }
 
 /// Stage timing on the GPU backend (what `socnav bench`'s per-stage shares come from): every
