@@ -8,7 +8,7 @@
 // operations and draws in the same order as the Rust file; change both in the same commit. The
 // regrouping that ends a completed formation (`regroup_canonicalize`, at the end of the Rust
 // `end_crowd_formation` and `sit_down`) is called by `main` right after them, from one place
-// (Mesa inlines every call, and each copy of the regrouping and obstacle rebuild costs llvmpipe
+// (Mesa inlines every call, and each copy of the regrouping costs llvmpipe
 // compile time).
 //
 // Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every

@@ -9,7 +9,7 @@
 // place_group_cap() (common/place.wgsl). A dispersal regroups the environment
 // (`regroup_canonicalize`) at the end of the Rust `disperse_group` and `end_laptop_use`; here
 // `main` calls it right after them, from one place (Mesa inlines every call, and each copy of
-// the regrouping and obstacle rebuild costs llvmpipe compile time).
+// the regrouping costs llvmpipe compile time).
 //
 // Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
 // environment, draws the events' chances in `main`'s order up to the first that hits and queues

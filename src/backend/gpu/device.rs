@@ -204,13 +204,7 @@ fn lane_paths_wanted() -> Result<bool, SimError> {
 /// Whether a value of [`PATHS_VAR`] asks for a software adapter's paths; an error names a value
 /// that is neither `device` nor `lane`.
 fn lane_paths_from(value: Option<&str>) -> Result<bool, SimError> {
-    match value {
-        None | Some("" | "device") => Ok(false),
-        Some("lane") => Ok(true),
-        Some(other) => Err(SimError::Usage(format!(
-            "{PATHS_VAR}={other:?}: expected \"device\" (the default) or \"lane\""
-        ))),
-    }
+    other_choice(PATHS_VAR, value, ("device", "lane"))
 }
 
 /// Whether [`SHADERS_VAR`] asks for the backend's own SPIR-V.
@@ -221,11 +215,22 @@ fn own_spirv_wanted() -> Result<bool, SimError> {
 /// Whether a value of [`SHADERS_VAR`] asks for the backend's own SPIR-V; an error names a value
 /// that is neither `spirv` nor `wgsl`.
 fn own_spirv_from(value: Option<&str>) -> Result<bool, SimError> {
+    other_choice(SHADERS_VAR, value, ("spirv", "wgsl")).map(|wgsl| !wgsl)
+}
+
+/// Whether `value` of the two-way environment variable `var` chooses `other` over `default`
+/// (unset or empty: `default`); an error names any other value.
+fn other_choice(
+    var: &str,
+    value: Option<&str>,
+    (default, other): (&str, &str),
+) -> Result<bool, SimError> {
     match value {
-        None | Some("" | "spirv") => Ok(true),
-        Some("wgsl") => Ok(false),
-        Some(other) => Err(SimError::Usage(format!(
-            "{SHADERS_VAR}={other:?}: expected \"spirv\" (the default) or \"wgsl\""
+        None | Some("") => Ok(false),
+        Some(v) if v == default => Ok(false),
+        Some(v) if v == other => Ok(true),
+        Some(v) => Err(SimError::Usage(format!(
+            "{var}={v:?}: expected {default:?} (the default) or {other:?}"
         ))),
     }
 }
@@ -304,6 +309,17 @@ impl std::fmt::Debug for GpuDevice {
 }
 
 impl GpuDevice {
+    /// This device with the paths a software adapter takes, whatever the adapter: observations
+    /// written in place, each reset on one lane, each obstacle rebuild over `scratch`
+    /// ([`PATHS_VAR`]`=lane`, `socnav bench --lane-paths`).
+    #[must_use]
+    pub fn with_lane_paths(mut self) -> Self {
+        self.stage_observations = false;
+        self.resets_in_workgroups = false;
+        self.obstacles_in_workgroups = false;
+        self
+    }
+
     /// The device of the best adapter the policy allows (see the module docs), opened on the
     /// first call and shared by every later call with the same policy and the same
     /// `WGPU_ADAPTER_NAME`/`WGPU_BACKEND`/[`SHADERS_VAR`]/[`PATHS_VAR`], so that batches reuse the pipelines
@@ -393,13 +409,13 @@ impl GpuDevice {
         let disk = super::kit::DiskCache::open(&device, features, &info);
         let adapter = AdapterSummary::of(&info);
         let own_spirv = features.contains(wgpu::Features::PASSTHROUGH_SHADERS);
-        Ok(Self {
+        let dev = Self {
             driver_checks_buffers: own_spirv && robust_buffer_access2(&device),
             device,
             queue,
-            stage_observations: adapter.hardware && !lane_paths,
-            resets_in_workgroups: adapter.hardware && !lane_paths,
-            obstacles_in_workgroups: adapter.hardware && !lane_paths,
+            stage_observations: adapter.hardware,
+            resets_in_workgroups: adapter.hardware,
+            obstacles_in_workgroups: adapter.hardware,
             own_spirv,
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             poison_orca_lists: false,
@@ -408,6 +424,11 @@ impl GpuDevice {
             errors,
             lost,
             pipelines: Arc::new(super::kit::PipelineCache::new(disk)),
+        };
+        Ok(if lane_paths {
+            dev.with_lane_paths()
+        } else {
+            dev
         })
     }
 

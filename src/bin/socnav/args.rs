@@ -183,8 +183,9 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = StepOutputsChoice::All)]
     pub step_outputs: StepOutputsChoice,
     /// GPU backend only: take the paths a software adapter takes (observations written in place,
-    /// each reset on one lane, obstacle rebuilds over the scratch buffer) instead of the device's defaults, so that a run with and one
-    /// without measure what the hardware paths buy (compare the per-stage shares).
+    /// each reset on one lane, obstacle rebuilds over the scratch buffer) instead of the device's
+    /// defaults, so that a run with and one without measure what the hardware paths buy
+    /// (compare the per-stage shares).
     #[arg(long)]
     pub lane_paths: bool,
     /// Print one JSON object on stdout instead of the table.

@@ -136,10 +136,7 @@ fn on_lane_paths(
     threads: Option<usize>,
 ) -> Result<socnav::BatchEnv, socnav::SimError> {
     use socnav::backend::gpu::{AdapterPolicy, GpuDevice};
-    let mut dev = GpuDevice::open(AdapterPolicy::Any)?;
-    dev.stage_observations = false;
-    dev.resets_in_workgroups = false;
-    dev.obstacles_in_workgroups = false;
+    let dev = GpuDevice::open(AdapterPolicy::Any)?.with_lane_paths();
     let options = socnav::EnvOptions {
         n_envs: n,
         seed,
