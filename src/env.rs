@@ -416,6 +416,13 @@ impl BatchEnv {
         self.backend.host_path()
     }
 
+    /// Time the following steps' passes and readback copies on the device's clock, where the
+    /// device has timestamp queries (`HostPath::device_s` and `readback_s` in
+    /// [`BatchEnv::host_path`]); off by default, and nothing on the CPU backend.
+    pub fn set_step_timeline(&mut self, on: bool) {
+        self.backend.set_step_timeline(on);
+    }
+
     /// Time each stage of the following steps ([`BatchEnv::stage_seconds`]); off by default.
     pub fn set_stage_timing(&mut self, on: bool) {
         self.backend.set_stage_timing(on);

@@ -134,6 +134,16 @@ pub struct HostPath {
     pub wait_s: f64,
     /// Seconds copying the mapped readback into the host's outputs.
     pub copy_s: f64,
+    /// Reads timed on the device's clock (`Backend::set_step_timeline`).
+    pub timed_reads: u64,
+    /// Of those, the reads whose readback copies were timed too (the adapter writes timestamps
+    /// between commands).
+    pub timed_copies: u64,
+    /// Seconds of the timed reads' passes on the device's clock: their part of `wait_s`.
+    pub device_s: f64,
+    /// Seconds from the end of the passes to the end of the last readback copy, on the device's
+    /// clock, over the reads whose copies were timed.
+    pub readback_s: f64,
 }
 
 /// A way of running the step over the whole batch.
@@ -183,6 +193,9 @@ pub trait Backend: Send + Sync {
     fn host_path(&self) -> Option<HostPath> {
         None
     }
+    /// Time the following steps' passes and readback on the device's clock (`HostPath`'s
+    /// `device_s` and `readback_s`), where the device has timestamps; off by default.
+    fn set_step_timeline(&mut self, _on: bool) {}
     /// Seconds `steps` steps take on the device alone (see `BatchEnv::time_device_steps`);
     /// `None` without a device.
     fn time_device_steps(

@@ -318,6 +318,10 @@ impl Backend for GpuBackend {
         self.run(true)
     }
 
+    fn set_step_timeline(&mut self, on: bool) {
+        self.gpu.set_step_timeline(on);
+    }
+
     fn set_step_outputs(&mut self, which: crate::outputs::StepOutputs) {
         self.gpu.set_step_outputs(which);
     }

@@ -373,11 +373,14 @@ impl GpuDevice {
         // The adapter's own limits: large batches need storage bindings beyond WebGPU's defaults.
         let limits = adapter.limits();
         // wgpu's pipeline cache, where the backend has one (`kit::DiskCache`), and timestamp
-        // queries, which time the passes for `socnav bench` (`GpuStages::time_passes`).
+        // queries, which time the passes for `socnav bench` (`GpuStages::time_passes`) and,
+        // written between commands, a delivered step's readback copies (`timeline`).
         // Shader passthrough, for the backend's own SPIR-V (`super::spirv`): on Vulkan only, and
         // unless SHADERS_VAR says `wgsl` (elsewhere passthrough takes the platform's own shader
         // languages, not SPIR-V).
-        let mut wanted = wgpu::Features::PIPELINE_CACHE | wgpu::Features::TIMESTAMP_QUERY;
+        let mut wanted = wgpu::Features::PIPELINE_CACHE
+            | wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
         if own_spirv && info.backend == wgpu::Backend::Vulkan {
             wanted |= wgpu::Features::PASSTHROUGH_SHADERS;
         }

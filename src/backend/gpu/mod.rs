@@ -27,6 +27,7 @@ pub(crate) mod pool_rows;
 pub(crate) mod readback;
 pub mod sngnn_net;
 pub(crate) mod spirv;
+mod timeline;
 
 pub use backend::GpuBackend;
 pub use device::{
@@ -51,6 +52,7 @@ use kit::{
 };
 use readback::{StepReadback, words_to_bytes};
 use sngnn_net::StepBuffers;
+use timeline::Timeline;
 
 /// What a step's readback fills on the host: the outputs, each environment's episode counter,
 /// and the threads that copy large columns (the caller alone when `None`).
@@ -130,6 +132,8 @@ pub struct GpuStages {
     sngnn_status: Vec<u32>,
     /// the network stage ran since the last readback of the outputs.
     sngnn_unread: bool,
+    /// The delivered steps' timestamps, while they are on ([`GpuStages::set_step_timeline`]).
+    timeline: Option<Timeline>,
 }
 
 /// Every environment's packed SNGNN graph as read back: the u32 regions, then the f32 regions,
@@ -531,6 +535,7 @@ impl GpuStages {
             sngnn_score_at,
             sngnn_status: vec![0; status_words],
             sngnn_unread: false,
+            timeline: None,
         };
         this.write(&this.state);
         this.write(&this.outputs);
@@ -806,9 +811,10 @@ impl GpuStages {
             self.step_read.clear(&mut enc);
         }
         {
+            let timeline = self.timeline.as_ref().filter(|_| read.is_some());
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("step"),
-                timestamp_writes: None,
+                timestamp_writes: timeline.map(Timeline::pass_writes),
             });
             self.bind(&mut pass);
             for dispatch in plan(stages) {
@@ -854,11 +860,18 @@ impl GpuStages {
             enc.copy_buffer_to_buffer(net.status_buffer(), 0, rb, total, e_bytes);
             total += e_bytes;
         }
+        let timeline = self.timeline.as_ref();
         let (submits, piece_bytes) = if selective {
-            self.step_read.submit_with_pieces(&self.dev, enc, &tables)
+            self.step_read
+                .submit_with_pieces(&self.dev, enc, &tables, timeline)
         } else {
+            if let Some(t) = timeline {
+                t.after_copy(&mut enc, 0);
+                t.resolve(&mut enc);
+            }
             (vec![self.dev.queue.submit([enc.finish()])], 0)
         };
+        let copies = submits.len();
         let mut bytes = total + piece_bytes;
         let working = std::time::Instant::now();
         while_device_works(self);
@@ -910,6 +923,9 @@ impl GpuStages {
             self.step_read.whole_table_next = false;
             self.step_read.stats.full_reads += 1;
         }
+        if let Some(t) = &self.timeline {
+            t.read(&self.dev, copies, &mut self.step_read.stats)?;
+        }
         let stats = &mut self.step_read.stats;
         stats.reads += 1;
         stats.bytes += bytes;
@@ -928,6 +944,17 @@ impl GpuStages {
     /// The host path's totals so far (the pool refill's time is the backend's to add).
     pub fn host_path(&self) -> crate::backend::HostPath {
         self.step_read.stats
+    }
+
+    /// Time the passes and readback copies of the following delivered steps on the device's
+    /// clock (`HostPath::device_s`, `HostPath::readback_s`), where the device has timestamp
+    /// queries; a step records none while this is off.
+    pub fn set_step_timeline(&mut self, on: bool) {
+        if !on {
+            self.timeline = None;
+        } else if self.timeline.is_none() {
+            self.timeline = Timeline::new(&self.dev);
+        }
     }
 
     /// Record `dispatch` into `pass` (whose bind groups are the batch's): its pass's dispatches,

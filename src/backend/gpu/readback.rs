@@ -33,6 +33,7 @@ use crate::state::columns::Elem;
 
 use super::GpuDevice;
 use super::kit::{Binding, bind_buffers, bytes_of, check_binding, map_and_read_after};
+use super::timeline::Timeline;
 
 /// Most pieces the per-step columns are read back in, each a buffer and a submit of its own: the
 /// host copies piece `k` into its outputs while the device copies piece `k + 1` to host memory,
@@ -265,22 +266,32 @@ impl StepReadback {
     /// Copy the first piece of the per-step columns in `enc` (the step's encoder) and submit
     /// it, then each other piece in a submit of its own, so that the host can read a piece while
     /// the device copies the next ([`Self::read_pieces`]); the submits in piece order, and the
-    /// bytes the pieces copy.
+    /// bytes the pieces copy. With `timeline`, a timestamp follows each copy and the last submit
+    /// resolves them.
     pub(crate) fn submit_with_pieces(
         &self,
         dev: &GpuDevice,
-        mut enc: wgpu::CommandEncoder,
+        step: wgpu::CommandEncoder,
         tables: &Tables<'_>,
+        timeline: Option<&Timeline>,
     ) -> (Vec<wgpu::SubmissionIndex>, u64) {
-        let mut bytes = self.copy_piece(&mut enc, tables, 0);
-        let mut submits = vec![dev.queue.submit([enc.finish()])];
-        for k in 1..self.pieces.len() {
-            let mut enc = dev
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("step readback piece"),
-                });
+        let mut submits = Vec::with_capacity(self.pieces.len());
+        let mut bytes = 0;
+        let mut step = Some(step);
+        for k in 0..self.pieces.len() {
+            let mut enc = step.take().unwrap_or_else(|| {
+                dev.device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("step readback piece"),
+                    })
+            });
             bytes += self.copy_piece(&mut enc, tables, k);
+            if let Some(t) = timeline {
+                t.after_copy(&mut enc, k);
+                if k + 1 == self.pieces.len() {
+                    t.resolve(&mut enc);
+                }
+            }
             submits.push(dev.queue.submit([enc.finish()]));
         }
         (submits, bytes)

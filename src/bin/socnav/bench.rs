@@ -37,11 +37,17 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
         // Throughput with stage timing off (it costs two clock reads per stage and chunk)...
         let path_before = env.host_path();
         let (steps, secs) = timed_steps(&mut env, &actions, a.seconds)?;
-        let host_path = host_path_per_step(path_before, env.host_path(), steps);
+        let host_path = host_path_per_step(path_before, env.host_path(), steps, secs);
         // On a GPU, the simulation alone: the same steps with nothing delivered to the host.
         let device_only = env
             .time_device_steps(Actions::Continuous(&actions), steps)?
             .map(|s| (n * steps) as f64 / s);
+        // A short run with the delivered step's timestamps: its wait on the device's clock.
+        env.set_step_timeline(true);
+        let before_timeline = env.host_path();
+        let (timeline_steps, _) = timed_steps(&mut env, &actions, 0.25 * a.seconds)?;
+        let timeline = step_timeline(before_timeline, env.host_path(), timeline_steps);
+        env.set_step_timeline(false);
         // ...then the stage shares from a shorter timed run.
         env.set_stage_timing(true);
         let before: Vec<f64> = env.stage_seconds().iter().map(|s| s.1).collect();
@@ -75,6 +81,9 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             "halves_env_steps_per_s": halves,
             // GPU: the host path's time and bytes per step over the timed steps.
             "host_path": host_path,
+            // GPU with timestamps: a shorter run's passes and readback copies on the device's
+            // clock, per step, beside its host path.
+            "timeline": timeline,
             "state_bytes_per_env": state_bytes,
             "obs_floats_per_env": obs_floats,
             // CPU stage time is summed over threads: each stage's share of the step's CPU time.
@@ -217,13 +226,29 @@ fn print_row(row: &serde_json::Value, header: bool, backend: &str, device: &str)
     if let Some(p) = row["host_path"].as_object() {
         let ms = |k: &str| 1e3 * p[k].as_f64().unwrap_or(0.0);
         println!(
-            "    host path per step: {:.2} ms refilling the reset pool ({:.2} ms more while the device works), {:.2} ms waiting for the device, {:.2} ms copying out; {:.1} MB read back ({:.1} finished rows)",
+            "    host path per step: {:.2} ms refilling the reset pool ({:.2} ms more while the device works), {:.2} ms waiting for the device, {:.2} ms copying out, {:.2} ms else; {:.1} MB read back ({:.1} finished rows)",
             ms("refill_s"),
             ms("refill_ahead_s"),
             ms("wait_s"),
             ms("copy_s"),
+            ms("other_s"),
             p["bytes"].as_f64().unwrap_or(0.0) / 1e6,
             p["finished_rows"].as_f64().unwrap_or(0.0)
+        );
+    }
+    if let Some(t) = row["timeline"].as_object() {
+        let ms = |k: &str| {
+            t[k].as_f64()
+                .map_or("-".into(), |s| format!("{:.2}", 1e3 * s))
+        };
+        println!(
+            "    on the device's clock ({} steps): passes {} ms, readback copies {} ms a step; meanwhile the host waited {} ms and made rows ahead {} ms, then copied {} ms",
+            t["steps"],
+            ms("passes_s"),
+            ms("readback_s"),
+            ms("wait_s"),
+            ms("refill_ahead_s"),
+            ms("copy_s")
         );
     }
     if let Some(stages) = row["stage_env_steps_per_s"].as_object() {
@@ -241,22 +266,53 @@ fn print_row(row: &serde_json::Value, header: bool, backend: &str, device: &str)
     }
 }
 
-/// The host path's figures per step between two totals (`None` on the CPU backend).
+/// The host path's figures per step between two totals over `steps` steps that took `secs`
+/// (`None` on the CPU backend); `other_s` is the step's time outside the four parts.
 fn host_path_per_step(
     before: Option<socnav::backend::HostPath>,
     after: Option<socnav::backend::HostPath>,
     steps: usize,
+    secs: f64,
 ) -> Option<serde_json::Value> {
     let (b, a) = (before?, after?);
     let per = |x: f64| x / steps.max(1) as f64;
+    let parts = a.refill_s - b.refill_s + a.refill_ahead_s - b.refill_ahead_s + a.wait_s - b.wait_s
+        + a.copy_s
+        - b.copy_s;
     Some(json!({
         "refill_s": per(a.refill_s - b.refill_s),
         "refill_ahead_s": per(a.refill_ahead_s - b.refill_ahead_s),
         "wait_s": per(a.wait_s - b.wait_s),
         "copy_s": per(a.copy_s - b.copy_s),
+        "other_s": per(secs - parts),
         "bytes": per((a.bytes - b.bytes) as f64),
         "finished_rows": per((a.finished_rows - b.finished_rows) as f64),
         "second_reads": per((a.second_reads - b.second_reads) as f64),
+    }))
+}
+
+/// The delivered step on the device's clock between two totals over `steps` steps, beside the
+/// host's wait, rows ahead and copy in those steps (`None` without a device that has timestamp
+/// queries); `readback_s` is `null` where the adapter cannot time copies.
+fn step_timeline(
+    before: Option<socnav::backend::HostPath>,
+    after: Option<socnav::backend::HostPath>,
+    steps: usize,
+) -> Option<serde_json::Value> {
+    let (b, a) = (before?, after?);
+    let timed = a.timed_reads - b.timed_reads;
+    if timed == 0 {
+        return None;
+    }
+    let per = |x: f64| x / steps.max(1) as f64;
+    let copies = a.timed_copies - b.timed_copies;
+    Some(json!({
+        "steps": steps,
+        "passes_s": (a.device_s - b.device_s) / timed as f64,
+        "readback_s": (copies > 0).then(|| (a.readback_s - b.readback_s) / copies as f64),
+        "wait_s": per(a.wait_s - b.wait_s),
+        "refill_ahead_s": per(a.refill_ahead_s - b.refill_ahead_s),
+        "copy_s": per(a.copy_s - b.copy_s),
     }))
 }
 

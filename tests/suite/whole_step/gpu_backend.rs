@@ -358,6 +358,65 @@ fn stage_timing_times_every_pass_and_changes_nothing() {
     }
 }
 
+/// Contract: with the step timeline on (`BatchEnv::set_step_timeline`), every delivered step
+/// times its passes on the device's clock (and its readback copies, where the adapter writes
+/// timestamps between commands, as lavapipe does); the device's part of a step fits inside the
+/// host's time from the submit to the last piece copied; the steps stay the CPU's bit for bit
+/// (exp2 with full observations, read back in the most pieces); and off,
+/// nothing more is timed.
+#[test]
+fn the_step_timeline_times_the_wait_on_the_devices_clock() {
+    use socnav::backend::BackendChoice;
+    let Some(mut dev) = device() else { return };
+    dev.readback_piece_bytes = 1 << 10;
+    let n = 64;
+    let options = socnav::EnvOptions {
+        n_envs: n,
+        seed: 6,
+        ..Default::default()
+    };
+    let cpu_options = socnav::EnvOptions {
+        backend: BackendChoice::Cpu,
+        ..options.clone()
+    };
+    let mut cpu = socnav::BatchEnv::new(config("exp2"), cpu_options).expect("CPU batch");
+    let mut gpu = socnav::BatchEnv::on_device(config("exp2"), options, dev).expect("GPU batch");
+    cpu.reset(None).expect("reset");
+    gpu.reset(None).expect("reset");
+    gpu.set_step_timeline(true);
+    let start = gpu.host_path().expect("host path");
+    let mut twins = Twins::new(cpu, gpu);
+    let mut rng = socnav::rng::RngStream::new(9, 0);
+    let steps = 12;
+    for _ in 0..steps {
+        twins.step(&random_actions(&mut rng, n, false));
+    }
+    twins.finish("steps with the timeline on");
+    let mut gpu = twins.gpu;
+    let timed = gpu.host_path().expect("host path");
+    assert_eq!(timed.timed_reads - start.timed_reads, steps as u64);
+    let passes = timed.device_s - start.device_s;
+    let readback = timed.readback_s - start.readback_s;
+    assert!(passes > 0.0, "passes {passes} s");
+    if timed.timed_copies > start.timed_copies {
+        assert_eq!(timed.timed_copies - start.timed_copies, steps as u64);
+        assert!(readback > 0.0, "readback copies {readback} s");
+    }
+    let host = (timed.wait_s - start.wait_s)
+        + (timed.copy_s - start.copy_s)
+        + (timed.refill_ahead_s - start.refill_ahead_s);
+    assert!(
+        passes + readback <= host,
+        "the device's {passes} s of passes and {readback} s of copies outlast the host's {host} s from submit to the last piece"
+    );
+    gpu.set_step_timeline(false);
+    gpu.step(socnav::Actions::Continuous(&[0.0; 3 * 64]))
+        .expect("a step");
+    let after = gpu.host_path().expect("host path");
+    assert_eq!(after.timed_reads, timed.timed_reads);
+    assert_eq!(after.device_s, timed.device_s);
+}
+
 /// Pool rows staged in one queue write each and copied into place before the next submit
 /// (`GpuStages::stage_pool_rows`, how `GpuBackend` writes them) reset environments exactly as
 /// rows written in place do, also when the staging buffer must grow while copies of an earlier
