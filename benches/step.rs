@@ -5,6 +5,8 @@
 //! 16,384) when a hardware GPU adapter exists (`SOCNAV_BENCH_GPU=any` takes a software one too,
 //! for correctness runs only).
 //!
+//! `pool_rows`: the GPU backend's reset-pool rows, generated on the host, per second.
+//!
 //! `cargo bench --bench step`; record figures in `benches/RESULTS.md` with the machine, batch size,
 //! backend and commit.
 
@@ -133,5 +135,68 @@ fn bench_configs(
     }
 }
 
-criterion_group!(benches, step, step_gpu, step_sngnn, step_sngnn_gpu);
+/// The GPU backend's reset-pool rows (`reset_pool::write_rows`, the rows two episodes ahead the
+/// host makes while the device runs a step): 512 rows of exp2 and exp3, on one thread and on
+/// every core, in rows per second. On the sixth H100 run's host a row cost about 68 µs of a core
+/// inside the step, against about 12 µs on one core of the 2-vCPU machine: this bench says
+/// whether that is the core or the threads.
+fn pool_rows(c: &mut Criterion) {
+    use socnav::backend::reset_pool::{Scratches, row_words, write_rows};
+    const ROWS: usize = 512;
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    for name in ["exp2", "exp3"] {
+        let config = Config::from_name_or_path(name).expect("shipped config");
+        let env = BatchEnv::new(config, EnvOptions::default()).expect("valid batch");
+        let params = env.params();
+        let caps = env.state().expect("state").strides;
+        let layout = env.outputs().strides.layout;
+        let words = row_words(caps, layout);
+        // Environments spread over a batch of 65,536, each starting its second episode.
+        let envs: Vec<usize> = (0..ROWS).map(|i| i * 128).collect();
+        let episodes = vec![1u32; ROWS * 128];
+        let mut seeds: Vec<u64> = (0..ROWS as u64 * 128).collect();
+        let mut rows = vec![0u32; ROWS * words];
+        let mut group = c.benchmark_group(format!("pool_rows/{name}"));
+        group
+            .measurement_time(Duration::from_secs(3))
+            .warm_up_time(Duration::from_secs(1))
+            .sample_size(20)
+            .throughput(Throughput::Elements(ROWS as u64));
+        for threads in [1, cores] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a thread pool");
+            let scratches = Scratches::new(caps, layout, Some(&pool));
+            group.bench_function(BenchmarkId::new("threads", threads), |b| {
+                b.iter(|| {
+                    // New seeds each time: new scenarios, as the step's rows are.
+                    for &e in &envs {
+                        seeds[e] = socnav::seeds::next_episode_seed(seeds[e]);
+                    }
+                    let failed = write_rows(
+                        params,
+                        &envs,
+                        &episodes,
+                        &seeds,
+                        &mut rows,
+                        Some(&pool),
+                        &scratches,
+                    );
+                    assert!(failed.is_empty(), "{name}: scenarios failed");
+                });
+            });
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(
+    benches,
+    step,
+    step_gpu,
+    step_sngnn,
+    step_sngnn_gpu,
+    pool_rows
+);
 criterion_main!(benches);

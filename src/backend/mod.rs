@@ -129,6 +129,8 @@ pub struct HostPath {
     /// a staging buffer, copied into place at the next submit): off the critical path unless
     /// longer than the device's work.
     pub refill_ahead_s: f64,
+    /// Rows generated while the device ran a step (`refill_ahead_s`'s work).
+    pub ahead_rows: u64,
     /// Seconds from submitting the device work to its readback being mapped, less the host's
     /// work meanwhile (`refill_ahead_s`).
     pub wait_s: f64,

@@ -468,7 +468,7 @@ fn slot_index_functions(state: Columns<'_>) -> String {
 /// (`obs_dim`, `obs_robot`, and per entity type `obs_offset_<type>`, `obs_capacity_<type>`, per
 /// interaction kind `pairs_<kind>`); the reset pool's `pool_row` (words per row) and
 /// `pool_observation` (the observation's first word in a row); the `scratch` region of an
-/// environment ([`ObstacleScratch`]), `x_obs_staged`, where the staged observation starts in it
+/// environment ([`scratch_region_words`]), `x_obs_staged`, where the staged observation starts in it
 /// ([`scratch_words`]), and `obs_staged` (1 when the observation is staged); and the SNGNN-v2
 /// sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one
 /// compiled pipeline serves every batch size and every config of the same [`SizeClasses`]. The
@@ -535,11 +535,12 @@ impl BatchLayout {
         // Where a pool row's first observation starts: after the state's words.
         fields.push(("pool_observation".into(), state.iter().map(|c| c.2).sum()));
         let scratch = ObstacleScratch::of(state);
-        fields.push(("s_scratch".into(), scratch.words));
+        let region = scratch_region_words(state);
+        fields.push(("s_scratch".into(), region));
         fields.push(("x_obstacle_list".into(), scratch.list));
         fields.push(("x_obstacle_set".into(), scratch.set));
         fields.push(("x_obstacle_stack".into(), scratch.stack));
-        fields.push(("x_obs_staged".into(), n_envs * scratch.words));
+        fields.push(("x_obs_staged".into(), n_envs * region));
         // 1 when the observation is staged ([`BatchLayout::with_staged_observation`]).
         fields.push(("obs_staged".into(), 0));
         fields.extend(sngnn_sizes(sngnn));
@@ -588,11 +589,12 @@ impl BatchLayout {
 /// memory of ORCA's obstacle processing (`shaders/common/orca_obstacles.wgsl`), in words: a
 /// polygon list (2 words and 8 a polygon, for a polygon per 8 obstacle vertices), a processed
 /// vertex set (2 words and 7 columns of the vertex capacity) and the tree build's stack (3
-/// columns of the vertex capacity). In [`BatchLayout`] as `s_scratch` (the words an environment)
-/// and `x_obstacle_list`, `x_obstacle_set`, `x_obstacle_stack` (where each part starts).
+/// columns of the vertex capacity). In [`BatchLayout`] as `x_obstacle_list`, `x_obstacle_set`,
+/// `x_obstacle_stack` (where each part starts); the region, `s_scratch` words, also serves the
+/// slot permutations ([`scratch_region_words`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ObstacleScratch {
-    /// Words of one environment's region.
+    /// Words of the obstacle processing's working memory.
     pub words: usize,
     /// First word of the polygon list.
     pub list: usize,
@@ -603,14 +605,22 @@ pub struct ObstacleScratch {
 }
 
 /// Words of the `scratch` buffer of `n_envs` environments: every environment's
-/// [`ObstacleScratch`] region, then, where the observation is staged (`staged_obs_dim`, its
+/// region ([`scratch_region_words`]), then, where the observation is staged (`staged_obs_dim`, its
 /// floats, else 0), the observation as the observation pass writes it, slot-major from
 /// `x_obs_staged` of the [`BatchLayout`]: value `i` of environment `e` at `x_obs_staged + i *
 /// n_envs + e`, so that a warp's stores coalesce. The pass's second dispatch
 /// ([`OBS_ROWS_ENTRY`]) moves it into the environment-major rows the host reads, through
 /// workgroup memory.
 pub fn scratch_words(n_envs: usize, state: Columns<'_>, staged_obs_dim: usize) -> usize {
-    n_envs * (ObstacleScratch::of(state).words + staged_obs_dim)
+    n_envs * (scratch_region_words(state) + staged_obs_dim)
+}
+
+/// Words of an environment's region of `scratch` (`s_scratch` of the [`BatchLayout`]): the
+/// working memory of the obstacle rebuild ([`ObstacleScratch`]) and of the slot permutations
+/// (the prelude's generated `state_permute_*`), which never run at once in one environment, so
+/// they share it.
+pub fn scratch_region_words(state: Columns<'_>) -> usize {
+    ObstacleScratch::of(state).words.max(permute_words(state))
 }
 
 /// The entry point of `shaders/observation.wgsl` dispatched after its `main`: the staged
@@ -1103,6 +1113,27 @@ fn permuted_cap(state: Columns<'_>) -> usize {
         .unwrap_or(0)
 }
 
+/// The state columns of slot kind `kind`, in declaration order.
+fn columns_of<'a>(state: Columns<'a>, kind: &str) -> Vec<&'a (&'static str, Elem, usize)> {
+    state
+        .iter()
+        .filter(|c| kind_of(c.0) == Some(kind))
+        .collect()
+}
+
+/// Words of the `scratch` region a slot permutation of environment `e` passes its old slots
+/// through ([`permute_functions`]): for the kind that needs most, a word per column and slot.
+fn permute_words(state: Columns<'_>) -> usize {
+    PERMUTED_KINDS
+        .iter()
+        .map(|&(kind, _)| {
+            let columns = columns_of(state, kind);
+            columns.len() * columns.iter().map(|c| c.2).max().unwrap_or(0)
+        })
+        .max()
+        .unwrap_or(0)
+}
+
 /// The twins of `StateChunk::permute` for the kinds the social events reorder, generated from the
 /// state's column list (so a column added to a kind is permuted without touching a shader): per
 /// kind `fn state_permute_<kinds>(e: u32, perm: array<u32, PERMUTE_CAP>, n: u32, used: u32)`,
@@ -1110,34 +1141,58 @@ fn permuted_cap(state: Columns<'_>) -> usize {
 /// kind: slot `k` receives the old slot `perm[k]` for `k < n`, and slots `n..used` are zeroed.
 /// (`PERMUTE_CAP`, the array size, is a [`SizeClasses`] class at least the largest capacity of
 /// those kinds.)
+///
+/// The old slots pass through the environment's region of `scratch` ([`scratch_region_words`];
+/// the obstacle rebuild's working memory, free here: the rebuild runs in a dispatch of its own
+/// after the regrouping, and nothing in the region outlives a call), a slot's every column at
+/// once: the loads of one slot's columns are independent of each other and of the stores into
+/// another buffer, so a GPU has them all in flight at once, where a column at a time through a
+/// function-scope array waited a memory round trip for every column and slot (the regrouping's
+/// permutations took 0.3-0.5 ms of exp2's step on an H100, one lane's chain). It moves bits, so
+/// the slots are those the CPU's permutation gives.
 fn permute_functions(state: Columns<'_>) -> String {
-    let mut out = String::new();
+    let mut out =
+        String::from("fn scratch_region(e: u32) -> u32 {\n    return e * batch.s_scratch;\n}\n");
     for (kind, name) in PERMUTED_KINDS {
-        let columns: Vec<_> = state
-            .iter()
-            .filter(|c| kind_of(c.0) == Some(kind))
-            .collect();
+        let columns = columns_of(state, kind);
+        let width = columns.len();
         out.push_str(&format!(
-            "fn {name}(e: u32, perm: array<u32, PERMUTE_CAP>, n: u32, used: u32) {{\n"
+            "fn {name}(e: u32, perm: array<u32, PERMUTE_CAP>, n: u32, used: u32) {{\n\
+             \x20   let region = scratch_region(e);\n\
+             \x20   for (var k = 0u; k < n; k++) {{\n\
+             \x20       let old = at_{kind}(e, perm[k]);\n\
+             \x20       let to = region + k * {width}u;\n"
         ));
-        // A temporary only for the element types the kind has: naga zeroes every local array on
-        // each call, read or not.
-        for (elem, tmp, ty) in [(Elem::F32, "tf", "f32"), (Elem::U32, "tu", "u32")] {
-            if columns.iter().any(|c| c.1 == elem) {
-                out.push_str(&format!("    var {tmp}: array<{ty}, PERMUTE_CAP>;\n"));
-            }
+        for (j, &&(col, elem, _)) in columns.iter().enumerate() {
+            let value = match elem {
+                Elem::F32 => format!("bitcast<u32>(sf[batch.c_{col} + old])"),
+                Elem::U32 => format!("su[batch.c_{col} + old]"),
+            };
+            out.push_str(&format!("        scratch[to + {j}u] = {value};\n"));
         }
-        for &&(col, elem, _) in &columns {
-            let (buf, tmp, zero) = match elem {
-                Elem::F32 => ("sf", "tf", "0.0"),
-                Elem::U32 => ("su", "tu", "0u"),
+        out.push_str(&format!(
+            "    }}\n\
+             \x20   for (var k = 0u; k < used; k++) {{\n\
+             \x20       let at = at_{kind}(e, k);\n\
+             \x20       if (k < n) {{\n\
+             \x20           let kept = region + k * {width}u;\n"
+        ));
+        let mut zeroes = String::new();
+        for (j, &&(col, elem, _)) in columns.iter().enumerate() {
+            let (buf, value, zero) = match elem {
+                Elem::F32 => ("sf", format!("bitcast<f32>(scratch[kept + {j}u])"), "0.0"),
+                Elem::U32 => ("su", format!("scratch[kept + {j}u]"), "0u"),
             };
             out.push_str(&format!(
-                "    for (var k = 0u; k < n; k++) {{ {tmp}[k] = {buf}[batch.c_{col} + at_{kind}(e, perm[k])]; }}\n\
-                 \x20   for (var k = 0u; k < used; k++) {{ var v = {zero}; if (k < n) {{ v = {tmp}[k]; }} {buf}[batch.c_{col} + at_{kind}(e, k)] = v; }}\n"
+                "            {buf}[batch.c_{col} + at] = {value};\n"
+            ));
+            zeroes.push_str(&format!(
+                "            {buf}[batch.c_{col} + at] = {zero};\n"
             ));
         }
-        out.push_str("}\n");
+        out.push_str(&format!(
+            "        }} else {{\n{zeroes}        }}\n    }}\n}}\n"
+        ));
     }
     out
 }

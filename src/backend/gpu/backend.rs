@@ -68,6 +68,8 @@ pub struct GpuBackend {
     /// Seconds spent refilling the reset pool before submitting, and while the device worked.
     refill_s: f64,
     refill_ahead_s: f64,
+    /// Rows generated while the device worked.
+    ahead_rows: u64,
 }
 
 impl std::fmt::Debug for GpuBackend {
@@ -138,6 +140,7 @@ impl GpuBackend {
             step_stages,
             refill_s: 0.0,
             refill_ahead_s: 0.0,
+            ahead_rows: 0,
         })
     }
 
@@ -202,10 +205,11 @@ impl GpuBackend {
             &self.scratches,
         );
         let (episode, next_seed) = (&self.episode, &self.next_seed);
-        let mut ahead_s = 0.0;
+        let (mut ahead_s, mut ahead_rows) = (0.0, 0);
         let ahead = |gpu: &mut GpuStages| {
             let start = Instant::now();
             rows.select(Which::Ahead, episode, next_seed);
+            ahead_rows = rows.selected() as u64;
             rows.generate(params, pool, scratches);
             rows.write(gpu);
             ahead_s = start.elapsed().as_secs_f64();
@@ -228,6 +232,7 @@ impl GpuBackend {
             self.gpu.run_stages(stages, Some(read), ahead)?;
         }
         self.refill_ahead_s += ahead_s;
+        self.ahead_rows += ahead_rows;
         let mut error = None;
         for e in 0..self.episode.len() {
             if self.read_episode[e] != self.episode[e] {
@@ -330,6 +335,7 @@ impl Backend for GpuBackend {
         let mut path = self.gpu.host_path();
         path.refill_s = self.refill_s;
         path.refill_ahead_s = self.refill_ahead_s;
+        path.ahead_rows = self.ahead_rows;
         Some(path)
     }
 

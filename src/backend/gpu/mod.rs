@@ -199,8 +199,9 @@ fn staging_buffer(dev: &GpuDevice, words: usize) -> wgpu::Buffer {
     })
 }
 
-/// The stages' working memory of `n_envs` environments (`wgsl::scratch_words`: ORCA's obstacles
-/// and, staged, the observation of `staged_obs_dim` floats), or why the adapter cannot bind it.
+/// The stages' working memory of `n_envs` environments (`wgsl::scratch_words`: ORCA's obstacles,
+/// the slot permutations and, staged, the observation of `staged_obs_dim` floats), or why the
+/// adapter cannot bind it.
 fn scratch_buffer(
     dev: &GpuDevice,
     n_envs: usize,

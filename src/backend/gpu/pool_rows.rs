@@ -108,6 +108,11 @@ impl PoolRows {
         }
     }
 
+    /// How many rows [`Self::select`] chose, for [`Self::generate`] to make.
+    pub(crate) fn selected(&self) -> usize {
+        self.envs.len()
+    }
+
     /// Generate the selected rows on `pool`'s threads (the caller's alone without one); they are
     /// the pool's from now on, for [`Self::write`] to put on the device.
     pub(crate) fn generate(

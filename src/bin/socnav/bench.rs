@@ -226,9 +226,10 @@ fn print_row(row: &serde_json::Value, header: bool, backend: &str, device: &str)
     if let Some(p) = row["host_path"].as_object() {
         let ms = |k: &str| 1e3 * p[k].as_f64().unwrap_or(0.0);
         println!(
-            "    host path per step: {:.2} ms refilling the reset pool ({:.2} ms more while the device works), {:.2} ms waiting for the device, {:.2} ms copying out, {:.2} ms else; {:.1} MB read back ({:.1} finished rows)",
+            "    host path per step: {:.2} ms refilling the reset pool ({:.2} ms more while the device works, {:.1} rows), {:.2} ms waiting for the device, {:.2} ms copying out, {:.2} ms else; {:.1} MB read back ({:.1} finished rows)",
             ms("refill_s"),
             ms("refill_ahead_s"),
+            p["ahead_rows"].as_f64().unwrap_or(0.0),
             ms("wait_s"),
             ms("copy_s"),
             ms("other_s"),
@@ -282,6 +283,7 @@ fn host_path_per_step(
     Some(json!({
         "refill_s": per(a.refill_s - b.refill_s),
         "refill_ahead_s": per(a.refill_ahead_s - b.refill_ahead_s),
+        "ahead_rows": per((a.ahead_rows - b.ahead_rows) as f64),
         "wait_s": per(a.wait_s - b.wait_s),
         "copy_s": per(a.copy_s - b.copy_s),
         "other_s": per(secs - parts),

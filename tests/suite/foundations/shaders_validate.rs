@@ -645,6 +645,27 @@ fn obstacle_scratch_layout() {
     );
 }
 
+/// An environment's region of `scratch` holds the obstacle processing's working memory and a
+/// slot permutation's old slots (a word per column and slot of the kind that needs most), by
+/// hand: 2 human columns of 16 slots (32 words) outgrow the obstacles of 1 vertex (22 words);
+/// 8 vertices (92 words) outgrow them.
+#[test]
+fn scratch_region_holds_obstacles_and_permutations() {
+    use socnav::state::columns::Elem;
+    let humans = [
+        ("h_x", Elem::F32, 16),
+        ("h_role", Elem::U32, 16),
+        ("g_first", Elem::U32, 3),
+    ];
+    let with = |vertices: usize| {
+        let mut columns = humans.to_vec();
+        columns.push(("ov_x", Elem::F32, vertices));
+        wgsl::scratch_region_words(&columns)
+    };
+    assert_eq!(with(1), 32);
+    assert_eq!(with(8), 92);
+}
+
 /// The GPU backend's finished-rows pass (`wgsl::finished_rows_shader`, generated from the output
 /// columns) validates for every shipped config and is the same text for all of them (one
 /// pipeline per device); its row is the environment's index and the finished-only columns.
