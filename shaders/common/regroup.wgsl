@@ -290,11 +290,14 @@ fn regroup_canonicalize(e: u32) {
 }
 
 // The ORCA obstacle rebuild of entry `k` of queue `queue` (a pass's environments, which its
-// `main` may have regrouped), if it has one and its obstacles are dirty. The rebuild entry points
-// of the passes that regroup are generated over it (src/backend/wgsl.rs, `rebuild_entries`).
-fn regroup_rebuild_queued(queue: u32, k: u32) {
+// `main` may have regrouped), if it has one and its obstacles are dirty; whether it has one. The
+// rebuild entry points of the passes that regroup are generated over it (src/backend/wgsl.rs,
+// `rebuild_entries`).
+fn regroup_rebuild_queued(queue: u32, k: u32) -> bool {
     let e = rare_env(queue, k);
-    if (e != NONE) {
-        orca_obstacles_rebuild_if_dirty(e);
+    if (e == NONE) {
+        return false;
     }
+    orca_obstacles_rebuild_if_dirty(e);
+    return true;
 }

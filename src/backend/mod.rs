@@ -134,6 +134,9 @@ pub struct HostPath {
     /// Seconds from submitting the device work to its readback being mapped, less the host's
     /// work meanwhile (`refill_ahead_s`).
     pub wait_s: f64,
+    /// Of `wait_s`, the seconds recording and submitting the work (the step's passes and the
+    /// readback's copies), before the device can start.
+    pub submit_s: f64,
     /// Seconds copying the mapped readback into the host's outputs.
     pub copy_s: f64,
     /// Reads timed on the device's clock (`Backend::set_step_timeline`).

@@ -176,13 +176,15 @@ pub const REBUILD_PASSES: [&str; 2] = ["formation", "social_events"];
 /// environment per lane, its working memory in the environment's region of `scratch`.
 pub const REBUILD_ENTRY: &str = "rebuild";
 
-/// The entry point of a [`REBUILD_PASSES`] shader that rebuilds the obstacles of one queued
-/// environment per workgroup, in its first lane, its working memory in workgroup memory (built
-/// from [`with_obstacles_in_workgroup`]'s source; a dispatch of one workgroup per environment of
-/// the batch): the GPU backend's choice on hardware adapters
+/// The entry point of a [`REBUILD_PASSES`] shader that rebuilds the obstacles of the queued
+/// environments a workgroup at a time, in its first lane, its working memory in workgroup memory
+/// (built from [`with_obstacles_in_workgroup`]'s source; a dispatch of a workgroup per
+/// environment of the batch, at most `GpuDevice::rebuild_workgroups`, workgroup `w` of `W`
+/// taking queue entries `w`, `w + W`, ...): the GPU backend's choice on hardware adapters
 /// (`GpuDevice::obstacles_in_workgroups`), where a rebuild over `scratch` is a chain of dependent
-/// storage-buffer accesses (2.4 of exp2's 5.1 ms a step on an H100). One environment per
-/// invocation: llvmpipe ends the loops of an invocation after 65,535 iterations in all.
+/// storage-buffer accesses (2.4 of exp2's 5.1 ms a step on an H100). (llvmpipe ends the loops of
+/// an invocation after 65,535 iterations in all, so there a workgroup must not take several large
+/// rebuilds; lavapipe rebuilds per lane, and tests that force this path keep to small batches.)
 pub const REBUILD_IN_WORKGROUPS_ENTRY: &str = "rebuild_in_workgroups";
 
 /// The [`REBUILD_PASSES`] pass `pass`'s two rebuild entry points, over its queue.
@@ -193,14 +195,16 @@ fn rebuild_entries(pass: &str) -> String {
          src/backend/wgsl.rs, `rebuild_entries`).\n\
          @compute @workgroup_size(WORKGROUP_SIZE)\n\
          fn {REBUILD_ENTRY}(@builtin(global_invocation_id) gid: vec3<u32>) {{\n\
-         \x20   regroup_rebuild_queued({queue}, gid.x);\n}}\n\
+         \x20   _ = regroup_rebuild_queued({queue}, gid.x);\n}}\n\
          @compute @workgroup_size(WORKGROUP_SIZE)\n\
          fn {REBUILD_IN_WORKGROUPS_ENTRY}(\n\
          \x20   @builtin(workgroup_id) wid: vec3<u32>,\n\
          \x20   @builtin(num_workgroups) groups: vec3<u32>,\n\
          \x20   @builtin(local_invocation_index) lane: u32,\n) {{\n\
          \x20   if (lane == 0u) {{\n\
-         \x20       regroup_rebuild_queued({queue}, wid.x + wid.y * groups.x);\n    }}\n}}\n"
+         \x20       let teams = groups.x * groups.y;\n\
+         \x20       for (var k = wid.x + wid.y * groups.x; regroup_rebuild_queued({queue}, k); k += teams) {{}}\n\
+         \x20   }}\n}}\n"
     )
 }
 

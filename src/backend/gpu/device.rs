@@ -240,6 +240,12 @@ fn other_choice(
 /// (207 MB a step; padded 60 MB) reads four pieces, at 256 environments (0.9 MB) one.
 pub const DEFAULT_READBACK_PIECE_BYTES: u64 = 4 << 20;
 
+/// Most workgroups an obstacle rebuild dispatch in workgroup memory takes
+/// ([`GpuDevice::rebuild_workgroups`]): more than an H100 holds at once (132 SMs, 14 workgroups of
+/// 16 KiB of workgroup memory each), and more than exp2's rebuilds a step at 65,536 environments
+/// (about 190 after formation, 490 after social events).
+pub const DEFAULT_REBUILD_WORKGROUPS: u32 = 2048;
+
 /// An open device and its queue, with the adapter it came from. Clones share the device.
 #[derive(Clone)]
 pub struct GpuDevice {
@@ -274,6 +280,12 @@ pub struct GpuDevice {
     /// Both give the same bits; a clone with the other setting is how a caller (or a test)
     /// chooses.
     pub obstacles_in_workgroups: bool,
+    /// Most workgroups a rebuild dispatch in workgroup memory takes: each workgroup rebuilds the
+    /// queued environments its index and every this-many-th after it. A workgroup per environment
+    /// of the batch (65,536 of them, each holding 16 KiB of workgroup memory, all but a few
+    /// hundred leaving at once) took dozens of waves of launches. [`DEFAULT_REBUILD_WORKGROUPS`]
+    /// unless a clone says otherwise.
+    pub rebuild_workgroups: u32,
     /// Bytes of a step's per-step outputs per readback piece (`backend::gpu::readback`): a batch
     /// reads them back in one piece per this many bytes, at most four, so that the host copies
     /// one piece while the device copies the next. [`DEFAULT_READBACK_PIECE_BYTES`] unless a
@@ -421,6 +433,7 @@ impl GpuDevice {
             obstacles_in_workgroups: adapter.hardware,
             own_spirv,
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
+            rebuild_workgroups: DEFAULT_REBUILD_WORKGROUPS,
             poison_orca_lists: false,
             adapter,
             limits,

@@ -875,6 +875,7 @@ impl GpuStages {
         let copies = submits.len();
         let mut bytes = total + piece_bytes;
         let working = std::time::Instant::now();
+        let submit_s = working.duration_since(started).as_secs_f64();
         while_device_works(self);
         let host_work_s = working.elapsed().as_secs_f64();
         let rb = &self.step_readback;
@@ -932,6 +933,7 @@ impl GpuStages {
         stats.bytes += bytes;
         stats.second_reads += u64::from(second);
         stats.copy_s += copy_s;
+        stats.submit_s += submit_s;
         stats.wait_s += started.elapsed().as_secs_f64() - copy_s - host_work_s;
         Ok(())
     }
@@ -997,10 +999,12 @@ impl GpuStages {
                 pass.dispatch_workgroups(workgroups, 1, 1);
             }
             Some((rebuild, Rebuild::InWorkgroups)) => {
-                // A workgroup per environment of the batch (a queued one each), in rows of at
-                // most the device's workgroups per dimension.
+                // A workgroup per environment of the batch, at most the device's
+                // `rebuild_workgroups` (each then takes every so-many-th queued environment), in
+                // rows of at most the device's workgroups per dimension.
                 let per_dimension = self.dev.limits.max_compute_workgroups_per_dimension;
-                let (x, y) = workgroup_grid(self.n_envs, per_dimension);
+                let most = usize::try_from(self.dev.rebuild_workgroups).unwrap_or(usize::MAX);
+                let (x, y) = workgroup_grid(self.n_envs.min(most), per_dimension);
                 pass.set_pipeline(rebuild);
                 pass.dispatch_workgroups(x, y, 1);
             }
@@ -1272,7 +1276,7 @@ enum Rebuild {
     /// [`wgsl::REBUILD_ENTRY`]: one queued environment per lane, over `scratch`.
     PerLane,
     /// [`wgsl::REBUILD_IN_WORKGROUPS_ENTRY`]: one per workgroup, in workgroup memory; dispatched
-    /// with a workgroup per environment of the batch.
+    /// with a workgroup per queued environment (`GpuDevice::rebuild_workgroups` at most).
     InWorkgroups,
 }
 

@@ -226,11 +226,12 @@ fn print_row(row: &serde_json::Value, header: bool, backend: &str, device: &str)
     if let Some(p) = row["host_path"].as_object() {
         let ms = |k: &str| 1e3 * p[k].as_f64().unwrap_or(0.0);
         println!(
-            "    host path per step: {:.2} ms refilling the reset pool ({:.2} ms more while the device works, {:.1} rows), {:.2} ms waiting for the device, {:.2} ms copying out, {:.2} ms else; {:.1} MB read back ({:.1} finished rows)",
+            "    host path per step: {:.2} ms refilling the reset pool ({:.2} ms more while the device works, {:.1} rows), {:.2} ms waiting for the device ({:.2} of them submitting), {:.2} ms copying out, {:.2} ms else; {:.1} MB read back ({:.1} finished rows)",
             ms("refill_s"),
             ms("refill_ahead_s"),
             p["ahead_rows"].as_f64().unwrap_or(0.0),
             ms("wait_s"),
+            ms("submit_s"),
             ms("copy_s"),
             ms("other_s"),
             p["bytes"].as_f64().unwrap_or(0.0) / 1e6,
@@ -243,13 +244,14 @@ fn print_row(row: &serde_json::Value, header: bool, backend: &str, device: &str)
                 .map_or("-".into(), |s| format!("{:.2}", 1e3 * s))
         };
         println!(
-            "    on the device's clock ({} steps): passes {} ms, readback copies {} ms a step; meanwhile the host waited {} ms and made rows ahead {} ms, then copied {} ms",
+            "    on the device's clock ({} steps): passes {} ms, readback copies {} ms a step; meanwhile the host waited {} ms and made rows ahead {} ms, then copied {} ms: {} ms beyond the device's part (submits, wake-ups, maps, the last piece's copy)",
             t["steps"],
             ms("passes_s"),
             ms("readback_s"),
             ms("wait_s"),
             ms("refill_ahead_s"),
-            ms("copy_s")
+            ms("copy_s"),
+            ms("host_beyond_s")
         );
     }
     if let Some(stages) = row["stage_env_steps_per_s"].as_object() {
@@ -285,6 +287,7 @@ fn host_path_per_step(
         "refill_ahead_s": per(a.refill_ahead_s - b.refill_ahead_s),
         "ahead_rows": per((a.ahead_rows - b.ahead_rows) as f64),
         "wait_s": per(a.wait_s - b.wait_s),
+        "submit_s": per(a.submit_s - b.submit_s),
         "copy_s": per(a.copy_s - b.copy_s),
         "other_s": per(secs - parts),
         "bytes": per((a.bytes - b.bytes) as f64),
@@ -308,13 +311,18 @@ fn step_timeline(
     }
     let per = |x: f64| x / steps.max(1) as f64;
     let copies = a.timed_copies - b.timed_copies;
+    let passes = (a.device_s - b.device_s) / timed as f64;
+    let readback = (copies > 0).then(|| (a.readback_s - b.readback_s) / copies as f64);
+    // The host's time from the submit to its outputs filled, less the device's part of it.
+    let host = per(a.wait_s - b.wait_s + a.refill_ahead_s - b.refill_ahead_s + a.copy_s - b.copy_s);
     Some(json!({
         "steps": steps,
-        "passes_s": (a.device_s - b.device_s) / timed as f64,
-        "readback_s": (copies > 0).then(|| (a.readback_s - b.readback_s) / copies as f64),
+        "passes_s": passes,
+        "readback_s": readback,
         "wait_s": per(a.wait_s - b.wait_s),
         "refill_ahead_s": per(a.refill_ahead_s - b.refill_ahead_s),
         "copy_s": per(a.copy_s - b.copy_s),
+        "host_beyond_s": host - passes - readback.unwrap_or(0.0),
     }))
 }
 

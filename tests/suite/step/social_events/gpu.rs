@@ -33,6 +33,8 @@ pub(crate) struct Seen {
     pub(crate) rebuilds: usize,
     /// ... of which produced split vertices.
     pub(crate) rebuilds_with_splits: usize,
+    /// The most rebuilds in one run.
+    pub(crate) most_rebuilds_in_a_run: usize,
 }
 
 /// `name` with every event probability set to `prob` (and its capacities grown to match).
@@ -169,14 +171,17 @@ pub(crate) fn parity_on(
         let cap = cpu.strides.obstacle_vertices;
         let mut chunk = cpu.clone();
         let chunk = chunk.chunk();
+        let mut rebuilds = 0;
         for e in 0..n_envs {
             if cap > 0 && cpu.ov_x[e * cap] != GARBAGE {
-                seen.rebuilds += 1;
+                rebuilds += 1;
                 let mut inputs = 0;
                 orca_obstacles::for_each_polygon(&p, &chunk, e, |_, _| inputs += 4);
                 seen.rebuilds_with_splits += usize::from(cpu.n_obstacle_vertices[e] > inputs);
             }
         }
+        seen.rebuilds += rebuilds;
+        seen.most_rebuilds_in_a_run = seen.most_rebuilds_in_a_run.max(rebuilds);
         if mode == Parity::Lockstep {
             lockstep.add(n_envs, (&cpu, &from_gpu), Some((&cpu_out, &from_gpu_out)));
             continue;
@@ -227,6 +232,7 @@ pub(crate) fn add(total: &mut Seen, s: Seen) {
     }
     total.rebuilds += s.rebuilds;
     total.rebuilds_with_splits += s.rebuilds_with_splits;
+    total.most_rebuilds_in_a_run = total.most_rebuilds_in_a_run.max(s.most_rebuilds_in_a_run);
 }
 
 /// Contract: the obstacle rebuilds after a regrouping give the same bits with their working
@@ -234,7 +240,11 @@ pub(crate) fn add(total: &mut Seen, s: Seen) {
 /// the hardware adapters' way), as the CPU's: `formation` in exp3 and `social_events` in stress
 /// (the largest obstacle region). That memory is not zeroed (`backend::gpu::spirv`), so it is
 /// poisoned before every rebuild here (`GpuDevice::poison_orca_lists`): a word read before it is
-/// written would change the result.
+/// written would change the result. exp3 runs twice: with a workgroup per environment, and with
+/// 64 workgroups in all (`GpuDevice::rebuild_workgroups`), each rebuilding every 64th queued
+/// environment in turn (two or three each here), as a batch with more rebuilds in a step than that
+/// bound does on hardware. (Not fewer: llvmpipe ends an invocation's loops after 65,535
+/// iterations in all, about 18 of exp3's rebuilds; a GPU has no such limit.)
 #[test]
 fn rebuilds_in_workgroup_memory_match_the_cpu() {
     let Some(mut dev) = device() else { return };
@@ -244,8 +254,17 @@ fn rebuilds_in_workgroup_memory_match_the_cpu() {
     let mut exp3 = eventful("exp3", 0.3);
     exp3.episode.time_step = 0.3;
     let perturb = crate::step::formation::perturb_formation;
-    let seen = parity_on(dev.clone(), "formation", exp3, 256, 6, perturb);
+    let seen = parity_on(dev.clone(), "formation", exp3.clone(), 256, 6, perturb);
     add(&mut total, seen.expect("a device"));
+    let mut few = dev.clone();
+    few.rebuild_workgroups = 64;
+    let seen = parity_on(few, "formation", exp3, 256, 6, perturb);
+    let seen = seen.expect("a device");
+    assert!(
+        seen.most_rebuilds_in_a_run > 64,
+        "{seen:?}: too few rebuilds in a run for 64 workgroups to take several each"
+    );
+    add(&mut total, seen);
     let stress = eventful("stress", 0.5);
     let seen = parity_on(dev, "social_events", stress, 64, 6, perturb_events);
     add(&mut total, seen.expect("a device"));
