@@ -680,7 +680,7 @@ fn orca_obstacles_poison_region(e: u32) {
         return;
     }
     let r = orca_obstacles_region(e);
-    for (var k = 0u; k < batch.s_scratch; k++) {
+    for (var k = 0u; k < batch.obstacle_words; k++) {
         scratch[r + k] = 0xffffffffu;
     }
 }

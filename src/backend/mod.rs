@@ -144,10 +144,17 @@ pub struct HostPath {
     /// Of those, the reads whose readback copies were timed too (the adapter writes timestamps
     /// between commands).
     pub timed_copies: u64,
-    /// Seconds of the timed reads' passes on the device's clock: their part of `wait_s`.
+    /// Seconds of the timed reads' passes on the device's clock. (They run while the host waits
+    /// and makes the rows ahead: compare the device's part of a step with `wait_s`,
+    /// `refill_ahead_s` and `copy_s` together.)
     pub device_s: f64,
-    /// Seconds from the end of the passes to the end of the last readback copy, on the device's
-    /// clock, over the reads whose copies were timed.
+    /// Seconds from the start of the step's commands to its passes (the reset pool's new rows
+    /// copied into place, the queue counters cleared), on the device's clock, over the reads
+    /// whose copies were timed.
+    pub before_passes_s: f64,
+    /// Seconds from the end of the passes to the end of the last readback copy, idle time
+    /// between the readback's submits included, on the device's clock, over the reads whose
+    /// copies were timed.
     pub readback_s: f64,
 }
 

@@ -222,9 +222,11 @@ const OBSTACLE_REGION_IN_SCRATCH: &str =
 /// working memory (the polygon list, the processed set, the tree build's stack) in a workgroup
 /// array of [`OBSTACLES_IN_WORKGROUP_WORDS`] words instead of the environment's region of
 /// `scratch`: one dependent chain of accesses at the latency of workgroup memory rather than of
-/// a storage buffer. Sound for [`REBUILD_IN_WORKGROUPS_ENTRY`] alone, which rebuilds one
-/// environment per workgroup in its first lane, and because nothing in the region outlives the
-/// call that fills it; never compile another entry point from it (lanes would share the array).
+/// a storage buffer. Every `scratch[` of the source is rewritten, the slot permutations' too,
+/// which that entry point never reaches. Sound for [`REBUILD_IN_WORKGROUPS_ENTRY`] alone, which
+/// rebuilds one environment at a time per workgroup in its first lane, and because nothing in
+/// the region outlives the call that fills it; never compile another entry point from it (lanes
+/// would share the array).
 /// `None` when `src` has no obstacle library.
 pub fn with_obstacles_in_workgroup(src: &str) -> Option<String> {
     if !src.contains(OBSTACLE_REGION_IN_SCRATCH) {
@@ -541,6 +543,7 @@ impl BatchLayout {
         let scratch = ObstacleScratch::of(state);
         let region = scratch_region_words(state);
         fields.push(("s_scratch".into(), region));
+        fields.push(("obstacle_words".into(), scratch.words));
         fields.push(("x_obstacle_list".into(), scratch.list));
         fields.push(("x_obstacle_set".into(), scratch.set));
         fields.push(("x_obstacle_stack".into(), scratch.stack));
@@ -594,8 +597,8 @@ impl BatchLayout {
 /// polygon list (2 words and 8 a polygon, for a polygon per 8 obstacle vertices), a processed
 /// vertex set (2 words and 7 columns of the vertex capacity) and the tree build's stack (3
 /// columns of the vertex capacity). In [`BatchLayout`] as `x_obstacle_list`, `x_obstacle_set`,
-/// `x_obstacle_stack` (where each part starts); the region, `s_scratch` words, also serves the
-/// slot permutations ([`scratch_region_words`]).
+/// `x_obstacle_stack` (where each part starts) and `obstacle_words` (its words); the region,
+/// `s_scratch` words, also serves the slot permutations ([`scratch_region_words`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ObstacleScratch {
     /// Words of the obstacle processing's working memory.

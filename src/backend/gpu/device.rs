@@ -284,7 +284,7 @@ pub struct GpuDevice {
     /// queued environments its index and every this-many-th after it. A workgroup per environment
     /// of the batch (65,536 of them, each holding 16 KiB of workgroup memory, all but a few
     /// hundred leaving at once) took dozens of waves of launches. [`DEFAULT_REBUILD_WORKGROUPS`]
-    /// unless a clone says otherwise.
+    /// unless a clone says otherwise; 0 counts as 1.
     pub rebuild_workgroups: u32,
     /// Bytes of a step's per-step outputs per readback piece (`backend::gpu::readback`): a batch
     /// reads them back in one piece per this many bytes, at most four, so that the host copies

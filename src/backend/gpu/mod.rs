@@ -806,13 +806,19 @@ impl GpuStages {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("step"),
             });
+        // The step timeline times a step read back whose passes run here (not the read after
+        // passes timed alone, `time_passes`).
+        let timed = read.is_some() && !stages.is_empty();
+        if let Some(t) = self.timeline.as_ref().filter(|_| timed) {
+            t.at_start(&mut enc);
+        }
         self.begin_submit(&mut enc);
         let selective = read.is_some() && !self.step_read.whole_table_next;
         if selective {
             self.step_read.clear(&mut enc);
         }
         {
-            let timeline = self.timeline.as_ref().filter(|_| read.is_some());
+            let timeline = self.timeline.as_ref().filter(|_| timed);
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("step"),
                 timestamp_writes: timeline.map(Timeline::pass_writes),
@@ -861,7 +867,7 @@ impl GpuStages {
             enc.copy_buffer_to_buffer(net.status_buffer(), 0, rb, total, e_bytes);
             total += e_bytes;
         }
-        let timeline = self.timeline.as_ref();
+        let timeline = self.timeline.as_ref().filter(|_| timed);
         let (submits, piece_bytes) = if selective {
             self.step_read
                 .submit_with_pieces(&self.dev, enc, &tables, timeline)
@@ -925,16 +931,19 @@ impl GpuStages {
             self.step_read.whole_table_next = false;
             self.step_read.stats.full_reads += 1;
         }
-        if let Some(t) = &self.timeline {
+        // The timeline's own readback is not the step's: its time stays out of the wait.
+        let timing = std::time::Instant::now();
+        if let Some(t) = self.timeline.as_ref().filter(|_| timed) {
             t.read(&self.dev, copies, &mut self.step_read.stats)?;
         }
+        let timeline_s = timing.elapsed().as_secs_f64();
         let stats = &mut self.step_read.stats;
         stats.reads += 1;
         stats.bytes += bytes;
         stats.second_reads += u64::from(second);
         stats.copy_s += copy_s;
         stats.submit_s += submit_s;
-        stats.wait_s += started.elapsed().as_secs_f64() - copy_s - host_work_s;
+        stats.wait_s += started.elapsed().as_secs_f64() - copy_s - host_work_s - timeline_s;
         Ok(())
     }
 
@@ -1003,7 +1012,8 @@ impl GpuStages {
                 // `rebuild_workgroups` (each then takes every so-many-th queued environment), in
                 // rows of at most the device's workgroups per dimension.
                 let per_dimension = self.dev.limits.max_compute_workgroups_per_dimension;
-                let most = usize::try_from(self.dev.rebuild_workgroups).unwrap_or(usize::MAX);
+                let most =
+                    usize::try_from(self.dev.rebuild_workgroups.max(1)).unwrap_or(usize::MAX);
                 let (x, y) = workgroup_grid(self.n_envs.min(most), per_dimension);
                 pass.set_pipeline(rebuild);
                 pass.dispatch_workgroups(x, y, 1);
@@ -1276,7 +1286,8 @@ enum Rebuild {
     /// [`wgsl::REBUILD_ENTRY`]: one queued environment per lane, over `scratch`.
     PerLane,
     /// [`wgsl::REBUILD_IN_WORKGROUPS_ENTRY`]: one per workgroup, in workgroup memory; dispatched
-    /// with a workgroup per queued environment (`GpuDevice::rebuild_workgroups` at most).
+    /// with a workgroup per environment of the batch, `GpuDevice::rebuild_workgroups` at most
+    /// (the host does not know how many are queued), each taking every so-many-th queued one.
     InWorkgroups,
 }
 

@@ -1,8 +1,11 @@
-//! A delivered step on the device's clock ([`Timeline`]): GPU timestamps at the start and the end
-//! of the step's compute pass and after each of its readback copies, so that the host's wait
-//! (`HostPath::wait_s`, the submit to the mapped readback) splits into the passes, the readback
-//! copies and what neither explains (submission and wake-up latency, the device idle between
-//! the readback's submits). `socnav bench --backend gpu` turns it on for a short run of its own
+//! A delivered step on the device's clock ([`Timeline`]): GPU timestamps at the start of the
+//! step's commands, at the start and the end of its compute pass, and after each of its readback
+//! copies. The host's time from the submit to its outputs filled (`HostPath`'s `wait_s`,
+//! `refill_ahead_s` and `copy_s`, which run one after the other) then splits into the device's
+//! part: the copies recorded before the passes (the reset pool's new rows, the queue counters),
+//! the passes, and the readback's copies with any idle time between their submits; and what the
+//! device's part does not explain: recording and submitting, waking up and mapping, and the copy
+//! of the last piece. `socnav bench --backend gpu` turns it on for a short run of its own
 //! (`Backend::set_step_timeline`); off, a step records no timestamps.
 
 use crate::backend::HostPath;
@@ -12,9 +15,12 @@ use super::GpuDevice;
 use super::kit::map_and_read;
 use super::readback::MOST_PIECES;
 
-/// Timestamp 0: the step's compute pass begins; 1: it ends; `2 + k`: readback copy `k` is done.
-const AFTER_PASSES: u32 = 1;
-const SLOTS: u32 = 2 + MOST_PIECES as u32;
+/// Timestamp slots: the step's commands start, its compute pass begins, it ends; readback copy
+/// `k` is done at `AFTER_PASSES + 1 + k`.
+const START: u32 = 0;
+const PASSES: u32 = 1;
+const AFTER_PASSES: u32 = 2;
+const SLOTS: u32 = AFTER_PASSES + 1 + MOST_PIECES as u32;
 
 /// The query set and buffers of the step timeline.
 pub(crate) struct Timeline {
@@ -23,7 +29,7 @@ pub(crate) struct Timeline {
     resolved: wgpu::Buffer,
     read: wgpu::Buffer,
     /// The adapter writes timestamps between commands (`TIMESTAMP_QUERY_INSIDE_ENCODERS`), so
-    /// the readback's copies are timed too; else only the passes are.
+    /// the copies before the passes and the readback's are timed too; else only the passes are.
     copies_timed: bool,
     /// Nanoseconds per timestamp tick.
     period_ns: f64,
@@ -65,11 +71,19 @@ impl Timeline {
         })
     }
 
-    /// The step's compute pass writes timestamps 0 and 1 at its beginning and end.
+    /// At the start of the step's encoder, before anything is recorded: its timestamp, where
+    /// copies are timed.
+    pub(crate) fn at_start(&self, enc: &mut wgpu::CommandEncoder) {
+        if self.copies_timed {
+            enc.write_timestamp(&self.set, START);
+        }
+    }
+
+    /// The step's compute pass writes its timestamps at its beginning and end.
     pub(crate) fn pass_writes(&self) -> wgpu::ComputePassTimestampWrites<'_> {
         wgpu::ComputePassTimestampWrites {
             query_set: &self.set,
-            beginning_of_pass_write_index: Some(0),
+            beginning_of_pass_write_index: Some(PASSES),
             end_of_pass_write_index: Some(AFTER_PASSES),
         }
     }
@@ -107,16 +121,17 @@ impl Timeline {
                 tick(to).saturating_sub(tick(from)) as f64 * self.period_ns * 1e-9
             };
             let last_copy = AFTER_PASSES + copies.min(MOST_PIECES) as u32;
-            let readback =
-                (self.copies_timed && copies > 0).then(|| seconds(AFTER_PASSES, last_copy));
-            times = Some((seconds(0, AFTER_PASSES), readback));
+            let copied = (self.copies_timed && copies > 0)
+                .then(|| (seconds(START, PASSES), seconds(AFTER_PASSES, last_copy)));
+            times = Some((seconds(PASSES, AFTER_PASSES), copied));
         })?;
-        if let Some((passes, readback)) = times {
+        if let Some((passes, copied)) = times {
             stats.timed_reads += 1;
             stats.device_s += passes;
-            if let Some(r) = readback {
+            if let Some((before, readback)) = copied {
                 stats.timed_copies += 1;
-                stats.readback_s += r;
+                stats.before_passes_s += before;
+                stats.readback_s += readback;
             }
         }
         Ok(())

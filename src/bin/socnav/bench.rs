@@ -44,6 +44,9 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             .map(|s| (n * steps) as f64 / s);
         // A short run with the delivered step's timestamps: its wait on the device's clock.
         env.set_step_timeline(true);
+        // One step first: the step after device work that was not read back reads the whole
+        // output table.
+        env.step(Actions::Continuous(&actions))?;
         let before_timeline = env.host_path();
         let (timeline_steps, _) = timed_steps(&mut env, &actions, 0.25 * a.seconds)?;
         let timeline = step_timeline(before_timeline, env.host_path(), timeline_steps);
@@ -244,8 +247,9 @@ fn print_row(row: &serde_json::Value, header: bool, backend: &str, device: &str)
                 .map_or("-".into(), |s| format!("{:.2}", 1e3 * s))
         };
         println!(
-            "    on the device's clock ({} steps): passes {} ms, readback copies {} ms a step; meanwhile the host waited {} ms and made rows ahead {} ms, then copied {} ms: {} ms beyond the device's part (submits, wake-ups, maps, the last piece's copy)",
+            "    on the device's clock ({} steps): {} ms before the passes, passes {} ms, readback copies {} ms a step; meanwhile the host waited {} ms and made rows ahead {} ms, then copied {} ms: {} ms beyond the device's part (submits, wake-ups, maps, the last piece's copy; the copies too where they are not timed, '-')",
             t["steps"],
+            ms("before_passes_s"),
             ms("passes_s"),
             ms("readback_s"),
             ms("wait_s"),
@@ -298,7 +302,7 @@ fn host_path_per_step(
 
 /// The delivered step on the device's clock between two totals over `steps` steps, beside the
 /// host's wait, rows ahead and copy in those steps (`None` without a device that has timestamp
-/// queries); `readback_s` is `null` where the adapter cannot time copies.
+/// queries); `before_passes_s` and `readback_s` are `null` where the adapter cannot time copies.
 fn step_timeline(
     before: Option<socnav::backend::HostPath>,
     after: Option<socnav::backend::HostPath>,
@@ -312,17 +316,22 @@ fn step_timeline(
     let per = |x: f64| x / steps.max(1) as f64;
     let copies = a.timed_copies - b.timed_copies;
     let passes = (a.device_s - b.device_s) / timed as f64;
-    let readback = (copies > 0).then(|| (a.readback_s - b.readback_s) / copies as f64);
-    // The host's time from the submit to its outputs filled, less the device's part of it.
+    let copied = |x: f64| (copies > 0).then(|| x / copies as f64);
+    let before = copied(a.before_passes_s - b.before_passes_s);
+    let readback = copied(a.readback_s - b.readback_s);
+    // The host's time from the submit to its outputs filled, less the device's part of it
+    // (without timed copies, the copies stay in the host's part).
     let host = per(a.wait_s - b.wait_s + a.refill_ahead_s - b.refill_ahead_s + a.copy_s - b.copy_s);
+    let device = passes + before.unwrap_or(0.0) + readback.unwrap_or(0.0);
     Some(json!({
         "steps": steps,
+        "before_passes_s": before,
         "passes_s": passes,
         "readback_s": readback,
         "wait_s": per(a.wait_s - b.wait_s),
         "refill_ahead_s": per(a.refill_ahead_s - b.refill_ahead_s),
         "copy_s": per(a.copy_s - b.copy_s),
-        "host_beyond_s": host - passes - readback.unwrap_or(0.0),
+        "host_beyond_s": host - device,
     }))
 }
 
