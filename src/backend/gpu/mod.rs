@@ -1393,9 +1393,9 @@ mod tests {
         dispatches.iter().map(|d| (d.pass, d.members)).collect()
     }
 
-    /// One workgroup per environment, in rows of at most the device's workgroups per dimension:
-    /// never fewer workgroups than environments, less than a row more, never a dimension past
-    /// the limit.
+    /// A grid of `n` workgroups (the rebuild's: one per environment, at most the device's
+    /// `rebuild_workgroups`), in rows of at most the device's workgroups per dimension: never
+    /// fewer workgroups than `n`, less than a row more, never a dimension past the limit.
     #[test]
     fn a_workgroup_grid_covers_the_batch_within_the_limit() {
         use super::workgroup_grid;

@@ -236,7 +236,7 @@ pub(crate) fn add(total: &mut Seen, s: Seen) {
 }
 
 /// Contract: the obstacle rebuilds after a regrouping give the same bits with their working
-/// memory in workgroup memory, a workgroup per environment (`GpuDevice::obstacles_in_workgroups`,
+/// memory in workgroup memory, a workgroup at a time (`GpuDevice::obstacles_in_workgroups`,
 /// the hardware adapters' way), as the CPU's: `formation` in exp3 and `social_events` in stress
 /// (the largest obstacle region). That memory is not zeroed (`backend::gpu::spirv`), so it is
 /// poisoned before every rebuild here (`GpuDevice::poison_orca_lists`): a word read before it is
