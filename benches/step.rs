@@ -113,21 +113,27 @@ fn bench_configs(
             .warm_up_time(Duration::from_secs(1))
             .sample_size(20);
         for &n in sizes {
-            let mut env = BatchEnv::new(
-                config.clone(),
-                EnvOptions {
-                    n_envs: n,
-                    seed: 0,
-                    backend,
-                    ..Default::default()
-                },
-            )
-            .expect("valid batch");
-            env.reset(None).expect("reset");
+            // Made on the first call, which criterion makes only for a bench its filter selects
+            // (`cargo bench -- pool_rows` builds no batch of the step's benches).
+            let mut env: Option<BatchEnv> = None;
             // Forward while turning: episodes end by collisions and timeouts, so resets are included.
             let actions = [0.8f32, 0.0, 0.3].repeat(n);
             group.throughput(Throughput::Elements(n as u64));
             group.bench_function(BenchmarkId::from_parameter(n), |b| {
+                let env = env.get_or_insert_with(|| {
+                    let mut env = BatchEnv::new(
+                        config.clone(),
+                        EnvOptions {
+                            n_envs: n,
+                            seed: 0,
+                            backend,
+                            ..Default::default()
+                        },
+                    )
+                    .expect("valid batch");
+                    env.reset(None).expect("reset");
+                    env
+                });
                 b.iter(|| env.step(Actions::Continuous(&actions)).expect("step"));
             });
         }
