@@ -648,7 +648,7 @@ fn obstacle_scratch_layout() {
 /// An environment's region of `scratch` holds the obstacle processing's working memory and a
 /// slot permutation's old slots (a word per column and slot of the kind that needs most), by
 /// hand: 2 human columns of 16 slots (32 words) outgrow the obstacles of 1 vertex (22 words);
-/// 8 vertices (92 words) outgrow them.
+/// 8 vertices (92 words) outgrow them; and for every shipped config.
 #[test]
 fn scratch_region_holds_obstacles_and_permutations() {
     use socnav::state::columns::Elem;
@@ -664,6 +664,38 @@ fn scratch_region_holds_obstacles_and_permutations() {
     };
     assert_eq!(with(1), 32);
     assert_eq!(with(8), 92);
+    // Every shipped config: the region holds each permuted kind's columns times its capacity,
+    // and the obstacle words.
+    for name in socnav::Config::shipped_names() {
+        let env = socnav::BatchEnv::new(
+            socnav::Config::from_name_or_path(name).expect("shipped"),
+            socnav::EnvOptions::default(),
+        )
+        .expect("batch");
+        let state = env.state().expect("state");
+        let columns = state.columns();
+        let region = wgsl::scratch_region_words(&columns);
+        for kind in ["human", "group", "laptop_user", "laptop"] {
+            let of_kind: Vec<_> = columns
+                .iter()
+                .filter(|c| {
+                    socnav::state::BatchState::COLUMN_KINDS
+                        .iter()
+                        .any(|&(col, k)| col == c.0 && k == kind)
+                })
+                .collect();
+            let words = of_kind.len() * of_kind.iter().map(|c| c.2).max().unwrap_or(0);
+            assert!(kind != "human" || words > 0, "{name}: no human slots");
+            assert!(
+                region >= words,
+                "{name}: {region} words < {words} of {kind} slots"
+            );
+        }
+        assert!(
+            region >= wgsl::ObstacleScratch::of(&columns).words,
+            "{name}"
+        );
+    }
 }
 
 /// The GPU backend's finished-rows pass (`wgsl::finished_rows_shader`, generated from the output
