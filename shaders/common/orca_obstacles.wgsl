@@ -47,9 +47,12 @@
 // every capacity class a shader of its own; with the scratch buffer one compiled shader serves
 // every config. One invocation steps one environment and uses one list and one set at a time
 // (the environment's rebuild, or one walker's visible subset), so one region per environment
-// suffices; nothing in it outlives the call that fills it. The rebuild entry point of hardware
-// adapters (`rebuild_in_workgroups`) takes this file with the region moved into a workgroup array
-// instead (backend::wgsl::with_obstacles_in_workgroup): one environment per workgroup.
+// suffices; nothing in it outlives the call that fills it. (A regrouping's slot permutations
+// pass their old slots through the same region, in `main`, before the rebuild's dispatch:
+// backend::wgsl::scratch_region_words; the library's own part is `batch.obstacle_words`.) The
+// rebuild entry point of hardware adapters (`rebuild_in_workgroups`) takes this file with the
+// region moved into a workgroup array instead (backend::wgsl::with_obstacles_in_workgroup): one
+// environment at a time per workgroup.
 //
 // Capacities and overflow. The processed set holds orca_obstacles_cap() = batch.s_ov_x vertices,
 // the per-environment capacity of the `ov_*` columns (Rust `store` asserts the same bound); a

@@ -474,8 +474,9 @@ fn slot_index_functions(state: Columns<'_>) -> String {
 /// (`obs_dim`, `obs_robot`, and per entity type `obs_offset_<type>`, `obs_capacity_<type>`, per
 /// interaction kind `pairs_<kind>`); the reset pool's `pool_row` (words per row) and
 /// `pool_observation` (the observation's first word in a row); the `scratch` region of an
-/// environment ([`scratch_region_words`]), `x_obs_staged`, where the staged observation starts in it
-/// ([`scratch_words`]), and `obs_staged` (1 when the observation is staged); and the SNGNN-v2
+/// environment (`s_scratch`, [`scratch_region_words`]), the obstacle library's part of it
+/// (`obstacle_words`, `x_obstacle_*`: [`ObstacleScratch`]), `x_obs_staged`, where the staged
+/// observation starts in it ([`scratch_words`]), and `obs_staged` (1 when the observation is staged); and the SNGNN-v2
 /// sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one
 /// compiled pipeline serves every batch size and every config of the same [`SizeClasses`]. The
 /// field names are the same for every batch (the column list is fixed), so the WGSL struct is
@@ -1110,11 +1111,9 @@ fn kind_of(col: &str) -> Option<&'static str> {
 
 /// The largest capacity of the kinds the social events reorder (0 if none).
 fn permuted_cap(state: Columns<'_>) -> usize {
-    state
+    PERMUTED_KINDS
         .iter()
-        .filter(|&&(col, _, _)| {
-            kind_of(col).is_some_and(|k| PERMUTED_KINDS.iter().any(|&(pk, _)| pk == k))
-        })
+        .flat_map(|&(kind, _)| columns_of(state, kind))
         .map(|&(_, _, stride)| stride)
         .max()
         .unwrap_or(0)

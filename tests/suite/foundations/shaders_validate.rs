@@ -666,13 +666,7 @@ fn scratch_region_holds_obstacles_and_permutations() {
     assert_eq!(with(8), 92);
     // Every shipped config: the region holds each permuted kind's columns times its capacity,
     // and the obstacle words.
-    for name in socnav::Config::shipped_names() {
-        let env = socnav::BatchEnv::new(
-            socnav::Config::from_name_or_path(name).expect("shipped"),
-            socnav::EnvOptions::default(),
-        )
-        .expect("batch");
-        let state = env.state().expect("state");
+    for (name, state, _) in shipped_tables() {
         let columns = state.columns();
         let region = wgsl::scratch_region_words(&columns);
         for kind in ["human", "group", "laptop_user", "laptop"] {
@@ -1088,13 +1082,8 @@ fn rebuild_passes_keep_their_obstacles_in_workgroup_memory() {
             "{pass}: one workgroup array"
         );
     }
-    for name in socnav::Config::shipped_names() {
-        let env = socnav::BatchEnv::new(
-            socnav::Config::from_name_or_path(name).expect("shipped"),
-            socnav::EnvOptions::default(),
-        )
-        .expect("batch");
-        let words = wgsl::ObstacleScratch::of(&env.state().expect("state").columns()).words;
+    for (name, state, _) in shipped_tables() {
+        let words = wgsl::ObstacleScratch::of(&state.columns()).words;
         assert!(
             words <= wgsl::OBSTACLES_IN_WORKGROUP_WORDS,
             "{name}: {words} words of obstacle region"
