@@ -7,6 +7,10 @@
 // records compacted to the front of each block, pairs indexing them), and Gaussian noise from the
 // counter-based stream of kind 7. One environment per invocation. Change both in the same commit.
 //
+// The device keeps each row without its entity records' one-hot floats (`obs_payload_index`;
+// `src/backend/obs_payload.rs`): they follow from the per-type counts, and the host writes them
+// as it reads the row back. The robot record is kept whole.
+//
 // On a device that stages observations (`batch.obs_staged`, `GpuDevice::stage_observations`),
 // `stage_observation` writes the observation into `scratch`, slot-major (value i of environment e at
 // `batch.x_obs_staged + i * n_envs + e`: `obs_put`), so that the 32 lanes of a warp storing the
@@ -37,22 +41,33 @@ var<private> fr: ObsFrame;
 // The environment this invocation observes.
 var<private> obs_e: u32;
 
-// Value `i` of this environment's observation row: staged (see the head of this file), or, on
-// a device that does not stage (`batch.obs_staged` 0: a software one, whose barriers are slow),
-// in its row.
+// Where float `i` of a row (of the robot record, or of an entity record past its one-hot
+// floats, which the device does not keep) lies in the device's row of `batch.so_obs` floats.
+fn obs_payload_index(i: u32) -> u32 {
+    if (i < batch.obs_robot) {
+        return i;
+    }
+    return i - OBS_ONE_HOT * (1u + (i - batch.obs_robot) / OBS_RECORD);
+}
+
+// Float `i` of this environment's observation row (never an entity record's one-hot float):
+// staged (see the head of this file), or, on a device that does not stage (`batch.obs_staged`
+// 0: a software one, whose barriers are slow), in its row.
 fn obs_put(i: u32, v: f32) {
+    let j = obs_payload_index(i);
     if (batch.obs_staged != 0u) {
-        scratch[batch.x_obs_staged + i * batch.n_envs + obs_e] = bitcast<u32>(v);
+        scratch[batch.x_obs_staged + j * batch.n_envs + obs_e] = bitcast<u32>(v);
     } else {
-        outf[batch.co_obs + obs_e * batch.so_obs + i] = v;
+        outf[batch.co_obs + obs_e * batch.so_obs + j] = v;
     }
 }
 
 fn obs_get(i: u32) -> f32 {
+    let j = obs_payload_index(i);
     if (batch.obs_staged != 0u) {
-        return bitcast<f32>(scratch[batch.x_obs_staged + i * batch.n_envs + obs_e]);
+        return bitcast<f32>(scratch[batch.x_obs_staged + j * batch.n_envs + obs_e]);
     }
-    return outf[batch.co_obs + obs_e * batch.so_obs + i];
+    return outf[batch.co_obs + obs_e * batch.so_obs + j];
 }
 
 fn obs_frame(e: u32) -> ObsFrame {
@@ -121,17 +136,17 @@ fn obs_plant_sin_cos() -> vec2<f32> {
     return math_sin_cos(-fr.ref_theta);
 }
 
-// The one-hot part of the record at `at` (its first 6 floats): 1 at `kind`, 0 elsewhere. Every
-// float of a record is stored once (no zeroing pass before the values): stores are the
-// observation pass's largest cost on a GPU.
-fn obs_one_hot(at: u32, kind: u32) {
-    for (var k = 0u; k < 6u; k++) {
-        obs_put(at + k, select(0.0, 1.0, k == kind));
+// The robot record's one-hot floats (its first OBS_ONE_HOT): 1 at ONE_HOT_ROBOT, 0 elsewhere.
+// Every float of a record is stored once (no zeroing pass before the values), and the entity
+// records' one-hot floats not at all (the head of this file).
+fn obs_robot_one_hot() {
+    for (var k = 0u; k < OBS_ONE_HOT; k++) {
+        obs_put(k, select(0.0, 1.0, k == ONE_HOT_ROBOT));
     }
 }
 
 fn obs_robot_record(e: u32) {
-    obs_one_hot(0u, ONE_HOT_ROBOT);
+    obs_robot_one_hot();
     if (fr.world) {
         obs_put(6u, sf[batch.c_goal_x + e]);
         obs_put(7u, sf[batch.c_goal_y + e]);
@@ -156,9 +171,8 @@ fn obs_robot_record(e: u32) {
     }
 }
 
-// A non-human record at `at`.
-fn obs_object_record(at: u32, kind: u32, px: f32, py: f32, sc: vec2<f32>, radius: f32) {
-    obs_one_hot(at, kind);
+// A non-human record at `at` (its one-hot floats are the host's: the head of this file).
+fn obs_object_record(at: u32, px: f32, py: f32, sc: vec2<f32>, radius: f32) {
     obs_put(at + 6u, px);
     obs_put(at + 7u, py);
     obs_put(at + 8u, sc.x);
@@ -197,7 +211,6 @@ fn obs_humans(e: u32, block: u32) -> u32 {
         }
         let at = block + k * OBS_RECORD;
         k += 1u;
-        obs_one_hot(at, ONE_HOT_HUMAN);
         let hsc = math_sin_cos(theta);
         obs_put(at + 10u, params.human_radius);
         obs_put(at + 13u, obs_gaze(x, y, hsc.y, hsc.x));
@@ -240,7 +253,6 @@ fn obs_rectangles(
     first: u32,
     end: u32,
     step: u32,
-    one_hot: u32,
     radius: f32,
 ) -> u32 {
     var k = 0u;
@@ -256,7 +268,7 @@ fn obs_rectangles(
             p = vec2<f32>(x, y);
         }
         let sc = obs_rel_sin_cos(sf[ctheta + i]);
-        obs_object_record(block + k * OBS_RECORD, one_hot, p.x, p.y, sc, radius);
+        obs_object_record(block + k * OBS_RECORD, p.x, p.y, sc, radius);
         k += 1u;
     }
     return k;
@@ -265,13 +277,13 @@ fn obs_rectangles(
 fn obs_laptops(e: u32, block: u32) -> u32 {
     let radius = obs_circumradius(params.laptop_length, params.laptop_width);
     let n = su[batch.c_n_laptops + e];
-    return obs_rectangles(block, batch.c_l_x, batch.c_l_y, batch.c_l_theta, at_laptop(e, 0u), at_laptop(e, n), batch.k_laptop, ONE_HOT_LAPTOP, radius);
+    return obs_rectangles(block, batch.c_l_x, batch.c_l_y, batch.c_l_theta, at_laptop(e, 0u), at_laptop(e, n), batch.k_laptop, radius);
 }
 
 fn obs_tables(e: u32, block: u32) -> u32 {
     let radius = obs_circumradius(params.table_length, params.table_width);
     let n = su[batch.c_n_tables + e];
-    return obs_rectangles(block, batch.c_t_x, batch.c_t_y, batch.c_t_theta, at_table(e, 0u), at_table(e, n), batch.k_table, ONE_HOT_TABLE, radius);
+    return obs_rectangles(block, batch.c_t_x, batch.c_t_y, batch.c_t_theta, at_table(e, 0u), at_table(e, n), batch.k_table, radius);
 }
 
 fn obs_plants(e: u32, block: u32) -> u32 {
@@ -288,7 +300,7 @@ fn obs_plants(e: u32, block: u32) -> u32 {
             p = vec2<f32>(x, y);
         }
         let sc = obs_plant_sin_cos();
-        obs_object_record(block + k * OBS_RECORD, ONE_HOT_PLANT, p.x, p.y, sc, params.plant_radius);
+        obs_object_record(block + k * OBS_RECORD, p.x, p.y, sc, params.plant_radius);
         k += 1u;
     }
     return k;
@@ -306,7 +318,7 @@ fn obs_segment(
         }
     }
     obs_object_record(
-        block + k * OBS_RECORD, ONE_HOT_WALL, written.x + along * written.z,
+        block + k * OBS_RECORD, written.x + along * written.z,
         written.y + along * written.w, sc, radius,
     );
     return 1u;
@@ -502,11 +514,13 @@ fn stage_observation(e: u32) {
     if (batch.obs_capacity_walls > 0u) {
         counts[4] = obs_walls(e, batch.obs_offset_walls);
     }
+    // The padding records past the counts: their floats past the one-hot ones.
     for (var t = 0u; t < 5u; t++) {
-        let first = obs_offset(t) + counts[t] * OBS_RECORD;
-        let last = obs_offset(t) + obs_capacity(t) * OBS_RECORD;
-        for (var i = first; i < last; i++) {
-            obs_put(i, 0.0);
+        for (var k = counts[t]; k < obs_capacity(t); k++) {
+            let at = obs_offset(t) + k * OBS_RECORD;
+            for (var i = at + OBS_ONE_HOT; i < at + OBS_RECORD; i++) {
+                obs_put(i, 0.0);
+            }
         }
     }
     if (params.obs_noise_on != 0u) {

@@ -24,6 +24,12 @@ use crate::state::{BatchState, Caps};
 /// relative angular speed, gaze.
 pub const RECORD: usize = 14;
 
+/// Floats of a record's one-hot type, its first floats (the robot's record's too): 1.0 at the
+/// type's place ([`one_hot`]) in a real record, all 0.0 in a padding record. An entity record's
+/// one-hot floats are therefore a function of the per-type counts beside the row, which is why
+/// the GPU backend keeps and reads back rows without them ([`ObsLayout::payload_dim`]).
+pub const ONE_HOT: usize = 6;
+
 /// Floats of the robot record without velocity: one-hot (6), goal x, goal y, radius.
 pub const ROBOT_RECORD: usize = 9;
 
@@ -75,6 +81,8 @@ pub mod one_hot {
     pub const PLANT: usize = 4;
     /// Wall.
     pub const WALL: usize = 5;
+    /// The one-hot place of each entity type, in [`super::ENTITY_KEYS`] order.
+    pub const OF_ENTITY: [usize; 5] = [HUMAN, LAPTOP, TABLE, PLANT, WALL];
 }
 
 /// Where each part of an environment's observation lives.
@@ -121,6 +129,17 @@ impl ObsLayout {
             dim: at,
             pairs: [human_human, caps.laptop_users],
         }
+    }
+
+    /// Entity records of a row (one per slot of every type).
+    pub fn entity_records(&self) -> usize {
+        self.capacity.iter().sum()
+    }
+
+    /// Floats of a row without its entity records' [`ONE_HOT`] floats: the robot record whole,
+    /// then every entity record's last `RECORD - ONE_HOT` floats, in row order.
+    pub fn payload_dim(&self) -> usize {
+        self.dim - ONE_HOT * self.entity_records()
     }
 }
 

@@ -4,6 +4,7 @@
 pub mod cpu;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+pub mod obs_payload;
 pub mod reset_pool;
 pub mod wgsl;
 

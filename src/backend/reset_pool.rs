@@ -12,6 +12,7 @@
 
 use rayon::prelude::*;
 
+use crate::backend::obs_payload;
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
@@ -26,6 +27,9 @@ pub struct RowScratch {
     out: Outputs,
     f32s: Vec<f32>,
     u32s: Vec<u32>,
+    /// The first observation without its one-hot floats, as the device keeps it
+    /// ([`crate::backend::obs_payload`]).
+    payload: Vec<u32>,
 }
 
 impl RowScratch {
@@ -36,6 +40,7 @@ impl RowScratch {
             out: Outputs::new(1, layout),
             f32s: Vec::new(),
             u32s: Vec::new(),
+            payload: vec![0; layout.payload_dim()],
         }
     }
 }
@@ -44,12 +49,13 @@ impl RowScratch {
 pub fn row_words(caps: Caps, layout: ObsLayout) -> usize {
     let s = BatchState::new(0, caps);
     let o = Outputs::new(0, layout);
-    crate::backend::wgsl::pool_row_words(&s.columns(), &o.columns())
+    crate::backend::wgsl::pool_row_words(&s.columns(), &obs_payload::device_columns(&o))
 }
 
 /// Write into `row` the pool row of environment `env` (batch index) starting the episode of seed
 /// `seed` with episode counter `episode` (the environment's before the reset): the state after
-/// `reset_and_observe`, then its first observation. `row` must hold [`row_words`] words.
+/// `reset_and_observe`, then its first observation (without its one-hot floats, as the device keeps
+/// it: [`obs_payload`]). `row` must hold [`row_words`] words.
 ///
 /// # Errors
 /// The scenario error of an unsatisfiable configuration, as the CPU backend's reset gives it.
@@ -66,6 +72,7 @@ pub fn write_row(
         out,
         f32s,
         u32s,
+        payload,
     } = scratch;
     state.set_next_seed(0, seed);
     state.episode[0] = episode;
@@ -87,10 +94,11 @@ pub fn write_row(
     f32s.clear();
     u32s.clear();
     state.pack(f32s, u32s);
+    obs_payload::strip_row(&out.strides.layout, bytemuck::cast_slice(&out.obs), payload);
     let parts: [&mut dyn Iterator<Item = u32>; 7] = [
         &mut f32s.iter().map(|v| v.to_bits()),
         &mut u32s.iter().copied(),
-        &mut out.obs.iter().map(|v| v.to_bits()),
+        &mut payload.iter().copied(),
         &mut out.obs_count.iter().copied(),
         &mut out.hh_pairs.iter().copied(),
         &mut out.hl_pairs.iter().copied(),

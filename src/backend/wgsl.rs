@@ -748,7 +748,7 @@ fn size_class(n: usize, floor: usize) -> usize {
 
 /// The part of every shader's head that depends on neither the config nor the batch: the
 /// constants [`prelude`] lists before the size classes (`WORKGROUP_SIZE`, `INFO_*`, `EP_*`,
-/// `EV_*`, the shared codes and f32 constants, `OBS_RECORD`, `OBS_TILE`, [`geometry_constants`]).
+/// `EV_*`, the shared codes and f32 constants, `OBS_RECORD`, `OBS_ONE_HOT`, `OBS_TILE`, [`geometry_constants`]).
 /// A kernel built from the shader library outside the step (tests/suite/orca/gpu.rs) starts with
 /// it, so the library's files see the same definitions there as in the step.
 pub fn shared_head() -> String {
@@ -772,8 +772,9 @@ pub fn shared_head() -> String {
         out.push_str(&format!("const {name}: f32 = {};\n", wgsl_f32(value)));
     }
     out.push_str(&format!(
-        "const OBS_RECORD: u32 = {}u;\n",
-        crate::spec::RECORD
+        "const OBS_RECORD: u32 = {}u;\nconst OBS_ONE_HOT: u32 = {}u;\n",
+        crate::spec::RECORD,
+        crate::spec::ONE_HOT
     ));
     out.push_str(&format!("const OBS_TILE: u32 = {OBS_ROWS_TILE}u;\n"));
     out.push_str(ORCA_LISTS_KEPT);
@@ -1252,12 +1253,8 @@ fn shared_constants() -> Vec<(&'static str, u32)> {
             systems::formation::APPROXIMATE_AFTER,
         ),
         ("NOISE_ROBOT", index(crate::params::NOISE_ROBOT)),
+        // The entity records' one-hot floats are the host's (`backend::obs_payload`).
         ("ONE_HOT_ROBOT", index(one_hot::ROBOT)),
-        ("ONE_HOT_HUMAN", index(one_hot::HUMAN)),
-        ("ONE_HOT_TABLE", index(one_hot::TABLE)),
-        ("ONE_HOT_LAPTOP", index(one_hot::LAPTOP)),
-        ("ONE_HOT_PLANT", index(one_hot::PLANT)),
-        ("ONE_HOT_WALL", index(one_hot::WALL)),
         ("REWARD_SNGNN", systems::reward::REWARD_SNGNN),
     ]
 }

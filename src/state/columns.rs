@@ -56,6 +56,8 @@ pub trait ColumnValue: Copy + Default + Send + Sync + 'static {
     fn packed_ref<'a>(f32s: &'a [f32], u32s: &'a [u32]) -> &'a [Self];
     /// `column` as its 32-bit words (an f32's bits), to be written in place.
     fn words_mut(column: &mut [Self]) -> &mut [u32];
+    /// `column` as its 32-bit words, read only.
+    fn words(column: &[Self]) -> &[u32];
 
     /// Append `column` (environment-major, `stride` elements per environment) to the packed
     /// array of its element kind in `order`.
@@ -117,6 +119,9 @@ impl ColumnValue for f32 {
     fn words_mut(column: &mut [Self]) -> &mut [u32] {
         bytemuck::cast_slice_mut(column)
     }
+    fn words(column: &[Self]) -> &[u32] {
+        bytemuck::cast_slice(column)
+    }
 }
 
 impl ColumnValue for u32 {
@@ -131,6 +136,9 @@ impl ColumnValue for u32 {
         u32s
     }
     fn words_mut(column: &mut [Self]) -> &mut [u32] {
+        column
+    }
+    fn words(column: &[Self]) -> &[u32] {
         column
     }
 }
@@ -249,6 +257,17 @@ macro_rules! soa {
                 $(
                     if name == stringify!($col) {
                         return Some(<$ty as $crate::state::columns::ColumnValue>::words_mut(&mut self.$col));
+                    }
+                )*
+                None
+            }
+
+            /// Column `name`'s 32-bit words (an f32 column's bits); `None` if the table has no
+            /// such column.
+            pub fn column_words(&self, name: &str) -> Option<&[u32]> {
+                $(
+                    if name == stringify!($col) {
+                        return Some(<$ty as $crate::state::columns::ColumnValue>::words(&self.$col));
                     }
                 )*
                 None

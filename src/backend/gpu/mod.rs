@@ -36,7 +36,7 @@ pub use device::{
 };
 pub use sngnn_net::GpuNet;
 
-use crate::backend::wgsl;
+use crate::backend::{obs_payload, wgsl};
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
@@ -335,14 +335,18 @@ impl GpuStages {
         let (mut f, mut u) = (Vec::new(), Vec::new());
         state.pack_in(wgsl::DEVICE_ORDER, &mut f, &mut u);
         let state_table = DeviceTable::new(&dev, "state", n_envs, f, u)?;
+        // The device's outputs: the host's, each observation row without its one-hot floats
+        // (`obs_payload`).
+        let out_columns = obs_payload::device_columns(outputs);
+        let obs_layout = outputs.strides.layout;
         let (mut f, mut u) = (Vec::new(), Vec::new());
-        outputs.pack(&mut f, &mut u);
+        obs_payload::pack(outputs, &mut f, &mut u);
         let outputs_table = DeviceTable::new(&dev, "output", n_envs, f, u)?;
         let params_buf = storage_buffer(&dev, "step params", size_of::<StepParams>() as u64);
         dev.queue
             .write_buffer(&params_buf, 0, bytemuck::bytes_of(params));
         let actions = storage_buffer(&dev, "actions", bytes_of::<f32>(3 * n_envs));
-        let pool_row_words = wgsl::pool_row_words(&state.columns(), &outputs.columns());
+        let pool_row_words = wgsl::pool_row_words(&state.columns(), &out_columns);
         // Two rows per environment: its next episode's and the one after it.
         let pool_bytes = bytes_of::<u32>(2 * n_envs * pool_row_words);
         check_binding(
@@ -353,7 +357,7 @@ impl GpuStages {
         let pool = storage_buffer(&dev, "reset pool", pool_bytes);
         let obs_staged = dev.stage_observations;
         let staged_obs_dim = if obs_staged {
-            outputs.strides.layout.dim
+            obs_layout.payload_dim()
         } else {
             0
         };
@@ -366,8 +370,8 @@ impl GpuStages {
         let layout = wgsl::BatchLayout::new(
             n_envs,
             &state.columns(),
-            &outputs.columns(),
-            &outputs.strides.layout,
+            &out_columns,
+            &obs_layout,
             sngnn.as_ref().map(|b| wgsl::SngnnSizes {
                 caps: &state.strides,
                 graphs: &b.layout,
@@ -396,7 +400,7 @@ impl GpuStages {
                     .max(outputs_table.largest())
                     .max(graph_words)
                     // A step's second copy of finished rows (`readback`).
-                    .max(1 + n_envs * wgsl::finished_row_words(&outputs.columns())),
+                    .max(1 + n_envs * wgsl::finished_row_words(&out_columns)),
             ),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
@@ -411,7 +415,8 @@ impl GpuStages {
             &dev,
             n_envs,
             &state.columns(),
-            &outputs.columns(),
+            &out_columns,
+            obs_layout,
             readback::Tables {
                 f32s: &outputs_table.f32s,
                 u32s: &outputs_table.u32s,
@@ -473,11 +478,7 @@ impl GpuStages {
             .map(|(g, l)| bind_kinds(&dev, "stage bindings", l, g))
             .collect();
         let columns = state.columns();
-        let mut prelude = wgsl::prelude(
-            &columns,
-            &outputs.columns(),
-            &wgsl::SizeClasses::of(&columns),
-        );
+        let mut prelude = wgsl::prelude(&columns, &out_columns, &wgsl::SizeClasses::of(&columns));
         if dev.poison_orca_lists {
             prelude = wgsl::with_poisoned_orca_lists(&prelude);
         }
@@ -509,7 +510,7 @@ impl GpuStages {
         let this = Self {
             dev,
             n_envs,
-            obs_row_tiles: (layout_at("obs_dim") as u32).div_ceil(wgsl::OBS_ROWS_TILE),
+            obs_row_tiles: (obs_layout.payload_dim() as u32).div_ceil(wgsl::OBS_ROWS_TILE),
             state: state_table,
             outputs: outputs_table,
             params: params_buf,
@@ -689,7 +690,7 @@ impl GpuStages {
         let t = &mut self.outputs;
         t.packed_f32.clear();
         t.packed_u32.clear();
-        outputs.pack(&mut t.packed_f32, &mut t.packed_u32);
+        obs_payload::pack(outputs, &mut t.packed_f32, &mut t.packed_u32);
         self.write(&self.outputs);
     }
 
@@ -898,7 +899,7 @@ impl GpuStages {
                 finished = step_read.read_rows(table, out);
             } else {
                 let (f, u) = table.split_at(f_words);
-                out.unpack(bytemuck::cast_slice(f), u);
+                obs_payload::unpack(out, bytemuck::cast_slice(f), u);
             }
             episode.copy_from_slice(ep);
             if scored {
@@ -1152,7 +1153,7 @@ impl GpuStages {
     /// Read the device's outputs back into `outputs` (same batch size and layout).
     pub fn download_outputs(&self, outputs: &mut Outputs) -> Result<(), SimError> {
         let (f, u) = self.read_table(&self.outputs)?;
-        outputs.unpack(&f, &u);
+        obs_payload::unpack(outputs, &f, &u);
         Ok(())
     }
 

@@ -26,9 +26,11 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use crate::backend::HostPath;
+use crate::backend::obs_payload;
 use crate::backend::wgsl::{self, Columns};
 use crate::error::SimError;
 use crate::outputs::{FINISHED_ONLY_COLUMNS, Outputs, StepOutputs};
+use crate::spec::ObsLayout;
 use crate::state::columns::Elem;
 
 use super::GpuDevice;
@@ -96,8 +98,12 @@ pub(crate) struct StepReadback {
     /// Where the spans are read back: piece `k` of `n` holds their words from `span_words * k /
     /// n` on ([`piece_range`]).
     pieces: Vec<wgpu::Buffer>,
-    /// The finished-only columns in row order, with their strides.
+    /// The finished-only columns in row order, with their strides on the device.
     columns: Vec<(&'static str, usize)>,
+    /// Where a finished row holds `final_obs_count` (from its first word, the environment's).
+    final_counts_at: usize,
+    /// The observation's layout (the host's rows hold the one-hot floats the device leaves out).
+    layout: ObsLayout,
     row_words: usize,
     n_envs: usize,
     /// The counter, then up to one row per environment.
@@ -129,6 +135,7 @@ impl StepReadback {
         n_envs: usize,
         state: Columns<'_>,
         outputs: Columns<'_>,
+        layout: ObsLayout,
         tables: Tables<'_>,
     ) -> Result<(Self, bool), SimError> {
         let mut spans = Vec::new();
@@ -146,12 +153,15 @@ impl StepReadback {
             }
             next[k] += words;
         }
-        // Table by table, in table order, so that neighbours make one copy ([`runs_of`]).
-        spans.sort_by_key(|s| (s.u32s, s.at));
-        let columns = wgsl::finished_columns(outputs)
+        // Table by table, in table order, so that neighbours make one copy ([`runs_of`]); the
+        // u32 table first, so that the counts are in the host's outputs before the
+        // observation rows whose one-hot floats they give ([`obs_payload::expand`]).
+        spans.sort_by_key(|s| (!s.u32s, s.at));
+        let columns: Vec<(&'static str, usize)> = wgsl::finished_columns(outputs)
             .into_iter()
             .map(|&(name, _, stride)| (name, stride))
             .collect();
+        let final_counts_at = row_offset(&columns, "final_obs_count");
         let row_words = wgsl::finished_row_words(outputs);
         let bytes = bytes_of::<u32>(1 + n_envs * row_words);
         check_binding(
@@ -194,6 +204,8 @@ impl StepReadback {
             span_words,
             pieces,
             columns,
+            final_counts_at,
+            layout,
             row_words,
             n_envs,
             finished,
@@ -363,12 +375,15 @@ impl StepReadback {
     ) -> Result<(), SimError> {
         let piece = piece_range(self.span_words, k, self.pieces.len());
         for (s, start, part) in parts_in(self.spans.iter().map(|s| s.words), piece.clone()) {
-            let dst = &mut column(out, self.spans[s].name)?[part.start - start..part.end - start];
-            copy_words(
-                dst,
-                &words[part.start - piece.start..part.end - piece.start],
-                pool,
-            );
+            let name = self.spans[s].name;
+            let src = &words[part.start - piece.start..part.end - piece.start];
+            if let Some((counts, rows)) = obs_payload::observation_mut(out, name) {
+                // Its counts were read first (the u32 spans lead).
+                obs_payload::expand(&self.layout, part.start - start, src, counts, rows, pool);
+            } else {
+                let dst = &mut column(out, name)?[part.start - start..part.end - start];
+                copy_words(dst, src, pool);
+            }
         }
         Ok(())
     }
@@ -401,8 +416,22 @@ impl StepReadback {
             }
             let mut w = 1;
             for &(name, stride) in &self.columns {
-                column(out, name)?[e * stride..(e + 1) * stride]
-                    .copy_from_slice(&row[w..w + stride]);
+                let src = &row[w..w + stride];
+                if let Some((_, rows)) = obs_payload::observation_mut(out, name) {
+                    // The row's own counts (the host's are written after this column, or not).
+                    let counts = &row[self.final_counts_at..self.final_counts_at + 5];
+                    let dim = self.layout.dim;
+                    obs_payload::expand(
+                        &self.layout,
+                        0,
+                        src,
+                        counts,
+                        &mut rows[e * dim..(e + 1) * dim],
+                        None,
+                    );
+                } else {
+                    column(out, name)?[e * stride..(e + 1) * stride].copy_from_slice(src);
+                }
                 w += stride;
             }
         }
@@ -461,6 +490,19 @@ fn parts_in(
             ))
         })
         .filter(|(_, _, part)| !part.is_empty())
+}
+
+/// Where column `name` starts in a finished row of `columns` (after the row's environment word).
+#[expect(
+    clippy::expect_used,
+    reason = "the finished rows hold every finished-only column (FINISHED_ONLY_COLUMNS)"
+)]
+fn row_offset(columns: &[(&'static str, usize)], name: &str) -> usize {
+    let k = columns
+        .iter()
+        .position(|c| c.0 == name)
+        .expect("a finished-only column");
+    1 + columns[..k].iter().map(|c| c.1).sum::<usize>()
 }
 
 /// Bytes of `words` 32-bit words: an offset or a copy's size (`kit::bytes_of` is a buffer's

@@ -177,15 +177,22 @@ fn reads_back_only_what_it_hands_the_host(
     let held = gpu.outputs().clone();
     let mut twins = Twins::new(cpu, gpu);
     let columns = twins.cpu.outputs().columns();
+    // The device keeps an observation row without its entity records' one-hot floats, which the
+    // host writes from the counts read back beside it (src/backend/obs_payload.rs).
+    let one_hots = socnav::spec::ONE_HOT * twins.cpu.layout().entity_records();
+    let device_words = |c: &(&str, socnav::state::columns::Elem, usize)| -> u64 {
+        let observation = c.0 == "obs" || c.0 == "final_obs";
+        (if observation { c.2 - one_hots } else { c.2 }) as u64
+    };
     let words = |finished: bool| -> u64 {
         columns
             .iter()
             .filter(|c| FINISHED_ONLY_COLUMNS.contains(&c.0) == finished)
             .filter(|c| which.delivers(c.0))
-            .map(|c| c.2 as u64)
+            .map(device_words)
             .sum()
     };
-    let every_column_words: u64 = columns.iter().map(|c| c.2 as u64).sum();
+    let every_column_words: u64 = columns.iter().map(device_words).sum();
     let n64 = n as u64;
     // Per-step columns and the episode counters, then the counter of finished rows.
     let fixed = 4 * (n64 * words(false) + n64 + 1);

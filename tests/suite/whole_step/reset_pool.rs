@@ -9,6 +9,7 @@ use crate::common;
 use socnav::backend::reset_pool::{RowScratch, row_words, write_row};
 use socnav::outputs::Outputs;
 use socnav::pipeline::Batch;
+use socnav::spec::{ONE_HOT, RECORD};
 use socnav::state::BatchState;
 use socnav::{Actions, BatchEnv, EnvOptions};
 
@@ -34,7 +35,14 @@ fn reset_in_place(env: &BatchEnv, e: usize) -> Vec<u32> {
     one.pack(&mut f, &mut u);
     let mut row: Vec<u32> = f.iter().map(|v| v.to_bits()).collect();
     row.extend(u);
-    row.extend(one_out.obs.iter().map(|v| v.to_bits()));
+    // The observation as the device keeps it (src/backend/obs_payload.rs): the robot record
+    // whole, then each entity record past its one-hot floats.
+    let layout = env.layout();
+    let obs: Vec<u32> = one_out.obs.iter().map(|v| v.to_bits()).collect();
+    row.extend(&obs[..layout.robot]);
+    for record in obs[layout.robot..].chunks_exact(RECORD) {
+        row.extend(&record[ONE_HOT..]);
+    }
     for col in [
         &one_out.obs_count,
         &one_out.hh_pairs,

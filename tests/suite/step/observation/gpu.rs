@@ -211,7 +211,7 @@ fn padded() {
     }
 }
 
-/// Contract: a batch on a device that stages observations holds `n_envs × obs_dim` words more
+/// Contract: a batch on a device that stages observations holds `n_envs × payload_dim` words more
 /// device memory (the staged values in `scratch`) than one on a device that writes rows in place,
 /// and says so (`GpuStages::device_bytes`, which out-of-memory errors report); the readback's
 /// pieces split the same bytes whatever their number.
@@ -234,5 +234,9 @@ fn staging_costs_one_observation_per_environment() {
     } else {
         (bytes(b), bytes(a))
     };
-    assert_eq!(staged - in_place, 4 * (n * env.layout().dim) as u64);
+    // The staged row is the device's: without the entity records' one-hot floats.
+    assert_eq!(
+        staged - in_place,
+        4 * (n * env.layout().payload_dim()) as u64
+    );
 }

@@ -816,3 +816,80 @@ fn observation_keys_are_validated() {
     assert_eq!(ok.observation.range, Some(4.0));
     assert!(ok.observation.noise.robot.is_on(), "a mean alone is noise");
 }
+
+// ---------------------------------------------------------------------------------------------
+// The one-hot floats and the counts
+// ---------------------------------------------------------------------------------------------
+
+/// Contract: an entity record's one-hot floats follow from the per-type counts beside its row (1.0
+/// at the type's place in the first `count` records of a type, 0.0 elsewhere and in padding), in
+/// every shipped config and with every observation option, for `obs` and SAME_STEP's `final_obs`
+/// alike: a row without them, rebuilt from its counts, is the row bit for bit. The GPU backend
+/// keeps and reads back rows without them (src/backend/obs_payload.rs), so this is what makes its
+/// observation the CPU's in configs and options its parity tests do not run.
+#[test]
+fn the_one_hot_floats_follow_from_the_counts() {
+    use socnav::backend::obs_payload::{expand, strip_row};
+    let mut configs = Vec::new();
+    for name in common::config_names() {
+        let c = common::load_config(&name);
+        let mut padded = c.clone();
+        padded.observation.padded = !c.observation.padded;
+        let mut partial = c.clone();
+        partial.observation.fov = 1.75;
+        partial.observation.range = Some(4.0);
+        let mut world = partial.clone();
+        world.observation.frame = ObsFrame::World;
+        let mut noisy = padded.clone();
+        noisy.observation.noise.humans.std = 0.3;
+        noisy.observation.noise.walls.mean = 0.2;
+        noisy.observation.noise.plants.std = 0.1;
+        configs.extend([c, padded, partial, world, noisy].map(|c| (name.clone(), c)));
+    }
+    let (n, steps) = (24, 40);
+    let mut finals = 0;
+    for (name, mut c) in configs {
+        // Short episodes, so that SAME_STEP writes final observations.
+        c.episode.length = 12;
+        let mut env = BatchEnv::new(
+            c,
+            EnvOptions {
+                n_envs: n,
+                seed: 5,
+                autoreset: socnav::AutoresetMode::SameStep,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        env.reset(None).unwrap();
+        let l = *env.layout();
+        let mut payload = vec![0u32; l.payload_dim()];
+        for t in 0..steps {
+            env.step(Actions::Continuous(&actions(n, t))).unwrap();
+            let o = env.outputs();
+            for (rows, counts) in [(&o.obs, &o.obs_count), (&o.final_obs, &o.final_obs_count)] {
+                let words: Vec<u32> = rows.iter().map(|v| v.to_bits()).collect();
+                for e in 0..n {
+                    let row = &words[e * l.dim..(e + 1) * l.dim];
+                    strip_row(&l, row, &mut payload);
+                    let mut rebuilt = vec![u32::MAX; l.dim];
+                    expand(
+                        &l,
+                        0,
+                        &payload,
+                        &counts[5 * e..5 * e + 5],
+                        &mut rebuilt,
+                        None,
+                    );
+                    if let Some(k) = (0..l.dim).find(|&k| rebuilt[k] != row[k]) {
+                        panic!(
+                            "{name}, step {t}, env {e}: float {k} of the row is not its counts'"
+                        );
+                    }
+                }
+            }
+            finals += o.has_final.iter().filter(|&&f| f != 0).count();
+        }
+    }
+    assert!(finals > 0, "no final observation was written");
+}
