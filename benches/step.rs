@@ -6,6 +6,8 @@
 //! for correctness runs only).
 //!
 //! `pool_rows`: the GPU backend's reset-pool rows, generated on the host, per second.
+//! `obs_rows`: observation rows into the host's outputs, expanded from the device's rows without
+//! their one-hot floats or copied whole, bytes per second.
 //!
 //! `cargo bench --bench step`; record figures in `benches/RESULTS.md` with the machine, batch size,
 //! backend and commit.
@@ -197,12 +199,87 @@ fn pool_rows(c: &mut Criterion) {
     }
 }
 
+/// `obs_rows`: the GPU backend's readback copies observation rows into the host's outputs from
+/// rows without their entity records' one-hot floats, writing those from the counts
+/// (`backend::obs_payload::expand`), where it copied whole rows before (`copy_from_slice`): both
+/// over 16,384 rows of exp2 (full and padded, real rows of a stepped batch), on one thread and on
+/// every core, in bytes of the host's rows a second. The model counts the copy's time as the
+/// same either way.
+fn obs_rows(c: &mut Criterion) {
+    use socnav::backend::obs_payload::{expand, strip_row};
+    const ROWS: usize = 16_384;
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    for padded in [false, true] {
+        let mut config = Config::from_name_or_path("exp2").expect("shipped config");
+        config.observation.padded = padded;
+        let n = 256;
+        let options = EnvOptions {
+            n_envs: n,
+            ..Default::default()
+        };
+        let mut env = BatchEnv::new(config, options).expect("valid batch");
+        env.reset(None).expect("reset");
+        let actions = [0.5f32, 0.0, 0.3].repeat(n);
+        for _ in 0..10 {
+            env.step(Actions::Continuous(&actions)).expect("step");
+        }
+        let layout = env.outputs().strides.layout;
+        let (dim, width) = (layout.dim, layout.payload_dim());
+        let whole: Vec<u32> = (0..ROWS)
+            .flat_map(|e| env.outputs().obs[(e % n) * dim..(e % n + 1) * dim].iter())
+            .map(|v| v.to_bits())
+            .collect();
+        let counts: Vec<u32> = (0..ROWS)
+            .flat_map(|e| {
+                env.outputs().obs_count[5 * (e % n)..5 * (e % n + 1)]
+                    .iter()
+                    .copied()
+            })
+            .collect();
+        let mut payload = vec![0u32; ROWS * width];
+        for (row, p) in whole.chunks_exact(dim).zip(payload.chunks_exact_mut(width)) {
+            strip_row(&layout, row, p);
+        }
+        let mut out = vec![0u32; ROWS * dim];
+        expand(&layout, 0, &payload, &counts, &mut out, None);
+        assert!(out == whole, "the expanded rows are the whole rows");
+        let label = if padded { "padded" } else { "full" };
+        let mut group = c.benchmark_group(format!("obs_rows/exp2_{label}"));
+        group
+            .measurement_time(Duration::from_secs(3))
+            .warm_up_time(Duration::from_secs(1))
+            .sample_size(20)
+            .throughput(Throughput::Bytes(4 * (ROWS * dim) as u64));
+        for threads in [1, cores] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a thread pool");
+            group.bench_function(BenchmarkId::new("expand", threads), |b| {
+                b.iter(|| expand(&layout, 0, &payload, &counts, &mut out, Some(&pool)));
+            });
+            group.bench_function(BenchmarkId::new("copy", threads), |b| {
+                b.iter(|| {
+                    pool.install(|| {
+                        use rayon::prelude::*;
+                        out.par_chunks_mut(512 * dim)
+                            .zip(whole.par_chunks(512 * dim))
+                            .for_each(|(o, w)| o.copy_from_slice(w));
+                    });
+                });
+            });
+        }
+        group.finish();
+    }
+}
+
 criterion_group!(
     benches,
     step,
     step_gpu,
     step_sngnn,
     step_sngnn_gpu,
-    pool_rows
+    pool_rows,
+    obs_rows
 );
 criterion_main!(benches);

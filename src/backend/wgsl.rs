@@ -812,6 +812,39 @@ pub fn with_resets_in_workgroups(src: &str) -> String {
     )
 }
 
+/// `src` (a shader) with each function of `names` that it defines returning at once: nothing, or
+/// its return type's zero value (`T()`). For diagnosis only (`GpuDevice::leave_out`): a pass
+/// timed without one of its functions says what that function costs on a device, and its results
+/// are wrong. Also returns the names found (a function is defined at the start of a line: `fn
+/// name(`).
+pub fn with_functions_returning_at_once<'a>(
+    src: &str,
+    names: &'a [String],
+) -> (String, Vec<&'a str>) {
+    let mut out = src.to_owned();
+    let mut found = Vec::new();
+    for name in names {
+        let head = format!("\nfn {name}(");
+        let Some(at) = out.find(&head) else {
+            continue;
+        };
+        // The body's brace is the first after the head: a signature holds none.
+        let Some(brace) = out[at..].find('{').map(|k| at + k) else {
+            continue;
+        };
+        let returned = match out[at..brace].split_once("->") {
+            Some((_, ty)) => format!("return {}();", ty.trim()),
+            None => "return;".to_owned(),
+        };
+        out.insert_str(
+            brace + 1,
+            &format!("\n    {returned} // left out (diagnosis)"),
+        );
+        found.push(name.as_str());
+    }
+    (out, found)
+}
+
 /// The generated head of every shader: [`shared_head`] (the constants shared with the Rust stages:
 /// `WORKGROUP_SIZE`, `INFO_*`/`EP_*`/`EV_*`, `NONE`, `ROLE_*`, `STREAM_*`, `POLICY_*`, `ONE_HOT_*`,
 /// `REWARD_SNGNN`, `SNGNN_WEIGHT`, `CONTACT_*`, `ORCA_RVO_EPSILON`, ...), the array sizes of
@@ -1473,6 +1506,39 @@ fn concatenate(mut src: String, order: &[&str]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A function left out returns at once with its type's zero value, whatever that type (none,
+    /// a scalar, a vector, a struct), the shader still validates, and the names it does not
+    /// define are not found.
+    #[test]
+    fn functions_left_out_return_at_once() {
+        let src = "struct Pair {\n    a: f32,\n    b: bool,\n}\n\
+                   fn none(x: u32) {\n    let y = x;\n}\n\
+                   fn scalar(x: array<u32, 2>) -> u32 {\n    return x[0];\n}\n\
+                   fn vector() -> vec2<f32> {\n    return vec2<f32>(1.0, 2.0);\n}\n\
+                   fn pair() -> Pair {\n    return Pair(1.0, true);\n}\n\
+                   @compute @workgroup_size(1)\nfn main() {\n    none(scalar(array<u32, 2>(1u, 2u)));\n    let v = vector();\n    let p = pair();\n}\n";
+        let names: Vec<String> = ["none", "scalar", "vector", "pair", "absent", "mai"]
+            .map(String::from)
+            .to_vec();
+        let (out, found) = with_functions_returning_at_once(src, &names);
+        assert_eq!(found, ["none", "scalar", "vector", "pair"]);
+        for line in [
+            "fn none(x: u32) {\n    return; // left out",
+            "-> u32 {\n    return u32(); // left out",
+            "-> vec2<f32> {\n    return vec2<f32>(); // left out",
+            "-> Pair {\n    return Pair(); // left out",
+        ] {
+            assert!(out.contains(line), "{line:?} in\n{out}");
+        }
+        let module = naga::front::wgsl::parse_str(&out).expect("parses");
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        )
+        .validate(&module)
+        .expect("validates");
+    }
 
     /// The poisoned build differs from the normal one exactly in the constant that turns the
     /// ORCA lists' poison on, which every prelude declares once.

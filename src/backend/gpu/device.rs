@@ -296,6 +296,12 @@ pub struct GpuDevice {
     /// (`super::spirv`) and no entry is read before it is written, so the results are the same
     /// bits either way; a test compares them. Off unless a clone says otherwise.
     pub poison_orca_lists: bool,
+    /// For diagnosis only: functions of the stage shaders that return at once, with their type's
+    /// zero value (`backend::wgsl::with_functions_returning_at_once`), so that a pass timed
+    /// without one says what that function costs on this device (`socnav bench --leave-out`).
+    /// The results are wrong; a batch refuses a name that none of its shaders defines. Empty
+    /// unless a clone says otherwise.
+    pub leave_out: Vec<String>,
     /// Whether pipelines are built from the backend's own SPIR-V (`super::spirv`: the ORCA
     /// lists not zeroed at every call), which takes a Vulkan adapter with `PASSTHROUGH_SHADERS`
     /// (every one wgpu 30 opens); otherwise from the WGSL as wgpu compiles it.
@@ -435,6 +441,7 @@ impl GpuDevice {
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             rebuild_workgroups: DEFAULT_REBUILD_WORKGROUPS,
             poison_orca_lists: false,
+            leave_out: Vec::new(),
             adapter,
             limits,
             errors,

@@ -498,14 +498,27 @@ impl GpuStages {
         let pool_staging = staging_buffer(&dev, POOL_STAGING_ROWS * pool_row_words);
         let mut pipelines: Vec<(&'static str, _)> = Vec::with_capacity(stages.len());
         let mut compiled = usize::from(read_compiled);
+        let mut left_out = Vec::new();
         for &stage in stages {
             let pass = wgsl::pass_of(stage);
             if pipelines.iter().any(|(p, _)| *p == pass) {
                 continue;
             }
-            let built = build_pass(&dev, stage, pass, &groups, &prelude, rebuild)?;
+            let built = build_pass(&dev, stage, pass, &groups, &prelude, rebuild, &mut left_out)?;
             compiled += built.as_ref().map_or(0, |b| b.1);
             pipelines.push((pass, built.map(|b| b.0)));
+        }
+        let unknown: Vec<&str> = dev
+            .leave_out
+            .iter()
+            .filter(|name| !left_out.contains(name))
+            .map(String::as_str)
+            .collect();
+        if !unknown.is_empty() {
+            return Err(SimError::Usage(format!(
+                "functions to leave out that no shader of the batch defines: {}",
+                unknown.join(", ")
+            )));
         }
         let this = Self {
             dev,
@@ -582,9 +595,17 @@ impl GpuStages {
         } else {
             "over the scratch buffer"
         };
+        let left_out = if self.dev.leave_out.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; DIAGNOSIS, results wrong: functions left out: {}",
+                self.dev.leave_out.join(", ")
+            )
+        };
         format!(
             "{}; shaders: {shaders}; observations {observations}; resets on {resets}; obstacle \
-             rebuilds {rebuilds}",
+             rebuilds {rebuilds}{left_out}",
             self.dev.adapter
         )
     }
@@ -1307,7 +1328,8 @@ type Built = Option<(PassPipelines, usize)>;
 /// were compiled now: `None` for a network stage, whose pipelines [`GpuStages::attach_sngnn_net`]
 /// adds. A shader that needs the SNGNN graphs ([`wgsl::needs_sngnn`]) gets
 /// [`wgsl::sngnn_prelude`] and group 1; any other, group 0 alone, whether the batch has the
-/// graphs or not.
+/// graphs or not. The functions of [`GpuDevice::leave_out`] that the pass defines return at once;
+/// their names go into `left_out`.
 fn build_pass(
     dev: &GpuDevice,
     stage: &'static str,
@@ -1315,6 +1337,7 @@ fn build_pass(
     groups: &[Vec<Binding>],
     prelude: &str,
     rebuild: Rebuild,
+    left_out: &mut Vec<String>,
 ) -> Result<Built, SimError> {
     let has_sngnn = groups.len() > 1;
     let missing_graphs = || {
@@ -1348,7 +1371,12 @@ fn build_pass(
     } else {
         (prelude.to_owned(), &groups[..1])
     };
-    let src = wgsl::assemble_pass(pass, &prelude).map_err(SimError::Usage)?;
+    let mut src = wgsl::assemble_pass(pass, &prelude).map_err(SimError::Usage)?;
+    if !dev.leave_out.is_empty() {
+        let (out, found) = wgsl::with_functions_returning_at_once(&src, &dev.leave_out);
+        src = out;
+        left_out.extend(found.into_iter().map(String::from));
+    }
     let (main, new) = dev.pipelines.pipeline(dev, pass, groups, &src, "main")?;
     let mut compiled = usize::from(new);
     let mut entry = |wanted: bool, name: &str| -> Result<_, SimError> {

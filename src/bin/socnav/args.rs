@@ -188,6 +188,12 @@ pub struct BenchArgs {
     /// (compare the per-stage shares).
     #[arg(long)]
     pub lane_paths: bool,
+    /// GPU backend only, for diagnosis: functions of the stage shaders that return at once
+    /// (comma separated, e.g. `obs_walls,obs_put`), so that the stage shares and the device's
+    /// time say what each costs on the device. The results are wrong, and the device line says
+    /// so; a name no shader of the batch defines is refused.
+    #[arg(long, value_delimiter = ',')]
+    pub leave_out: Vec<String>,
     /// Print one JSON object on stdout instead of the table.
     #[arg(long)]
     pub json: bool,

@@ -4,7 +4,8 @@
 //! padded observations (walls omitted; the second target) instead of the full ones; `--halves`
 //! also steps each batch size as two halves on two host threads; `--step-outputs` chooses the
 //! optional per-step outputs delivered (every one by default); `--lane-paths` takes a software
-//! adapter's paths on the GPU, for comparison.
+//! adapter's paths on the GPU, for comparison; `--leave-out` makes shader functions return at
+//! once, to time a pass without them (diagnosis: the results are wrong).
 
 use std::time::Instant;
 
@@ -18,9 +19,10 @@ use crate::run::make_env;
 const WARMUP_STEPS: usize = 50;
 
 pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
-    if a.lane_paths && a.backend != crate::args::BackendChoice::Gpu {
+    if (a.lane_paths || !a.leave_out.is_empty()) && a.backend != crate::args::BackendChoice::Gpu {
         return Err(format!(
-            "--lane-paths chooses paths of the GPU backend: give --backend gpu (not {:?})",
+            "--lane-paths and --leave-out change the GPU backend's shaders: give --backend gpu \
+             (not {:?})",
             a.backend
         )
         .into());
@@ -124,8 +126,8 @@ fn warmed_up(
     n: usize,
     seed: u64,
 ) -> Result<(socnav::BatchEnv, Vec<f32>), socnav::SimError> {
-    let mut env = if a.lane_paths {
-        on_lane_paths(config, n, 0, a.threads)?
+    let mut env = if a.lane_paths || !a.leave_out.is_empty() {
+        on_chosen_device(config, n, a)?
     } else {
         make_env(config.clone(), n, 0, a.backend, a.threads)?
     };
@@ -138,35 +140,36 @@ fn warmed_up(
     Ok((env, actions))
 }
 
-/// A batch of `n` environments of `config` (seed `seed`) on the GPU backend with the paths a
-/// software adapter takes (`--lane-paths`).
+/// A batch of `n` environments of `config` on the GPU backend with the paths a software adapter
+/// takes (`--lane-paths`) and the functions of `--leave-out` returning at once.
 #[cfg(feature = "gpu")]
-fn on_lane_paths(
+fn on_chosen_device(
     config: &Config,
     n: usize,
-    seed: u64,
-    threads: Option<usize>,
+    a: &BenchArgs,
 ) -> Result<socnav::BatchEnv, socnav::SimError> {
     use socnav::backend::gpu::{AdapterPolicy, GpuDevice};
-    let dev = GpuDevice::open(AdapterPolicy::Any)?.with_lane_paths();
+    let mut dev = GpuDevice::open(AdapterPolicy::Any)?;
+    if a.lane_paths {
+        dev = dev.with_lane_paths();
+    }
+    dev.leave_out.clone_from(&a.leave_out);
     let options = socnav::EnvOptions {
         n_envs: n,
-        seed,
-        threads,
+        threads: a.threads,
         ..Default::default()
     };
     socnav::BatchEnv::on_device(config.clone(), options, dev)
 }
 
 #[cfg(not(feature = "gpu"))]
-fn on_lane_paths(
+fn on_chosen_device(
     _: &Config,
     _: usize,
-    _: u64,
-    _: Option<usize>,
+    _: &BenchArgs,
 ) -> Result<socnav::BatchEnv, socnav::SimError> {
     Err(socnav::SimError::BackendUnavailable(
-        "--lane-paths needs the GPU backend, and this build has none".into(),
+        "--lane-paths and --leave-out need the GPU backend, and this build has none".into(),
     ))
 }
 

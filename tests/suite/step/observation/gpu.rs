@@ -240,3 +240,50 @@ fn staging_costs_one_observation_per_environment() {
         4 * (n * env.layout().payload_dim()) as u64
     );
 }
+
+/// Contract: a device that leaves shader functions out (`GpuDevice::leave_out`, for `socnav bench
+/// --leave-out`: timings without a function, the results wrong) builds its batches' passes with
+/// them returning at once and says so in its description, and a batch refuses a name that none of
+/// its shaders defines, naming it.
+#[test]
+fn functions_left_out_return_at_once_on_the_device() {
+    use socnav::{Actions, BatchEnv, EnvOptions};
+    let Some(mut dev) = device() else {
+        return;
+    };
+    let n = 8;
+    let options = || EnvOptions {
+        n_envs: n,
+        ..Default::default()
+    };
+    // Forward and turning (a diff-drive robot: no lateral component).
+    let actions = [0.5f32, 0.0, 0.3].repeat(n);
+    let mut cpu = BatchEnv::new(config("exp2"), options()).expect("batch");
+    cpu.reset(None).expect("reset");
+    cpu.step(Actions::Continuous(&actions)).expect("step");
+    assert!(
+        (0..n).all(|e| cpu.outputs().obs_count[5 * e + 4] > 0),
+        "exp2 observes walls"
+    );
+    dev.leave_out = vec!["obs_walls".into()];
+    let mut gpu = BatchEnv::on_device(config("exp2"), options(), dev.clone()).expect("batch");
+    gpu.reset(None).expect("reset");
+    gpu.step(Actions::Continuous(&actions)).expect("step");
+    assert!(
+        (0..n).all(|e| gpu.outputs().obs_count[5 * e + 4] == 0),
+        "obs_walls returned at once: no wall records"
+    );
+    assert!(
+        gpu.device().contains("functions left out: obs_walls"),
+        "{}",
+        gpu.device()
+    );
+    dev.leave_out = vec!["obs_walls".into(), "obs_no_such_function".into()];
+    let err = BatchEnv::on_device(config("exp2"), options(), dev)
+        .expect_err("an unknown name is refused")
+        .to_string();
+    assert!(
+        err.contains("no shader of the batch defines: obs_no_such_function"),
+        "{err}"
+    );
+}
