@@ -17,6 +17,10 @@
 //! The caller can leave optional per-step columns out ([`StepOutputs`]: info, interactions,
 //! events); those are then not read back at all ([`StepReadback::select`]).
 //!
+//! The device's observation rows (`obs`, and `final_obs` in the finished rows) lack their entity
+//! records' one-hot floats ([`obs_payload`]); the host writes them from the counts as it copies
+//! the rows, so the u32 columns, the counts among them, are read before the f32 ones.
+//!
 //! Device work that is not read back (a pass run alone, the device-only timing) can change the
 //! finished-only columns without the host seeing which environments finished, so the read after
 //! it copies the whole output table ([`StepReadback::whole_table_next`]).
