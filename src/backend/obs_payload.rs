@@ -263,15 +263,21 @@ fn slot_one_hot(layout: &ObsLayout, mut slot: usize, counts: &[u32]) -> Option<u
     None
 }
 
-/// 1.0 at `place`, 0.0 elsewhere (everywhere without one).
-fn write_one_hot(dst: &mut [u32], place: Option<usize>) {
-    for (k, v) in dst.iter_mut().enumerate() {
-        *v = if Some(k) == place {
-            1.0f32.to_bits()
-        } else {
-            0
-        };
+/// The one-hot floats of each place (as words), then of none: whole-array copies instead of a
+/// comparison per float.
+const ONE_HOTS: [[u32; ONE_HOT]; ONE_HOT + 1] = {
+    let mut table = [[0; ONE_HOT]; ONE_HOT + 1];
+    let mut k = 0;
+    while k < ONE_HOT {
+        table[k][k] = 1.0f32.to_bits();
+        k += 1;
     }
+    table
+};
+
+/// 1.0 at `place`, 0.0 elsewhere (everywhere without one) into `dst` ([`ONE_HOT`] words).
+fn write_one_hot(dst: &mut [u32], place: Option<usize>) {
+    dst.copy_from_slice(&ONE_HOTS[place.unwrap_or(ONE_HOT).min(ONE_HOT)]);
 }
 
 #[cfg(test)]
