@@ -21,9 +21,8 @@ use crate::outputs::Outputs;
 use crate::spec::{ONE_HOT, ObsLayout, RECORD, one_hot};
 use crate::state::columns::Elem;
 
-/// The output columns of observation rows, each with its per-type counts column.
-pub const OBSERVATION_COLUMNS: [(&str, &str); 2] =
-    [("obs", "obs_count"), ("final_obs", "final_obs_count")];
+/// The output columns of observation rows (their counts: [`observation_mut`]).
+pub const OBSERVATION_COLUMNS: [&str; 2] = ["obs", "final_obs"];
 
 /// Payload floats of an entity record.
 const PAYLOAD: usize = RECORD - ONE_HOT;
@@ -33,7 +32,7 @@ const ROWS_PER_TASK: usize = 512;
 
 /// Whether output column `name` holds observation rows.
 pub fn is_observation(name: &str) -> bool {
-    OBSERVATION_COLUMNS.iter().any(|(obs, _)| *obs == name)
+    OBSERVATION_COLUMNS.contains(&name)
 }
 
 /// The GPU's output columns: the host's, each observation column [`ObsLayout::payload_dim`]
