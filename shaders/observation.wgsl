@@ -18,6 +18,12 @@
 // environment-major rows of `obs` that the host reads, a tile at a time through workgroup memory.
 // Elsewhere `stage_observation` writes the rows in place and `rows` is not dispatched. `rows` is
 // an entry point of the fused pass that holds the observation (`backend::wgsl::FUSED_PASSES`).
+//
+// On a device that writes the entity records apart (`batch.obs_records_apart`,
+// `GpuDevice::records_in_lanes`), in a whole view, `stage_observation` writes the robot record,
+// the counts and the pairs, and `records`, dispatched after `main` and before `rows`, writes the
+// entity records a lane each (noise included). A limited sensor compacts the records it sees, so
+// there the observing lane writes them in order, as on a device that does not take that path.
 
 // Rust `Frame`: the robot pose and velocities an observation is relative to.
 struct ObsFrame {
@@ -195,43 +201,56 @@ fn obs_gaze(hx: f32, hy: f32, hc: f32, hs: f32) -> f32 {
     return 0.0;
 }
 
+// Human element `i`'s heading relative to the robot's, wrapped (`x`), stored as its cache for
+// the next step, and the cache's value before (`y`).
+fn obs_human_turn(i: u32) -> vec2<f32> {
+    let wrapped = math_wrap_angle(sf[batch.c_h_theta + i] - fr.theta);
+    let prev = sf[batch.c_h_prev_rel_theta + i];
+    sf[batch.c_h_prev_rel_theta + i] = wrapped;
+    return vec2<f32>(wrapped, prev);
+}
+
+// The record at `at` of human element `i` at (x, y), `l` in the robot frame, with its turn
+// (`obs_human_turn`).
+fn obs_human_record(at: u32, i: u32, x: f32, y: f32, l: vec2<f32>, turn: vec2<f32>) {
+    let theta = sf[batch.c_h_theta + i];
+    let hsc = math_sin_cos(theta);
+    obs_put(at + 10u, params.human_radius);
+    obs_put(at + 13u, obs_gaze(x, y, hsc.y, hsc.x));
+    if (fr.world) {
+        obs_put(at + 6u, x);
+        obs_put(at + 7u, y);
+        obs_put(at + 8u, hsc.x);
+        obs_put(at + 9u, hsc.y);
+        obs_put(at + 11u, sf[batch.c_h_vx + i]);
+        obs_put(at + 12u, sf[batch.c_h_vy + i]);
+    } else {
+        let sc = math_sin_cos(theta - fr.theta);
+        let dvx = sf[batch.c_h_vx + i] - fr.vx;
+        let dvy = sf[batch.c_h_vy + i] - fr.vy;
+        obs_put(at + 6u, l.x);
+        obs_put(at + 7u, l.y);
+        obs_put(at + 8u, sc.x);
+        obs_put(at + 9u, sc.y);
+        obs_put(at + 11u, sqrt(dvx * dvx + dvy * dvy));
+        obs_put(at + 12u, math_wrap_angle(turn.x - turn.y) / params.dt);
+    }
+}
+
+// The humans' records, those a limited sensor sees compacted to the front of the block at
+// `block` (every human's turn is cached, seen or not); how many.
 fn obs_humans(e: u32, block: u32) -> u32 {
     var k = 0u;
     for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]); i += batch.k_human) {
-        let theta = sf[batch.c_h_theta + i];
-        let rel = theta - fr.theta;
-        let wrapped = math_wrap_angle(rel);
-        let prev = sf[batch.c_h_prev_rel_theta + i];
-        sf[batch.c_h_prev_rel_theta + i] = wrapped;
+        let turn = obs_human_turn(i);
         let x = sf[batch.c_h_x + i];
         let y = sf[batch.c_h_y + i];
         let l = obs_local(x, y);
         if (!obs_sees(l)) {
             continue;
         }
-        let at = block + k * OBS_RECORD;
+        obs_human_record(block + k * OBS_RECORD, i, x, y, l, turn);
         k += 1u;
-        let hsc = math_sin_cos(theta);
-        obs_put(at + 10u, params.human_radius);
-        obs_put(at + 13u, obs_gaze(x, y, hsc.y, hsc.x));
-        if (fr.world) {
-            obs_put(at + 6u, x);
-            obs_put(at + 7u, y);
-            obs_put(at + 8u, hsc.x);
-            obs_put(at + 9u, hsc.y);
-            obs_put(at + 11u, sf[batch.c_h_vx + i]);
-            obs_put(at + 12u, sf[batch.c_h_vy + i]);
-        } else {
-            let sc = math_sin_cos(rel);
-            let dvx = sf[batch.c_h_vx + i] - fr.vx;
-            let dvy = sf[batch.c_h_vy + i] - fr.vy;
-            obs_put(at + 6u, l.x);
-            obs_put(at + 7u, l.y);
-            obs_put(at + 8u, sc.x);
-            obs_put(at + 9u, sc.y);
-            obs_put(at + 11u, sqrt(dvx * dvx + dvy * dvy));
-            obs_put(at + 12u, math_wrap_angle(wrapped - prev) / params.dt);
-        }
     }
     return k;
 }
@@ -263,25 +282,37 @@ fn obs_rectangles(
         if (!obs_sees(l)) {
             continue;
         }
-        var p = l;
-        if (fr.world) {
-            p = vec2<f32>(x, y);
-        }
-        let sc = obs_rel_sin_cos(sf[ctheta + i]);
-        obs_object_record(block + k * OBS_RECORD, p.x, p.y, sc, radius);
+        obs_rectangle_record(block + k * OBS_RECORD, x, y, l, sf[ctheta + i], radius);
         k += 1u;
     }
     return k;
 }
 
+// The record at `at` of a rectangle at (x, y), `l` in the robot frame, heading `theta`.
+fn obs_rectangle_record(at: u32, x: f32, y: f32, l: vec2<f32>, theta: f32, radius: f32) {
+    var p = l;
+    if (fr.world) {
+        p = vec2<f32>(x, y);
+    }
+    obs_object_record(at, p.x, p.y, obs_rel_sin_cos(theta), radius);
+}
+
+fn obs_laptop_radius() -> f32 {
+    return obs_circumradius(params.laptop_length, params.laptop_width);
+}
+
+fn obs_table_radius() -> f32 {
+    return obs_circumradius(params.table_length, params.table_width);
+}
+
 fn obs_laptops(e: u32, block: u32) -> u32 {
-    let radius = obs_circumradius(params.laptop_length, params.laptop_width);
+    let radius = obs_laptop_radius();
     let n = su[batch.c_n_laptops + e];
     return obs_rectangles(block, batch.c_l_x, batch.c_l_y, batch.c_l_theta, at_laptop(e, 0u), at_laptop(e, n), batch.k_laptop, radius);
 }
 
 fn obs_tables(e: u32, block: u32) -> u32 {
-    let radius = obs_circumradius(params.table_length, params.table_width);
+    let radius = obs_table_radius();
     let n = su[batch.c_n_tables + e];
     return obs_rectangles(block, batch.c_t_x, batch.c_t_y, batch.c_t_theta, at_table(e, 0u), at_table(e, n), batch.k_table, radius);
 }
@@ -295,63 +326,110 @@ fn obs_plants(e: u32, block: u32) -> u32 {
         if (!obs_sees(l)) {
             continue;
         }
-        var p = l;
-        if (fr.world) {
-            p = vec2<f32>(x, y);
-        }
-        let sc = obs_plant_sin_cos();
-        obs_object_record(block + k * OBS_RECORD, p.x, p.y, sc, params.plant_radius);
+        obs_plant_record(block + k * OBS_RECORD, x, y, l);
         k += 1u;
     }
     return k;
 }
 
-// Rust `segment`: the segment centred `along` metres from the wall's left end, as record k.
-// `local` and `written` are the left end and unit direction (x, y, dx, dy).
-fn obs_segment(
-    block: u32, k: u32, local: vec4<f32>, written: vec4<f32>, along: f32, sc: vec2<f32>,
-    radius: f32,
-) -> u32 {
+// A wall as its records see it: its left end and unit direction in the robot frame (`local`:
+// x, y, dx, dy) and as written (`written`: the same, or world coordinates in the world frame),
+// its heading's sin and cos as written, and how it is cut into segments.
+struct ObsWall {
+    local: vec4<f32>,
+    written: vec4<f32>,
+    sc: vec2<f32>,
+    cut: WallCut,
+}
+
+// `scenario::layout::segments` of a wall: `full` segments of the config's segment size, then one
+// of the `rest` (m) if there is any.
+struct WallCut {
+    full: u32,
+    rest: f32,
+}
+
+fn obs_wall_cut(w: u32) -> WallCut {
+    let length = sf[batch.c_w_length + w];
+    let full_f = floor(length / params.wall_segment_size);
+    return WallCut(u32(full_f), length - full_f * params.wall_segment_size);
+}
+
+// Segments of a wall.
+fn obs_wall_segments(cut: WallCut) -> u32 {
+    return cut.full + select(0u, 1u, cut.rest > 0.0);
+}
+
+fn obs_wall(w: u32) -> ObsWall {
+    let length = sf[batch.c_w_length + w];
+    let wc = sf[batch.c_w_cos + w];
+    let ws = sf[batch.c_w_sin + w];
+    let x0 = sf[batch.c_w_x + w] - 0.5 * length * wc;
+    let y0 = sf[batch.c_w_y + w] - 0.5 * length * ws;
+    let l = obs_local(x0, y0);
+    let dx = fr.cos * wc + fr.sin * ws;
+    let dy = fr.cos * ws - fr.sin * wc;
+    let local = vec4<f32>(l.x, l.y, dx, dy);
+    var written = local;
+    if (fr.world) {
+        written = vec4<f32>(x0, y0, wc, ws);
+    }
+    let sc = obs_rel_sin_cos(sf[batch.c_w_theta + w]);
+    return ObsWall(local, written, sc, obs_wall_cut(w));
+}
+
+// The record at `at` of a plant at (x, y), `l` in the robot frame.
+fn obs_plant_record(at: u32, x: f32, y: f32, l: vec2<f32>) {
+    var p = l;
+    if (fr.world) {
+        p = vec2<f32>(x, y);
+    }
+    obs_object_record(at, p.x, p.y, obs_plant_sin_cos(), params.plant_radius);
+}
+
+// Rust `segment`: segment `j` of the wall (`obs_wall_segments`), as record `k` of the block at
+// `block`, unless a limited sensor does not see it; 1 if written.
+fn obs_segment(block: u32, k: u32, wall: ObsWall, j: u32) -> u32 {
+    let step = params.wall_segment_size;
+    var along = (f32(j) + 0.5) * step;
+    var radius = 0.5 * step;
+    if (j == wall.cut.full) {
+        along = f32(wall.cut.full) * step + 0.5 * wall.cut.rest;
+        radius = 0.5 * wall.cut.rest;
+    }
+    let local = wall.local;
     if (fr.partial) {
         if (!obs_within(vec2<f32>(local.x + along * local.z, local.y + along * local.w))) {
             return 0u;
         }
     }
+    let written = wall.written;
     obs_object_record(
         block + k * OBS_RECORD, written.x + along * written.z,
-        written.y + along * written.w, sc, radius,
+        written.y + along * written.w, wall.sc, radius,
     );
     return 1u;
 }
 
+// The walls' records, wall by wall and segment by segment, those a limited sensor sees compacted
+// to the front of the block at `block`; how many.
 fn obs_walls(e: u32, block: u32) -> u32 {
-    let step = params.wall_segment_size;
     var k = 0u;
     for (var w = at_wall(e, 0u); w < at_wall(e, su[batch.c_n_walls + e]); w += batch.k_wall) {
-        let length = sf[batch.c_w_length + w];
-        let wc = sf[batch.c_w_cos + w];
-        let ws = sf[batch.c_w_sin + w];
-        let x0 = sf[batch.c_w_x + w] - 0.5 * length * wc;
-        let y0 = sf[batch.c_w_y + w] - 0.5 * length * ws;
-        let l = obs_local(x0, y0);
-        let dx = fr.cos * wc + fr.sin * ws;
-        let dy = fr.cos * ws - fr.sin * wc;
-        let local = vec4<f32>(l.x, l.y, dx, dy);
-        var written = local;
-        if (fr.world) {
-            written = vec4<f32>(x0, y0, wc, ws);
+        let wall = obs_wall(w);
+        let n = obs_wall_segments(wall.cut);
+        for (var j = 0u; j < n; j++) {
+            k += obs_segment(block, k, wall, j);
         }
-        let sc = obs_rel_sin_cos(sf[batch.c_w_theta + w]);
-        // `scenario::layout::segments`.
-        let full_f = floor(length / step);
-        let full = u32(full_f);
-        let rest = length - full_f * step;
-        for (var j = 0u; j < full; j++) {
-            k += obs_segment(block, k, local, written, (f32(j) + 0.5) * step, sc, 0.5 * step);
-        }
-        if (rest > 0.0) {
-            k += obs_segment(block, k, local, written, f32(full) * step + 0.5 * rest, sc, 0.5 * rest);
-        }
+    }
+    return k;
+}
+
+// How many records the walls of a whole view have: every segment of every wall.
+fn obs_walls_counted(e: u32) -> u32 {
+    var k = 0u;
+    for (var w = at_wall(e, 0u); w < at_wall(e, su[batch.c_n_walls + e]); w += batch.k_wall) {
+        k += obs_wall_segments(obs_wall_cut(w));
     }
     return k;
 }
@@ -388,33 +466,48 @@ fn obs_capacity(t: u32) -> u32 {
     return v;
 }
 
-// Rust `noise::add_noise`.
-fn obs_noise(e: u32, counts_in: array<u32, 5>) {
-    var counts = counts_in;
+// The base of this step's observation-noise stream of environment `e` (Rust `noise::add_noise`).
+fn obs_noise_base(e: u32) -> u32 {
     let stream = rng_new(
         su[batch.c_seed_lo + e],
         su[batch.c_seed_hi + e],
         rng_stream_id(STREAM_OBS_NOISE, su[batch.c_tick + e]),
     );
-    let base = stream.base;
+    return stream.base;
+}
+
+// Whether record `k` of entity type `t`, with `count` records present, gets noise: a present
+// one, or any padding record of a padded layout (Rust `noise::add_noise`).
+fn obs_noisy_record(t: u32, k: u32, count: u32) -> bool {
+    let mean = params.obs_noise[2u * t];
+    let std_dev = params.obs_noise[2u * t + 1u];
+    return (mean != 0.0 || std_dev != 0.0) && (k < count || params.obs_padded != 0u);
+}
+
+// Noise on the floats of record `k` of entity type `t` past its one-hot floats.
+fn obs_perturb_record(t: u32, k: u32, base: u32) {
+    let first = obs_offset(t) + k * OBS_RECORD + 6u;
+    obs_perturb(first, OBS_RECORD - 6u, base, params.obs_noise[2u * t], params.obs_noise[2u * t + 1u]);
+}
+
+// Rust `noise::add_noise`, on the robot record and, with `records`, the entity records (where
+// `records` writes those, it adds theirs).
+fn obs_noise(e: u32, counts_in: array<u32, 5>, records: bool) {
+    var counts = counts_in;
+    let base = obs_noise_base(e);
     let rmean = params.obs_noise[2u * NOISE_ROBOT];
     let rstd = params.obs_noise[2u * NOISE_ROBOT + 1u];
     if (rmean != 0.0 || rstd != 0.0) {
         obs_perturb(6u, 2u, base, rmean, rstd);
     }
+    if (!records) {
+        return;
+    }
     for (var t = 0u; t < 5u; t++) {
-        let mean = params.obs_noise[2u * t];
-        let std_dev = params.obs_noise[2u * t + 1u];
-        if (mean == 0.0 && std_dev == 0.0) {
-            continue;
-        }
-        var records = counts[t];
-        if (params.obs_padded != 0u) {
-            records = obs_capacity(t);
-        }
-        let first = obs_offset(t);
-        for (var k = 0u; k < records; k++) {
-            obs_perturb(first + k * OBS_RECORD + 6u, OBS_RECORD - 6u, base, mean, std_dev);
+        for (var k = 0u; k < obs_capacity(t); k++) {
+            if (obs_noisy_record(t, k, counts[t])) {
+                obs_perturb_record(t, k, base);
+            }
         }
     }
 }
@@ -500,6 +593,35 @@ fn obs_human_laptop(e: u32) -> u32 {
     return n;
 }
 
+// A padding record at `at`: its floats past the one-hot ones, zero.
+fn obs_zero_record(at: u32) {
+    for (var i = at + OBS_ONE_HOT; i < at + OBS_RECORD; i++) {
+        obs_put(i, 0.0);
+    }
+}
+
+// Whether `records` writes the entity records, a lane each, rather than the observing lane: on
+// a device that takes that path (`batch.obs_records_apart`, `GpuDevice::records_in_lanes`) in a
+// whole view, where entity k of a type (segment k of the walls) is its record k (a limited sensor
+// compacts the records it sees, so there one lane writes them in order).
+fn obs_records_apart() -> bool {
+    return batch.obs_records_apart != 0u && !fr.partial;
+}
+
+// How many entities of type `t` environment `e` has (walls: segments): its records in a whole
+// view.
+fn obs_present(e: u32, t: u32) -> u32 {
+    var n = 0u;
+    switch (t) {
+        case 0u: { n = su[batch.c_n_humans + e]; }
+        case 1u: { n = su[batch.c_n_laptops + e]; }
+        case 2u: { n = su[batch.c_n_tables + e]; }
+        case 3u: { n = su[batch.c_n_plants + e]; }
+        default: { n = obs_walls_counted(e); }
+    }
+    return n;
+}
+
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
 // (`backend::wgsl::FUSED_PASSES`, generated) calls it.
 fn stage_observation(e: u32) {
@@ -507,24 +629,30 @@ fn stage_observation(e: u32) {
     obs_e = e;
     obs_robot_record(e);
     var counts = array<u32, 5>(0u, 0u, 0u, 0u, 0u);
-    counts[0] = obs_humans(e, batch.obs_offset_humans);
-    counts[1] = obs_laptops(e, batch.obs_offset_laptops);
-    counts[2] = obs_tables(e, batch.obs_offset_tables);
-    counts[3] = obs_plants(e, batch.obs_offset_plants);
-    if (batch.obs_capacity_walls > 0u) {
-        counts[4] = obs_walls(e, batch.obs_offset_walls);
-    }
-    // The padding records past the counts: their floats past the one-hot ones.
-    for (var t = 0u; t < 5u; t++) {
-        for (var k = counts[t]; k < obs_capacity(t); k++) {
-            let at = obs_offset(t) + k * OBS_RECORD;
-            for (var i = at + OBS_ONE_HOT; i < at + OBS_RECORD; i++) {
-                obs_put(i, 0.0);
+    let apart = obs_records_apart();
+    if (apart) {
+        for (var t = 0u; t < 5u; t++) {
+            if (obs_capacity(t) > 0u) {
+                counts[t] = obs_present(e, t);
+            }
+        }
+    } else {
+        counts[0] = obs_humans(e, batch.obs_offset_humans);
+        counts[1] = obs_laptops(e, batch.obs_offset_laptops);
+        counts[2] = obs_tables(e, batch.obs_offset_tables);
+        counts[3] = obs_plants(e, batch.obs_offset_plants);
+        if (batch.obs_capacity_walls > 0u) {
+            counts[4] = obs_walls(e, batch.obs_offset_walls);
+        }
+        // The padding records past the counts: their floats past the one-hot ones.
+        for (var t = 0u; t < 5u; t++) {
+            for (var k = counts[t]; k < obs_capacity(t); k++) {
+                obs_zero_record(obs_offset(t) + k * OBS_RECORD);
             }
         }
     }
     if (params.obs_noise_on != 0u) {
-        obs_noise(e, counts);
+        obs_noise(e, counts, !apart);
     }
     for (var t = 0u; t < 5u; t++) {
         outu[batch.co_obs_count + e * batch.so_obs_count + t] = counts[t];
@@ -570,5 +698,89 @@ fn rows(
         if (e < batch.n_envs && su[batch.c_stepping + e] != 0u) {
             outf[batch.co_obs + e * batch.so_obs + f0 + f] = bitcast<f32>(obs_tile[f * pitch + j]);
         }
+    }
+}
+
+// The entity records of a whole view, a lane each (`obs_records_apart`): lane `lane` of
+// workgroup (x, y) writes entity record y of the row of environment x * WORKGROUP_SIZE + lane (of
+// the records of every type, in row order), for the environments that stepped, after `main` has
+// written the robot record, the counts and the pairs. Record k of a type is its entity k (the
+// walls: segment k in `obs_walls`' order), or padding past the last one; with its noise
+// (`obs_noise` leaves the entity records to this). The 32 lanes of a warp write the same record
+// of 32 environments, so their stores coalesce where the observation is staged, and a record
+// waits on no other: the observing lane's loops over every record (exp2: 49, 40 of them wall
+// segments), serial, become a lane each.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn records(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let e = wg.x * WORKGROUP_SIZE + lane;
+    if (e >= batch.n_envs || su[batch.c_stepping + e] == 0u) {
+        return;
+    }
+    fr = obs_frame(e);
+    obs_e = e;
+    if (!obs_records_apart()) {
+        return;
+    }
+    // Record y's type and its index among that type's records.
+    var t = 0u;
+    var k = wg.y;
+    while (t < 4u && k >= obs_capacity(t)) {
+        k -= obs_capacity(t);
+        t += 1u;
+    }
+    let at = obs_offset(t) + k * OBS_RECORD;
+    let present = obs_present(e, t);
+    if (k >= present) {
+        obs_zero_record(at);
+    } else {
+        switch (t) {
+            case 0u: { obs_human_record_of(e, k, at); }
+            case 1u: { obs_rectangle_of(at, at_laptop(e, k), batch.c_l_x, batch.c_l_y, batch.c_l_theta, obs_laptop_radius()); }
+            case 2u: { obs_rectangle_of(at, at_table(e, k), batch.c_t_x, batch.c_t_y, batch.c_t_theta, obs_table_radius()); }
+            case 3u: { obs_plant_of(at, at_plant(e, k)); }
+            default: { obs_segment_of(e, k); }
+        }
+    }
+    if (params.obs_noise_on != 0u && obs_noisy_record(t, k, present)) {
+        obs_perturb_record(t, k, obs_noise_base(e));
+    }
+}
+
+// Human slot `k`'s record at `at` in a whole view, its turn cached.
+fn obs_human_record_of(e: u32, k: u32, at: u32) {
+    let i = at_human(e, k);
+    let turn = obs_human_turn(i);
+    let x = sf[batch.c_h_x + i];
+    let y = sf[batch.c_h_y + i];
+    obs_human_record(at, i, x, y, obs_local(x, y), turn);
+}
+
+// The record at `at` of the rectangle element `i` of columns `cx`, `cy`, `ctheta`.
+fn obs_rectangle_of(at: u32, i: u32, cx: u32, cy: u32, ctheta: u32, radius: f32) {
+    let x = sf[cx + i];
+    let y = sf[cy + i];
+    obs_rectangle_record(at, x, y, obs_local(x, y), sf[ctheta + i], radius);
+}
+
+fn obs_plant_of(at: u32, i: u32) {
+    let x = sf[batch.c_p_x + i];
+    let y = sf[batch.c_p_y + i];
+    obs_plant_record(at, x, y, obs_local(x, y));
+}
+
+// Wall segment `k` of environment `e` (of every wall's segments in order; `k` below their count)
+// as its record k.
+fn obs_segment_of(e: u32, k: u32) {
+    var first = 0u;
+    for (var w = at_wall(e, 0u); w < at_wall(e, su[batch.c_n_walls + e]); w += batch.k_wall) {
+        let n = obs_wall_segments(obs_wall_cut(w));
+        if (k < first + n) {
+            _ = obs_segment(batch.obs_offset_walls, k, obs_wall(w), k - first);
+            return;
+        }
+        first += n;
     }
 }

@@ -476,7 +476,8 @@ fn slot_index_functions(state: Columns<'_>) -> String {
 /// `pool_observation` (the observation's first word in a row); the `scratch` region of an
 /// environment (`s_scratch`, [`scratch_region_words`]), the obstacle library's part of it
 /// (`obstacle_words`, `x_obstacle_*`: [`ObstacleScratch`]), `x_obs_staged`, where the staged
-/// observation starts in it ([`scratch_words`]), and `obs_staged` (1 when the observation is staged); and the SNGNN-v2
+/// observation starts in it ([`scratch_words`]), `obs_staged` (1 when the observation is staged) and
+/// `obs_records_apart` (1 when [`OBS_RECORDS_ENTRY`] writes the entity records); and the SNGNN-v2
 /// sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one
 /// compiled pipeline serves every batch size and every config of the same [`SizeClasses`]. The
 /// field names are the same for every batch (the column list is fixed), so the WGSL struct is
@@ -551,6 +552,8 @@ impl BatchLayout {
         fields.push(("x_obs_staged".into(), n_envs * region));
         // 1 when the observation is staged ([`BatchLayout::with_staged_observation`]).
         fields.push(("obs_staged".into(), 0));
+        // 1 when a dispatch of its own writes the entity records ([`BatchLayout::with_records_apart`]).
+        fields.push(("obs_records_apart".into(), 0));
         fields.extend(sngnn_sizes(sngnn));
         let fields = fields
             .into_iter()
@@ -561,9 +564,20 @@ impl BatchLayout {
 
     /// This layout with the observation staged in `scratch` (`on`) or written into its rows in
     /// place: `obs_staged` (see [`scratch_words`], `GpuDevice::stage_observations`).
-    pub fn with_staged_observation(mut self, on: bool) -> Self {
+    pub fn with_staged_observation(self, on: bool) -> Self {
+        self.with_flag("obs_staged", on)
+    }
+
+    /// This layout with the observation's entity records written by [`OBS_RECORDS_ENTRY`], a lane
+    /// each, in a whole view (`on`), or by the observing lane: `obs_records_apart`
+    /// (`GpuDevice::records_in_lanes`).
+    pub fn with_records_apart(self, on: bool) -> Self {
+        self.with_flag("obs_records_apart", on)
+    }
+
+    fn with_flag(mut self, field: &str, on: bool) -> Self {
         for (name, v) in &mut self.fields {
-            if name == "obs_staged" {
+            if name == field {
                 *v = u32::from(on);
             }
         }
@@ -635,6 +649,12 @@ pub fn scratch_region_words(state: Columns<'_>) -> usize {
 /// observation ([`scratch_words`]) into the rows of `obs`, one workgroup per [`WORKGROUP_SIZE`]
 /// environments and [`OBS_ROWS_TILE`] floats.
 pub const OBS_ROWS_ENTRY: &str = "rows";
+
+/// The entry point of `shaders/observation.wgsl` dispatched after its `main` (and before
+/// [`OBS_ROWS_ENTRY`]) on a batch whose entity records are written apart (`obs_records_apart` of
+/// the [`BatchLayout`]), in a whole view: the entity records, one lane per environment and
+/// record, a workgroup per [`WORKGROUP_SIZE`] environments and entity record of a row.
+pub const OBS_RECORDS_ENTRY: &str = "records";
 
 /// Floats of a row one workgroup of [`OBS_ROWS_ENTRY`] moves (the `OBS_TILE` of its shader): a
 /// tile of `OBS_ROWS_TILE x (WORKGROUP_SIZE + 1)` words, 8,320 bytes of workgroup memory.

@@ -208,9 +208,9 @@ pub fn check_parity_mode(
     check_parity_on(device()?, stage, config, mode, n_envs, runs, perturb)
 }
 
-/// The shared device with the other observation path than its default
-/// (`GpuDevice::stage_observations`), the other ways of running the step's resets
-/// (`GpuDevice::resets_in_workgroups`) and its obstacle rebuilds
+/// The shared device with the other observation paths than its defaults
+/// (`GpuDevice::stage_observations`, `GpuDevice::records_in_lanes`), the other ways of
+/// running the step's resets (`GpuDevice::resets_in_workgroups`) and its obstacle rebuilds
 /// (`GpuDevice::obstacles_in_workgroups`), and every step's readback in the most pieces
 /// (`GpuDevice::readback_piece_bytes` of 1 KiB), so that tests cover the paths a test-sized batch
 /// on this device would not take.
@@ -219,6 +219,7 @@ pub fn device_other_paths() -> Option<GpuDevice> {
     dev.stage_observations = !dev.stage_observations;
     dev.resets_in_workgroups = !dev.resets_in_workgroups;
     dev.obstacles_in_workgroups = !dev.obstacles_in_workgroups;
+    dev.records_in_lanes = !dev.records_in_lanes;
     dev.readback_piece_bytes = 1 << 10;
     Some(dev)
 }

@@ -190,9 +190,10 @@ fn robust_buffer_access2(_: &wgpu::Device) -> bool {
 
 /// The environment variable that chooses the paths of the devices this process opens: `device`
 /// (the default) takes the adapter's (on a hardware GPU the observation staged through workgroup
-/// memory, each reset on a workgroup's lanes and each obstacle rebuild in workgroup memory:
-/// [`GpuDevice::stage_observations`], [`GpuDevice::resets_in_workgroups`],
-/// [`GpuDevice::obstacles_in_workgroups`]), `lane` a software adapter's on any adapter: the way
+/// memory, each reset on a workgroup's lanes, each obstacle rebuild in workgroup memory and the
+/// observation's entity records a lane each: [`GpuDevice::stage_observations`],
+/// [`GpuDevice::resets_in_workgroups`], [`GpuDevice::obstacles_in_workgroups`],
+/// [`GpuDevice::records_in_lanes`]), `lane` a software adapter's on any adapter: the way
 /// back should a driver refuse a hardware path's pipeline.
 pub const PATHS_VAR: &str = "SOCNAV_GPU_PATHS";
 
@@ -280,6 +281,14 @@ pub struct GpuDevice {
     /// Both give the same bits; a clone with the other setting is how a caller (or a test)
     /// chooses.
     pub obstacles_in_workgroups: bool,
+    /// Whether batches made on this device write the observation's entity records in a dispatch
+    /// of their own, a lane per environment and record (`backend::wgsl::OBS_RECORDS_ENTRY`),
+    /// where the view is whole, instead of in the observing lane's loops over every record (exp2:
+    /// 49, 40 of them wall segments, serial in one lane). On by default on a hardware GPU; off on
+    /// a software one, where each of those lanes would compute the robot's frame again on a CPU
+    /// core. Both give the same bits; a clone with the other setting is how a caller (or a test)
+    /// chooses.
+    pub records_in_lanes: bool,
     /// Most workgroups a rebuild dispatch in workgroup memory takes: each workgroup rebuilds the
     /// queued environments its index and every this-many-th after it. A workgroup per environment
     /// of the batch (65,536 of them, each holding 16 KiB of workgroup memory, all but a few
@@ -328,13 +337,15 @@ impl std::fmt::Debug for GpuDevice {
 
 impl GpuDevice {
     /// This device with the paths a software adapter takes, whatever the adapter: observations
-    /// written in place, each reset on one lane, each obstacle rebuild over `scratch`
+    /// written in place, each reset on one lane, each obstacle rebuild over `scratch`, the entity
+    /// records in the observing lane
     /// ([`PATHS_VAR`]`=lane`, `socnav bench --lane-paths`).
     #[must_use]
     pub fn with_lane_paths(mut self) -> Self {
         self.stage_observations = false;
         self.resets_in_workgroups = false;
         self.obstacles_in_workgroups = false;
+        self.records_in_lanes = false;
         self
     }
 
@@ -437,6 +448,7 @@ impl GpuDevice {
             stage_observations: adapter.hardware,
             resets_in_workgroups: adapter.hardware,
             obstacles_in_workgroups: adapter.hardware,
+            records_in_lanes: adapter.hardware,
             own_spirv,
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             rebuild_workgroups: DEFAULT_REBUILD_WORKGROUPS,

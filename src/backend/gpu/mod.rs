@@ -82,6 +82,12 @@ pub struct GpuStages {
     /// Workgroups along an observation row of the observation pass's `rows` dispatch
     /// (`OBS_ROWS_TILE` floats each), made where the observation is staged.
     obs_row_tiles: u32,
+    /// Entity records of a row, where they are written apart (`GpuDevice::records_in_lanes`),
+    /// else 0: the rows of the observation pass's `records` dispatch.
+    entity_records: u32,
+    /// Whether the step's parameters ask for a whole view, which `records` needs to write
+    /// anything (a limited sensor's records are the observing lane's).
+    whole_view: bool,
     state: DeviceTable,
     outputs: DeviceTable,
     params: wgpu::Buffer,
@@ -356,6 +362,12 @@ impl GpuStages {
         )?;
         let pool = storage_buffer(&dev, "reset pool", pool_bytes);
         let obs_staged = dev.stage_observations;
+        let entity_records = if dev.records_in_lanes {
+            obs_layout.entity_records()
+        } else {
+            0
+        };
+        let records_apart = entity_records > 0;
         let staged_obs_dim = if obs_staged {
             obs_layout.payload_dim()
         } else {
@@ -377,7 +389,8 @@ impl GpuStages {
                 graphs: &b.layout,
             }),
         )
-        .with_staged_observation(obs_staged);
+        .with_staged_observation(obs_staged)
+        .with_records_apart(records_apart);
         let layout_at = |column: &str| {
             layout
                 .get(column)
@@ -504,7 +517,11 @@ impl GpuStages {
             if pipelines.iter().any(|(p, _)| *p == pass) {
                 continue;
             }
-            let built = build_pass(&dev, stage, pass, &groups, &prelude, rebuild, &mut left_out)?;
+            let ways = Ways {
+                rebuild,
+                records_apart,
+            };
+            let built = build_pass(&dev, stage, pass, &groups, &prelude, ways, &mut left_out)?;
             compiled += built.as_ref().map_or(0, |b| b.1);
             pipelines.push((pass, built.map(|b| b.0)));
         }
@@ -524,6 +541,8 @@ impl GpuStages {
             dev,
             n_envs,
             obs_row_tiles: (obs_layout.payload_dim() as u32).div_ceil(wgsl::OBS_ROWS_TILE),
+            entity_records: u32::try_from(entity_records).unwrap_or(u32::MAX),
+            whole_view: params.obs_partial == 0,
             state: state_table,
             outputs: outputs_table,
             params: params_buf,
@@ -565,7 +584,8 @@ impl GpuStages {
     /// The adapter, and the ways taken: whether the pipelines run the backend's own SPIR-V
     /// (`spirv`: the ORCA lists not zeroed), with its storage-buffer bounds checked by the driver
     /// or clamped in the shaders (`spirv::BufferBounds`), or the WGSL as wgpu compiles it; how
-    /// the observations are written (`GpuDevice::stage_observations`), the resets run
+    /// the observations are written (`GpuDevice::stage_observations`) and their entity records
+    /// (`GpuDevice::records_in_lanes`, where the batch's rows have any), the resets run
     /// (`GpuDevice::resets_in_workgroups`) and the obstacles are rebuilt
     /// (`GpuDevice::obstacles_in_workgroups`, where the batch's passes rebuild any).
     pub fn device_description(&self) -> String {
@@ -603,9 +623,14 @@ impl GpuStages {
                 self.dev.leave_out.join(", ")
             )
         };
+        let records = if self.entity_records > 0 {
+            "a lane each"
+        } else {
+            "in the observing lane"
+        };
         format!(
-            "{}; shaders: {shaders}; observations {observations}; resets on {resets}; obstacle \
-             rebuilds {rebuilds}{left_out}",
+            "{}; shaders: {shaders}; observations {observations}; entity records {records}; \
+             resets on {resets}; obstacle rebuilds {rebuilds}{left_out}",
             self.dev.adapter
         )
     }
@@ -725,6 +750,7 @@ impl GpuStages {
 
     /// Replace the step constants.
     pub fn upload_params(&mut self, params: &StepParams) {
+        self.whole_view = params.obs_partial == 0;
         self.dev
             .queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(params));
@@ -1042,6 +1068,13 @@ impl GpuStages {
             }
             None => {}
         }
+        if let Some(records) = &pipeline.records
+            && self.whole_view
+            && dispatch.runs(wgsl::OBS_ROWS_STAGE)
+        {
+            pass.set_pipeline(records);
+            pass.dispatch_workgroups(workgroups, self.entity_records, 1);
+        }
         if let Some(rows) = &pipeline.rows
             && dispatch.runs(wgsl::OBS_ROWS_STAGE)
         {
@@ -1292,11 +1325,13 @@ fn member_mask_table(dev: &GpuDevice) -> (wgpu::Buffer, u32) {
 
 /// The pipelines of a pass: `main` and, for a stage of [`wgsl::RARE_WORK_STAGES`], `queue_work`
 /// (dispatched before it, over every environment, to queue those `main` runs for); for
-/// [`wgsl::OBS_ROWS_STAGE`] on a device that stages observations, `rows` (dispatched after it:
-/// the staged observation into its rows).
+/// [`wgsl::OBS_ROWS_STAGE`], on a batch whose entity records are written apart, `records` (dispatched after
+/// it: [`wgsl::OBS_RECORDS_ENTRY`]) and, on a device that stages observations, `rows` (dispatched
+/// after those: the staged observation into its rows).
 struct PassPipelines {
     queue: Option<wgpu::ComputePipeline>,
     main: wgpu::ComputePipeline,
+    records: Option<wgpu::ComputePipeline>,
     rows: Option<wgpu::ComputePipeline>,
     /// A [`wgsl::REBUILD_PASSES`] pass's rebuild after `main`, and how it runs.
     rebuild: Option<(wgpu::ComputePipeline, Rebuild)>,
@@ -1311,6 +1346,14 @@ enum Rebuild {
     /// with a workgroup per environment of the batch, `GpuDevice::rebuild_workgroups` at most
     /// (the host does not know how many are queued), each taking every so-many-th queued one.
     InWorkgroups,
+}
+
+/// The ways a batch's passes run that choose their pipelines: how they rebuild obstacles, and
+/// whether the entity records of the observation are written apart ([`wgsl::OBS_RECORDS_ENTRY`]).
+#[derive(Debug, Clone, Copy)]
+struct Ways {
+    rebuild: Rebuild,
+    records_apart: bool,
 }
 
 /// A grid of at least `n` workgroups, and fewer than `n` + rows, in as few rows of at most
@@ -1336,7 +1379,7 @@ fn build_pass(
     pass: &'static str,
     groups: &[Vec<Binding>],
     prelude: &str,
-    rebuild: Rebuild,
+    ways: Ways,
     left_out: &mut Vec<String>,
 ) -> Result<Built, SimError> {
     let has_sngnn = groups.len() > 1;
@@ -1388,8 +1431,10 @@ fn build_pass(
         Ok(Some(pipeline))
     };
     let queue = entry(wgsl::RARE_WORK_STAGES.contains(&stage), wgsl::QUEUE_ENTRY)?;
-    let staged = pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE) && dev.stage_observations;
-    let rows = entry(staged, wgsl::OBS_ROWS_ENTRY)?;
+    let observes = pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE);
+    let records = entry(observes && ways.records_apart, wgsl::OBS_RECORDS_ENTRY)?;
+    let rows = entry(observes && dev.stage_observations, wgsl::OBS_ROWS_ENTRY)?;
+    let rebuild = ways.rebuild;
     let rebuild = match (wgsl::REBUILD_PASSES.contains(&pass), rebuild) {
         (false, _) => None,
         (true, Rebuild::PerLane) => entry(true, wgsl::REBUILD_ENTRY)?.map(|p| (p, rebuild)),
@@ -1406,6 +1451,7 @@ fn build_pass(
     let pipelines = PassPipelines {
         queue,
         main,
+        records,
         rows,
         rebuild,
     };

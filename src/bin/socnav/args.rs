@@ -112,6 +112,20 @@ impl From<StepOutputsChoice> for socnav::outputs::StepOutputs {
     }
 }
 
+/// A hardware path of the GPU backend that `socnav bench --lane-paths` turns back into a
+/// software adapter's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LanePath {
+    /// The observation written into its rows in place, not staged through workgroup memory.
+    Staging,
+    /// Each reset on one lane, not a workgroup's.
+    Resets,
+    /// Each ORCA obstacle rebuild over the scratch buffer, not in workgroup memory.
+    Obstacles,
+    /// The observation's entity records in the observing lane, not a lane each.
+    Records,
+}
+
 /// How actions are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum PolicyChoice {
@@ -182,12 +196,11 @@ pub struct BenchArgs {
     /// The optional per-step outputs each step delivers (on the GPU backend: reads back).
     #[arg(long, value_enum, default_value_t = StepOutputsChoice::All)]
     pub step_outputs: StepOutputsChoice,
-    /// GPU backend only: take the paths a software adapter takes (observations written in place,
-    /// each reset on one lane, obstacle rebuilds over the scratch buffer) instead of the device's
-    /// defaults, so that a run with and one without measure what the hardware paths buy
-    /// (compare the per-stage shares).
-    #[arg(long)]
-    pub lane_paths: bool,
+    /// GPU backend only: take the paths a software adapter takes instead of the device's
+    /// defaults, every one (no value) or those named (comma separated), so that a run with and
+    /// one without measure what the hardware paths buy (compare the per-stage shares).
+    #[arg(long, value_enum, value_delimiter = ',', num_args = 0..)]
+    pub lane_paths: Option<Vec<LanePath>>,
     /// GPU backend only, for diagnosis: functions of the stage shaders that return at once
     /// (comma separated, e.g. `obs_walls,obs_put`), so that the stage shares and the device's
     /// time say what each costs on the device. The results are wrong, and the device line says

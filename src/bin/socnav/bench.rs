@@ -4,7 +4,7 @@
 //! padded observations (walls omitted; the second target) instead of the full ones; `--halves`
 //! also steps each batch size as two halves on two host threads; `--step-outputs` chooses the
 //! optional per-step outputs delivered (every one by default); `--lane-paths` takes a software
-//! adapter's paths on the GPU, for comparison; `--leave-out` makes shader functions return at
+//! adapter's paths on the GPU (every one, or those named), for comparison; `--leave-out` makes shader functions return at
 //! once, to time a pass without them (diagnosis: the results are wrong).
 
 use std::time::Instant;
@@ -19,7 +19,9 @@ use crate::run::make_env;
 const WARMUP_STEPS: usize = 50;
 
 pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
-    if (a.lane_paths || !a.leave_out.is_empty()) && a.backend != crate::args::BackendChoice::Gpu {
+    if (a.lane_paths.is_some() || !a.leave_out.is_empty())
+        && a.backend != crate::args::BackendChoice::Gpu
+    {
         return Err(format!(
             "--lane-paths and --leave-out change the GPU backend's shaders: give --backend gpu \
              (not {:?})",
@@ -126,7 +128,7 @@ fn warmed_up(
     n: usize,
     seed: u64,
 ) -> Result<(socnav::BatchEnv, Vec<f32>), socnav::SimError> {
-    let mut env = if a.lane_paths || !a.leave_out.is_empty() {
+    let mut env = if a.lane_paths.is_some() || !a.leave_out.is_empty() {
         on_chosen_device(config, n, a)?
     } else {
         make_env(config.clone(), n, 0, a.backend, a.threads)?
@@ -140,18 +142,30 @@ fn warmed_up(
     Ok((env, actions))
 }
 
-/// A batch of `n` environments of `config` on the GPU backend with the paths a software adapter
-/// takes (`--lane-paths`) and the functions of `--leave-out` returning at once.
+/// A batch of `n` environments of `config` on the GPU backend with the paths of a software adapter
+/// that `--lane-paths` names (every one without a name) and the functions of `--leave-out` returning at once.
 #[cfg(feature = "gpu")]
 fn on_chosen_device(
     config: &Config,
     n: usize,
     a: &BenchArgs,
 ) -> Result<socnav::BatchEnv, socnav::SimError> {
+    use crate::args::LanePath;
     use socnav::backend::gpu::{AdapterPolicy, GpuDevice};
     let mut dev = GpuDevice::open(AdapterPolicy::Any)?;
-    if a.lane_paths {
-        dev = dev.with_lane_paths();
+    match a.lane_paths.as_deref() {
+        None => {}
+        Some([]) => dev = dev.with_lane_paths(),
+        Some(paths) => {
+            for path in paths {
+                match path {
+                    LanePath::Staging => dev.stage_observations = false,
+                    LanePath::Resets => dev.resets_in_workgroups = false,
+                    LanePath::Obstacles => dev.obstacles_in_workgroups = false,
+                    LanePath::Records => dev.records_in_lanes = false,
+                }
+            }
+        }
     }
     dev.leave_out.clone_from(&a.leave_out);
     let options = socnav::EnvOptions {

@@ -89,8 +89,9 @@ fn a_closed_pipe_ends_the_tool_quietly() {
     );
 }
 
-/// `socnav bench --lane-paths` takes a software adapter's paths on the GPU backend and says so in
-/// its device line; without `--backend gpu` it is refused with an error naming the backend given.
+/// `socnav bench --lane-paths` takes a software adapter's paths on the GPU backend (every one, or
+/// those named) and says so in its device line; without `--backend gpu` it is refused with an
+/// error naming the backend given, and a path it does not know with one naming it.
 #[test]
 fn bench_lane_paths_names_the_paths_it_took() {
     let bench = |args: &[&str]| {
@@ -116,19 +117,33 @@ fn bench_lane_paths_names_the_paths_it_took() {
         why.contains("--lane-paths") && why.contains("Cpu"),
         "unclear refusal: {why}"
     );
+    let unknown = bench(&["--lane-paths", "records,walls", "--backend", "gpu"]);
+    assert!(!unknown.status.success(), "--lane-paths walls ran");
+    let why = String::from_utf8_lossy(&unknown.stderr);
+    assert!(why.contains("'walls'"), "unclear refusal: {why}");
     if common::gpu::device().is_none() {
         return;
     }
-    let out = bench(&["--lane-paths", "--backend", "gpu"]);
+    let device_line = |lane_paths: &[&str]| -> String {
+        let out = bench(&[&["--backend", "gpu", "--lane-paths"], lane_paths].concat());
+        assert!(
+            out.status.success(),
+            "socnav bench --lane-paths {lane_paths:?} failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let report: Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+        report["device"].as_str().expect("a device line").to_owned()
+    };
+    // exp1's rows have entity records, so the line says where they are written.
+    let device = device_line(&["records"]);
     assert!(
-        out.status.success(),
-        "socnav bench --lane-paths failed: {}",
-        String::from_utf8_lossy(&out.stderr)
+        device.contains("entity records in the observing lane"),
+        "{device}"
     );
-    let report: Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
-    let device = report["device"].as_str().expect("a device line");
+    let device = device_line(&[]);
     assert!(
         device.contains("observations written in place")
+            && device.contains("entity records in the observing lane")
             && device.contains("resets on one lane each")
             && device.contains("obstacle rebuilds over the scratch buffer"),
         "{device}"

@@ -1014,7 +1014,8 @@ fn main() {
 
 /// The passes of the stages whose rare work runs out of the hot pass (`wgsl::RARE_WORK_STAGES`)
 /// have the entry point that queues their environments besides `main`, the pass of the
-/// observation has the one that moves its staged values into rows (`wgsl::OBS_ROWS_ENTRY`), the
+/// observation has the one that writes its entity records a lane each (`wgsl::OBS_RECORDS_ENTRY`)
+/// and the one that moves its staged values into rows (`wgsl::OBS_ROWS_ENTRY`), the
 /// passes that regroup the two that rebuild ORCA obstacles (`wgsl::REBUILD_PASSES`), and no
 /// other pass has another.
 #[test]
@@ -1032,7 +1033,7 @@ fn passes_have_their_second_entry_points() {
             expected.push(wgsl::QUEUE_ENTRY);
         }
         if pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE) {
-            expected.push(wgsl::OBS_ROWS_ENTRY);
+            expected.extend([wgsl::OBS_RECORDS_ENTRY, wgsl::OBS_ROWS_ENTRY]);
         }
         if wgsl::REBUILD_PASSES.contains(&pass) {
             expected.extend([wgsl::REBUILD_ENTRY, wgsl::REBUILD_IN_WORKGROUPS_ENTRY]);
