@@ -8,6 +8,8 @@
 //! `pool_rows`: the GPU backend's reset-pool rows, generated on the host, per second.
 //! `obs_rows`: observation rows into the host's outputs, expanded from the device's rows without
 //! their one-hot floats or copied whole, bytes per second.
+//! `obstacle_build`: RVO2's `processObstacles` of an environment's ORCA obstacles (every reset,
+//! every pool row and every regrouping builds one), builds per second.
 //!
 //! `cargo bench --bench step`; record figures in `benches/RESULTS.md` with the machine, batch size,
 //! backend and commit.
@@ -273,6 +275,49 @@ fn obs_rows(c: &mut Criterion) {
     }
 }
 
+fn obstacle_build(c: &mut Criterion) {
+    use socnav::orca::{ObstacleScratch, ObstacleSet, process_obstacles};
+    use socnav::systems::orca_obstacles::for_each_polygon;
+    const ENVS: usize = 256;
+    let mut group = c.benchmark_group("obstacle_build");
+    group
+        .measurement_time(Duration::from_secs(3))
+        .warm_up_time(Duration::from_secs(1))
+        .sample_size(20)
+        .throughput(Throughput::Elements(ENVS as u64));
+    for name in ["exp2", "exp3", "stress"] {
+        let config = Config::from_name_or_path(name).expect("shipped config");
+        let options = EnvOptions {
+            n_envs: ENVS,
+            ..Default::default()
+        };
+        let mut env = BatchEnv::new(config, options).expect("valid batch");
+        env.reset(Some(0)).expect("reset");
+        let p = *env.params();
+        let mut state = env.state().expect("state").clone();
+        // Each environment's polygons as its first episode places them.
+        let scenes: Vec<Vec<Vec<[f32; 2]>>> = (0..ENVS)
+            .map(|e| {
+                let mut polygons = Vec::new();
+                for_each_polygon(&p, &state.env_chunk(e), 0, |_, polygon| {
+                    polygons.push(polygon.to_vec());
+                });
+                polygons
+            })
+            .collect();
+        let (mut scratch, mut set) = (ObstacleScratch::new(), ObstacleSet::new());
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                for polygons in &scenes {
+                    process_obstacles(polygons, &mut scratch, &mut set).expect("valid polygons");
+                }
+                set.len()
+            });
+        });
+    }
+    group.finish();
+}
+
 criterion_group!(
     benches,
     step,
@@ -280,6 +325,7 @@ criterion_group!(
     step_sngnn,
     step_sngnn_gpu,
     pool_rows,
-    obs_rows
+    obs_rows,
+    obstacle_build
 );
 criterion_main!(benches);

@@ -241,10 +241,12 @@ impl ObstacleSet {
     }
 }
 
-/// Reusable working memory for [`super::process_obstacles`] (the per-node edge lists of the build).
+/// Reusable working memory for [`super::process_obstacles`] (the per-node edge lists of the build,
+/// and the end points of the edges a node chooses its split among).
 #[derive(Clone, Debug, Default)]
 pub struct ObstacleScratch {
     pub(super) arena: Vec<u32>,
+    pub(super) ends: Vec<[Vec2; 2]>,
 }
 
 impl ObstacleScratch {
@@ -259,5 +261,7 @@ impl ObstacleScratch {
     pub fn reserve(&mut self, vertices: usize) {
         let worst = vertices * (vertices + 1);
         self.arena.reserve(worst.saturating_sub(self.arena.len()));
+        // One node's list at a time, every vertex at most.
+        self.ends.reserve(vertices.saturating_sub(self.ends.len()));
     }
 }
