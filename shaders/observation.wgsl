@@ -487,7 +487,8 @@ fn obs_noisy_record(t: u32, k: u32, count: u32) -> bool {
 // Noise on the floats of record `k` of entity type `t` past its one-hot floats.
 fn obs_perturb_record(t: u32, k: u32, base: u32) {
     let first = obs_offset(t) + k * OBS_RECORD + 6u;
-    obs_perturb(first, OBS_RECORD - 6u, base, params.obs_noise[2u * t], params.obs_noise[2u * t + 1u]);
+    let mean = params.obs_noise[2u * t];
+    obs_perturb(first, OBS_RECORD - 6u, base, mean, params.obs_noise[2u * t + 1u]);
 }
 
 // Rust `noise::add_noise`, on the robot record and, with `records`, the entity records (where
@@ -738,8 +739,16 @@ fn records(
     } else {
         switch (t) {
             case 0u: { obs_human_record_of(e, k, at); }
-            case 1u: { obs_rectangle_of(at, at_laptop(e, k), batch.c_l_x, batch.c_l_y, batch.c_l_theta, obs_laptop_radius()); }
-            case 2u: { obs_rectangle_of(at, at_table(e, k), batch.c_t_x, batch.c_t_y, batch.c_t_theta, obs_table_radius()); }
+            case 1u: {
+                let i = at_laptop(e, k);
+                let radius = obs_laptop_radius();
+                obs_rectangle_of(at, i, batch.c_l_x, batch.c_l_y, batch.c_l_theta, radius);
+            }
+            case 2u: {
+                let i = at_table(e, k);
+                let radius = obs_table_radius();
+                obs_rectangle_of(at, i, batch.c_t_x, batch.c_t_y, batch.c_t_theta, radius);
+            }
             case 3u: { obs_plant_of(at, at_plant(e, k)); }
             default: { obs_segment_of(e, k); }
         }

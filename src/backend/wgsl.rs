@@ -476,9 +476,9 @@ fn slot_index_functions(state: Columns<'_>) -> String {
 /// `pool_observation` (the observation's first word in a row); the `scratch` region of an
 /// environment (`s_scratch`, [`scratch_region_words`]), the obstacle library's part of it
 /// (`obstacle_words`, `x_obstacle_*`: [`ObstacleScratch`]), `x_obs_staged`, where the staged
-/// observation starts in it ([`scratch_words`]), `obs_staged` (1 when the observation is staged) and
-/// `obs_records_apart` (1 when [`OBS_RECORDS_ENTRY`] writes the entity records); and the SNGNN-v2
-/// sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one
+/// observation starts in it ([`scratch_words`]), `obs_staged` (1 when the observation is staged)
+/// and `obs_records_apart` (1 when [`OBS_RECORDS_ENTRY`] writes the entity records); and the
+/// SNGNN-v2 sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one
 /// compiled pipeline serves every batch size and every config of the same [`SizeClasses`]. The
 /// field names are the same for every batch (the column list is fixed), so the WGSL struct is
 /// too.

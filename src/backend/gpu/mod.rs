@@ -1325,9 +1325,9 @@ fn member_mask_table(dev: &GpuDevice) -> (wgpu::Buffer, u32) {
 
 /// The pipelines of a pass: `main` and, for a stage of [`wgsl::RARE_WORK_STAGES`], `queue_work`
 /// (dispatched before it, over every environment, to queue those `main` runs for); for
-/// [`wgsl::OBS_ROWS_STAGE`], on a batch whose entity records are written apart, `records` (dispatched after
-/// it: [`wgsl::OBS_RECORDS_ENTRY`]) and, on a device that stages observations, `rows` (dispatched
-/// after those: the staged observation into its rows).
+/// [`wgsl::OBS_ROWS_STAGE`], on a batch whose entity records are written apart, `records`
+/// (dispatched after it: [`wgsl::OBS_RECORDS_ENTRY`]) and, on a device that stages observations,
+/// `rows` (dispatched after those: the staged observation into its rows).
 struct PassPipelines {
     queue: Option<wgpu::ComputePipeline>,
     main: wgpu::ComputePipeline,

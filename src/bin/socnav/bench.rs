@@ -4,8 +4,9 @@
 //! padded observations (walls omitted; the second target) instead of the full ones; `--halves`
 //! also steps each batch size as two halves on two host threads; `--step-outputs` chooses the
 //! optional per-step outputs delivered (every one by default); `--lane-paths` takes a software
-//! adapter's paths on the GPU (every one, or those named), for comparison; `--leave-out` makes shader functions return at
-//! once, to time a pass without them (diagnosis: the results are wrong).
+//! adapter's paths on the GPU (every one, or those named), for comparison; `--leave-out` makes
+//! shader functions return at once, to time a pass without them (diagnosis: the results are
+//! wrong).
 
 use std::time::Instant;
 
@@ -143,7 +144,8 @@ fn warmed_up(
 }
 
 /// A batch of `n` environments of `config` on the GPU backend with the paths of a software adapter
-/// that `--lane-paths` names (every one without a name) and the functions of `--leave-out` returning at once.
+/// that `--lane-paths` names (every one without a name) and the functions of `--leave-out`
+/// returning at once.
 #[cfg(feature = "gpu")]
 fn on_chosen_device(
     config: &Config,
