@@ -288,13 +288,25 @@ fn obs_rectangles(
     return k;
 }
 
+// Where an object record puts the object at (x, y), `l` in the robot frame: there, or at (x, y)
+// in the world frame.
+fn obs_written(x: f32, y: f32, l: vec2<f32>) -> vec2<f32> {
+    if (fr.world) {
+        return vec2<f32>(x, y);
+    }
+    return l;
+}
+
 // The record at `at` of a rectangle at (x, y), `l` in the robot frame, heading `theta`.
 fn obs_rectangle_record(at: u32, x: f32, y: f32, l: vec2<f32>, theta: f32, radius: f32) {
-    var p = l;
-    if (fr.world) {
-        p = vec2<f32>(x, y);
-    }
+    let p = obs_written(x, y, l);
     obs_object_record(at, p.x, p.y, obs_rel_sin_cos(theta), radius);
+}
+
+// The record at `at` of a plant at (x, y), `l` in the robot frame.
+fn obs_plant_record(at: u32, x: f32, y: f32, l: vec2<f32>) {
+    let p = obs_written(x, y, l);
+    obs_object_record(at, p.x, p.y, obs_plant_sin_cos(), params.plant_radius);
 }
 
 fn obs_laptop_radius() -> f32 {
@@ -376,15 +388,6 @@ fn obs_wall(w: u32) -> ObsWall {
     }
     let sc = obs_rel_sin_cos(sf[batch.c_w_theta + w]);
     return ObsWall(local, written, sc, obs_wall_cut(w));
-}
-
-// The record at `at` of a plant at (x, y), `l` in the robot frame.
-fn obs_plant_record(at: u32, x: f32, y: f32, l: vec2<f32>) {
-    var p = l;
-    if (fr.world) {
-        p = vec2<f32>(x, y);
-    }
-    obs_object_record(at, p.x, p.y, obs_plant_sin_cos(), params.plant_radius);
 }
 
 // Rust `segment`: segment `j` of the wall (`obs_wall_segments`), as record `k` of the block at
@@ -486,9 +489,9 @@ fn obs_noisy_record(t: u32, k: u32, count: u32) -> bool {
 
 // Noise on the floats of record `k` of entity type `t` past its one-hot floats.
 fn obs_perturb_record(t: u32, k: u32, base: u32) {
-    let first = obs_offset(t) + k * OBS_RECORD + 6u;
+    let first = obs_offset(t) + k * OBS_RECORD + OBS_ONE_HOT;
     let mean = params.obs_noise[2u * t];
-    obs_perturb(first, OBS_RECORD - 6u, base, mean, params.obs_noise[2u * t + 1u]);
+    obs_perturb(first, OBS_RECORD - OBS_ONE_HOT, base, mean, params.obs_noise[2u * t + 1u]);
 }
 
 // Rust `noise::add_noise`, on the robot record and, with `records`, the entity records (where

@@ -478,9 +478,9 @@ fn slot_index_functions(state: Columns<'_>) -> String {
 /// (`obstacle_words`, `x_obstacle_*`: [`ObstacleScratch`]), `x_obs_staged`, where the staged
 /// observation starts in it ([`scratch_words`]), `obs_staged` (1 when the observation is staged)
 /// and `obs_records_apart` (1 when [`OBS_RECORDS_ENTRY`] writes the entity records); and the
-/// SNGNN-v2 sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so one
-/// compiled pipeline serves every batch size and every config of the same [`SizeClasses`]. The
-/// field names are the same for every batch (the column list is fixed), so the WGSL struct is
+/// SNGNN-v2 sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so
+/// one compiled pipeline serves every batch size and every config of the same [`SizeClasses`].
+/// The field names are the same for every batch (the column list is fixed), so the WGSL struct is
 /// too.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct BatchLayout {
@@ -552,7 +552,8 @@ impl BatchLayout {
         fields.push(("x_obs_staged".into(), n_envs * region));
         // 1 when the observation is staged ([`BatchLayout::with_staged_observation`]).
         fields.push(("obs_staged".into(), 0));
-        // 1 when a dispatch of its own writes the entity records ([`BatchLayout::with_records_apart`]).
+        // 1 when a dispatch of its own writes the entity records
+        // ([`BatchLayout::with_records_apart`]).
         fields.push(("obs_records_apart".into(), 0));
         fields.extend(sngnn_sizes(sngnn));
         let fields = fields

@@ -1434,10 +1434,11 @@ fn build_pass(
     let observes = pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE);
     let records = entry(observes && ways.records_apart, wgsl::OBS_RECORDS_ENTRY)?;
     let rows = entry(observes && dev.stage_observations, wgsl::OBS_ROWS_ENTRY)?;
-    let rebuild = ways.rebuild;
-    let rebuild = match (wgsl::REBUILD_PASSES.contains(&pass), rebuild) {
+    let rebuild = match (wgsl::REBUILD_PASSES.contains(&pass), ways.rebuild) {
         (false, _) => None,
-        (true, Rebuild::PerLane) => entry(true, wgsl::REBUILD_ENTRY)?.map(|p| (p, rebuild)),
+        (true, Rebuild::PerLane) => {
+            entry(true, wgsl::REBUILD_ENTRY)?.map(|p| (p, Rebuild::PerLane))
+        }
         (true, Rebuild::InWorkgroups) => {
             let moved = wgsl::with_obstacles_in_workgroup(&src).ok_or_else(|| {
                 SimError::Internal(format!("pass {pass} has no ORCA obstacle library"))
@@ -1445,7 +1446,7 @@ fn build_pass(
             let entry = wgsl::REBUILD_IN_WORKGROUPS_ENTRY;
             let (p, new) = dev.pipelines.pipeline(dev, pass, groups, &moved, entry)?;
             compiled += usize::from(new);
-            Some((p, rebuild))
+            Some((p, Rebuild::InWorkgroups))
         }
     };
     let pipelines = PassPipelines {
