@@ -40,9 +40,12 @@ pub fn reset_env(
 ) -> Result<(), SimError> {
     let seed = seeds::seed_from_words(s.next_seed_lo[e], s.next_seed_hi[e]);
     let mut last = "";
+    // One spawn list for every attempt, borrowed, never moved: it holds every config's capacity
+    // (about 22 KB), and a move copies all of it.
+    let mut spawn = SpawnList::default();
     for attempt in 0..MAX_SCENARIO_ATTEMPTS {
         let mut rng = RngStream::new(seed, stream_id(STREAM_SCENARIO, attempt));
-        match generate(p, s, e, &mut rng) {
+        match generate(p, s, e, &mut rng, &mut spawn) {
             Ok(()) => {
                 (s.seed_lo[e], s.seed_hi[e]) = seeds::seed_words(seed);
                 (s.next_seed_lo[e], s.next_seed_hi[e]) =
@@ -99,8 +102,15 @@ fn draw_counts(p: &StepParams, rng: &mut RngStream) -> Counts {
     }
 }
 
-/// Draw the room, then place everything; writes the environment's slots.
-fn generate(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngStream) -> Attempt {
+/// Draw the room, then place everything; writes the environment's slots (`spawn`: working
+/// memory, cleared first).
+fn generate(
+    p: &StepParams,
+    s: &mut StateChunk,
+    e: usize,
+    rng: &mut RngStream,
+    spawn: &mut SpawnList,
+) -> Attempt {
     // Unused slots hold zeros (crate::state): nothing of an earlier episode or attempt remains.
     s.clear_slots(e);
     let n = draw_counts(p, rng);
@@ -108,8 +118,8 @@ fn generate(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngStream) -
     draw_human_params(p, s, e, rng);
     let mut layout = RoomLayout::default();
     room::build(p, rng, shape, x, y, l_location, &mut layout);
-    let mut spawn = SpawnList::default();
-    write_room(s, e, shape, x, y, &layout, &mut spawn);
+    spawn.clear();
+    write_room(s, e, shape, x, y, &layout, spawn);
     let area = SamplingBox::new(p, x, y);
     let mut g = Gen {
         p,
@@ -214,7 +224,7 @@ fn write_room(
 struct Gen<'a, 'r> {
     p: &'a StepParams,
     rng: &'r mut RngStream,
-    spawn: SpawnList,
+    spawn: &'r mut SpawnList,
     area: SamplingBox,
     next_id: u32,
     e: usize,
@@ -309,7 +319,7 @@ impl Gen<'_, '_> {
     }
 
     fn place_robot(&mut self, s: &mut StateChunk) -> Attempt {
-        let d = place::free_disc(self.rng, &self.area, &self.spawn, self.p.robot_radius)
+        let d = place::free_disc(self.rng, &self.area, self.spawn, self.p.robot_radius)
             .ok_or("the robot")?;
         let e = self.e;
         s.robot_x[e] = d.x;
@@ -320,7 +330,7 @@ impl Gen<'_, '_> {
     }
 
     fn place_lone_human(&mut self, s: &mut StateChunk, i: usize, r: u32) -> Attempt {
-        let d = place::free_disc(self.rng, &self.area, &self.spawn, self.p.human_radius)
+        let d = place::free_disc(self.rng, &self.area, self.spawn, self.p.human_radius)
             .ok_or("a lone human")?;
         s.h_id[i] = self.id();
         s.h_x[i] = d.x;
@@ -338,7 +348,7 @@ impl Gen<'_, '_> {
     }
 
     fn place_plant(&mut self, s: &mut StateChunk, k: usize) -> Attempt {
-        let d = place::free_disc(self.rng, &self.area, &self.spawn, self.p.plant_radius)
+        let d = place::free_disc(self.rng, &self.area, self.spawn, self.p.plant_radius)
             .ok_or("a plant")?;
         let i = self.e * s.strides.plants + k;
         s.p_id[i] = self.id();
@@ -351,7 +361,7 @@ impl Gen<'_, '_> {
     fn place_table(&mut self, s: &mut StateChunk, k: usize) -> Attempt {
         let (l, w) = (self.p.table_length, self.p.table_width);
         let (x, y, theta) =
-            place::free_rect(self.rng, &self.area, &self.spawn, l, w).ok_or("a table")?;
+            place::free_rect(self.rng, &self.area, self.spawn, l, w).ok_or("a table")?;
         let i = self.e * s.strides.tables + k;
         s.t_id[i] = self.id();
         s.t_x[i] = x;
@@ -370,7 +380,7 @@ impl Gen<'_, '_> {
         let pose = if tables > 0 {
             self.laptop_on_some_table(s, tables, |sp, shape| sp.blocked_by_laptop(shape))
         } else {
-            place::free_rect(self.rng, &self.area, &self.spawn, l, w)
+            place::free_rect(self.rng, &self.area, self.spawn, l, w)
         };
         let (x, y, theta) = pose.ok_or("a laptop")?;
         let i = self.e * s.strides.laptops + k;
@@ -401,7 +411,7 @@ impl Gen<'_, '_> {
                 self.p.laptop_length,
                 self.p.laptop_width,
             ));
-            (!free(&self.spawn, &shape)).then_some((x, y, theta))
+            (!free(self.spawn, &shape)).then_some((x, y, theta))
         })
     }
 
@@ -546,7 +556,7 @@ impl Gen<'_, '_> {
         let hb = self.e * s.strides.humans;
         for k in 0..n.dynamic_humans {
             let i = hb + (n.static_humans + k) as usize;
-            let g = place::free_goal(self.rng, &self.area, &self.spawn, p.human_goal_radius)
+            let g = place::free_goal(self.rng, &self.area, self.spawn, p.human_goal_radius)
                 .ok_or("a human goal")?;
             s.h_goal_x[i] = g.x;
             s.h_goal_y[i] = g.y;
@@ -562,7 +572,7 @@ impl Gen<'_, '_> {
                 r: p.human_goal_radius,
             });
         }
-        let g = place::free_goal(self.rng, &self.area, &self.spawn, p.goal_radius)
+        let g = place::free_goal(self.rng, &self.area, self.spawn, p.goal_radius)
             .ok_or("the robot goal")?;
         s.goal_x[self.e] = g.x;
         s.goal_y[self.e] = g.y;
@@ -570,7 +580,7 @@ impl Gen<'_, '_> {
         let gb = self.e * s.strides.groups;
         let moving = (n.group_sets[0] + n.group_sets[1]) as usize;
         for gi in gb..gb + moving {
-            let g = place::free_goal(self.rng, &self.area, &self.spawn, p.group_goal_radius)
+            let g = place::free_goal(self.rng, &self.area, self.spawn, p.group_goal_radius)
                 .ok_or("a group goal")?;
             s.g_goal_x[gi] = g.x;
             s.g_goal_y[gi] = g.y;
