@@ -249,6 +249,11 @@ impl StepReadback {
         self.finished.size() + self.pieces.iter().map(wgpu::Buffer::size).sum::<u64>()
     }
 
+    /// Pieces the per-step columns are read back in, each a submit and a map of its own.
+    pub(crate) fn pieces(&self) -> usize {
+        self.pieces.len()
+    }
+
     /// Rows the next step's first copy takes.
     pub(crate) fn rows_hint(&self) -> usize {
         self.rows_hint
@@ -279,42 +284,67 @@ impl StepReadback {
         rows
     }
 
-    /// Copy the first piece of the per-step columns in `enc` (the step's encoder) and submit
-    /// it, then each other piece in a submit of its own, so that the host can read a piece while
-    /// the device copies the next ([`Self::read_pieces`]); the submits in piece order, and the
-    /// bytes the pieces copy. With `timeline`, a timestamp follows each copy and the last submit
-    /// resolves them.
-    pub(crate) fn submit_with_pieces(
+    /// Copy the first piece of the per-step columns in `step` (the step's encoder, which the
+    /// caller submits); the bytes it copies. With `timeline`, a timestamp follows the copy, and
+    /// when there is no other piece the timestamps are resolved.
+    pub(crate) fn copy_first_piece(
+        &self,
+        step: &mut wgpu::CommandEncoder,
+        tables: &Tables<'_>,
+        timeline: Option<&Timeline>,
+    ) -> u64 {
+        self.copy_piece_timed(step, tables, timeline, 0)
+    }
+
+    /// Copy each piece after the first in a submit of its own, so that the host can read a
+    /// piece while the device copies the next ([`Self::read_pieces`]); the submits in piece
+    /// order, and the bytes they copy. With `timeline`, a timestamp follows each copy and the
+    /// last submit resolves them.
+    ///
+    /// A driver may hold a submit until the one before it has finished (lavapipe does, in
+    /// `vkQueueSubmit`: wgpu chains its submits with semaphores), so the caller makes these
+    /// submits after the host's work that overlaps the step's passes, not before it.
+    pub(crate) fn submit_other_pieces(
         &self,
         dev: &GpuDevice,
-        step: wgpu::CommandEncoder,
         tables: &Tables<'_>,
         timeline: Option<&Timeline>,
     ) -> (Vec<wgpu::SubmissionIndex>, u64) {
         let mut submits = Vec::with_capacity(self.pieces.len());
         let mut bytes = 0;
-        let mut step = Some(step);
-        for k in 0..self.pieces.len() {
-            let mut enc = step.take().unwrap_or_else(|| {
-                dev.device
-                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                        label: Some("step readback piece"),
-                    })
-            });
-            bytes += self.copy_piece(&mut enc, tables, k);
-            if let Some(t) = timeline {
-                t.after_copy(&mut enc, k);
-                if k + 1 == self.pieces.len() {
-                    t.resolve(&mut enc);
-                }
-            }
+        for k in 1..self.pieces.len() {
+            let mut enc = dev
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("step readback piece"),
+                });
+            bytes += self.copy_piece_timed(&mut enc, tables, timeline, k);
             submits.push(dev.queue.submit([enc.finish()]));
         }
         (submits, bytes)
     }
 
-    /// Read each piece into the per-step columns of `out` as soon as its submit (`submits`, from
-    /// [`Self::submit_with_pieces`]) has finished, long stretches on every thread of `pool`; the
+    /// Copy piece `k` into its buffer in `enc`, with its timestamp and, for the last piece, the
+    /// timestamps' resolve; the bytes copied.
+    fn copy_piece_timed(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        tables: &Tables<'_>,
+        timeline: Option<&Timeline>,
+        k: usize,
+    ) -> u64 {
+        let bytes = self.copy_piece(enc, tables, k);
+        if let Some(t) = timeline {
+            t.after_copy(enc, k);
+            if k + 1 == self.pieces.len() {
+                t.resolve(enc);
+            }
+        }
+        bytes
+    }
+
+    /// Read each piece into the per-step columns of `out` as soon as its submit (`submits`: the
+    /// step's, then [`Self::submit_other_pieces`]') has finished, long stretches on every thread of `pool`; the
     /// seconds spent copying.
     pub(crate) fn read_pieces(
         &self,

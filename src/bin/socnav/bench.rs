@@ -20,12 +20,10 @@ use crate::run::make_env;
 const WARMUP_STEPS: usize = 50;
 
 pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
-    if (a.lane_paths.is_some() || !a.leave_out.is_empty())
-        && a.backend != crate::args::BackendChoice::Gpu
-    {
+    if chosen_device(a) && a.backend != crate::args::BackendChoice::Gpu {
         return Err(format!(
-            "--lane-paths and --leave-out change the GPU backend's shaders: give --backend gpu \
-             (not {:?})",
+            "--lane-paths, --leave-out and --readback-piece-bytes change the GPU backend: give \
+             --backend gpu (not {:?})",
             a.backend
         )
         .into());
@@ -129,7 +127,7 @@ fn warmed_up(
     n: usize,
     seed: u64,
 ) -> Result<(socnav::BatchEnv, Vec<f32>), socnav::SimError> {
-    let mut env = if a.lane_paths.is_some() || !a.leave_out.is_empty() {
+    let mut env = if chosen_device(a) {
         on_chosen_device(config, n, a)?
     } else {
         make_env(config.clone(), n, 0, a.backend, a.threads)?
@@ -143,9 +141,15 @@ fn warmed_up(
     Ok((env, actions))
 }
 
+/// Whether the arguments change the GPU device's settings (so the batch is made on a device of
+/// [`on_chosen_device`]'s).
+fn chosen_device(a: &BenchArgs) -> bool {
+    a.lane_paths.is_some() || !a.leave_out.is_empty() || a.readback_piece_bytes.is_some()
+}
+
 /// A batch of `n` environments of `config` on the GPU backend with the paths of a software adapter
-/// that `--lane-paths` names (every one without a name) and the functions of `--leave-out`
-/// returning at once.
+/// that `--lane-paths` names (every one without a name), the functions of `--leave-out`
+/// returning at once and the readback pieces of `--readback-piece-bytes`.
 #[cfg(feature = "gpu")]
 fn on_chosen_device(
     config: &Config,
@@ -170,6 +174,9 @@ fn on_chosen_device(
         }
     }
     dev.leave_out.clone_from(&a.leave_out);
+    if let Some(bytes) = a.readback_piece_bytes {
+        dev.readback_piece_bytes = bytes;
+    }
     let options = socnav::EnvOptions {
         n_envs: n,
         threads: a.threads,
@@ -185,7 +192,9 @@ fn on_chosen_device(
     _: &BenchArgs,
 ) -> Result<socnav::BatchEnv, socnav::SimError> {
     Err(socnav::SimError::BackendUnavailable(
-        "--lane-paths and --leave-out need the GPU backend, and this build has none".into(),
+"--lane-paths, --leave-out and --readback-piece-bytes need the GPU backend, and this build \
+         has none"
+            .into(),
     ))
 }
 

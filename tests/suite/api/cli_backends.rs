@@ -90,8 +90,9 @@ fn a_closed_pipe_ends_the_tool_quietly() {
 }
 
 /// `socnav bench --lane-paths` takes a software adapter's paths on the GPU backend (every one, or
-/// those named) and says so in its device line; without `--backend gpu` it is refused with an
-/// error naming the backend given, and a path it does not know with one naming it.
+/// those named) and `--readback-piece-bytes` the readback pieces given, and the device line says
+/// so; without `--backend gpu` either is refused with an error naming the backend given, and a
+/// path it does not know with one naming it.
 #[test]
 fn bench_lane_paths_names_the_paths_it_took() {
     let bench = |args: &[&str]| {
@@ -117,6 +118,16 @@ fn bench_lane_paths_names_the_paths_it_took() {
         why.contains("--lane-paths") && why.contains("Cpu"),
         "unclear refusal: {why}"
     );
+    let refused = bench(&["--readback-piece-bytes", "64"]);
+    assert!(
+        !refused.status.success(),
+        "--readback-piece-bytes on auto ran"
+    );
+    let why = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        why.contains("--readback-piece-bytes") && why.contains("Auto"),
+        "unclear refusal: {why}"
+    );
     let unknown = bench(&["--lane-paths", "records,walls", "--backend", "gpu"]);
     assert!(!unknown.status.success(), "--lane-paths walls ran");
     let why = String::from_utf8_lossy(&unknown.stderr);
@@ -134,10 +145,12 @@ fn bench_lane_paths_names_the_paths_it_took() {
         let report: Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
         report["device"].as_str().expect("a device line").to_owned()
     };
-    // exp1's rows have entity records, so the line says where they are written.
-    let device = device_line(&["records"]);
+    // exp1's rows have entity records, so the line says where they are written. Three
+    // environments' per-step outputs (about 8 KB) in pieces of 64 bytes: the most pieces, four.
+    let device = device_line(&["records", "--readback-piece-bytes", "64"]);
     assert!(
-        device.contains("entity records in the observing lane"),
+        device.contains("entity records in the observing lane")
+            && device.contains("read back in 4 pieces"),
         "{device}"
     );
     let device = device_line(&[]);
@@ -145,7 +158,8 @@ fn bench_lane_paths_names_the_paths_it_took() {
         device.contains("observations written in place")
             && device.contains("entity records in the observing lane")
             && device.contains("resets on one lane each")
-            && device.contains("obstacle rebuilds over the scratch buffer"),
+            && device.contains("obstacle rebuilds over the scratch buffer")
+            && device.contains("read back in one piece"),
         "{device}"
     );
 }
