@@ -890,11 +890,6 @@ impl GpuStages {
             self.step_read.whole_table_next = true;
             return self.dev.take_errors();
         };
-        let tables = readback::Tables {
-            f32s: &self.outputs.f32s,
-            u32s: &self.outputs.u32s,
-            batch: &self.batch,
-        };
         let f_words = self.outputs.packed_f32.len();
         let table_bytes = if selective {
             self.step_read.copy_rows(&mut enc, &self.step_readback)
@@ -923,6 +918,7 @@ impl GpuStages {
         let timeline = self.timeline.as_ref().filter(|_| timed);
         let mut piece_bytes = 0;
         if selective {
+            let tables = self.output_tables();
             piece_bytes = self.step_read.copy_first_piece(&mut enc, &tables, timeline);
         } else if let Some(t) = timeline {
             t.after_copy(&mut enc, 0);
@@ -935,11 +931,7 @@ impl GpuStages {
         while_device_works(self);
         let host_work_s = working.elapsed().as_secs_f64();
         if selective {
-            let tables = readback::Tables {
-                f32s: &self.outputs.f32s,
-                u32s: &self.outputs.u32s,
-                batch: &self.batch,
-            };
+            let tables = self.output_tables();
             let timeline = self.timeline.as_ref().filter(|_| timed);
             let (others, bytes) = self
                 .step_read
@@ -1100,6 +1092,15 @@ impl GpuStages {
             pass.dispatch_workgroups(workgroups, self.obs_row_tiles, 1);
         }
         Ok(false)
+    }
+
+    /// The output tables and the batch's layout, as the readback copies from them.
+    fn output_tables(&self) -> readback::Tables<'_> {
+        readback::Tables {
+            f32s: &self.outputs.f32s,
+            u32s: &self.outputs.u32s,
+            batch: &self.batch,
+        }
     }
 
     /// What every submit of stages starts with: the pool rows staged since the last one copied
