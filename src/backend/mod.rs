@@ -136,7 +136,9 @@ pub struct HostPath {
     /// work meanwhile (`refill_ahead_s`).
     pub wait_s: f64,
     /// Of `wait_s`, the seconds recording and submitting the work (the step's passes and the
-    /// readback's copies), before the device can start.
+    /// readback's copies): the step's submit before the rows ahead, the readback's other pieces
+    /// after them. Where a driver holds a submit until the one before it has finished (lavapipe
+    /// does), this includes the rest of the step's passes.
     pub submit_s: f64,
     /// Seconds copying the mapped readback into the host's outputs.
     pub copy_s: f64,
