@@ -8,8 +8,8 @@ use std::mem::MaybeUninit;
 ///
 /// The items past `len` are left uninitialised: a new list writes nothing, and moving one copies
 /// nothing the compiler must keep. Lists sized for every config are large (a scenario's spawn
-/// list is about 22 KB), and zeroing and then moving each new one was a fifth of a reset's
-/// instructions.
+/// list is about 22 KB), and zeroing and then moving each new one was a fifth of the
+/// instructions of a reset-pool row (a reset and its first observation).
 #[derive(Clone, Copy)]
 pub struct Fixed<T: Copy, const N: usize> {
     /// Invariant: `items[..len]` are initialised (written by `push`, moved by `remove`).

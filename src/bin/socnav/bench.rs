@@ -192,8 +192,8 @@ fn on_chosen_device(
     _: &BenchArgs,
 ) -> Result<socnav::BatchEnv, socnav::SimError> {
     Err(socnav::SimError::BackendUnavailable(
-"--lane-paths, --leave-out and --readback-piece-bytes need the GPU backend, and this build \
-         has none"
+        "--lane-paths, --leave-out and --readback-piece-bytes need the GPU backend, and this \
+         build has none"
             .into(),
     ))
 }
