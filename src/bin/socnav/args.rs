@@ -208,9 +208,10 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',')]
     pub leave_out: Vec<String>,
     /// GPU backend only: bytes of per-step outputs per readback piece (default 4 MiB), each
-    /// piece a submit and a map of its own, at most four a step; a large value (1e12) reads
-    /// every step in one piece, so that a run with and one without say what the pieces cost
-    /// (the submits and maps) against what they overlap (the host's copy with the DMA).
+    /// piece a submit and a map of its own, at most four a step; a value above a step's bytes
+    /// (1000000000000) reads every step in one piece, so that a run with and one without say
+    /// what the pieces cost (the submits and maps) against what they overlap (the host's copy
+    /// with the DMA).
     #[arg(long)]
     pub readback_piece_bytes: Option<u64>,
     /// Print one JSON object on stdout instead of the table.
