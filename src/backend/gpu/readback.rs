@@ -7,8 +7,10 @@
 //! also runs the finished-rows pass ([`wgsl::finished_rows_shader`]), which packs the finished
 //! environments' rows behind a counter, and copies into the mapped readback buffer the counter
 //! and the first [`StepReadback::rows_hint`] rows, and the per-step columns into up to
-//! [`MOST_PIECES`] buffers of their own, a submit each after the step's: while the host copies
-//! one piece into its outputs, the device copies the next to host memory. When more environments
+//! [`MOST_PIECES`] buffers of their own, the first in the step's submit and each other in a submit
+//! of its own after the host's work that overlaps the passes (a driver may hold a submit until
+//! the one before it has finished): while the host copies one piece into its outputs, the device
+//! copies the next to host memory. When more environments
 //! finished than that, a second copy fetches the rest and the hint grows; the hint follows twice
 //! the most environments that finished in recent steps. Rows come in the order the device's
 //! atomic counter gave them; each carries its environment, where the host writes it, so the

@@ -1,12 +1,13 @@
-//! A delivered step on the device's clock ([`Timeline`]): GPU timestamps at the start of the
-//! step's commands, at the start and the end of its compute pass, and after each of its readback
-//! copies. The host's time from the submit to its outputs filled (`HostPath`'s `wait_s`,
-//! `refill_ahead_s` and `copy_s`, which run one after the other) then splits into the device's
-//! part: the copies recorded before the passes (the reset pool's new rows, the queue counters),
-//! the passes, and the readback's copies with any idle time between their submits; and what the
-//! device's part does not explain: recording and submitting, waking up and mapping, and the copy
-//! of the last piece. `socnav bench --backend gpu` turns it on for a short run of its own
-//! (`Backend::set_step_timeline`); off, a step records no timestamps.
+//! A delivered step on the device's clock ([`Timeline`]): GPU timestamps at the start of the step's
+//! commands, at the start and the end of its compute pass, and after each of its readback copies.
+//! The host's time from the submit to its outputs filled (`HostPath`'s `wait_s`, `refill_ahead_s`
+//! and `copy_s`, which run one after the other) then splits into the device's part: the copies
+//! recorded before the passes (the reset pool's new rows, the queue counters), the passes, and the
+//! readback's copies with any idle time between their submits (the other pieces are submitted after
+//! the host's rows ahead, so where those outlast the passes the device's wait for them counts
+//! here); and what the device's part does not explain: recording and submitting, waking up and
+//! mapping, and the copy of the last piece. `socnav bench --backend gpu` turns it on for a short
+//! run of its own (`Backend::set_step_timeline`); off, a step records no timestamps.
 
 use crate::backend::HostPath;
 use crate::error::SimError;
