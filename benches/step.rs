@@ -149,9 +149,11 @@ fn bench_configs(
 /// host makes while the device runs a step): 512 rows of exp2 and exp3, on one thread and on
 /// every core, in rows per second. On the sixth H100 run's host a row cost about 68 µs of a core
 /// inside the step, against about 12 µs on one core of the 2-vCPU machine: this bench says
-/// whether that is the core or the threads.
+/// whether that is the core or the threads. `deferred` rows leave their ORCA obstacles to the
+/// device (`GpuDevice::obstacles_after_resets`): what the host saves.
 fn pool_rows(c: &mut Criterion) {
     use socnav::backend::reset_pool::{Scratches, row_words, write_rows};
+    use socnav::systems::reset::ObstacleBuild;
     const ROWS: usize = 512;
     let cores = std::thread::available_parallelism().map_or(1, usize::from);
     for name in ["exp2", "exp3"] {
@@ -172,13 +174,17 @@ fn pool_rows(c: &mut Criterion) {
             .warm_up_time(Duration::from_secs(1))
             .sample_size(20)
             .throughput(Throughput::Elements(ROWS as u64));
-        for threads in [1, cores] {
+        let ways = [
+            (ObstacleBuild::Now, "threads"),
+            (ObstacleBuild::Deferred, "deferred"),
+        ];
+        for ((obstacles, way), threads) in ways.into_iter().flat_map(|w| [(w, 1), (w, cores)]) {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .expect("a thread pool");
-            let scratches = Scratches::new(caps, layout, Some(&pool));
-            group.bench_function(BenchmarkId::new("threads", threads), |b| {
+            let scratches = Scratches::new(caps, layout, obstacles, Some(&pool));
+            group.bench_function(BenchmarkId::new(way, threads), |b| {
                 b.iter(|| {
                     // New seeds each time: new scenarios, as the step's rows are.
                     for &e in &envs {

@@ -9,6 +9,11 @@
 //! per-environment column (`tests/suite/whole_step/reset_pool.rs` checks a row against an in-place
 //! reset of a rolled-out environment for every config). Row layout:
 //! [`crate::backend::wgsl::pool_row_words`].
+//!
+//! A row may leave its ORCA obstacles to the device ([`ObstacleBuild::Deferred`], chosen per
+//! [`RowScratch`]): dirty and empty, they cost the host nothing (their build is about two thirds
+//! of a row's instructions), and the pass that copies the row rebuilds them after the copy
+//! (`backend::wgsl::RESET_REBUILD_PASSES`), which gives the bits an in-place reset builds.
 
 use rayon::prelude::*;
 
@@ -19,6 +24,7 @@ use crate::params::StepParams;
 use crate::pipeline::Batch;
 use crate::spec::ObsLayout;
 use crate::state::{BatchState, Caps};
+use crate::systems::reset::ObstacleBuild;
 
 /// A one-environment table to generate rows in, with the buffers its packing reuses.
 #[derive(Debug)]
@@ -30,17 +36,24 @@ pub struct RowScratch {
     /// The first observation without its one-hot floats, as the device keeps it
     /// ([`crate::backend::obs_payload`]).
     payload: Vec<u32>,
+    /// Whether the rows hold their ORCA obstacles built, or leave them to the device.
+    obstacles: ObstacleBuild,
 }
 
 impl RowScratch {
-    /// Scratch for environments of capacities `caps` and observation layout `layout`.
-    pub fn new(caps: Caps, layout: ObsLayout) -> Self {
+    /// Scratch for environments of capacities `caps` and observation layout `layout`, for rows
+    /// whose ORCA obstacles are built as `obstacles` says: [`ObstacleBuild::Now`], the state
+    /// exactly as the CPU backend's reset leaves it, or [`ObstacleBuild::Deferred`], its
+    /// obstacles empty and dirty for the device to rebuild after it copies the row
+    /// (`GpuDevice::obstacles_after_resets`).
+    pub fn new(caps: Caps, layout: ObsLayout, obstacles: ObstacleBuild) -> Self {
         Self {
             state: BatchState::new(1, caps),
             out: Outputs::new(1, layout),
             f32s: Vec::new(),
             u32s: Vec::new(),
             payload: vec![0; layout.payload_dim()],
+            obstacles,
         }
     }
 }
@@ -54,8 +67,9 @@ pub fn row_words(caps: Caps, layout: ObsLayout) -> usize {
 
 /// Write into `row` the pool row of environment `env` (batch index) starting the episode of seed
 /// `seed` with episode counter `episode` (the environment's before the reset): the state after
-/// `reset_and_observe`, then its first observation (without its one-hot floats, as the device keeps
-/// it: [`obs_payload`]). `row` must hold [`row_words`] words.
+/// `reset_and_observe` (its ORCA obstacles built as `scratch` says), then its first observation
+/// (without its one-hot floats, as the device keeps it: [`obs_payload`]). `row` must hold
+/// [`row_words`] words.
 ///
 /// # Errors
 /// The scenario error of an unsatisfiable configuration, as the CPU backend's reset gives it.
@@ -73,6 +87,7 @@ pub fn write_row(
         f32s,
         u32s,
         payload,
+        obstacles,
     } = scratch;
     state.set_next_seed(0, seed);
     state.episode[0] = episode;
@@ -87,7 +102,7 @@ pub fn write_row(
         sngnn: None,
         error: None,
     };
-    crate::systems::reset::reset_and_observe(p, &mut b, 0);
+    crate::systems::reset::reset_and_observe_building(p, &mut b, 0, *obstacles);
     if let Some(err) = b.error {
         return Err(err);
     }
@@ -126,12 +141,18 @@ pub fn write_row(
 pub struct Scratches(Vec<std::sync::Mutex<RowScratch>>);
 
 impl Scratches {
-    /// Scratch tables for `pool`'s threads (or the caller alone).
-    pub fn new(caps: Caps, layout: ObsLayout, pool: Option<&rayon::ThreadPool>) -> Self {
+    /// Scratch tables for `pool`'s threads (or the caller alone), for rows whose obstacles are
+    /// built as `obstacles` says ([`RowScratch::new`]).
+    pub fn new(
+        caps: Caps,
+        layout: ObsLayout,
+        obstacles: ObstacleBuild,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Self {
         let n = pool.map_or(0, rayon::ThreadPool::current_num_threads) + 1;
         Self(
             (0..n)
-                .map(|_| std::sync::Mutex::new(RowScratch::new(caps, layout)))
+                .map(|_| std::sync::Mutex::new(RowScratch::new(caps, layout, obstacles)))
                 .collect(),
         )
     }

@@ -187,15 +187,26 @@ pub const REBUILD_ENTRY: &str = "rebuild";
 /// rebuilds; lavapipe rebuilds per lane, and tests that force this path keep to small batches.)
 pub const REBUILD_IN_WORKGROUPS_ENTRY: &str = "rebuild_in_workgroups";
 
-/// The [`REBUILD_PASSES`] pass `pass`'s two rebuild entry points, over its queue.
-fn rebuild_entries(pass: &str) -> String {
-    let queue = format!("RARE_{}", pass.to_uppercase());
+/// The passes that reset environments from the reset pool: where the pool's rows leave their ORCA
+/// obstacles to the device (`GpuDevice::obstacles_after_resets`,
+/// `systems::reset::ObstacleBuild::Deferred`), each is assembled with the obstacle library and
+/// the two rebuild entry points of a [`REBUILD_PASSES`] pass ([`REBUILD_ENTRY`],
+/// [`REBUILD_IN_WORKGROUPS_ENTRY`]) over the environments it reset
+/// ([`assemble_pass_rebuilding_resets`]): the queued pool rows of `begin_step` and `autoreset`,
+/// the masked environments of the reset pass. Nothing reads the `ov_*` columns between a reset and
+/// the rebuild after it.
+pub const RESET_REBUILD_PASSES: [&str; 3] = ["begin_step", "autoreset", RESET_PASS];
+
+/// A pass's two rebuild entry points, `rebuilds` (a WGSL function of `k`, the entry's index)
+/// rebuilding the obstacles of its `k`th entry and saying whether it had one; `what` names the
+/// entries in the comment.
+fn rebuild_entries(what: &str, rebuilds: &str) -> String {
     format!(
-        "\n// The ORCA obstacle rebuilds of the environments `main` regrouped (generated: \
-         src/backend/wgsl.rs, `rebuild_entries`).\n\
+        "\n// The ORCA obstacle rebuilds of {what} (generated: src/backend/wgsl.rs, \
+         `rebuild_entries`).\n\
          @compute @workgroup_size(WORKGROUP_SIZE)\n\
          fn {REBUILD_ENTRY}(@builtin(global_invocation_id) gid: vec3<u32>) {{\n\
-         \x20   _ = regroup_rebuild_queued({queue}, gid.x);\n}}\n\
+         \x20   _ = {rebuilds}(gid.x);\n}}\n\
          @compute @workgroup_size(WORKGROUP_SIZE)\n\
          fn {REBUILD_IN_WORKGROUPS_ENTRY}(\n\
          \x20   @builtin(workgroup_id) wid: vec3<u32>,\n\
@@ -203,8 +214,43 @@ fn rebuild_entries(pass: &str) -> String {
          \x20   @builtin(local_invocation_index) lane: u32,\n) {{\n\
          \x20   if (lane == 0u) {{\n\
          \x20       let teams = groups.x * groups.y;\n\
-         \x20       for (var k = wid.x + wid.y * groups.x; regroup_rebuild_queued({queue}, k); k += teams) {{}}\n\
+         \x20       for (var k = wid.x + wid.y * groups.x; {rebuilds}(k); k += teams) {{}}\n\
          \x20   }}\n}}\n"
+    )
+}
+
+/// The [`REBUILD_PASSES`] pass `pass`'s two rebuild entry points, over its queue.
+fn regroup_rebuild_entries(pass: &str) -> String {
+    let queue = format!("RARE_{}", pass.to_uppercase());
+    format!(
+        "\nfn rebuild_entry(k: u32) -> bool {{\n    \
+         return regroup_rebuild_queued({queue}, k);\n}}\n{}",
+        rebuild_entries("the environments `main` regrouped", "rebuild_entry")
+    )
+}
+
+/// The [`RESET_REBUILD_PASSES`] pass `pass`'s two rebuild entry points, over the environments it
+/// reset: the pool rows in its queue, or the reset pass's mask (the first action float non-zero).
+fn reset_rebuild_entries(pass: &str) -> String {
+    let entry = if pass == RESET_PASS {
+        "    if (k >= batch.n_envs) {\n        return false;\n    }\n\
+         \x20   if (actions[3u * k] != 0.0) {\n        orca_obstacles_rebuild_if_dirty(k);\n    }\n\
+         \x20   return true;\n"
+            .to_owned()
+    } else {
+        format!(
+            "    let row = rare_env(RARE_{}, k);\n\
+             \x20   if (row == NONE) {{\n        return false;\n    }}\n\
+             \x20   orca_obstacles_rebuild_if_dirty(pool_env_of(row));\n    return true;\n",
+            pass.to_uppercase()
+        )
+    };
+    format!(
+        "\nfn rebuild_entry(k: u32) -> bool {{\n{entry}}}\n{}",
+        rebuild_entries(
+            "the environments `main` reset from rows that leave them to the device",
+            "rebuild_entry"
+        )
     )
 }
 
@@ -423,6 +469,19 @@ pub fn resolve(path: &str) -> Result<Vec<&'static str>, String> {
     }
     let mut order = Vec::new();
     visit(path, &mut order, &mut Vec::new())?;
+    Ok(order)
+}
+
+/// The files `paths` need, each once, in the order of [`resolve`] over each path in turn.
+fn resolve_each(paths: &[String]) -> Result<Vec<&'static str>, String> {
+    let mut order: Vec<&'static str> = Vec::new();
+    for path in paths {
+        for f in resolve(path)? {
+            if !order.contains(&f) {
+                order.push(f);
+            }
+        }
+    }
     Ok(order)
 }
 
@@ -1360,19 +1419,27 @@ pub fn assemble_pass(pass: &str, prelude: &str) -> Result<String, String> {
     let Some((_, members)) = FUSED_PASSES.iter().find(|(p, _)| *p == pass) else {
         let src = assemble(&format!("{pass}.wgsl"), prelude)?;
         if REBUILD_PASSES.contains(&pass) {
-            return Ok(src + &rebuild_entries(pass));
+            return Ok(src + &regroup_rebuild_entries(pass));
         }
         return Ok(src);
     };
-    let mut order: Vec<&'static str> = Vec::new();
-    for file in pass_files(pass) {
-        for f in resolve(&file)? {
-            if !order.contains(&f) {
-                order.push(f);
-            }
-        }
-    }
+    let order = resolve_each(&pass_files(pass))?;
     let body = concatenate(String::new(), &order) + &fused_entry(pass, members);
+    Ok(format!("{}{body}", used_size_classes_only(prelude, &body)))
+}
+
+/// [`assemble_pass`] of a [`RESET_REBUILD_PASSES`] pass for a batch whose reset-pool rows leave
+/// their ORCA obstacles to the device: the pass's files after the obstacle library's, then the
+/// rebuild entry points over the environments it reset. An error for any other pass.
+pub fn assemble_pass_rebuilding_resets(pass: &str, prelude: &str) -> Result<String, String> {
+    if !RESET_REBUILD_PASSES.contains(&pass) {
+        return Err(format!("pass {pass:?} resets no environment from the pool"));
+    }
+    let files = [
+        "common/orca_obstacles.wgsl".to_owned(),
+        format!("{pass}.wgsl"),
+    ];
+    let body = concatenate(String::new(), &resolve_each(&files)?) + &reset_rebuild_entries(pass);
     Ok(format!("{}{body}", used_size_classes_only(prelude, &body)))
 }
 

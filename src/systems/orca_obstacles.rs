@@ -197,8 +197,31 @@ fn store(s: &mut StateChunk, e: usize, set: &ObstacleSet) {
     let n = set.len();
     // A smaller set than before (a laptop user stood up): its old tail becomes unused slots,
     // which hold zeros (crate::state).
+    zero_from(s, e, n);
+    s.ov_x[b..b + n].copy_from_slice(v.x);
+    s.ov_y[b..b + n].copy_from_slice(v.y);
+    s.ov_dir_x[b..b + n].copy_from_slice(v.dir_x);
+    s.ov_dir_y[b..b + n].copy_from_slice(v.dir_y);
+    s.ov_next[b..b + n].copy_from_slice(v.next);
+    s.ov_prev[b..b + n].copy_from_slice(v.prev);
+    s.ov_convex[b..b + n].copy_from_slice(v.convex);
+    s.n_obstacle_vertices[e] = n as u32;
+}
+
+/// Empty the processed obstacles of environment `e`: no vertices, every slot zero, as a fresh
+/// table holds them (a reset that leaves the build to later: `reset::ObstacleBuild::Deferred`).
+pub fn clear(s: &mut StateChunk, e: usize) {
+    zero_from(s, e, 0);
+    s.n_obstacle_vertices[e] = 0;
+}
+
+/// Zero environment `e`'s obstacle slots from `n` to its current count (unused slots hold zeros:
+/// crate::state).
+fn zero_from(s: &mut StateChunk, e: usize, n: usize) {
+    let cap = s.strides.obstacle_vertices;
     let old = (s.n_obstacle_vertices[e] as usize).min(cap);
     if old > n {
+        let b = e * cap;
         let tail = b + n..b + old;
         s.ov_x[tail.clone()].fill(0.0);
         s.ov_y[tail.clone()].fill(0.0);
@@ -208,12 +231,4 @@ fn store(s: &mut StateChunk, e: usize, set: &ObstacleSet) {
         s.ov_prev[tail.clone()].fill(0);
         s.ov_convex[tail].fill(0);
     }
-    s.ov_x[b..b + n].copy_from_slice(v.x);
-    s.ov_y[b..b + n].copy_from_slice(v.y);
-    s.ov_dir_x[b..b + n].copy_from_slice(v.dir_x);
-    s.ov_dir_y[b..b + n].copy_from_slice(v.dir_y);
-    s.ov_next[b..b + n].copy_from_slice(v.next);
-    s.ov_prev[b..b + n].copy_from_slice(v.prev);
-    s.ov_convex[b..b + n].copy_from_slice(v.convex);
-    s.n_obstacle_vertices[e] = n as u32;
 }

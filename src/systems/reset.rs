@@ -8,10 +8,26 @@ use crate::state::StateChunk;
 
 use super::Batch;
 
+/// When a reset builds the environment's ORCA obstacles (RVO2's `processObstacles` of its
+/// polygons, the `ov_*` columns).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ObstacleBuild {
+    /// In the reset, as every reset of the CPU backend does.
+    #[default]
+    Now,
+    /// Later, by whoever copies the state: the reset leaves `obstacles_dirty` set and the
+    /// obstacles empty (`n_obstacle_vertices` 0, every `ov_*` slot zero), so that a rebuild
+    /// ([`super::orca_obstacles::rebuild_if_dirty`], or its WGSL twin after the GPU backend copies
+    /// a reset-pool row) gives the bits [`ObstacleBuild::Now`] gives. The GPU backend's rows
+    /// leave the build to the device where it asks for it (`GpuDevice::obstacles_after_resets`):
+    /// the build is about two thirds of a row's instructions on the host.
+    Deferred,
+}
+
 /// Initialise everything of environment `e` that is not drawn by the scenario: counters, robot
 /// command, shadow robot, metric accumulators, reward memory, observation caches, the SNGNN frame
-/// history, ORCA obstacles.
-pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize) {
+/// history, ORCA obstacles (built now or left to rebuild: `obstacles`).
+pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize, obstacles: ObstacleBuild) {
     s.tick[e] = 0;
     s.done[e] = 0;
     s.pending_reset[e] = 0;
@@ -56,7 +72,10 @@ pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize) {
     super::regroup::number_lists(s, e);
     crate::sngnn::frame::start_episode(s, e);
     s.obstacles_dirty[e] = 1;
-    super::orca_obstacles::rebuild_if_dirty(p, s, e);
+    match obstacles {
+        ObstacleBuild::Now => super::orca_obstacles::rebuild_if_dirty(p, s, e),
+        ObstacleBuild::Deferred => super::orca_obstacles::clear(s, e),
+    }
 }
 
 /// Metric accumulators of a new episode (spec 8.2): minima start at +inf, the rest at 0.
@@ -94,22 +113,38 @@ pub fn init_episode_sums(s: &mut StateChunk, e: usize) {
 
 /// Reset environment `e` and write its first observation; reward 0, flags cleared, info zeroed.
 pub fn reset_and_observe(p: &StepParams, b: &mut Batch<'_>, e: usize) {
+    reset_and_observe_building(p, b, e, ObstacleBuild::Now);
+}
+
+/// [`reset_and_observe`], its ORCA obstacles built as `obstacles` says (the observation does not
+/// read them).
+pub fn reset_and_observe_building(
+    p: &StepParams,
+    b: &mut Batch<'_>,
+    e: usize,
+    obstacles: ObstacleBuild,
+) {
     b.o.reward[e] = 0.0;
     b.o.terminated[e] = 0;
     b.o.truncated[e] = 0;
-    reset_and_observe_keep_step_outputs(p, b, e);
+    reset_building(p, b, e, obstacles);
 }
 
 /// Reset environment `e` and write its first observation and a zeroed info, keeping this step's
 /// reward and flags (SAME_STEP autoreset returns those of the finishing step).
 pub fn reset_and_observe_keep_step_outputs(p: &StepParams, b: &mut Batch<'_>, e: usize) {
+    reset_building(p, b, e, ObstacleBuild::Now);
+}
+
+/// [`reset_and_observe_keep_step_outputs`], its ORCA obstacles built as `obstacles` says.
+fn reset_building(p: &StepParams, b: &mut Batch<'_>, e: usize, obstacles: ObstacleBuild) {
     let env_index = b.env_index(e);
     if let Err(err) = scenario::reset_env(p, &mut b.s, e, env_index) {
         b.s.done[e] = 1;
         b.error.get_or_insert(err);
         return;
     }
-    init_episode(p, &mut b.s, e);
+    init_episode(p, &mut b.s, e, obstacles);
     let info = b.o.strides.info();
     b.o.info[e * info..(e + 1) * info].fill(0.0);
     super::observation::write_observation(p, &mut b.s, &mut b.o, e);

@@ -167,7 +167,7 @@ pub fn next_pool_rows(
     let envs: Vec<usize> = (0..state.n_envs).collect();
     let words = gpu.pool_row_words();
     let mut rows = vec![0u32; envs.len() * words];
-    let scratches = reset_pool::Scratches::new(state.strides, layout, None);
+    let scratches = reset_pool::Scratches::new(state.strides, layout, gpu.pool_obstacles(), None);
     let seeds: Vec<u64> = envs.iter().map(|&e| state.next_seed(e)).collect();
     let failed = reset_pool::write_rows(
         p,
@@ -211,7 +211,9 @@ pub fn check_parity_mode(
 /// The shared device with the other observation paths than its defaults
 /// (`GpuDevice::stage_observations`, `GpuDevice::records_in_lanes`), the other ways of
 /// running the step's resets (`GpuDevice::resets_in_workgroups`) and its obstacle rebuilds
-/// (`GpuDevice::obstacles_in_workgroups`), and every step's readback in the most pieces
+/// (`GpuDevice::obstacles_in_workgroups`), the other place a reset's obstacles are built (the
+/// host or the device: `GpuDevice::obstacles_after_resets`), and every step's readback in the
+/// most pieces
 /// (`GpuDevice::readback_piece_bytes` of 1 KiB), so that tests cover the paths a test-sized batch
 /// on this device would not take.
 pub fn device_other_paths() -> Option<GpuDevice> {
@@ -220,19 +222,22 @@ pub fn device_other_paths() -> Option<GpuDevice> {
     dev.resets_in_workgroups = !dev.resets_in_workgroups;
     dev.obstacles_in_workgroups = !dev.obstacles_in_workgroups;
     dev.records_in_lanes = !dev.records_in_lanes;
+    dev.obstacles_after_resets = !dev.obstacles_after_resets;
     dev.readback_piece_bytes = 1 << 10;
     Some(dev)
 }
 
 /// The shared device twice: as it is, and with the other way of running the step's resets
-/// (`GpuDevice::resets_in_workgroups`: one lane each, or a workgroup's lanes); empty without a
-/// device.
+/// (`GpuDevice::resets_in_workgroups`: one lane each, or a workgroup's lanes) and the other place
+/// their obstacles are built (`GpuDevice::obstacles_after_resets`: the host, or the device after
+/// the reset); empty without a device.
 pub fn devices_both_reset_ways() -> Vec<GpuDevice> {
     let Some(dev) = device() else {
         return Vec::new();
     };
     let mut other = dev.clone();
     other.resets_in_workgroups = !dev.resets_in_workgroups;
+    other.obstacles_after_resets = !dev.obstacles_after_resets;
     vec![dev, other]
 }
 

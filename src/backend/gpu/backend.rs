@@ -118,6 +118,8 @@ impl GpuBackend {
         let layout = out.strides.layout;
         let episode = state.episode.clone();
         let row_words = gpu.pool_row_words();
+        let scratches =
+            reset_pool::Scratches::new(caps, layout, gpu.pool_obstacles(), pool.as_ref());
         let next_seed = (0..n).map(|e| state.next_seed(e)).collect();
         Ok(Self {
             params,
@@ -131,7 +133,7 @@ impl GpuBackend {
             next_seed,
             rows: PoolRows::new(n, row_words),
             read_episode: vec![0; n],
-            scratches: reset_pool::Scratches::new(caps, layout, pool.as_ref()),
+            scratches,
             threads,
             pool,
             timing: false,

@@ -190,10 +190,11 @@ fn robust_buffer_access2(_: &wgpu::Device) -> bool {
 
 /// The environment variable that chooses the paths of the devices this process opens: `device`
 /// (the default) takes the adapter's (on a hardware GPU the observation staged through workgroup
-/// memory, each reset on a workgroup's lanes, each obstacle rebuild in workgroup memory and the
-/// observation's entity records a lane each: [`GpuDevice::stage_observations`],
-/// [`GpuDevice::resets_in_workgroups`], [`GpuDevice::obstacles_in_workgroups`],
-/// [`GpuDevice::records_in_lanes`]), `lane` a software adapter's on any adapter: the way
+/// memory, each reset on a workgroup's lanes, each obstacle rebuild in workgroup memory, the
+/// observation's entity records a lane each and the reset's obstacles rebuilt on the device:
+/// [`GpuDevice::stage_observations`], [`GpuDevice::resets_in_workgroups`],
+/// [`GpuDevice::obstacles_in_workgroups`], [`GpuDevice::records_in_lanes`],
+/// [`GpuDevice::obstacles_after_resets`]), `lane` a software adapter's on any adapter: the way
 /// back should a driver refuse a hardware path's pipeline.
 pub const PATHS_VAR: &str = "SOCNAV_GPU_PATHS";
 
@@ -289,6 +290,16 @@ pub struct GpuDevice {
     /// core. Both give the same bits; a clone with the other setting is how a caller (or a test)
     /// chooses.
     pub records_in_lanes: bool,
+    /// Whether the reset pool's rows leave their ORCA obstacles to the device
+    /// (`systems::reset::ObstacleBuild::Deferred`), which rebuilds them after each reset's copy
+    /// in a dispatch of the resetting pass (`backend::wgsl::RESET_REBUILD_PASSES`; in workgroup
+    /// memory where [`GpuDevice::obstacles_in_workgroups`] says so), instead of building them
+    /// on the host into each row: the build is about two thirds of a row's instructions, and the
+    /// host's rows made ahead are what the delivered step waits on once the device's step is
+    /// short. On by default on a hardware GPU; off on a software one, where the device's
+    /// rebuild is a lane's serial work on the same cores. Both give the same bits; a clone with
+    /// the other setting is how a caller (or a test) chooses.
+    pub obstacles_after_resets: bool,
     /// Most workgroups a rebuild dispatch in workgroup memory takes: each workgroup rebuilds the
     /// queued environments its index and every this-many-th after it. A workgroup per environment
     /// of the batch (65,536 of them, each holding 16 KiB of workgroup memory, all but a few
@@ -338,7 +349,7 @@ impl std::fmt::Debug for GpuDevice {
 impl GpuDevice {
     /// This device with the paths a software adapter takes, whatever the adapter: observations
     /// written in place, each reset on one lane, each obstacle rebuild over `scratch`, the entity
-    /// records in the observing lane
+    /// records in the observing lane, each reset's obstacles built on the host
     /// ([`PATHS_VAR`]`=lane`, `socnav bench --lane-paths`).
     #[must_use]
     pub fn with_lane_paths(mut self) -> Self {
@@ -346,6 +357,7 @@ impl GpuDevice {
         self.resets_in_workgroups = false;
         self.obstacles_in_workgroups = false;
         self.records_in_lanes = false;
+        self.obstacles_after_resets = false;
         self
     }
 
@@ -449,6 +461,7 @@ impl GpuDevice {
             resets_in_workgroups: adapter.hardware,
             obstacles_in_workgroups: adapter.hardware,
             records_in_lanes: adapter.hardware,
+            obstacles_after_resets: adapter.hardware,
             own_spirv,
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             rebuild_workgroups: DEFAULT_REBUILD_WORKGROUPS,

@@ -46,6 +46,7 @@ use crate::sngnn::model::Model;
 use crate::sngnn::packed::PackedLayout;
 use crate::sngnn::pieces::Tables;
 use crate::state::BatchState;
+use crate::systems::reset::ObstacleBuild;
 use kit::{
     Binding, CreationScope, Groups, bind_kinds, bytes_of, check_binding, map_and_read,
     map_and_read_after, storage_buffer, uniform_buffer,
@@ -520,6 +521,7 @@ impl GpuStages {
             let ways = Ways {
                 rebuild,
                 records_apart,
+                obstacles_after_resets: dev.obstacles_after_resets,
             };
             let built = build_pass(&dev, stage, pass, &groups, &prelude, ways, &mut left_out)?;
             compiled += built.as_ref().map_or(0, |b| b.1);
@@ -586,8 +588,9 @@ impl GpuStages {
     /// or clamped in the shaders (`spirv::BufferBounds`), or the WGSL as wgpu compiles it; how
     /// the observations are written (`GpuDevice::stage_observations`) and their entity records
     /// (`GpuDevice::records_in_lanes`, where the batch's rows have any), the resets run
-    /// (`GpuDevice::resets_in_workgroups`) and the obstacles are rebuilt
-    /// (`GpuDevice::obstacles_in_workgroups`, where the batch's passes rebuild any).
+    /// (`GpuDevice::resets_in_workgroups`), the obstacles are rebuilt
+    /// (`GpuDevice::obstacles_in_workgroups`, where the batch's passes rebuild any) and a reset's
+    /// obstacles are built (`GpuDevice::obstacles_after_resets`).
     pub fn device_description(&self) -> String {
         let shaders = match (self.dev.own_spirv, self.dev.driver_checks_buffers) {
             (true, true) => {
@@ -628,14 +631,18 @@ impl GpuStages {
         } else {
             "in the observing lane"
         };
+        let reset_obstacles = match self.pool_obstacles() {
+            ObstacleBuild::Now => "built on the host",
+            ObstacleBuild::Deferred => "rebuilt on the device",
+        };
         let pieces = match self.step_read.pieces() {
             1 => "one piece".to_owned(),
             n => format!("{n} pieces"),
         };
         format!(
             "{}; shaders: {shaders}; observations {observations}; entity records {records}; \
-             resets on {resets}; obstacle rebuilds {rebuilds}; per-step outputs read back in \
-             {pieces}{left_out}",
+             resets on {resets}; obstacle rebuilds {rebuilds}; a reset's obstacles \
+             {reset_obstacles}; per-step outputs read back in {pieces}{left_out}",
             self.dev.adapter
         )
     }
@@ -764,6 +771,18 @@ impl GpuStages {
     /// Words of one reset-pool row ([`wgsl::pool_row_words`]).
     pub fn pool_row_words(&self) -> usize {
         self.pool_row_words
+    }
+
+    /// How the rows written into the reset pool must hold their ORCA obstacles: left to the
+    /// device, which rebuilds them after each reset, where the device asks for it
+    /// (`GpuDevice::obstacles_after_resets`), else built
+    /// (`crate::backend::reset_pool::RowScratch::new`).
+    pub fn pool_obstacles(&self) -> ObstacleBuild {
+        if self.dev.obstacles_after_resets {
+            ObstacleBuild::Deferred
+        } else {
+            ObstacleBuild::Now
+        }
     }
 
     /// Write `rows` (whole pool rows) into the reset pool from environment `first_env` on, in the
@@ -1352,11 +1371,13 @@ struct PassPipelines {
     main: wgpu::ComputePipeline,
     records: Option<wgpu::ComputePipeline>,
     rows: Option<wgpu::ComputePipeline>,
-    /// A [`wgsl::REBUILD_PASSES`] pass's rebuild after `main`, and how it runs.
+    /// A [`wgsl::REBUILD_PASSES`] pass's rebuild after `main`, and how it runs; a
+    /// [`wgsl::RESET_REBUILD_PASSES`] pass's where the batch's pool rows leave their obstacles to
+    /// the device.
     rebuild: Option<(wgpu::ComputePipeline, Rebuild)>,
 }
 
-/// How a pass rebuilds the ORCA obstacles of its regrouped environments.
+/// How a pass rebuilds the ORCA obstacles of its regrouped (or reset) environments.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Rebuild {
     /// [`wgsl::REBUILD_ENTRY`]: one queued environment per lane, over `scratch`.
@@ -1367,12 +1388,15 @@ enum Rebuild {
     InWorkgroups,
 }
 
-/// The ways a batch's passes run that choose their pipelines: how they rebuild obstacles, and
-/// whether the entity records of the observation are written apart ([`wgsl::OBS_RECORDS_ENTRY`]).
+/// The ways a batch's passes run that choose their pipelines: how they rebuild obstacles,
+/// whether the entity records of the observation are written apart ([`wgsl::OBS_RECORDS_ENTRY`]),
+/// and whether the passes that reset rebuild the obstacles the pool's rows leave to the device
+/// ([`wgsl::RESET_REBUILD_PASSES`]).
 #[derive(Debug, Clone, Copy)]
 struct Ways {
     rebuild: Rebuild,
     records_apart: bool,
+    obstacles_after_resets: bool,
 }
 
 /// A grid of at least `n` workgroups, and fewer than `n` + rows, in as few rows of at most
@@ -1433,7 +1457,13 @@ fn build_pass(
     } else {
         (prelude.to_owned(), &groups[..1])
     };
-    let mut src = wgsl::assemble_pass(pass, &prelude).map_err(SimError::Usage)?;
+    let rebuilds_resets = ways.obstacles_after_resets && wgsl::RESET_REBUILD_PASSES.contains(&pass);
+    let mut src = if rebuilds_resets {
+        wgsl::assemble_pass_rebuilding_resets(pass, &prelude)
+    } else {
+        wgsl::assemble_pass(pass, &prelude)
+    }
+    .map_err(SimError::Usage)?;
     if !dev.leave_out.is_empty() {
         let (out, found) = wgsl::with_functions_returning_at_once(&src, &dev.leave_out);
         src = out;
@@ -1453,7 +1483,8 @@ fn build_pass(
     let observes = pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE);
     let records = entry(observes && ways.records_apart, wgsl::OBS_RECORDS_ENTRY)?;
     let rows = entry(observes && dev.stage_observations, wgsl::OBS_ROWS_ENTRY)?;
-    let rebuild = match (wgsl::REBUILD_PASSES.contains(&pass), ways.rebuild) {
+    let rebuilds = wgsl::REBUILD_PASSES.contains(&pass) || rebuilds_resets;
+    let rebuild = match (rebuilds, ways.rebuild) {
         (false, _) => None,
         (true, Rebuild::PerLane) => {
             entry(true, wgsl::REBUILD_ENTRY)?.map(|p| (p, Rebuild::PerLane))

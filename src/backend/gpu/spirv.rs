@@ -295,8 +295,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         assert_eq!(without_zero_initialisers(&words, &["Absent"]), words);
     }
 
-    /// Pass `pass` (`wgsl::passes`) as the GPU backend assembles it for a batch of experiment 2.
-    fn exp2_pass(pass: &str) -> String {
+    /// The prelude of a batch of experiment 2.
+    fn exp2_prelude() -> String {
         use crate::backend::wgsl;
         let env = crate::BatchEnv::new(
             crate::Config::from_name_or_path("exp2").unwrap(),
@@ -304,12 +304,16 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         )
         .unwrap();
         let columns = env.state().unwrap().columns();
-        let prelude = wgsl::prelude(
+        wgsl::prelude(
             &columns,
             &env.outputs().columns(),
             &wgsl::SizeClasses::of(&columns),
-        );
-        wgsl::assemble_pass(pass, &prelude).unwrap()
+        )
+    }
+
+    /// Pass `pass` (`wgsl::passes`) as the GPU backend assembles it for a batch of experiment 2.
+    fn exp2_pass(pass: &str) -> String {
+        crate::backend::wgsl::assemble_pass(pass, &exp2_prelude()).unwrap()
     }
 
     #[test]
@@ -340,11 +344,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     #[test]
     fn every_entry_point_of_every_pass_is_written() {
         use crate::backend::wgsl;
-        for file in wgsl::passes() {
-            if wgsl::pass_files(file).iter().any(|f| wgsl::needs_sngnn(f)) {
-                continue;
-            }
-            let source = exp2_pass(file);
+        let passes = wgsl::passes()
+            .into_iter()
+            .filter(|&p| !wgsl::pass_files(p).iter().any(|f| wgsl::needs_sngnn(f)))
+            .map(|p| (p.to_owned(), exp2_pass(p)));
+        // The passes that reset, as a batch whose pool rows leave their obstacles to the device
+        // assembles them.
+        let resets = wgsl::RESET_REBUILD_PASSES.iter().map(|&p| {
+            let source = wgsl::assemble_pass_rebuilding_resets(p, &exp2_prelude()).unwrap();
+            (format!("{p}+rebuild"), source)
+        });
+        for (file, source) in passes.chain(resets) {
             let module = naga::front::wgsl::parse_str(&source).unwrap();
             for entry in &module.entry_points {
                 let words = compute_spirv(&source, &entry.name, BufferBounds::Clamped)

@@ -124,6 +124,9 @@ pub enum LanePath {
     Obstacles,
     /// The observation's entity records in the observing lane, not a lane each.
     Records,
+    /// Each reset's ORCA obstacles built on the host, in its reset-pool row, not rebuilt on the
+    /// device after the reset.
+    ResetObstacles,
 }
 
 /// How actions are chosen.

@@ -169,6 +169,7 @@ fn on_chosen_device(
                     LanePath::Resets => dev.resets_in_workgroups = false,
                     LanePath::Obstacles => dev.obstacles_in_workgroups = false,
                     LanePath::Records => dev.records_in_lanes = false,
+                    LanePath::ResetObstacles => dev.obstacles_after_resets = false,
                 }
             }
         }

@@ -140,8 +140,23 @@ fn validate_pass(pass: &str) -> Result<naga::Module, String> {
     validate_source(&src, &format!("pass {pass} (assembled)"))
 }
 
+/// Each pass that resets from the pool (`wgsl::RESET_REBUILD_PASSES`) as the GPU backend
+/// assembles it for a batch of experiment 2 whose pool rows leave their obstacles to the device
+/// (`wgsl::assemble_pass_rebuilding_resets`), named `<pass>+rebuild`.
+fn reset_rebuild_passes() -> Vec<(String, String)> {
+    wgsl::RESET_REBUILD_PASSES
+        .iter()
+        .map(|&pass| {
+            let src = wgsl::assemble_pass_rebuilding_resets(pass, &exp2_prelude())
+                .unwrap_or_else(|e| panic!("{pass}: {e}"));
+            (format!("{pass}+rebuild"), src)
+        })
+        .collect()
+}
+
 /// Every module the GPU backend compiles from `shaders/`, by name: each pass
-/// (`wgsl::passes`), then each network shader (standalone).
+/// (`wgsl::passes`), each pass that resets as a batch assembles it whose rows leave their
+/// obstacles to the device, then each network shader (standalone).
 fn compiled_modules() -> Vec<(String, naga::Module)> {
     let mut out: Vec<(String, naga::Module)> = wgsl::passes()
         .into_iter()
@@ -152,6 +167,10 @@ fn compiled_modules() -> Vec<(String, naga::Module)> {
             )
         })
         .collect();
+    for (name, src) in reset_rebuild_passes() {
+        let module = validate_source(&src, &name).unwrap_or_else(|e| panic!("{e}"));
+        out.push((name, module));
+    }
     for s in socnav::pipeline::STAGES {
         let file = s.shader_file();
         if wgsl::is_standalone(&file) {
@@ -838,11 +857,19 @@ fn zeroed_function_scope_arrays_do_not_grow() {
         ("reset::state_permute_groups", 512),
         ("reset::state_permute_laptop_users", 256),
         ("reset::state_permute_laptops", 512),
+        ("begin_step+rebuild::orca_lp3", 3088),
+        ("begin_step+rebuild::orca_obstacles_corners", 32),
+        ("begin_step+rebuild::orca_obstacles_polygon", 72),
+        ("autoreset+rebuild::orca_lp3", 3088),
+        ("autoreset+rebuild::orca_obstacles_corners", 32),
+        ("autoreset+rebuild::orca_obstacles_polygon", 72),
+        ("reset+rebuild::orca_lp3", 3088),
+        ("reset+rebuild::orca_obstacles_corners", 32),
+        ("reset+rebuild::orca_obstacles_polygon", 72),
     ];
     let mut report = Vec::new();
     let mut over = Vec::new();
-    for pass in wgsl::passes() {
-        let module = validate_pass(pass).expect("assembled");
+    for (pass, module) in compiled_modules() {
         for (function, bytes) in zeroed_local_array_bytes(&module) {
             let key = format!("{pass}::{function}");
             let budget = BUDGET.iter().find(|(k, _)| *k == key).map_or(0, |b| b.1);
@@ -1016,12 +1043,22 @@ fn main() {
 /// have the entry point that queues their environments besides `main`, the pass of the
 /// observation has the one that writes its entity records a lane each (`wgsl::OBS_RECORDS_ENTRY`)
 /// and the one that moves its staged values into rows (`wgsl::OBS_ROWS_ENTRY`), the
-/// passes that regroup the two that rebuild ORCA obstacles (`wgsl::REBUILD_PASSES`), and no
-/// other pass has another.
+/// passes that regroup the two that rebuild ORCA obstacles (`wgsl::REBUILD_PASSES`), as do the
+/// passes that reset where the pool's rows leave their obstacles to the device
+/// (`wgsl::RESET_REBUILD_PASSES`), and no other pass has another; only those reset.
 #[test]
 fn passes_have_their_second_entry_points() {
-    for pass in wgsl::passes() {
-        let module = validate_pass(pass).expect("validates");
+    let passes = wgsl::passes()
+        .into_iter()
+        .map(|p| (p.to_owned(), validate_pass(p).expect("validates")));
+    let resets = reset_rebuild_passes().into_iter().map(|(name, src)| {
+        (
+            name.clone(),
+            validate_source(&src, &name).expect("validates"),
+        )
+    });
+    for (name, module) in passes.chain(resets) {
+        let pass = name.trim_end_matches("+rebuild");
         let mut entries: Vec<&str> = module
             .entry_points
             .iter()
@@ -1035,12 +1072,13 @@ fn passes_have_their_second_entry_points() {
         if pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE) {
             expected.extend([wgsl::OBS_RECORDS_ENTRY, wgsl::OBS_ROWS_ENTRY]);
         }
-        if wgsl::REBUILD_PASSES.contains(&pass) {
+        if wgsl::REBUILD_PASSES.contains(&pass) || name.ends_with("+rebuild") {
             expected.extend([wgsl::REBUILD_ENTRY, wgsl::REBUILD_IN_WORKGROUPS_ENTRY]);
         }
         expected.sort_unstable();
-        assert_eq!(entries, expected, "{pass}");
+        assert_eq!(entries, expected, "{name}");
     }
+    assert!(wgsl::assemble_pass_rebuilding_resets("formation", &exp2_prelude()).is_err());
 }
 
 /// The passes that rebuild ORCA obstacles (`wgsl::REBUILD_PASSES`) validate with the obstacle
@@ -1048,12 +1086,19 @@ fn passes_have_their_second_entry_points() {
 /// GPU backend builds their `wgsl::REBUILD_IN_WORKGROUPS_ENTRY` on hardware adapters: no access
 /// to `scratch` left, one workgroup variable of `OBSTACLES_IN_WORKGROUP_WORDS` words, which every
 /// shipped config's obstacle region fits; no pass but those regroups, and none of their `main`s
-/// rebuilds (the rebuild entry points do, after it).
+/// rebuilds (the rebuild entry points do, after it). The same for the passes that reset, as a
+/// batch whose pool rows leave their obstacles to the device assembles them.
 #[test]
 fn rebuild_passes_keep_their_obstacles_in_workgroup_memory() {
-    for pass in wgsl::passes() {
+    let passes = wgsl::passes().into_iter().map(|pass| {
         let src = wgsl::assemble_pass(pass, &exp2_prelude()).expect("assembled");
-        if !wgsl::REBUILD_PASSES.contains(&pass) {
+        (pass.to_owned(), src, wgsl::REBUILD_PASSES.contains(&pass))
+    });
+    let resets = reset_rebuild_passes()
+        .into_iter()
+        .map(|(n, s)| (n, s, true));
+    for (pass, src, rebuilds) in passes.chain(resets) {
+        if !rebuilds {
             assert!(
                 !src.contains("regroup_canonicalize("),
                 "{pass}: a pass that regroups without rebuilding after it"

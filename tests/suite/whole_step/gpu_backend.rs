@@ -281,9 +281,10 @@ fn reads_back_only_what_it_hands_the_host(
 /// Contract: whole steps on the other paths than the device's defaults (the observation staged
 /// slot-major and moved into rows through workgroup memory, or written into the rows in place;
 /// the resets and the obstacle rebuilds on a workgroup's lanes, or on one lane each:
-/// `common::gpu::device_other_paths`), read back in four pieces, hand the host the CPU's outputs
-/// bit for bit, SAME_STEP finals (copied from the rows after the move) included, over episodes
-/// that end and social events that regroup.
+/// `common::gpu::device_other_paths`; a reset's obstacles built on the host, or rebuilt on the
+/// device), read back in four pieces, hand the host the CPU's outputs and state bit for bit,
+/// SAME_STEP finals (copied from the rows after the move) included, over episodes that end,
+/// social events that regroup and a caller's masked reset.
 #[test]
 fn the_other_observation_path_steps_as_the_cpu() {
     use socnav::AutoresetMode;
@@ -328,6 +329,11 @@ fn the_other_observation_path_steps_as_the_cpu() {
             .map(|ev| regrouping.iter().map(|&k| ev[k] as usize).sum::<usize>())
             .sum::<usize>();
     }
+    // The reset pass alone, on every other environment (on these paths a reset's obstacles are
+    // built where the defaults do not build them).
+    let mask: Vec<bool> = (0..n).map(|e| e % 2 == 0).collect();
+    twins.reset_envs(&mask);
+    twins.step(&random_actions(&mut rng, n, false));
     twins.finish("the other paths");
     assert!(finals > n, "only {finals} SAME_STEP finals");
     assert!(regroupings > 0, "no regrouping: the rebuilds went untested");

@@ -2,7 +2,8 @@
 //! constants, the environment's next episode seed and its episode counter. For every shipped config, a
 //! row generated on a fresh one-environment table equals, word for word, the state and first
 //! observation that an in-place reset gives an environment of a rolled-out batch (whose slots
-//! hold the previous episode's entities, its counters and caches).
+//! hold the previous episode's entities, its counters and caches). A row that leaves its ORCA
+//! obstacles to the device (`ObstacleBuild::Deferred`) equals the same once they are rebuilt.
 
 use crate::common;
 
@@ -11,6 +12,7 @@ use socnav::outputs::Outputs;
 use socnav::pipeline::Batch;
 use socnav::spec::{ONE_HOT, RECORD};
 use socnav::state::BatchState;
+use socnav::systems::reset::ObstacleBuild;
 use socnav::{Actions, BatchEnv, EnvOptions};
 
 /// The row an in-place reset of environment `e` of `env` produces, in pool layout.
@@ -54,9 +56,40 @@ fn reset_in_place(env: &BatchEnv, e: usize) -> Vec<u32> {
     row
 }
 
+/// `row` (a pool row that leaves its obstacles to the device) with its state's ORCA obstacles
+/// rebuilt, as the GPU backend's rebuild after the reset's copy does; it must have left them
+/// dirty and empty.
+fn with_obstacles_rebuilt(env: &BatchEnv, row: &[u32]) -> Vec<u32> {
+    let mut one = BatchState::new(1, *env.caps());
+    let (mut f, mut u) = (Vec::new(), Vec::new());
+    one.pack(&mut f, &mut u);
+    let (nf, nu) = (f.len(), u.len());
+    let f: Vec<f32> = row[..nf].iter().map(|&w| f32::from_bits(w)).collect();
+    one.unpack(&f, &row[nf..nf + nu]);
+    assert_eq!(
+        one.obstacles_dirty[0], 1,
+        "a deferred row's obstacles are dirty"
+    );
+    assert_eq!(
+        one.n_obstacle_vertices[0], 0,
+        "a deferred row's obstacles are empty"
+    );
+    assert!(one.ov_x.iter().chain(&one.ov_y).all(|&v| v == 0.0));
+    socnav::systems::orca_obstacles::rebuild_if_dirty(env.params(), &mut one.chunk(), 0);
+    assert_eq!(one.obstacles_dirty[0], 0, "rebuilt");
+    let (mut f, mut u) = (Vec::new(), Vec::new());
+    one.pack(&mut f, &mut u);
+    let mut out: Vec<u32> = f.iter().map(|v| v.to_bits()).collect();
+    out.extend(u);
+    out.extend(&row[nf + nu..]);
+    out
+}
+
 /// Contract: for every config, the generated row of each environment of a batch that has run
 /// episodes (with entities, formations and events left over) equals its in-place reset, and a
-/// scratch table reused across environments leaves no trace in the next row.
+/// scratch table reused across environments leaves no trace in the next row. A row that leaves
+/// its obstacles to the device differs from it in them alone: rebuilt, it equals the in-place
+/// reset too.
 #[test]
 fn rows_equal_in_place_resets() {
     for name in common::config_names() {
@@ -86,7 +119,8 @@ fn rows_equal_in_place_resets() {
         let p = *env.params();
         let words = row_words(*env.caps(), *env.layout());
         // One scratch for all: rows must not depend on what it held before.
-        let mut scratch = RowScratch::new(*env.caps(), *env.layout());
+        let mut scratch = RowScratch::new(*env.caps(), *env.layout(), ObstacleBuild::Now);
+        let mut deferring = RowScratch::new(*env.caps(), *env.layout(), ObstacleBuild::Deferred);
         for e in 0..n {
             let mut row = vec![0u32; words];
             let (episode, seed) = (
@@ -98,6 +132,16 @@ fn rows_equal_in_place_resets() {
             assert_eq!(expected.len(), words, "{name}: row length");
             if let Some(k) = (0..words).find(|&k| row[k] != expected[k]) {
                 panic!("{name}: env {e}: pool row differs from the in-place reset at word {k}");
+            }
+            let mut deferred = vec![0u32; words];
+            write_row(&p, e, episode, seed, &mut deferring, &mut deferred).expect("row");
+            assert_ne!(
+                deferred, row,
+                "{name}: env {e}: obstacles left to the device"
+            );
+            let rebuilt = with_obstacles_rebuilt(&env, &deferred);
+            if let Some(k) = (0..words).find(|&k| rebuilt[k] != expected[k]) {
+                panic!("{name}: env {e}: deferred row, rebuilt, differs at word {k}");
             }
         }
     }
