@@ -346,8 +346,8 @@ impl StepReadback {
     }
 
     /// Read each piece into the per-step columns of `out` as soon as its submit (`submits`: the
-    /// step's, then [`Self::submit_other_pieces`]') has finished, long stretches on every thread of `pool`; the
-    /// seconds spent copying.
+    /// step's, then [`Self::submit_other_pieces`]') has finished, long stretches on every thread
+    /// of `pool`; the seconds spent copying.
     pub(crate) fn read_pieces(
         &self,
         dev: &GpuDevice,
