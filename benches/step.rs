@@ -162,12 +162,10 @@ fn pool_rows(c: &mut Criterion) {
         let params = env.params();
         let caps = env.state().expect("state").strides;
         let layout = env.outputs().strides.layout;
-        let words = row_words(caps, layout);
         // Environments spread over a batch of 65,536, each starting its second episode.
         let envs: Vec<usize> = (0..ROWS).map(|i| i * 128).collect();
         let episodes = vec![1u32; ROWS * 128];
         let mut seeds: Vec<u64> = (0..ROWS as u64 * 128).collect();
-        let mut rows = vec![0u32; ROWS * words];
         let mut group = c.benchmark_group(format!("pool_rows/{name}"));
         group
             .measurement_time(Duration::from_secs(3))
@@ -184,6 +182,7 @@ fn pool_rows(c: &mut Criterion) {
                 .build()
                 .expect("a thread pool");
             let scratches = Scratches::new(caps, layout, obstacles, Some(&pool));
+            let mut rows = vec![0u32; ROWS * row_words(caps, layout, obstacles)];
             group.bench_function(BenchmarkId::new(way, threads), |b| {
                 b.iter(|| {
                     // New seeds each time: new scenarios, as the step's rows are.

@@ -10,9 +10,11 @@
 // reads back with the outputs, and writes the row two episodes ahead into the freed place while
 // the device runs the following step. `pool_row_of`, `pool_env_of`, `pool_copy_state` and
 // `pool_copy_observation` are generated with the prelude. Where the device asks for it
-// (`GpuDevice::obstacles_after_resets`), a row leaves the ORCA obstacles dirty and empty (the
-// copy zeroes the old ones), and the resetting pass rebuilds them after `main` in entry points
-// generated with the obstacle library (`backend::wgsl::assemble_pass_rebuilding_resets`).
+// (`GpuDevice::obstacles_after_resets`), a row leaves the ORCA obstacles dirty and out of the row
+// (`batch.pool_obstacles` 0, `backend::wgsl::POOL_OBSTACLE_COLUMNS`: the copy leaves the old ones
+// and their count in place), and the resetting pass rebuilds them after `main` in entry points
+// generated with the obstacle library (`backend::wgsl::assemble_pass_rebuilding_resets`), which
+// zero the old tail past the new count as every rebuild does.
 
 // Resets by many lanes. A reset is about 1,500 words (exp2) copied from the pool, a chain of
 // loads and stores that one lane runs at memory latency. The queued resets of a step

@@ -11,31 +11,32 @@
 //! [`crate::backend::wgsl::pool_row_words`].
 //!
 //! A row may leave its ORCA obstacles to the device ([`ObstacleBuild::Deferred`], chosen per
-//! [`RowScratch`]): dirty and empty, they cost the host nothing (their build is about two thirds
-//! of a row's instructions), and the pass that copies the row rebuilds them after the copy
+//! [`RowScratch`]): dirty and left out of the row ([`wgsl::POOL_OBSTACLE_COLUMNS`]), they cost
+//! the host nothing (their build is about two thirds of a row's instructions, their columns two
+//! fifths of its words), and the pass that copies the row rebuilds them after the copy
 //! (`backend::wgsl::RESET_REBUILD_PASSES`), which gives the bits an in-place reset builds.
 
 use rayon::prelude::*;
 
-use crate::backend::obs_payload;
+use crate::backend::{obs_payload, wgsl};
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
 use crate::pipeline::Batch;
 use crate::spec::ObsLayout;
+use crate::state::columns::{Elem, copy_words};
 use crate::state::{BatchState, Caps};
 use crate::systems::reset::ObstacleBuild;
 
-/// A one-environment table to generate rows in, with the buffers its packing reuses.
+/// A one-environment table to generate rows in.
 #[derive(Debug)]
 pub struct RowScratch {
     state: BatchState,
     out: Outputs,
-    f32s: Vec<f32>,
-    u32s: Vec<u32>,
-    /// The first observation without its one-hot floats, as the device keeps it
-    /// ([`crate::backend::obs_payload`]).
-    payload: Vec<u32>,
+    /// The state packed whole (`soa!`'s `pack_words`), of which the row holds `held`.
+    packed: Vec<u32>,
+    /// The runs of `packed` a row holds, in order ([`held_runs`]).
+    held: Vec<std::ops::Range<usize>>,
     /// Whether the rows hold their ORCA obstacles built, or leave them to the device.
     obstacles: ObstacleBuild,
 }
@@ -50,19 +51,45 @@ impl RowScratch {
         Self {
             state: BatchState::new(1, caps),
             out: Outputs::new(1, layout),
-            f32s: Vec::new(),
-            u32s: Vec::new(),
-            payload: vec![0; layout.payload_dim()],
+            packed: vec![0; state_words(caps)],
+            held: held_runs(&BatchState::new(0, caps).columns(), obstacles),
             obstacles,
         }
     }
 }
 
-/// Words of one pool row for environments of capacities `caps` and layout `layout`.
-pub fn row_words(caps: Caps, layout: ObsLayout) -> usize {
+/// Words of one environment's state packed whole.
+fn state_words(caps: Caps) -> usize {
+    BatchState::new(0, caps).columns().iter().map(|c| c.2).sum()
+}
+
+/// The runs of a one-environment state packed whole (f32 columns first, then u32 columns, each in
+/// declaration order) that a pool row whose obstacles are built as `obstacles` says holds
+/// ([`wgsl::pool_holds`]), adjacent columns in one run: a row leaving its obstacles out is then
+/// a few copies.
+fn held_runs(columns: wgsl::Columns<'_>, obstacles: ObstacleBuild) -> Vec<std::ops::Range<usize>> {
+    let mut runs: Vec<std::ops::Range<usize>> = Vec::new();
+    let mut at = 0;
+    for elem in [Elem::F32, Elem::U32] {
+        for &(name, _, stride) in columns.iter().filter(|c| c.1 == elem) {
+            if wgsl::pool_holds(name, obstacles) {
+                match runs.last_mut() {
+                    Some(run) if run.end == at => run.end += stride,
+                    _ => runs.push(at..at + stride),
+                }
+            }
+            at += stride;
+        }
+    }
+    runs
+}
+
+/// Words of one pool row for environments of capacities `caps` and layout `layout`, whose ORCA
+/// obstacles are built as `obstacles` says.
+pub fn row_words(caps: Caps, layout: ObsLayout, obstacles: ObstacleBuild) -> usize {
     let s = BatchState::new(0, caps);
     let o = Outputs::new(0, layout);
-    crate::backend::wgsl::pool_row_words(&s.columns(), &obs_payload::device_columns(&o))
+    wgsl::pool_row_words(&s.columns(), &obs_payload::device_columns(&o), obstacles)
 }
 
 /// Write into `row` the pool row of environment `env` (batch index) starting the episode of seed
@@ -73,6 +100,10 @@ pub fn row_words(caps: Caps, layout: ObsLayout) -> usize {
 ///
 /// # Errors
 /// The scenario error of an unsatisfiable configuration, as the CPU backend's reset gives it.
+// Out of line, so that a profile names a row's cost: one call a row, against some 35 k
+// instructions (callgrind `--toggle-collect='socnav::backend::reset_pool::write_row'`, the full
+// name: a pattern that also matches `write_rows` toggles collection off again inside it).
+#[inline(never)]
 pub fn write_row(
     p: &StepParams,
     env: usize,
@@ -84,9 +115,8 @@ pub fn write_row(
     let RowScratch {
         state,
         out,
-        f32s,
-        u32s,
-        payload,
+        packed,
+        held,
         obstacles,
     } = scratch;
     state.set_next_seed(0, seed);
@@ -106,25 +136,27 @@ pub fn write_row(
     if let Some(err) = b.error {
         return Err(err);
     }
-    f32s.clear();
-    u32s.clear();
-    state.pack(f32s, u32s);
-    obs_payload::strip_row(&out.strides.layout, bytemuck::cast_slice(&out.obs), payload);
-    let parts: [&mut dyn Iterator<Item = u32>; 7] = [
-        &mut f32s.iter().map(|v| v.to_bits()),
-        &mut u32s.iter().copied(),
-        &mut payload.iter().copied(),
-        &mut out.obs_count.iter().copied(),
-        &mut out.hh_pairs.iter().copied(),
-        &mut out.hl_pairs.iter().copied(),
-        &mut out.pair_count.iter().copied(),
-    ];
+    state.pack_words(packed);
     let mut k = 0;
-    for part in parts {
-        for w in part {
-            row[k] = w;
-            k += 1;
-        }
+    for run in held.iter() {
+        row[k..k + run.len()].copy_from_slice(&packed[run.clone()]);
+        k += run.len();
+    }
+    let payload = out.strides.layout.payload_dim();
+    obs_payload::strip_row(
+        &out.strides.layout,
+        bytemuck::cast_slice(&out.obs),
+        &mut row[k..k + payload],
+    );
+    k += payload;
+    for part in [
+        &out.obs_count[..],
+        &out.hh_pairs,
+        &out.hl_pairs,
+        &out.pair_count,
+    ] {
+        copy_words(&mut row[k..k + part.len()], part);
+        k += part.len();
     }
     assert_eq!(
         k,

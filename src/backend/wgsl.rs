@@ -16,6 +16,7 @@
 //! shaders without the `gpu` feature or a device.
 
 use crate::state::columns::{Elem, ElementOrder};
+use crate::systems::reset::ObstacleBuild;
 
 /// Every WGSL file under `shaders/`, by path relative to it.
 pub const FILES: &[(&str, &str)] = &[
@@ -193,8 +194,9 @@ pub const REBUILD_IN_WORKGROUPS_ENTRY: &str = "rebuild_in_workgroups";
 /// the two rebuild entry points of a [`REBUILD_PASSES`] pass ([`REBUILD_ENTRY`],
 /// [`REBUILD_IN_WORKGROUPS_ENTRY`]) over the environments it reset
 /// ([`assemble_pass_rebuilding_resets`]): the queued pool rows of `begin_step` and `autoreset`,
-/// the masked environments of the reset pass. Nothing reads the `ov_*` columns between a reset and
-/// the rebuild after it.
+/// the masked environments of the reset pass. Nothing reads the `ov_*` columns or their count
+/// between a reset and the rebuild after it (the copy leaves the old ones in place:
+/// [`POOL_OBSTACLE_COLUMNS`]).
 pub const RESET_REBUILD_PASSES: [&str; 3] = ["begin_step", "autoreset", RESET_PASS];
 
 /// A pass's two rebuild entry points, `rebuilds` (a WGSL function of `k`, the entry's index)
@@ -531,8 +533,9 @@ fn slot_index_functions(state: Columns<'_>) -> String {
 /// columns as `co_<name>`/`so_<name>` in `outf`/`outu` (environment-major: element `k` of
 /// environment `e` at `co + e * so + k`, the rows the host reads); the observation layout
 /// (`obs_dim`, `obs_robot`, and per entity type `obs_offset_<type>`, `obs_capacity_<type>`, per
-/// interaction kind `pairs_<kind>`); the reset pool's `pool_row` (words per row) and
-/// `pool_observation` (the observation's first word in a row); the `scratch` region of an
+/// interaction kind `pairs_<kind>`); the reset pool's `pool_row` (words per row),
+/// `pool_observation` (the observation's first word in a row) and `pool_obstacles` (1 when a row
+/// holds the ORCA obstacles: [`BatchLayout::with_pool_obstacles`]); the `scratch` region of an
 /// environment (`s_scratch`, [`scratch_region_words`]), the obstacle library's part of it
 /// (`obstacle_words`, `x_obstacle_*`: [`ObstacleScratch`]), `x_obs_staged`, where the staged
 /// observation starts in it ([`scratch_words`]), `obs_staged` (1 when the observation is staged)
@@ -598,9 +601,15 @@ impl BatchLayout {
         for (k, key) in crate::spec::INTERACTION_KEYS.iter().enumerate() {
             fields.push((format!("pairs_{}", key.replace('-', "_")), obs.pairs[k]));
         }
-        fields.push(("pool_row".into(), pool_row_words(state, outputs)));
+        let obstacles = ObstacleBuild::Now;
+        fields.push(("pool_row".into(), pool_row_words(state, outputs, obstacles)));
         // Where a pool row's first observation starts: after the state's words.
-        fields.push(("pool_observation".into(), state.iter().map(|c| c.2).sum()));
+        fields.push((
+            "pool_observation".into(),
+            pool_state_words(state, obstacles),
+        ));
+        // 1 when a pool row holds the ORCA obstacles ([`BatchLayout::with_pool_obstacles`]).
+        fields.push(("pool_obstacles".into(), 1));
         let scratch = ObstacleScratch::of(state);
         let region = scratch_region_words(state);
         fields.push(("s_scratch".into(), region));
@@ -633,6 +642,35 @@ impl BatchLayout {
     /// (`GpuDevice::records_in_lanes`).
     pub fn with_records_apart(self, on: bool) -> Self {
         self.with_flag("obs_records_apart", on)
+    }
+
+    /// This layout with reset-pool rows whose ORCA obstacles are built as `obstacles` says:
+    /// `pool_obstacles` 0, and `pool_row` and `pool_observation` without the words of
+    /// [`POOL_OBSTACLE_COLUMNS`], where the rows leave them to the device
+    /// (`GpuDevice::obstacles_after_resets`).
+    #[expect(
+        clippy::expect_used,
+        reason = "the layout has a field per state column and for the pool"
+    )]
+    pub fn with_pool_obstacles(mut self, obstacles: ObstacleBuild) -> Self {
+        if obstacles == ObstacleBuild::Now {
+            return self;
+        }
+        let words: u32 = POOL_OBSTACLE_COLUMNS
+            .iter()
+            .map(|c| {
+                self.get(&format!("s_{c}"))
+                    .expect("a state column's stride")
+            })
+            .sum();
+        for (name, v) in &mut self.fields {
+            match name.as_str() {
+                "pool_row" | "pool_observation" => *v -= words,
+                "pool_obstacles" => *v = 0,
+                _ => {}
+            }
+        }
+        self
     }
 
     fn with_flag(mut self, field: &str, on: bool) -> Self {
@@ -1046,11 +1084,46 @@ pub fn sngnn_prelude() -> String {
 pub const POOL_OUTPUT_COLUMNS: [&str; 5] =
     ["obs", "obs_count", "hh_pairs", "hl_pairs", "pair_count"];
 
-/// 32-bit words of one environment's row in the reset pool: every state column, f32 columns first
-/// then u32 columns, each in declaration order, then the [`POOL_OUTPUT_COLUMNS`] in that order.
-/// A one-environment table packed by `soa!`'s `pack` is exactly the state part.
-pub fn pool_row_words(state: Columns<'_>, outputs: Columns<'_>) -> usize {
-    state.iter().map(|c| c.2).sum::<usize>() + pool_outputs(outputs).map(|c| c.2).sum::<usize>()
+/// The state columns of an environment's processed ORCA obstacles, which a reset-pool row that
+/// leaves them to the device ([`ObstacleBuild::Deferred`]) does not hold: two fifths of an exp2
+/// row, which the host would write, the device's pool keep and every reset copy, only for the
+/// rebuild to replace.
+/// Such a row's copy leaves the environment's old obstacles in place, their count included, and
+/// the rebuild after it ([`RESET_REBUILD_PASSES`]) replaces them, zeroing the old tail past the
+/// new count as every rebuild does: the bits of a build on the host.
+pub const POOL_OBSTACLE_COLUMNS: [&str; 8] = [
+    "ov_x",
+    "ov_y",
+    "ov_dir_x",
+    "ov_dir_y",
+    "ov_next",
+    "ov_prev",
+    "ov_convex",
+    "n_obstacle_vertices",
+];
+
+/// Whether a reset-pool row whose obstacles are built as `obstacles` says holds state column
+/// `name` ([`POOL_OBSTACLE_COLUMNS`]).
+pub fn pool_holds(name: &str, obstacles: ObstacleBuild) -> bool {
+    obstacles == ObstacleBuild::Now || !POOL_OBSTACLE_COLUMNS.contains(&name)
+}
+
+/// 32-bit words of one environment's state in a reset-pool row ([`pool_row_words`]).
+fn pool_state_words(state: Columns<'_>, obstacles: ObstacleBuild) -> usize {
+    state
+        .iter()
+        .filter(|c| pool_holds(c.0, obstacles))
+        .map(|c| c.2)
+        .sum()
+}
+
+/// 32-bit words of one environment's row in the reset pool: every state column it holds
+/// ([`pool_holds`]: all but the obstacles' where the row leaves them to the device), f32 columns
+/// first then u32 columns, each in declaration order, then the [`POOL_OUTPUT_COLUMNS`] in that
+/// order. A one-environment table packed by `soa!`'s `pack_words`, less the columns the row
+/// does not hold, is exactly the state part (`backend::reset_pool`).
+pub fn pool_row_words(state: Columns<'_>, outputs: Columns<'_>, obstacles: ObstacleBuild) -> usize {
+    pool_state_words(state, obstacles) + pool_outputs(outputs).map(|c| c.2).sum::<usize>()
 }
 
 #[expect(
@@ -1094,10 +1167,17 @@ fn pool_functions(state: Columns<'_>, outputs: Columns<'_>) -> String {
             Some(kind) => format!("at_{kind}(e, j)"),
             None => format!("e * batch.{s}{name} + j"),
         };
-        out.push_str(&format!(
-            "    for (var j = first; j < batch.{s}{name}; j += stride) {{ {buf}[batch.{c}{name} + {at}] = {value}; }}\n\
-             \x20   w += batch.{s}{name};\n"
-        ));
+        let copy = format!(
+            "for (var j = first; j < batch.{s}{name}; j += stride) {{ {buf}[batch.{c}{name} + {at}] = {value}; }}\n\
+             \x20   w += batch.{s}{name};"
+        );
+        if c == "c_" && POOL_OBSTACLE_COLUMNS.contains(&name) {
+            out.push_str(&format!(
+                "    if (batch.pool_obstacles != 0u) {{\n    {copy}\n    }}\n"
+            ));
+        } else {
+            out.push_str(&format!("    {copy}\n"));
+        }
     };
     let mut out = String::from(
         "fn pool_row_of(e: u32) -> u32 {\n    return ((su[batch.c_episode + e] + 1u) & 1u) * batch.n_envs + e;\n}\n\
@@ -1594,6 +1674,49 @@ fn concatenate(mut src: String, order: &[&str]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The pool's layout in the batch uniform follows where its rows' obstacles are built: rows
+    /// that leave them to the device are [`POOL_OBSTACLE_COLUMNS`]' words shorter, in their state
+    /// part, as the host writes them (`reset_pool::row_words`), and every one of those names is a
+    /// state column (a renamed column would otherwise stay in the rows unnoticed).
+    #[test]
+    fn the_pool_layout_follows_where_obstacles_are_built() {
+        use crate::backend::{obs_payload, reset_pool};
+        let config = crate::config::Config::from_name_or_path("exp2").expect("shipped config");
+        let caps = crate::state::Caps::from_config(&config);
+        let obs = crate::spec::ObsLayout::new(&caps, &config.observation);
+        let state = crate::state::BatchState::new(0, caps).columns();
+        let outputs = obs_payload::device_columns(&crate::outputs::Outputs::new(0, obs));
+        let obstacle_words: usize = POOL_OBSTACLE_COLUMNS
+            .iter()
+            .map(|name| {
+                let column = state.iter().find(|c| c.0 == *name);
+                column
+                    .unwrap_or_else(|| panic!("{name} is no state column"))
+                    .2
+            })
+            .sum();
+        assert_eq!(obstacle_words, 7 * caps.obstacle_vertices + 1);
+        let layout = BatchLayout::new(5, &state, &outputs, &obs, None);
+        for (build, held) in [(ObstacleBuild::Now, 1), (ObstacleBuild::Deferred, 0)] {
+            let words = pool_row_words(&state, &outputs, build);
+            assert_eq!(words, reset_pool::row_words(caps, obs, build), "{build:?}");
+            let l = layout.clone().with_pool_obstacles(build);
+            assert_eq!(l.get("pool_row"), Some(words as u32), "{build:?}");
+            assert_eq!(l.get("pool_obstacles"), Some(held), "{build:?}");
+            let observation = words - pool_outputs(&outputs).map(|c| c.2).sum::<usize>();
+            assert_eq!(
+                l.get("pool_observation"),
+                Some(observation as u32),
+                "{build:?}"
+            );
+        }
+        assert_eq!(
+            pool_row_words(&state, &outputs, ObstacleBuild::Now)
+                - pool_row_words(&state, &outputs, ObstacleBuild::Deferred),
+            obstacle_words
+        );
+    }
 
     /// A function left out returns at once with its type's zero value, whatever that type (none,
     /// a scalar, a vector, a struct), the shader still validates, and the names it does not

@@ -43,6 +43,20 @@ impl ElementOrder {
     }
 }
 
+/// `dst` = `src` (same length), element by element when short: most columns of one environment
+/// are a word or a few, where `copy_from_slice`'s call into `memcpy` costs more than the copy.
+#[inline]
+pub fn copy_words(dst: &mut [u32], src: &[u32]) {
+    debug_assert_eq!(dst.len(), src.len(), "copy_words of unequal lengths");
+    if src.len() <= 8 {
+        for (d, s) in dst.iter_mut().zip(src) {
+            *d = *s;
+        }
+    } else {
+        dst.copy_from_slice(src);
+    }
+}
+
 /// A value that can live in a column.
 pub trait ColumnValue: Copy + Default + Send + Sync + 'static {
     /// Its element kind.
@@ -219,6 +233,31 @@ macro_rules! soa {
             /// column's elements environment-major.
             pub fn pack(&self, f32s: &mut Vec<f32>, u32s: &mut Vec<u32>) {
                 self.pack_in($crate::state::columns::ElementOrder::EnvMajor, f32s, u32s);
+            }
+
+            /// [`Self::pack`] into `out` as 32-bit words (an f32's bits), the f32 array then the
+            /// u32 array, without allocating: the reset pool's rows, one environment each, whose
+            /// two hundred short columns made the growing vectors of [`Self::pack`] a sixth of a
+            /// row's instructions. Returns the words written.
+            pub fn pack_words(&self, out: &mut [u32]) -> usize {
+                use $crate::state::columns::{ColumnValue, Elem, copy_words};
+                let mut k = 0;
+                // Two passes whose column tests are constants, so each compiles to its copies.
+                $(
+                    if <$ty as ColumnValue>::ELEM == Elem::F32 {
+                        let words = <$ty as ColumnValue>::words(&self.$col);
+                        copy_words(&mut out[k..k + words.len()], words);
+                        k += words.len();
+                    }
+                )*
+                $(
+                    if <$ty as ColumnValue>::ELEM == Elem::U32 {
+                        let words = <$ty as ColumnValue>::words(&self.$col);
+                        copy_words(&mut out[k..k + words.len()], words);
+                        k += words.len();
+                    }
+                )*
+                k
             }
 
             /// [`Self::pack`] with each column's elements in `order`.

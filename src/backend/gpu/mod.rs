@@ -194,7 +194,17 @@ fn sngnn_buffers(
 }
 
 /// Pool rows the staging buffer first has room for ([`GpuStages::stage_pool_rows`]; it grows).
-const POOL_STAGING_ROWS: usize = 64;
+pub const POOL_STAGING_ROWS: usize = 64;
+
+/// How the reset pool's rows hold their ORCA obstacles on a device that rebuilds them after each
+/// reset (`after_resets`, `GpuDevice::obstacles_after_resets`) or not.
+fn obstacle_build(after_resets: bool) -> ObstacleBuild {
+    if after_resets {
+        ObstacleBuild::Deferred
+    } else {
+        ObstacleBuild::Now
+    }
+}
 
 /// A buffer the host writes rows into and the device copies from, of `words` words.
 fn staging_buffer(dev: &GpuDevice, words: usize) -> wgpu::Buffer {
@@ -353,7 +363,8 @@ impl GpuStages {
         dev.queue
             .write_buffer(&params_buf, 0, bytemuck::bytes_of(params));
         let actions = storage_buffer(&dev, "actions", bytes_of::<f32>(3 * n_envs));
-        let pool_row_words = wgsl::pool_row_words(&state.columns(), &out_columns);
+        let pool_obstacles = obstacle_build(dev.obstacles_after_resets);
+        let pool_row_words = wgsl::pool_row_words(&state.columns(), &out_columns, pool_obstacles);
         // Two rows per environment: its next episode's and the one after it.
         let pool_bytes = bytes_of::<u32>(2 * n_envs * pool_row_words);
         check_binding(
@@ -391,7 +402,8 @@ impl GpuStages {
             }),
         )
         .with_staged_observation(obs_staged)
-        .with_records_apart(records_apart);
+        .with_records_apart(records_apart)
+        .with_pool_obstacles(pool_obstacles);
         let layout_at = |column: &str| {
             layout
                 .get(column)
@@ -778,11 +790,7 @@ impl GpuStages {
     /// (`GpuDevice::obstacles_after_resets`), else built
     /// (`crate::backend::reset_pool::RowScratch::new`).
     pub fn pool_obstacles(&self) -> ObstacleBuild {
-        if self.dev.obstacles_after_resets {
-            ObstacleBuild::Deferred
-        } else {
-            ObstacleBuild::Now
-        }
+        obstacle_build(self.dev.obstacles_after_resets)
     }
 
     /// Write `rows` (whole pool rows) into the reset pool from environment `first_env` on, in the

@@ -11,6 +11,7 @@
 use crate::common;
 
 use common::gpu::*;
+use socnav::backend::gpu::{GpuDevice, GpuStages};
 use socnav::config::{Gaussian, ObsFrame};
 use socnav::outputs::Outputs;
 use socnav::rng::RngStream;
@@ -217,28 +218,59 @@ fn padded() {
 /// pieces split the same bytes whatever their number.
 #[test]
 fn staging_costs_one_observation_per_environment() {
-    let (Some(a), Some(b)) = (device(), device_other_paths()) else {
-        return;
-    };
     let n = 67;
     let env = rolled_out(config("exp2"), n, 1);
-    let p = *env.params();
-    let (state, out) = (env.state().unwrap(), env.outputs());
-    let bytes = |dev| {
-        socnav::backend::gpu::GpuStages::new(dev, &p, state, out, &["observation"])
-            .expect("GPU stages")
-            .device_bytes()
-    };
-    let (staged, in_place) = if a.stage_observations {
-        (bytes(a), bytes(b))
-    } else {
-        (bytes(b), bytes(a))
+    let Some((staged, in_place)) = bytes_with_and_without(&env, |d| &mut d.stage_observations)
+    else {
+        return;
     };
     // The staged row is the device's: without the entity records' one-hot floats.
     assert_eq!(
         staged - in_place,
         4 * (n * env.layout().payload_dim()) as u64
     );
+}
+
+/// Contract: where the reset pool's rows leave their ORCA obstacles to the device
+/// (`GpuDevice::obstacles_after_resets`), its two rows per environment (and the staging
+/// buffer's) hold none of the obstacles' columns (`wgsl::POOL_OBSTACLE_COLUMNS`: seven of the
+/// obstacle vertices' capacity and their count), and the batch's device memory says so.
+#[test]
+fn pool_rows_that_leave_their_obstacles_out_shrink_the_pool() {
+    let n = 67;
+    let env = rolled_out(config("exp2"), n, 1);
+    let Some((deferred, built)) = bytes_with_and_without(&env, |d| &mut d.obstacles_after_resets)
+    else {
+        return;
+    };
+    // Two rows an environment in the pool, and the rows the staging buffer first has room for.
+    let rows = 2 * n + socnav::backend::gpu::POOL_STAGING_ROWS;
+    let row_words = 7 * env.caps().obstacle_vertices + 1;
+    assert_eq!(built - deferred, 4 * (rows * row_words) as u64);
+}
+
+/// Device bytes of a batch of `env`'s tables with the observation pass, on the shared device with
+/// its `flag` on and with it off; `None` without a device.
+fn bytes_with_and_without(
+    env: &socnav::BatchEnv,
+    flag: fn(&mut GpuDevice) -> &mut bool,
+) -> Option<(u64, u64)> {
+    let dev = device()?;
+    let bytes = |on: bool, mut dev: GpuDevice| {
+        *flag(&mut dev) = on;
+        let p = *env.params();
+        GpuStages::new(
+            dev,
+            &p,
+            env.state().unwrap(),
+            env.outputs(),
+            &["observation"],
+        )
+        .expect("GPU stages")
+        .device_bytes()
+    };
+    let with = bytes(true, dev.clone());
+    Some((with, bytes(false, dev)))
 }
 
 /// Contract: a device that leaves shader functions out (`GpuDevice::leave_out`, for `socnav bench
