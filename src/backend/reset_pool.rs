@@ -45,22 +45,18 @@ impl RowScratch {
     /// Scratch for environments of capacities `caps` and observation layout `layout`, for rows
     /// whose ORCA obstacles are built as `obstacles` says: [`ObstacleBuild::Now`], the state
     /// exactly as the CPU backend's reset leaves it, or [`ObstacleBuild::Deferred`], its
-    /// obstacles empty and dirty for the device to rebuild after it copies the row
-    /// (`GpuDevice::obstacles_after_resets`).
+    /// obstacles dirty and their columns left out of the row, for the device to rebuild after it
+    /// copies the row (`GpuDevice::obstacles_after_resets`).
     pub fn new(caps: Caps, layout: ObsLayout, obstacles: ObstacleBuild) -> Self {
+        let columns = BatchState::new(0, caps).columns();
         Self {
             state: BatchState::new(1, caps),
             out: Outputs::new(1, layout),
-            packed: vec![0; state_words(caps)],
-            held: held_runs(&BatchState::new(0, caps).columns(), obstacles),
+            packed: vec![0; columns.iter().map(|c| c.2).sum()],
+            held: held_runs(&columns, obstacles),
             obstacles,
         }
     }
-}
-
-/// Words of one environment's state packed whole.
-fn state_words(caps: Caps) -> usize {
-    BatchState::new(0, caps).columns().iter().map(|c| c.2).sum()
 }
 
 /// The runs of a one-environment state packed whole (f32 columns first, then u32 columns, each in

@@ -1087,10 +1087,9 @@ pub const POOL_OUTPUT_COLUMNS: [&str; 5] =
 /// The state columns of an environment's processed ORCA obstacles, which a reset-pool row that
 /// leaves them to the device ([`ObstacleBuild::Deferred`]) does not hold: two fifths of an exp2
 /// row, which the host would write, the device's pool keep and every reset copy, only for the
-/// rebuild to replace.
-/// Such a row's copy leaves the environment's old obstacles in place, their count included, and
-/// the rebuild after it ([`RESET_REBUILD_PASSES`]) replaces them, zeroing the old tail past the
-/// new count as every rebuild does: the bits of a build on the host.
+/// rebuild to replace. Such a row's copy leaves the environment's old obstacles in place, their
+/// count included, and the rebuild after it ([`RESET_REBUILD_PASSES`]) replaces them, zeroing
+/// the old tail past the new count as every rebuild does: the bits of a build on the host.
 pub const POOL_OBSTACLE_COLUMNS: [&str; 8] = [
     "ov_x",
     "ov_y",
