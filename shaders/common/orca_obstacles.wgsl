@@ -441,12 +441,18 @@ fn orca_obstacles_key_less(a0: u32, a1: u32, b0: u32, b1: u32) -> bool {
     return a0 < b0 || (a0 == b0 && a1 < b1);
 }
 
-// Rust `choose_split` over the list `arena[start..start + n]` of environment e: (position, L, R).
-fn orca_obstacles_choose_split(e: u32, s: u32, start: u32, n: u32) -> vec3<u32> {
-    var best = 0u;
+// RVO2's split candidates `lane`, `lane + lanes`, ... of the list `arena[start..start + n]` of
+// environment e: (position, L, R) of the least of them by the key (max(L, R), min(L, R)), the
+// first position among equal keys, with RVO2's early exit against the best so far; position NONE
+// when the lane has no candidate. A candidate's counts only grow as its loop goes on, so the
+// early exit never drops a candidate that would have been chosen, and every candidate's full
+// key has max(L, R) < n: the least over all positions is Rust `choose_split`'s choice, whichever
+// lanes share the candidates (`orca_obstacles_earlier_split` takes the least of the lanes').
+fn orca_obstacles_split_candidates(e: u32, s: u32, start: u32, n: u32, lane: u32, lanes: u32) -> vec3<u32> {
+    var best = NONE;
     var min_left = n;
     var min_right = n;
-    for (var i = 0u; i < n; i++) {
+    for (var i = lane; i < n; i += lanes) {
         let i1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + i)];
         let best0 = max(min_left, min_right);
         let best1 = min(min_left, min_right);
@@ -479,6 +485,24 @@ fn orca_obstacles_choose_split(e: u32, s: u32, start: u32, n: u32) -> vec3<u32> 
     return vec3<u32>(best, min_left, min_right);
 }
 
+// Whether split candidate a (`orca_obstacles_split_candidates`) comes before b: a lesser key, or
+// an equal one at an earlier position; no candidate (NONE) comes last.
+fn orca_obstacles_earlier_split(a: vec3<u32>, b: vec3<u32>) -> bool {
+    if (a.x == NONE || b.x == NONE) {
+        return b.x == NONE && a.x != NONE;
+    }
+    let a0 = max(a.y, a.z);
+    let a1 = min(a.y, a.z);
+    let b0 = max(b.y, b.z);
+    let b1 = min(b.y, b.z);
+    return orca_obstacles_key_less(a0, a1, b0, b1) || (a0 == b0 && a1 == b1 && a.x < b.x);
+}
+
+// Rust `choose_split` over the list `arena[start..start + n]` of environment e: (position, L, R).
+fn orca_obstacles_choose_split(e: u32, s: u32, start: u32, n: u32) -> vec3<u32> {
+    return orca_obstacles_split_candidates(e, s, start, n, 0u, 1u);
+}
+
 // Rust `split_edge`: splits edge j1 -> next(j1) where it crosses the line of edge i1 -> next(i1);
 // the fresh vertex's id, or NONE when the set is full (overflow flagged).
 fn orca_obstacles_split_edge(s: u32, i1: u32, j1: u32) -> u32 {
@@ -499,8 +523,17 @@ fn orca_obstacles_split_edge(s: u32, i1: u32, j1: u32) -> u32 {
     return fresh;
 }
 
-// Rust `process_obstacles` of environment e's list into its set (see the header).
-fn orca_obstacles_process(e: u32) {
+// The tree build's stack of edge lists between two nodes: the lists are `arena[..end]`, their
+// lengths `lens[..depth]`, the top list last.
+struct OrcaObstaclesStack {
+    end: u32,
+    depth: u32,
+}
+
+// The start of Rust `process_obstacles` of environment e's list into its set: the polygons'
+// vertices added, and the stack holding the root list of every vertex (none where the list
+// overflowed or is invalid, or holds no vertex).
+fn orca_obstacles_process_begin(e: u32) -> OrcaObstaclesStack {
     let l = orca_obstacles_region(e) + batch.x_obstacle_list;
     let s = orca_obstacles_set(e);
     scratch[s] = 0u;
@@ -509,98 +542,126 @@ fn orca_obstacles_process(e: u32) {
         scratch[s + 1u] |= ORCA_OBSTACLES_INVALID;
     }
     if (scratch[s + 1u] != 0u) {
-        return;
+        return OrcaObstaclesStack(0u, 0u);
     }
     for (var p = 0u; p < orca_obstacles_list_len(l); p++) {
         orca_obstacles_add_polygon(s, orca_obstacles_list_polygon(l, p));
     }
     if (scratch[s + 1u] != 0u) {
-        return;
+        return OrcaObstaclesStack(0u, 0u);
     }
-
-    // `build_node` from the root list of every vertex, with an explicit stack of edge lists
-    // (`arena[..end]`, list lengths in `lens[..depth]`, the top list last).
     let n = scratch[s];
     for (var i = 0u; i < n; i++) {
         scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, i)] = i;
     }
-    var end = n;
-    var depth = 0u;
-    if (n > 0u) {
-        scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, 0u)] = n;
-        depth = 1u;
+    if (n == 0u) {
+        return OrcaObstaclesStack(0u, 0u);
     }
-    while (depth > 0u) {
-        depth -= 1u;
-        let len = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, depth)];
-        let start = end - len;
-        let chosen = orca_obstacles_choose_split(e, s, start, len);
-        let split = chosen.x;
-        let n_left = chosen.y;
-        let n_right = chosen.z;
-        let i1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + split)];
-        // Child lists into `tmp`: left at 0.., right at n_left...
-        var lc = 0u;
-        var rc = 0u;
-        for (var j = 0u; j < len; j++) {
-            if (j == split) {
-                continue;
+    scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, 0u)] = n;
+    return OrcaObstaclesStack(n, 1u);
+}
+
+// The top list of the stack, popped: (start, len) in the arena, len 0 when the stack is empty.
+// The list's words stay where they are until the node's children are pushed.
+fn orca_obstacles_pop(e: u32, stack: ptr<function, OrcaObstaclesStack>) -> vec2<u32> {
+    if ((*stack).depth == 0u) {
+        return vec2<u32>(0u, 0u);
+    }
+    (*stack).depth -= 1u;
+    let len = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, (*stack).depth)];
+    let start = (*stack).end - len;
+    (*stack).end = start;
+    return vec2<u32>(start, len);
+}
+
+// Rust `build_node` of the popped list `node` (start, len) split at `chosen` (position, L, R:
+// `orca_obstacles_choose_split`): the edges crossing the split edge's line split, the left and
+// right lists pushed (right first, so that the left subtree is built completely before the right
+// one, as in the recursive Rust). False where the set overflowed: the build stops.
+fn orca_obstacles_split_node(e: u32, s: u32, node: vec2<u32>, chosen: vec3<u32>, stack: ptr<function, OrcaObstaclesStack>) -> bool {
+    let start = node.x;
+    let len = node.y;
+    let split = chosen.x;
+    let n_left = chosen.y;
+    let n_right = chosen.z;
+    let i1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + split)];
+    // Child lists into `tmp`: left at 0.., right at n_left...
+    var lc = 0u;
+    var rc = 0u;
+    for (var j = 0u; j < len; j++) {
+        if (j == split) {
+            continue;
+        }
+        let j1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + j)];
+        let sides = orca_obstacles_edge_sides(s, i1, j1);
+        let side = orca_obstacles_classify(sides.x, sides.y);
+        var to_left = NONE;
+        var to_right = NONE;
+        if (side == 0u) {
+            to_left = j1;
+        } else if (side == 1u) {
+            to_right = j1;
+        } else {
+            let fresh = orca_obstacles_split_edge(s, i1, j1);
+            if (fresh == NONE) {
+                return false;
             }
-            let j1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + j)];
-            let sides = orca_obstacles_edge_sides(s, i1, j1);
-            let side = orca_obstacles_classify(sides.x, sides.y);
-            var to_left = NONE;
-            var to_right = NONE;
-            if (side == 0u) {
+            if (sides.x > 0.0) {
                 to_left = j1;
-            } else if (side == 1u) {
-                to_right = j1;
+                to_right = fresh;
             } else {
-                let fresh = orca_obstacles_split_edge(s, i1, j1);
-                if (fresh == NONE) {
-                    return;
-                }
-                if (sides.x > 0.0) {
-                    to_left = j1;
-                    to_right = fresh;
-                } else {
-                    to_left = fresh;
-                    to_right = j1;
-                }
-            }
-            if (to_left != NONE) {
-                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, lc)] = to_left;
-                lc += 1u;
-            }
-            if (to_right != NONE) {
-                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, n_left + rc)] = to_right;
-                rc += 1u;
+                to_left = fresh;
+                to_right = j1;
             }
         }
-        // Pop this list, push the right list, then the left one (built next, completely).
-        // Cannot overflow (see the header); checked all the same.
-        if (lc != n_left || rc != n_right || start + n_left + n_right > orca_obstacles_cap()) {
-            scratch[s + 1u] |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
-            return;
+        if (to_left != NONE) {
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, lc)] = to_left;
+            lc += 1u;
         }
-        end = start;
-        if (n_right > 0u) {
-            for (var k = 0u; k < n_right; k++) {
-                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, end + k)] =
-                    scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, n_left + k)];
-            }
-            end += n_right;
-            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, depth)] = n_right;
-            depth += 1u;
+        if (to_right != NONE) {
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, n_left + rc)] = to_right;
+            rc += 1u;
         }
-        if (n_left > 0u) {
-            for (var k = 0u; k < n_left; k++) {
-                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, end + k)] =
-                    scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, k)];
-            }
-            end += n_left;
-            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, depth)] = n_left;
-            depth += 1u;
+    }
+    // Cannot overflow (see the header); checked all the same.
+    if (lc != n_left || rc != n_right || start + n_left + n_right > orca_obstacles_cap()) {
+        scratch[s + 1u] |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
+        return false;
+    }
+    if (n_right > 0u) {
+        for (var k = 0u; k < n_right; k++) {
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, (*stack).end + k)] =
+                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, n_left + k)];
+        }
+        (*stack).end += n_right;
+        scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, (*stack).depth)] = n_right;
+        (*stack).depth += 1u;
+    }
+    if (n_left > 0u) {
+        for (var k = 0u; k < n_left; k++) {
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, (*stack).end + k)] =
+                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, k)];
+        }
+        (*stack).end += n_left;
+        scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, (*stack).depth)] = n_left;
+        (*stack).depth += 1u;
+    }
+    return true;
+}
+
+// Rust `process_obstacles` of environment e's list into its set (see the header): `build_node`
+// from the root list of every vertex, with an explicit stack of edge lists.
+fn orca_obstacles_process(e: u32) {
+    let s = orca_obstacles_set(e);
+    var stack = orca_obstacles_process_begin(e);
+    loop {
+        let node = orca_obstacles_pop(e, &stack);
+        if (node.y == 0u) {
+            break;
+        }
+        let chosen = orca_obstacles_choose_split(e, s, node.x, node.y);
+        if (!orca_obstacles_split_node(e, s, node, chosen, &stack)) {
+            break;
         }
     }
 }
@@ -696,10 +757,88 @@ fn orca_obstacles_rebuild_if_dirty(e: u32) {
     orca_obstacles_poison_region(e);
     orca_obstacles_gather(e, orca_obstacles_list(e));
     orca_obstacles_process(e);
+    orca_obstacles_finish(e);
+}
+
+// The end of a rebuild of environment e: its processed set stored, its flag cleared (or left
+// at ORCA_OBSTACLES_FAILED where the set overflowed).
+fn orca_obstacles_finish(e: u32) {
     orca_obstacles_store(e);
     if (orca_obstacles_set_overflow(orca_obstacles_set(e)) != 0u) {
         su[batch.c_obstacles_dirty + e] = ORCA_OBSTACLES_FAILED;
     } else {
         su[batch.c_obstacles_dirty + e] = 0u;
     }
+}
+
+// ---- a rebuild on a workgroup's lanes -----------------------------------------------------------
+
+// What a rebuild entry's target says besides an environment (src/backend/wgsl.rs,
+// `rebuild_entries`): this entry has nothing to rebuild, but later ones may (NONE: no later one).
+const ORCA_OBSTACLES_SKIP: u32 = 0xfffffffeu;
+
+// The workgroup's rebuild in hand: (what it rebuilds, whether its obstacles are dirty).
+var<workgroup> orca_obstacles_turn: vec2<u32>;
+// The node being split: (start, len) in the arena, len 0 once the tree is built.
+var<workgroup> orca_obstacles_node: vec2<u32>;
+// Each lane's best split candidate of the node (`orca_obstacles_split_candidates`).
+var<workgroup> orca_obstacles_splits: array<vec3<u32>, WORKGROUP_SIZE>;
+
+// `orca_obstacles_rebuild_if_dirty` of `wanted` (an environment, ORCA_OBSTACLES_SKIP or NONE:
+// lane 0's is taken) by every lane of the workgroup, called by all of them together: lane 0 runs
+// the serial parts (the polygons, the set, the splits of the edges), and each node's split
+// candidates are shared out among the lanes and the least of theirs taken, which is RVO2's
+// choice (`orca_obstacles_split_candidates`): the same bits, and a node of n <= 64 edges searched
+// in about n steps a lane instead of up to n² in one. Whether `wanted` was not NONE (the value is
+// the workgroup's own).
+fn orca_obstacles_rebuild_on_lanes(wanted: u32, lane: u32) -> bool {
+    if (lane == 0u) {
+        var dirty = 0u;
+        if (wanted < ORCA_OBSTACLES_SKIP && su[batch.c_obstacles_dirty + wanted] != 0u) {
+            dirty = 1u;
+        }
+        orca_obstacles_turn = vec2<u32>(wanted, dirty);
+    }
+    let turn = workgroupUniformLoad(&orca_obstacles_turn);
+    if (turn.x == NONE) {
+        return false;
+    }
+    if (turn.y == 0u) {
+        return true;
+    }
+    let e = turn.x;
+    let s = orca_obstacles_set(e);
+    var stack: OrcaObstaclesStack;
+    if (lane == 0u) {
+        orca_obstacles_poison_region(e);
+        orca_obstacles_gather(e, orca_obstacles_list(e));
+        stack = orca_obstacles_process_begin(e);
+    }
+    loop {
+        if (lane == 0u) {
+            orca_obstacles_node = orca_obstacles_pop(e, &stack);
+        }
+        let node = workgroupUniformLoad(&orca_obstacles_node);
+        if (node.y == 0u) {
+            break;
+        }
+        orca_obstacles_splits[lane] = orca_obstacles_split_candidates(e, s, node.x, node.y, lane, WORKGROUP_SIZE);
+        workgroupBarrier();
+        if (lane == 0u) {
+            // Lanes past the node's length had no candidate.
+            var chosen = orca_obstacles_splits[0];
+            for (var l = 1u; l < min(node.y, WORKGROUP_SIZE); l++) {
+                if (orca_obstacles_earlier_split(orca_obstacles_splits[l], chosen)) {
+                    chosen = orca_obstacles_splits[l];
+                }
+            }
+            if (!orca_obstacles_split_node(e, s, node, chosen, &stack)) {
+                stack.depth = 0u;
+            }
+        }
+    }
+    if (lane == 0u) {
+        orca_obstacles_finish(e);
+    }
+    return true;
 }

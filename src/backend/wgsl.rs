@@ -178,12 +178,15 @@ pub const REBUILD_PASSES: [&str; 2] = ["formation", "social_events"];
 pub const REBUILD_ENTRY: &str = "rebuild";
 
 /// The entry point of a [`REBUILD_PASSES`] shader that rebuilds the obstacles of the queued
-/// environments a workgroup at a time, in its first lane, its working memory in workgroup memory
-/// (built from [`with_obstacles_in_workgroup`]'s source; a dispatch of a workgroup per
-/// environment of the batch, at most `GpuDevice::rebuild_workgroups`, workgroup `w` of `W`
-/// taking queue entries `w`, `w + W`, ...): the GPU backend's choice on hardware adapters
-/// (`GpuDevice::obstacles_in_workgroups`), where a rebuild over `scratch` is a chain of dependent
-/// storage-buffer accesses (2.4 of exp2's 5.1 ms a step on an H100). (llvmpipe ends the loops of
+/// environments a workgroup at a time, its working memory in workgroup memory (built from
+/// [`with_obstacles_in_workgroup`]'s source; a dispatch of a workgroup per environment of the
+/// batch, at most `GpuDevice::rebuild_workgroups`, workgroup `w` of `W` taking queue entries `w`,
+/// `w + W`, ...), its first lane running the serial parts and every lane a share of each tree
+/// node's split candidates (`orca_obstacles_rebuild_on_lanes`): the GPU backend's choice on
+/// hardware adapters (`GpuDevice::obstacles_in_workgroups`), where a rebuild over `scratch` is a
+/// chain of dependent storage-buffer accesses (2.4 of exp2's 5.1 ms a step on an H100), and in
+/// one lane the split search's quadratic loop was most of a rebuild (about 0.4 ms on an H200).
+/// (llvmpipe ends the loops of
 /// an invocation after 65,535 iterations in all, so there a workgroup must not take several large
 /// rebuilds; lavapipe rebuilds per lane, and tests that force this path keep to small batches.)
 pub const REBUILD_IN_WORKGROUPS_ENTRY: &str = "rebuild_in_workgroups";
@@ -199,25 +202,28 @@ pub const REBUILD_IN_WORKGROUPS_ENTRY: &str = "rebuild_in_workgroups";
 /// [`POOL_OBSTACLE_COLUMNS`]).
 pub const RESET_REBUILD_PASSES: [&str; 3] = ["begin_step", "autoreset", RESET_PASS];
 
-/// A pass's two rebuild entry points, `rebuilds` (a WGSL function of `k`, the entry's index)
-/// rebuilding the obstacles of its `k`th entry and saying whether it had one; `what` names the
-/// entries in the comment.
-fn rebuild_entries(what: &str, rebuilds: &str) -> String {
+/// A pass's two rebuild entry points over `target`, a WGSL function of `k`, the entry's index,
+/// saying what its `k`th entry rebuilds: an environment, `ORCA_OBSTACLES_SKIP` (nothing, but
+/// later entries may) or `NONE` (no entry from `k` on); `what` names the entries in the comment.
+/// [`REBUILD_ENTRY`] takes an entry a lane; [`REBUILD_IN_WORKGROUPS_ENTRY`] an entry at a time
+/// per workgroup, on all its lanes (`orca_obstacles_rebuild_on_lanes`).
+fn rebuild_entries(what: &str, target: &str) -> String {
     format!(
         "\n// The ORCA obstacle rebuilds of {what} (generated: src/backend/wgsl.rs, \
          `rebuild_entries`).\n\
          @compute @workgroup_size(WORKGROUP_SIZE)\n\
          fn {REBUILD_ENTRY}(@builtin(global_invocation_id) gid: vec3<u32>) {{\n\
-         \x20   _ = {rebuilds}(gid.x);\n}}\n\
+         \x20   let e = {target}(gid.x);\n\
+         \x20   if (e < ORCA_OBSTACLES_SKIP) {{\n\
+         \x20       orca_obstacles_rebuild_if_dirty(e);\n    }}\n}}\n\
          @compute @workgroup_size(WORKGROUP_SIZE)\n\
          fn {REBUILD_IN_WORKGROUPS_ENTRY}(\n\
          \x20   @builtin(workgroup_id) wid: vec3<u32>,\n\
          \x20   @builtin(num_workgroups) groups: vec3<u32>,\n\
          \x20   @builtin(local_invocation_index) lane: u32,\n) {{\n\
-         \x20   if (lane == 0u) {{\n\
-         \x20       let teams = groups.x * groups.y;\n\
-         \x20       for (var k = wid.x + wid.y * groups.x; {rebuilds}(k); k += teams) {{}}\n\
-         \x20   }}\n}}\n"
+         \x20   let teams = groups.x * groups.y;\n\
+         \x20   for (var k = wid.x + wid.y * groups.x; \
+         orca_obstacles_rebuild_on_lanes({target}(k), lane); k += teams) {{}}\n}}\n"
     )
 }
 
@@ -225,42 +231,51 @@ fn rebuild_entries(what: &str, rebuilds: &str) -> String {
 fn regroup_rebuild_entries(pass: &str) -> String {
     let queue = format!("RARE_{}", pass.to_uppercase());
     format!(
-        "\nfn rebuild_entry(k: u32) -> bool {{\n    \
-         return regroup_rebuild_queued({queue}, k);\n}}\n{}",
-        rebuild_entries("the environments `main` regrouped", "rebuild_entry")
+        "\nfn rebuild_target(k: u32) -> u32 {{\n    return rare_env({queue}, k);\n}}\n{}",
+        rebuild_entries("the environments `main` regrouped", "rebuild_target")
     )
 }
 
 /// The [`RESET_REBUILD_PASSES`] pass `pass`'s two rebuild entry points, over the environments it
 /// reset: the pool rows in its queue, or the reset pass's mask (the first action float non-zero).
 fn reset_rebuild_entries(pass: &str) -> String {
-    let entry = if pass == RESET_PASS {
-        "    if (k >= batch.n_envs) {\n        return false;\n    }\n\
-         \x20   if (actions[3u * k] != 0.0) {\n        orca_obstacles_rebuild_if_dirty(k);\n    }\n\
-         \x20   return true;\n"
+    let target = if pass == RESET_PASS {
+        "    if (k >= batch.n_envs) {\n        return NONE;\n    }\n\
+         \x20   if (actions[3u * k] != 0.0) {\n        return k;\n    }\n\
+         \x20   return ORCA_OBSTACLES_SKIP;\n"
             .to_owned()
     } else {
         format!(
             "    let row = rare_env(RARE_{}, k);\n\
-             \x20   if (row == NONE) {{\n        return false;\n    }}\n\
-             \x20   orca_obstacles_rebuild_if_dirty(pool_env_of(row));\n    return true;\n",
+             \x20   if (row == NONE) {{\n        return NONE;\n    }}\n\
+             \x20   return pool_env_of(row);\n",
             pass.to_uppercase()
         )
     };
     format!(
-        "\nfn rebuild_entry(k: u32) -> bool {{\n{entry}}}\n{}",
+        "\nfn rebuild_target(k: u32) -> u32 {{\n{target}}}\n{}",
         rebuild_entries(
             "the environments `main` reset from rows that leave them to the device",
-            "rebuild_entry"
+            "rebuild_target"
         )
     )
 }
 
+/// Words of workgroup memory [`REBUILD_IN_WORKGROUPS_ENTRY`] takes in all
+/// ([`REBUILD_WORKGROUP_WORDS`]): 16 KiB, the workgroup memory every WebGPU adapter has (wgpu's
+/// default `max_compute_workgroup_storage_size`).
+pub const REBUILD_WORKGROUP_WORDS: usize = 4096;
+
+/// Words of workgroup memory the lanes of a rebuild share besides the obstacle region
+/// (`orca_obstacles_rebuild_on_lanes`): a split candidate of 4 words (a `vec3<u32>`'s stride) for
+/// each lane, and two `vec2<u32>`.
+pub const REBUILD_LANES_WORDS: usize = 4 * WORKGROUP_SIZE as usize + 4;
+
 /// Words of workgroup memory [`REBUILD_IN_WORKGROUPS_ENTRY`] keeps an environment's obstacle
-/// region in ([`ObstacleScratch`]): 16 KiB, the workgroup memory every WebGPU adapter has (wgpu's
-/// default `max_compute_workgroup_storage_size`). Every shipped config's region fits (stress,
-/// the largest, 3,348 words); a larger one stays in the `scratch` buffer.
-pub const OBSTACLES_IN_WORKGROUP_WORDS: usize = 4096;
+/// region in ([`ObstacleScratch`]): the rest of [`REBUILD_WORKGROUP_WORDS`]. Every shipped
+/// config's region fits (stress, the largest, 3,348 words); a larger one stays in the `scratch`
+/// buffer.
+pub const OBSTACLES_IN_WORKGROUP_WORDS: usize = REBUILD_WORKGROUP_WORDS - REBUILD_LANES_WORDS;
 
 /// The obstacle library's region function as `shaders/common/orca_obstacles.wgsl` writes it.
 const OBSTACLE_REGION_IN_SCRATCH: &str =
@@ -272,9 +287,9 @@ const OBSTACLE_REGION_IN_SCRATCH: &str =
 /// `scratch`: one dependent chain of accesses at the latency of workgroup memory rather than of
 /// a storage buffer. Every `scratch[` of the source is rewritten, the slot permutations' too,
 /// which that entry point never reaches. Sound for [`REBUILD_IN_WORKGROUPS_ENTRY`] alone, which
-/// rebuilds one environment at a time per workgroup in its first lane, and because nothing in
-/// the region outlives the call that fills it; never compile another entry point from it (lanes
-/// would share the array).
+/// rebuilds one environment at a time per workgroup (its first lane writing the region, every
+/// lane reading it between barriers), and because nothing in the region outlives the call that
+/// fills it; never compile another entry point from it (lanes would share the array).
 /// `None` when `src` has no obstacle library.
 pub fn with_obstacles_in_workgroup(src: &str) -> Option<String> {
     if !src.contains(OBSTACLE_REGION_IN_SCRATCH) {

@@ -515,7 +515,7 @@ impl GpuStages {
         // environment's region fits.
         let fits = wgsl::ObstacleScratch::of(&columns).words <= wgsl::OBSTACLES_IN_WORKGROUP_WORDS
             && dev.limits.max_compute_workgroup_storage_size as usize
-                >= 4 * wgsl::OBSTACLES_IN_WORKGROUP_WORDS;
+                >= 4 * wgsl::REBUILD_WORKGROUP_WORDS;
         let rebuild = if dev.obstacles_in_workgroups && fits {
             Rebuild::InWorkgroups
         } else {

@@ -1085,8 +1085,9 @@ fn passes_have_their_second_entry_points() {
 /// library's working memory in a workgroup array (`wgsl::with_obstacles_in_workgroup`), as the
 /// GPU backend builds their `wgsl::REBUILD_IN_WORKGROUPS_ENTRY` on hardware adapters: no access
 /// to `scratch` left, one workgroup variable of `OBSTACLES_IN_WORKGROUP_WORDS` words, which every
-/// shipped config's obstacle region fits; no pass but those regroups, and none of their `main`s
-/// rebuilds (the rebuild entry points do, after it). The same for the passes that reset, as a
+/// shipped config's obstacle region fits, and with the lanes' shared words
+/// `REBUILD_WORKGROUP_WORDS` in all (16 KiB, which every WebGPU adapter has); no pass but those
+/// regroups, and none of their `main`s rebuilds (the rebuild entry points do, after it). The same for the passes that reset, as a
 /// batch whose pool rows leave their obstacles to the device assembles them.
 #[test]
 fn rebuild_passes_keep_their_obstacles_in_workgroup_memory() {
@@ -1110,22 +1111,35 @@ fn rebuild_passes_keep_their_obstacles_in_workgroup_memory() {
         assert!(!moved.contains("scratch["), "{pass}: scratch still read");
         let module = validate_source(&moved, &format!("pass {pass} (obstacles in workgroup)"))
             .unwrap_or_else(|e| panic!("{e}"));
-        let workgroup: Vec<u32> = module
+        let workgroup: Vec<(u32, u32)> = module
             .global_variables
             .iter()
             .filter(|(_, v)| v.space == naga::AddressSpace::WorkGroup)
-            .map(|(_, v)| match module.types[v.ty].inner {
-                naga::TypeInner::Array {
-                    size: naga::ArraySize::Constant(n),
-                    ..
-                } => n.get(),
-                _ => 0,
+            .map(|(_, v)| {
+                let inner = &module.types[v.ty].inner;
+                let len = match *inner {
+                    naga::TypeInner::Array {
+                        size: naga::ArraySize::Constant(n),
+                        base,
+                        ..
+                    } if module.types[base].inner == naga::TypeInner::Scalar(naga::Scalar::U32) => {
+                        n.get()
+                    }
+                    _ => 0,
+                };
+                (len, inner.size(module.to_ctx()))
             })
             .collect();
+        let regions = workgroup
+            .iter()
+            .filter(|&&(len, _)| len == wgsl::OBSTACLES_IN_WORKGROUP_WORDS as u32)
+            .count();
+        assert_eq!(regions, 1, "{pass}: one obstacle region: {workgroup:?}");
+        let bytes: u32 = workgroup.iter().map(|&(_, bytes)| bytes).sum();
         assert_eq!(
-            workgroup,
-            [wgsl::OBSTACLES_IN_WORKGROUP_WORDS as u32],
-            "{pass}: one workgroup array"
+            bytes as usize,
+            4 * wgsl::REBUILD_WORKGROUP_WORDS,
+            "{pass}: the rebuild's workgroup memory: {workgroup:?}"
         );
     }
     for (name, state, _) in shipped_tables() {

@@ -16,14 +16,18 @@
 //!
 //! Needs a GPU adapter (lavapipe will do). Without one the tests print why and pass, unless
 //! `REQUIRE_GPU=1`. Bit-identity is the contract on lavapipe; on other adapters the shader may
-//! legally round differently (spec/wgpu-on-cpu.md section 3).
+//! legally round differently (spec/wgpu-on-cpu.md section 3), so there
+//! (`common::gpu::parity_mode`) an agent agrees when its velocity is within
+//! `common::gpu::TOLERANCE` and its overflow flag is the CPU's (the lines' bits and the decisions
+//! within rounding of a threshold may differ), and at most `common::gpu::MAX_DIVERGED` of the
+//! agents may disagree.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use crate::common;
 
-use common::gpu::{config, device};
+use common::gpu::{MAX_DIVERGED, Parity, TOLERANCE, config, device, floats_agree, parity_mode};
 use common::reference::Table;
 use socnav::backend::gpu::GpuDevice;
 use socnav::backend::wgsl;
@@ -491,10 +495,24 @@ fn obstacles(polygons: &[Polygon]) -> ObstacleSet {
     set
 }
 
+/// Whether an agent's result `got` is the CPU's `want` under `mode`: every word (`Parity::Exact`),
+/// or the velocity within [`TOLERANCE`] and the same overflow flag (`Parity::Lockstep`).
+fn agrees(want: &Expected, got: &[u32], mode: Parity) -> bool {
+    match mode {
+        Parity::Exact => want[..] == *got,
+        Parity::Lockstep => {
+            let close =
+                |f: usize| floats_agree(f32::from_bits(want[f]), f32::from_bits(got[f]), TOLERANCE);
+            close(0) && close(1) && want[3] == got[3]
+        }
+    }
+}
+
 /// Runs the entry points over `batch` and compares every agent with the CPU; panics listing
 /// the first mismatches. `name` labels the printed counts.
 fn check(kernel: &Kernel, name: &str, batch: &Batch) {
     assert!(batch.agents() > 0, "{name}: no agents");
+    let mode = parity_mode(&kernel.dev.adapter);
     let mut report = String::new();
     let mut mismatches = 0;
     let mut nan = 0;
@@ -502,7 +520,7 @@ fn check(kernel: &Kernel, name: &str, batch: &Batch) {
         let got = kernel.run(entry, batch);
         assert_eq!(got.len(), batch.agents() * OUT, "{name}: output size");
         for (k, (want, got)) in batch.expected.iter().zip(got.chunks(OUT)).enumerate() {
-            if want[..] == *got {
+            if agrees(want, got, mode) {
                 nan += usize::from(f32::from_bits(want[0]).is_nan());
                 continue;
             }
@@ -532,10 +550,14 @@ fn check(kernel: &Kernel, name: &str, batch: &Batch) {
         batch.lp3,
         batch.obstacle_lines,
     );
+    let allowed = match mode {
+        Parity::Exact => 0,
+        Parity::Lockstep => (MAX_DIVERGED * (batch.agents() * ENTRY_POINTS.len()) as f64) as usize,
+    };
     assert!(
-        mismatches == 0,
+        mismatches <= allowed,
         "{name}: {mismatches} agent results differ between the WGSL and the Rust ORCA core on \
-         {}:\n{report}",
+         {} ({mode:?}; {allowed} allowed):\n{report}",
         kernel.dev.adapter
     );
 }
@@ -910,7 +932,8 @@ fn list_limits_are_flagged() {
             overflow[1..].iter().all(|&o| o == 0),
             "{entry}: agents with 10 neighbours are not flagged"
         );
-        // Within the limits, the results are the CPU's.
+        // Within the limits, the results are the CPU's (within rounding off lavapipe).
+        let mode = parity_mode(&kernel.dev.adapter);
         for (k, (want, got)) in batch
             .expected
             .iter()
@@ -918,7 +941,10 @@ fn list_limits_are_flagged() {
             .enumerate()
             .skip(1)
         {
-            assert_eq!(want[..], *got, "{entry}: agent {k}");
+            assert!(
+                agrees(want, got, mode),
+                "{entry}: agent {k} ({mode:?}): cpu {want:x?} gpu {got:x?}"
+            );
         }
     }
 }
