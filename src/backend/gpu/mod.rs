@@ -48,8 +48,8 @@ use crate::sngnn::pieces::Tables;
 use crate::state::BatchState;
 use crate::systems::reset::ObstacleBuild;
 use kit::{
-    Binding, CreationScope, Groups, bind_kinds, bytes_of, check_binding, map_and_read,
-    map_and_read_after, storage_buffer, uniform_buffer,
+    Binding, CreationScope, Groups, bind_buffers, bind_kinds, bytes_of, check_binding,
+    map_and_read, map_and_read_after, storage_buffer, uniform_buffer,
 };
 use readback::{StepReadback, words_to_bytes};
 use sngnn_net::StepBuffers;
@@ -95,12 +95,16 @@ pub struct GpuStages {
     actions: wgpu::Buffer,
     pool: wgpu::Buffer,
     /// New pool rows the host wrote back to back in one queue write, waiting to be copied into
-    /// their places at the start of the next submit ([`GpuStages::stage_pool_rows`]).
+    /// their places at the start of the next submit ([`GpuStages::stage_pool_rows`]); never
+    /// larger than the pool unless one write's rows are, so that it fits one storage binding.
     pool_staging: wgpu::Buffer,
     /// Those copies: (offset in `pool_staging`, offset in `pool`, bytes); and the bytes of
     /// `pool_staging` they use.
     pool_copies: Vec<(u64, u64, u64)>,
     pool_staged: u64,
+    /// The pass that makes those copies in one dispatch (`wgsl::pool_scatter_shader`), and the
+    /// list of runs it reads (the count, then `wgsl::POOL_RUN_WORDS` words a run).
+    pool_scatter: PoolScatter,
     /// The stages' working memory (`wgsl::ObstacleScratch`).
     scratch: wgpu::Buffer,
     /// The queues of the rare work (`wgsl::RARE_WORK_STAGES`): counters cleared before every
@@ -208,12 +212,85 @@ fn obstacle_build(after_resets: bool) -> ObstacleBuild {
 
 /// A buffer the host writes rows into and the device copies from, of `words` words.
 fn staging_buffer(dev: &GpuDevice, words: usize) -> wgpu::Buffer {
-    dev.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("pool staging"),
-        size: bytes_of::<u32>(words),
-        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
+    storage_buffer(dev, "pool staging", bytes_of::<u32>(words))
+}
+
+/// The pool scatter pass (`wgsl::pool_scatter_shader`): its pipeline, its bind group layout, and
+/// the list of runs it reads, which grows as a step's runs need.
+struct PoolScatter {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    runs: wgpu::Buffer,
+    /// The list's words on the host, kept between steps.
+    list: Vec<u32>,
+}
+
+impl PoolScatter {
+    /// The pass on `dev` (compiled once per device), with whether this call compiled it.
+    fn new(dev: &GpuDevice) -> Result<(Self, bool), SimError> {
+        let read = Binding::Storage { read_only: true };
+        let groups = vec![vec![read, read, Binding::Storage { read_only: false }]];
+        let source = wgsl::pool_scatter_shader();
+        let (pipeline, compiled) =
+            dev.pipelines
+                .pipeline(dev, wgsl::POOL_SCATTER_PASS, &groups, &source, "main")?;
+        let (layouts, _) = dev.pipelines.layout(dev, &groups);
+        let runs = storage_buffer(
+            dev,
+            "pool runs",
+            bytes_of::<u32>(1 + 64 * wgsl::POOL_RUN_WORDS),
+        );
+        let this = Self {
+            pipeline,
+            layout: layouts[0].clone(),
+            runs,
+            list: Vec::new(),
+        };
+        Ok((this, compiled))
+    }
+
+    /// Record into `enc` the copies `copies` ((from, to, bytes): from `staged` into `pool`) as
+    /// one dispatch, its list of runs written to the device before the submit's work.
+    fn record(
+        &mut self,
+        dev: &GpuDevice,
+        enc: &mut wgpu::CommandEncoder,
+        (staged, pool): (&wgpu::Buffer, &wgpu::Buffer),
+        copies: &[(u64, u64, u64)],
+    ) {
+        // Word offsets within one storage binding, which WGSL indexes with a u32, as every
+        // shader of the batch does.
+        let word = |bytes: u64| u32::try_from(bytes / 4).unwrap_or(u32::MAX);
+        let list = &mut self.list;
+        list.clear();
+        list.push(u32::try_from(copies.len()).unwrap_or(u32::MAX));
+        for &(from, to, size) in copies {
+            list.extend([word(from), word(to), word(size)]);
+        }
+        let bytes = words_to_bytes(list.len());
+        if bytes > self.runs.size() {
+            self.runs = storage_buffer(dev, "pool runs", bytes.next_power_of_two());
+        }
+        dev.queue
+            .write_buffer(&self.runs, 0, bytemuck::cast_slice(&self.list));
+        let group = bind_buffers(
+            dev,
+            "pool scatter",
+            &self.layout,
+            &[staged, &self.runs, pool],
+        );
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(wgsl::POOL_SCATTER_PASS),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        let (x, y) = workgroup_grid(
+            copies.len(),
+            dev.limits.max_compute_workgroups_per_dimension,
+        );
+        pass.dispatch_workgroups(x, y, 1);
+    }
 }
 
 /// The stages' working memory of `n_envs` environments (`wgsl::scratch_words`: ORCA's obstacles,
@@ -522,8 +599,9 @@ impl GpuStages {
             Rebuild::PerLane
         };
         let pool_staging = staging_buffer(&dev, POOL_STAGING_ROWS * pool_row_words);
+        let (pool_scatter, scatter_compiled) = PoolScatter::new(&dev)?;
         let mut pipelines: Vec<(&'static str, _)> = Vec::with_capacity(stages.len());
-        let mut compiled = usize::from(read_compiled);
+        let mut compiled = usize::from(read_compiled) + usize::from(scatter_compiled);
         let mut left_out = Vec::new();
         for &stage in stages {
             let pass = wgsl::pass_of(stage);
@@ -565,6 +643,7 @@ impl GpuStages {
             pool_staging,
             pool_copies: Vec::new(),
             pool_staged: 0,
+            pool_scatter,
             scratch,
             rare,
             pool_row_words,
@@ -674,6 +753,7 @@ impl GpuStages {
             &self.actions,
             &self.pool,
             &self.pool_staging,
+            &self.pool_scatter.runs,
             &self.scratch,
             &self.rare,
             &self.readback,
@@ -814,7 +894,9 @@ impl GpuStages {
     /// copied into the pool before the next submitted work: `runs` lists, in order, each run of
     /// consecutive environments of one half (as [`GpuStages::write_pool_rows`] takes them) and
     /// its number of rows. A queue write per run costs several microseconds of the host's time
-    /// each, and the rows of a step are scattered; one write and a copy per run cost less.
+    /// each, and the rows of a step are scattered; one write, and one dispatch that moves every
+    /// run into place (`wgsl::pool_scatter_shader`), cost less (a copy command per run cost about
+    /// 0.7 µs each).
     pub fn stage_pool_rows(&mut self, rows: &[u32], runs: &[(usize, usize, usize)]) {
         let bytes = words_to_bytes(rows.len());
         if self.pool_staged + bytes > self.pool_staging.size() {
@@ -829,7 +911,11 @@ impl GpuStages {
                 self.flush_pool_copies(&mut enc);
                 self.dev.queue.submit([enc.finish()]);
             }
-            let words = (2 * self.pool_staging.size() / 4).max(rows.len() as u64) as usize;
+            // No larger than the pool (which fits one storage binding) unless the rows are:
+            // the pool scatter pass binds the staging buffer whole.
+            let words = (2 * self.pool_staging.size() / 4)
+                .min(self.pool.size() / 4)
+                .max(rows.len() as u64) as usize;
             self.pool_staging = staging_buffer(&self.dev, words);
         }
         self.dev.queue.write_buffer(
@@ -852,10 +938,14 @@ impl GpuStages {
         words_to_bytes((half * self.n_envs + env) * self.pool_row_words)
     }
 
-    /// Record the staged pool rows' copies into `enc` (before its passes).
+    /// Record the staged pool rows' copies into `enc` (before its passes): one dispatch of the
+    /// pool scatter pass.
     fn flush_pool_copies(&mut self, enc: &mut wgpu::CommandEncoder) {
-        for (from, to, size) in self.pool_copies.drain(..) {
-            enc.copy_buffer_to_buffer(&self.pool_staging, from, &self.pool, to, size);
+        if !self.pool_copies.is_empty() {
+            let buffers = (&self.pool_staging, &self.pool);
+            self.pool_scatter
+                .record(&self.dev, enc, buffers, &self.pool_copies);
+            self.pool_copies.clear();
         }
         self.pool_staged = 0;
     }

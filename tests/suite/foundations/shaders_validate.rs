@@ -711,6 +711,22 @@ fn scratch_region_holds_obstacles_and_permutations() {
     }
 }
 
+/// The GPU backend's pool scatter pass (`wgsl::pool_scatter_shader`) validates, and reads a run
+/// as `wgsl::POOL_RUN_WORDS` words in a workgroup of `wgsl::WORKGROUP_SIZE` lanes.
+#[test]
+fn the_pool_scatter_pass_validates() {
+    let src = wgsl::pool_scatter_shader();
+    validate_source(&src, "pool scatter").expect("validates");
+    assert!(src.contains(&format!(
+        "const RUN_WORDS: u32 = {}u;",
+        wgsl::POOL_RUN_WORDS
+    )));
+    assert!(src.contains(&format!(
+        "const WORKGROUP_SIZE: u32 = {}u;",
+        wgsl::WORKGROUP_SIZE
+    )));
+}
+
 /// The GPU backend's finished-rows pass (`wgsl::finished_rows_shader`, generated from the output
 /// columns) validates for every shipped config and is the same text for all of them (one
 /// pipeline per device); its row is the environment's index and the finished-only columns.

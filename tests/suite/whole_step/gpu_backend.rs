@@ -439,8 +439,8 @@ fn the_step_timeline_times_the_wait_on_the_devices_clock() {
 
 /// Pool rows staged in one queue write each and copied into place before the next submit
 /// (`GpuStages::stage_pool_rows`, how `GpuBackend` writes them) reset environments exactly as
-/// rows written in place do, also when the staging buffer must grow while copies of an earlier
-/// write are still pending (10 rows, then 90).
+/// rows written in place do, their first observations included, also when the staging buffer
+/// must grow while copies of an earlier write are still pending (10 rows, then 90).
 #[test]
 fn staged_pool_rows_land_where_written_ones_do() {
     use socnav::backend::wgsl::RESET_PASS;
@@ -458,7 +458,9 @@ fn staged_pool_rows_land_where_written_ones_do() {
         gpu.run(RESET_PASS).expect("reset pass");
         let mut back = BatchState::zeroed(state.n_envs, state.strides);
         gpu.download_state(&mut back).expect("readback");
-        back
+        let mut first = Outputs::zeroed(out.n_envs, out.strides);
+        gpu.download_outputs(&mut first).expect("readback");
+        (back, first)
     };
     let written = after_reset(|gpu, rows| {
         for (e, (half, row)) in rows.iter().enumerate() {
@@ -476,12 +478,22 @@ fn staged_pool_rows_land_where_written_ones_do() {
         }
     });
     assert!(
-        written.differing_columns(&state).contains(&"episode"),
+        written.0.differing_columns(&state).contains(&"episode"),
         "the pass reset nothing"
     );
     assert!(
-        written.differing_columns(&staged).is_empty(),
+        written.1.differing_columns(out).contains(&"obs"),
+        "the pass wrote no first observation"
+    );
+    assert!(
+        written.0.differing_columns(&staged.0).is_empty(),
         "staged rows differ in {:?}",
-        written.differing_columns(&staged)
+        written.0.differing_columns(&staged.0)
+    );
+    // A row's observation (its last words) too.
+    assert!(
+        written.1.differing_columns(&staged.1).is_empty(),
+        "staged rows' first observations differ in {:?}",
+        written.1.differing_columns(&staged.1)
     );
 }
