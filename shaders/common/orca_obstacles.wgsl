@@ -52,7 +52,8 @@
 // backend::wgsl::scratch_region_words; the library's own part is `batch.obstacle_words`.) The
 // rebuild entry point of hardware adapters (`rebuild_in_workgroups`) takes this file with the
 // region moved into a workgroup array instead (backend::wgsl::with_obstacles_in_workgroup): one
-// environment at a time per workgroup.
+// environment at a time per workgroup, its lanes sharing each tree node's split search
+// (`orca_obstacles_rebuild_on_lanes`, below).
 //
 // Capacities and overflow. The processed set holds orca_obstacles_cap() = batch.s_ov_x vertices,
 // the per-environment capacity of the `ov_*` columns (Rust `store` asserts the same bound); a

@@ -1103,8 +1103,9 @@ fn passes_have_their_second_entry_points() {
 /// to `scratch` left, one workgroup variable of `OBSTACLES_IN_WORKGROUP_WORDS` words, which every
 /// shipped config's obstacle region fits, and with the lanes' shared words
 /// `REBUILD_WORKGROUP_WORDS` in all (16 KiB, which every WebGPU adapter has); no pass but those
-/// regroups, and none of their `main`s rebuilds (the rebuild entry points do, after it). The same for the passes that reset, as a
-/// batch whose pool rows leave their obstacles to the device assembles them.
+/// regroups, and none of their `main`s rebuilds (the rebuild entry points do, after it). The same
+/// for the passes that reset, as a batch whose pool rows leave their obstacles to the device
+/// assembles them.
 #[test]
 fn rebuild_passes_keep_their_obstacles_in_workgroup_memory() {
     let passes = wgsl::passes().into_iter().map(|pass| {
