@@ -31,8 +31,11 @@ pub enum AdapterPolicy {
     Any,
 }
 
-/// What the user reads when no adapter can be used.
-const INSTALL_HINT: &str = "install a Vulkan driver: your GPU vendor's driver, or Mesa's software \
+/// What the user reads when no adapter can be used. The loader and glvnd are named because a
+/// container with NVIDIA's driver mounted but neither of them (seen on an H200 machine) lists no
+/// adapter, with no other sign of why: the driver's Vulkan library needs glvnd's dispatch.
+const INSTALL_HINT: &str = "install a Vulkan driver: your GPU vendor's driver with the Vulkan \
+loader (Debian/Ubuntu: `libvulkan1`; NVIDIA's driver also needs `libglvnd0`), or Mesa's software \
 driver for testing (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers`); `socnav devices` lists \
 the adapters wgpu finds";
 
