@@ -186,9 +186,9 @@ pub const REBUILD_ENTRY: &str = "rebuild";
 /// hardware adapters (`GpuDevice::obstacles_in_workgroups`), where a rebuild over `scratch` is a
 /// chain of dependent storage-buffer accesses (2.4 of exp2's 5.1 ms a step on an H100), and in
 /// one lane the split search's quadratic loop was most of a rebuild (about 0.4 ms on an H200).
-/// (llvmpipe ends the loops of
-/// an invocation after 65,535 iterations in all, so there a workgroup must not take several large
-/// rebuilds; lavapipe rebuilds per lane, and tests that force this path keep to small batches.)
+/// (llvmpipe ends the loops of an invocation after 65,535 iterations in all, so there a
+/// workgroup must not take several large rebuilds; lavapipe rebuilds per lane, and tests that
+/// force this path keep to small batches.)
 pub const REBUILD_IN_WORKGROUPS_ENTRY: &str = "rebuild_in_workgroups";
 
 /// The passes that reset environments from the reset pool: where the pool's rows leave their ORCA
@@ -261,8 +261,8 @@ fn reset_rebuild_entries(pass: &str) -> String {
     )
 }
 
-/// Words of workgroup memory [`REBUILD_IN_WORKGROUPS_ENTRY`] takes in all
-/// ([`REBUILD_WORKGROUP_WORDS`]): 16 KiB, the workgroup memory every WebGPU adapter has (wgpu's
+/// Words of workgroup memory [`REBUILD_IN_WORKGROUPS_ENTRY`] takes in all (the obstacle region
+/// and the lanes' shared words): 16 KiB, the workgroup memory every WebGPU adapter has (wgpu's
 /// default `max_compute_workgroup_storage_size`).
 pub const REBUILD_WORKGROUP_WORDS: usize = 4096;
 

@@ -235,10 +235,11 @@ impl PoolScatter {
             dev.pipelines
                 .pipeline(dev, wgsl::POOL_SCATTER_PASS, &groups, &source, "main")?;
         let (layouts, _) = dev.pipelines.layout(dev, &groups);
+        // Room for a staging buffer's first rows in runs of one; it grows past that as needed.
         let runs = storage_buffer(
             dev,
             "pool runs",
-            bytes_of::<u32>(1 + 64 * wgsl::POOL_RUN_WORDS),
+            bytes_of::<u32>(1 + POOL_STAGING_ROWS * wgsl::POOL_RUN_WORDS),
         );
         let this = Self {
             pipeline,
@@ -261,13 +262,13 @@ impl PoolScatter {
         // Word offsets within one storage binding, which WGSL indexes with a u32, as every
         // shader of the batch does.
         let word = |bytes: u64| u32::try_from(bytes / 4).unwrap_or(u32::MAX);
-        let list = &mut self.list;
-        list.clear();
-        list.push(u32::try_from(copies.len()).unwrap_or(u32::MAX));
+        self.list.clear();
+        self.list
+            .push(u32::try_from(copies.len()).unwrap_or(u32::MAX));
         for &(from, to, size) in copies {
-            list.extend([word(from), word(to), word(size)]);
+            self.list.extend([word(from), word(to), word(size)]);
         }
-        let bytes = words_to_bytes(list.len());
+        let bytes = words_to_bytes(self.list.len());
         if bytes > self.runs.size() {
             self.runs = storage_buffer(dev, "pool runs", bytes.next_power_of_two());
         }
