@@ -16,8 +16,9 @@
 // the environments where one does; `main` runs one lane per queued environment and redraws from
 // the start (the step's stream is keyed by the tick, so it draws the same numbers). Where no
 // chance hits, `main` would have changed nothing, and the environment is not queued. The ORCA
-// obstacle rebuild that ends a regrouping follows `main` in a dispatch of its own, over the same
-// queue (`rebuild` or `rebuild_in_workgroups`, generated: backend::wgsl::REBUILD_PASSES).
+// obstacle rebuild that ends a regrouping is queued (RARE_REBUILD) for one dispatch after the
+// submit's last stage, `formation`'s regroupings with these (`rebuild` or
+// `rebuild_in_workgroups`, generated: backend::wgsl::REBUILD_PASSES).
 
 // Outcome of an attempt to start a formation (Rust `Start`).
 const START_STARTED: u32 = 0u;

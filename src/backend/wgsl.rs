@@ -166,12 +166,23 @@ pub const RARE_WORK_STAGES: [&str; 4] = ["begin_step", "formation", "social_even
 pub const QUEUE_ENTRY: &str = "queue_work";
 
 /// The passes whose `main` regroups environments (`regroup_canonicalize` in
-/// `shaders/common/regroup.wgsl`), leaving their ORCA obstacles to rebuild: a third entry point,
-/// generated (`rebuild_entries`), rebuilds them after `main`, before any later stage reads the
-/// `ov_*` columns (only the ORCA velocities of the next step's `motion` and `crowd` do). One
-/// rebuild per environment and pass, at the end of it, gives the columns the CPU's stage leaves,
-/// since a rebuild depends on the obstacles alone: the CPU rebuilds inside each regrouping.
+/// `shaders/common/regroup.wgsl`), leaving their ORCA obstacles to rebuild: each regrouped
+/// environment is queued once a submit (`RARE_REBUILD`, [`REBUILD_QUEUE`]), and one dispatch of a
+/// third entry point, generated (`rebuild_entries`), rebuilds them all after the submit's last
+/// stage (the GPU backend's `record_regroup_rebuild`; after the step's readback copies where a
+/// step is read back), before anything reads the `ov_*` columns (only the ORCA velocities of the
+/// next step's `motion` and `crowd` do). One rebuild per environment, after its last regrouping,
+/// gives the columns the CPU's stages leave, since a rebuild depends on the obstacles alone: the
+/// CPU rebuilds inside each regrouping, and the second of two in a step replaces the first's.
 pub const REBUILD_PASSES: [&str; 2] = ["formation", "social_events"];
+
+/// The rare-work queue of the environments whose obstacles the [`REBUILD_PASSES`] left to rebuild
+/// (`RARE_REBUILD`), after the [`RARE_WORK_STAGES`]' queues: an environment is pushed when its
+/// `obstacles_dirty` becomes 1, so at most once a submit (no environment ends a submit dirty).
+pub const REBUILD_QUEUE: usize = RARE_WORK_STAGES.len();
+
+/// Queues of the `rare` binding: one per [`RARE_WORK_STAGES`] stage and [`REBUILD_QUEUE`].
+pub const RARE_QUEUES: usize = RARE_WORK_STAGES.len() + 1;
 
 /// The entry point of a [`REBUILD_PASSES`] shader that rebuilds the obstacles of one queued
 /// environment per lane, its working memory in the environment's region of `scratch`.
@@ -227,12 +238,12 @@ fn rebuild_entries(what: &str, target: &str) -> String {
     )
 }
 
-/// The [`REBUILD_PASSES`] pass `pass`'s two rebuild entry points, over its queue.
-fn regroup_rebuild_entries(pass: &str) -> String {
-    let queue = format!("RARE_{}", pass.to_uppercase());
+/// A [`REBUILD_PASSES`] pass's two rebuild entry points, over the environments the submit's
+/// regroupings queued ([`REBUILD_QUEUE`]): the same in each such pass.
+fn regroup_rebuild_entries() -> String {
     format!(
-        "\nfn rebuild_target(k: u32) -> u32 {{\n    return rare_env({queue}, k);\n}}\n{}",
-        rebuild_entries("the environments `main` regrouped", "rebuild_target")
+        "\nfn rebuild_target(k: u32) -> u32 {{\n    return rare_env(RARE_REBUILD, k);\n}}\n{}",
+        rebuild_entries("the environments the submit regrouped", "rebuild_target")
     )
 }
 
@@ -311,7 +322,7 @@ pub fn with_obstacles_in_workgroup(src: &str) -> Option<String> {
 
 /// Words of the `rare` binding for `n_envs` environments: the counters, then the lists.
 pub fn rare_work_words(n_envs: usize) -> usize {
-    RARE_WORK_STAGES.len() * (1 + n_envs)
+    RARE_QUEUES * (1 + n_envs)
 }
 
 /// Passes that run consecutive stages of [`crate::pipeline::STAGES`] in one dispatch (issue 19:
@@ -1320,9 +1331,9 @@ pub fn finished_rows_shader(state: Columns<'_>, outputs: Columns<'_>) -> String 
     out
 }
 
-/// The queues of [`RARE_WORK_STAGES`]: their indices `RARE_<STAGE>`, the binding `rare` (9), and
-/// `rare_push` (queue an environment) and `rare_env` (lane `k`'s environment, or `NONE` past the
-/// queue's end).
+/// The queues of [`RARE_WORK_STAGES`] and the [`REBUILD_QUEUE`]: their indices `RARE_<STAGE>`
+/// and `RARE_REBUILD`, the binding `rare` (9), and `rare_push` (queue an environment) and
+/// `rare_env` (lane `k`'s environment, or `NONE` past the queue's end).
 fn rare_work_functions() -> String {
     let mut out = String::new();
     for (k, stage) in RARE_WORK_STAGES.iter().enumerate() {
@@ -1331,6 +1342,7 @@ fn rare_work_functions() -> String {
             stage.to_uppercase()
         ));
     }
+    out.push_str(&format!("const RARE_REBUILD: u32 = {REBUILD_QUEUE}u;\n"));
     out.push_str(&format!(
         "struct RareWork {{\n    count: array<atomic<u32>, {n}>,\n    list: array<u32>,\n}}\n\
          @group(0) @binding(9) var<storage, read_write> rare: RareWork;\n\
@@ -1339,7 +1351,7 @@ fn rare_work_functions() -> String {
          fn rare_env(queue: u32, k: u32) -> u32 {{\n\
          \x20   if (k >= atomicLoad(&rare.count[queue])) {{\n        return NONE;\n    }}\n\
          \x20   return rare.list[queue * batch.n_envs + k];\n}}\n",
-        n = RARE_WORK_STAGES.len()
+        n = RARE_QUEUES
     ));
     out
 }
@@ -1556,7 +1568,7 @@ pub fn assemble_pass(pass: &str, prelude: &str) -> Result<String, String> {
     let Some((_, members)) = FUSED_PASSES.iter().find(|(p, _)| *p == pass) else {
         let src = assemble(&format!("{pass}.wgsl"), prelude)?;
         if REBUILD_PASSES.contains(&pass) {
-            return Ok(src + &regroup_rebuild_entries(pass));
+            return Ok(src + &regroup_rebuild_entries());
         }
         return Ok(src);
     };

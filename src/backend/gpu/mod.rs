@@ -107,8 +107,8 @@ pub struct GpuStages {
     pool_scatter: PoolScatter,
     /// The stages' working memory (`wgsl::ObstacleScratch`).
     scratch: wgpu::Buffer,
-    /// The queues of the rare work (`wgsl::RARE_WORK_STAGES`): counters cleared before every
-    /// submit, then the lists.
+    /// The queues of the rare work (`wgsl::RARE_WORK_STAGES`) and of the regroupings' rebuild
+    /// (`wgsl::REBUILD_QUEUE`): counters cleared before every submit of stages, then the lists.
     rare: wgpu::Buffer,
     pool_row_words: usize,
     readback: wgpu::Buffer,
@@ -963,7 +963,9 @@ impl GpuStages {
     /// the episode counters into the step readback buffer, which is read into `read`'s outputs
     /// and counters. The host runs `while_device_works` between the submit and the wait for the
     /// readback; it may stage pool rows ([`GpuStages::stage_pool_rows`]), which reach the pool at
-    /// the start of the next submit.
+    /// the start of the next submit. Where `stages` regroup, the obstacles of the environments
+    /// they regrouped are rebuilt once after them (`record_regroup_rebuild`), with a read in a
+    /// submit of its own after the readback's.
     pub fn run_stages(
         &mut self,
         stages: &[&str],
@@ -971,6 +973,14 @@ impl GpuStages {
         while_device_works: impl FnOnce(&mut Self),
     ) -> Result<(), SimError> {
         let started = std::time::Instant::now();
+        // The regroupings' one rebuild, with the last regrouping pass's pipeline: at the end of
+        // the submit, or where the step is read back, in a submit of its own after the readback's
+        // (the host waits for those alone, and copies while the device rebuilds).
+        let regrouping = stages
+            .iter()
+            .rev()
+            .find(|s| wgsl::REBUILD_PASSES.contains(s))
+            .copied();
         let mut enc = self
             .dev
             .device
@@ -997,6 +1007,9 @@ impl GpuStages {
             self.bind(&mut pass);
             for dispatch in plan(stages) {
                 self.sngnn_unread |= self.record(&mut pass, &dispatch)?;
+            }
+            if let (None, Some(of)) = (&read, regrouping) {
+                self.record_regroup_rebuild(&mut pass, of)?;
             }
             if selective {
                 self.step_read.record(&mut pass);
@@ -1056,6 +1069,9 @@ impl GpuStages {
                 .submit_other_pieces(&self.dev, &tables, timeline);
             submits.extend(others);
             piece_bytes += bytes;
+        }
+        if let Some(of) = regrouping {
+            self.submit_regroup_rebuild(of)?;
         }
         let submit_s = started.elapsed().as_secs_f64() - host_work_s;
         let copies = submits.len();
@@ -1178,23 +1194,11 @@ impl GpuStages {
             pass.set_bind_group(0, &self.bind_groups[0], &[members * self.mask_stride]);
         }
         pass.dispatch_workgroups(workgroups, 1, 1);
-        match &pipeline.rebuild {
-            Some((rebuild, Rebuild::PerLane)) => {
-                pass.set_pipeline(rebuild);
-                pass.dispatch_workgroups(workgroups, 1, 1);
-            }
-            Some((rebuild, Rebuild::InWorkgroups)) => {
-                // A workgroup per environment of the batch, at most the device's
-                // `rebuild_workgroups` (each then takes every so-many-th queued environment), in
-                // rows of at most the device's workgroups per dimension.
-                let per_dimension = self.dev.limits.max_compute_workgroups_per_dimension;
-                let most =
-                    usize::try_from(self.dev.rebuild_workgroups.max(1)).unwrap_or(usize::MAX);
-                let (x, y) = workgroup_grid(self.n_envs.min(most), per_dimension);
-                pass.set_pipeline(rebuild);
-                pass.dispatch_workgroups(x, y, 1);
-            }
-            None => {}
+        // A regrouping pass's rebuild waits for the submit's end (`record_regroup_rebuild`).
+        if let Some(rebuild) = &pipeline.rebuild
+            && !wgsl::REBUILD_PASSES.contains(&dispatch.pass)
+        {
+            self.dispatch_rebuild(pass, rebuild);
         }
         if let Some(records) = &pipeline.records
             && self.whole_view
@@ -1212,6 +1216,72 @@ impl GpuStages {
         Ok(false)
     }
 
+    /// Record a rebuild entry point's dispatch into `pass`.
+    fn dispatch_rebuild(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        (pipeline, how): &(wgpu::ComputePipeline, Rebuild),
+    ) {
+        pass.set_pipeline(pipeline);
+        match how {
+            Rebuild::PerLane => {
+                pass.dispatch_workgroups((self.n_envs as u32).div_ceil(wgsl::WORKGROUP_SIZE), 1, 1);
+            }
+            Rebuild::InWorkgroups => {
+                // A workgroup per environment of the batch, at most the device's
+                // `rebuild_workgroups` (each then takes every so-many-th queued environment), in
+                // rows of at most the device's workgroups per dimension.
+                let per_dimension = self.dev.limits.max_compute_workgroups_per_dimension;
+                let most =
+                    usize::try_from(self.dev.rebuild_workgroups.max(1)).unwrap_or(usize::MAX);
+                let (x, y) = workgroup_grid(self.n_envs.min(most), per_dimension);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+    }
+
+    /// Record into `pass` the one rebuild of the ORCA obstacles of every environment that the
+    /// submit's regroupings queued (`wgsl::REBUILD_QUEUE`), with regrouping pass `of`'s rebuild
+    /// pipeline (the same entry point in each). It follows the submit's last stage: nothing in a
+    /// step reads the obstacles after the regroupings, so the rebuild costs the step's latency
+    /// nothing where it follows the readback ([`Self::run_stages`]).
+    fn record_regroup_rebuild(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        of: &str,
+    ) -> Result<(), SimError> {
+        let rebuild = self
+            .pipelines
+            .iter()
+            .find(|(p, _)| *p == of)
+            .and_then(|(_, pipelines)| pipelines.as_ref())
+            .and_then(|p| p.rebuild.as_ref())
+            .ok_or_else(|| SimError::Internal(format!("pass {of} has no rebuild pipeline")))?;
+        self.dispatch_rebuild(pass, rebuild);
+        Ok(())
+    }
+
+    /// The regroupings' rebuild (`record_regroup_rebuild`) in a submit of its own, after the
+    /// submits made so far.
+    fn submit_regroup_rebuild(&self, of: &str) -> Result<(), SimError> {
+        let mut enc = self
+            .dev
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("regroupings' obstacle rebuild"),
+            });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("regroupings' obstacle rebuild"),
+                timestamp_writes: None,
+            });
+            self.bind(&mut pass);
+            self.record_regroup_rebuild(&mut pass, of)?;
+        }
+        self.dev.queue.submit([enc.finish()]);
+        Ok(())
+    }
+
     /// The output tables and the batch's layout, as the readback copies from them.
     fn output_tables(&self) -> readback::Tables<'_> {
         readback::Tables {
@@ -1225,7 +1295,7 @@ impl GpuStages {
     /// into their places, and the rare work's queues emptied.
     fn begin_submit(&mut self, enc: &mut wgpu::CommandEncoder) {
         self.flush_pool_copies(enc);
-        let counters = bytes_of::<u32>(wgsl::RARE_WORK_STAGES.len());
+        let counters = bytes_of::<u32>(wgsl::RARE_QUEUES);
         enc.clear_buffer(&self.rare, 0, Some(counters));
     }
 
@@ -1274,6 +1344,10 @@ impl GpuStages {
             label: Some("timed passes"),
         });
         self.begin_submit(&mut enc);
+        // The regroupings' one rebuild is timed with the last regrouping stage timed.
+        let regrouping = stages
+            .iter()
+            .rposition(|s| wgsl::REBUILD_PASSES.contains(s));
         for (k, &stage) in (0u32..).zip(stages) {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(stage),
@@ -1286,6 +1360,9 @@ impl GpuStages {
             self.bind(&mut pass);
             for dispatch in plan(&[stage]) {
                 self.sngnn_unread |= self.record(&mut pass, &dispatch)?;
+            }
+            if regrouping == Some(k as usize) {
+                self.record_regroup_rebuild(&mut pass, stage)?;
             }
         }
         enc.resolve_query_set(&set, 0..count, &resolved, 0);
@@ -1332,6 +1409,21 @@ impl GpuStages {
         let u = self.read_words(gu, self.n_envs * layout.u32_stride())?;
         let f = self.read_words(gf, self.n_envs * layout.f32_stride())?;
         Ok(Some((u, f.into_iter().map(f32::from_bits).collect())))
+    }
+
+    /// The environments the last submit's regroupings queued for their one obstacle rebuild
+    /// (`wgsl::REBUILD_QUEUE`), in the order they were queued: each at most once.
+    pub fn queued_rebuilds(&self) -> Result<Vec<u32>, SimError> {
+        let counters = self.read_words(&self.rare, wgsl::RARE_QUEUES)?;
+        let count = counters[wgsl::REBUILD_QUEUE] as usize;
+        if count > self.n_envs {
+            return Err(SimError::Internal(format!(
+                "the rebuild queue holds {count} environments of {}",
+                self.n_envs
+            )));
+        }
+        let first = wgsl::RARE_QUEUES + wgsl::REBUILD_QUEUE * self.n_envs;
+        self.read_words_at(&self.rare, words_to_bytes(first), count)
     }
 
     /// Read the device's state back into `state` (same batch size and capacities).

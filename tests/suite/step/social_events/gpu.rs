@@ -318,3 +318,114 @@ fn social_events_parity() {
         "{total:?}"
     );
 }
+
+/// The environments whose obstacles a CPU stage rebuilt: those whose first obstacle vertex is no
+/// longer the marker the state was given (`scramble_obstacles`).
+fn rebuilt_envs(s: &BatchState) -> Vec<u32> {
+    let cap = s.strides.obstacle_vertices;
+    (0..s.n_envs)
+        .filter(|&e| cap > 0 && s.ov_x[e * cap] != GARBAGE)
+        .map(|e| e as u32)
+        .collect()
+}
+
+/// Zero the obstacle slots past each environment's count, as every real state holds them
+/// (`crate::state`), which `scramble_obstacles` does not: a rebuild zeroes only the slots from its
+/// set's end to the old count, so two rebuilds in a row leave what one does only where the slots
+/// past the count hold zeros.
+fn zero_unused_obstacle_slots(s: &mut BatchState) {
+    let cap = s.strides.obstacle_vertices;
+    for e in 0..s.n_envs {
+        for i in e * cap + s.n_obstacle_vertices[e] as usize..(e + 1) * cap {
+            s.ov_x[i] = 0.0;
+            s.ov_y[i] = 0.0;
+            s.ov_dir_x[i] = 0.0;
+            s.ov_dir_y[i] = 0.0;
+            s.ov_next[i] = 0;
+            s.ov_prev[i] = 0;
+            s.ov_convex[i] = 0;
+        }
+    }
+}
+
+/// Contract: `formation` and `social_events` in one submit, as a step runs them, leave the CPU's
+/// columns, though the device rebuilds the obstacles of each environment that either regrouped
+/// once, after both (`wgsl::REBUILD_QUEUE`): its queue holds exactly the environments whose
+/// obstacles the CPU's two stages rebuilt, each once, some regrouped by both stages. Rebuilt in
+/// workgroup memory (the hardware adapters' way, where an environment queued twice would be
+/// rebuilt by two workgroups at once), poisoned before each rebuild.
+#[test]
+fn regroupings_in_one_submit_rebuild_each_environment_once() {
+    const STAGES: [&str; 2] = ["formation", "social_events"];
+    let Some(mut dev) = device() else { return };
+    dev.obstacles_in_workgroups = true;
+    dev.poison_orca_lists = true;
+    let mut config = eventful("exp3", 0.5);
+    config.episode.time_step = 0.3;
+    let n_envs = 256;
+    let env = rolled_out(config, n_envs, 40);
+    let p = *env.params();
+    let mut cpu = env.state().unwrap().clone();
+    let mut cpu_out = env.outputs().clone();
+    let mut gpu = GpuStages::new(dev, &p, &cpu, &cpu_out, &STAGES).expect("GPU stages");
+    let mut from_gpu = cpu.clone();
+    let mode = parity_mode(gpu.adapter());
+    let mut lockstep = Lockstep::default();
+    let mut rng = RngStream::new(11, 2);
+    let (mut both, mut queued) = (0, 0);
+    for run in 0..4 {
+        crate::step::formation::perturb_formation(&mut cpu, &mut cpu_out, &p, &mut rng);
+        zero_unused_obstacle_slots(&mut cpu);
+        gpu.upload_state(&cpu);
+        gpu.upload_outputs(&cpu_out);
+        let actions = random_actions(&mut rng, n_envs, p.holonomic != 0);
+        // Which environments each CPU stage rebuilt: the marker again before the second.
+        cpu_stage(STAGES[0], &p, &mut cpu, &mut cpu_out, &actions);
+        let by_formation = rebuilt_envs(&cpu);
+        let mut marked = cpu.clone();
+        let cap = marked.strides.obstacle_vertices;
+        for e in 0..n_envs {
+            marked.ov_x[e * cap] = GARBAGE;
+        }
+        cpu_stage(STAGES[1], &p, &mut marked, &mut cpu_out.clone(), &actions);
+        let by_events = rebuilt_envs(&marked);
+        cpu_stage(STAGES[1], &p, &mut cpu, &mut cpu_out, &actions);
+        gpu.upload_actions(&actions);
+        gpu.run_stages(&STAGES, None, |_| {}).expect("GPU stages");
+        let mut expected: Vec<u32> = by_formation.iter().chain(&by_events).copied().collect();
+        expected.sort_unstable();
+        expected.dedup();
+        let mut got = gpu.queued_rebuilds().expect("the rebuild queue");
+        got.sort_unstable();
+        assert_eq!(got, expected, "run {run}: the queued rebuilds");
+        both += by_formation
+            .iter()
+            .filter(|e| by_events.contains(e))
+            .count();
+        queued += got.len();
+        gpu.download_state(&mut from_gpu).expect("readback");
+        if mode == Parity::Lockstep {
+            lockstep.add(n_envs, (&cpu, &from_gpu), None);
+            continue;
+        }
+        let differ = cpu.differing_columns(&from_gpu);
+        assert!(
+            differ.is_empty(),
+            "run {run}: state columns {differ:?} differ between CPU and GPU on {}; {}",
+            gpu.adapter(),
+            first_differences(
+                &cpu.columns(),
+                |f, u| cpu.pack(f, u),
+                |f, u| from_gpu.pack(f, u)
+            ),
+        );
+    }
+    if mode == Parity::Lockstep {
+        lockstep.check("formation + social_events", gpu.adapter());
+    }
+    assert!(
+        both > 0,
+        "no environment regrouped in both stages ({queued} queued in all)"
+    );
+    println!("{queued} rebuilds queued, {both} of environments regrouped by both stages");
+}
