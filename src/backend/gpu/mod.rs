@@ -682,7 +682,8 @@ impl GpuStages {
     /// (`GpuDevice::records_in_lanes`, where the batch's rows have any), the resets run
     /// (`GpuDevice::resets_in_workgroups`), the obstacles are rebuilt
     /// (`GpuDevice::obstacles_in_workgroups`, where the batch's passes rebuild any) and a reset's
-    /// obstacles are built (`GpuDevice::obstacles_after_resets`).
+    /// obstacles are built (`GpuDevice::obstacles_after_resets`) and the memory the readback is
+    /// mapped from (`GpuDevice::readback_memory`).
     pub fn device_description(&self) -> String {
         let shaders = match (self.dev.own_spirv, self.dev.driver_checks_buffers) {
             (true, true) => {
@@ -731,10 +732,14 @@ impl GpuStages {
             1 => "one piece".to_owned(),
             n => format!("{n} pieces"),
         };
+        let memory = self
+            .dev
+            .readback_memory()
+            .map_or(String::new(), |m| format!(", mapped from {m}"));
         format!(
             "{}; shaders: {shaders}; observations {observations}; entity records {records}; \
              resets on {resets}; obstacle rebuilds {rebuilds}; a reset's obstacles \
-             {reset_obstacles}; per-step outputs read back in {pieces}{left_out}",
+             {reset_obstacles}; per-step outputs read back in {pieces}{memory}{left_out}",
             self.dev.adapter
         )
     }

@@ -34,6 +34,37 @@ fn state_round_trip() {
     );
 }
 
+/// The device names the memory its step readback is mapped from (a diagnosis of the copy out of
+/// it on hardware): on Vulkan a host-visible, coherent memory type, and a batch's device line
+/// says the same.
+#[test]
+fn the_readback_memory_is_named() {
+    let Some(dev) = device() else { return };
+    if dev.adapter.backend != "Vulkan" {
+        println!("skipped: {} is not a Vulkan adapter", dev.adapter);
+        return;
+    }
+    let memory = dev
+        .readback_memory()
+        .expect("a Vulkan device names its readback memory")
+        .to_owned();
+    assert!(
+        memory.starts_with("memory type ")
+            && memory.contains("HOST_VISIBLE")
+            && memory.contains("HOST_COHERENT"),
+        "{memory}"
+    );
+    let env = rolled_out(config("exp1"), 4, 1);
+    let state = env.state().unwrap().clone();
+    let gpu = GpuStages::new(dev, env.params(), &state, env.outputs(), &[]).expect("GPU stages");
+    assert!(
+        gpu.device_description()
+            .contains(&format!("mapped from {memory}")),
+        "{}",
+        gpu.device_description()
+    );
+}
+
 /// Contract: the masked reset pass (`shaders/reset.wgsl`) equals `CpuBackend::reset` over about
 /// half the environments, chained so that reset environments reset again from their next row.
 #[test]
