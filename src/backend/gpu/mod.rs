@@ -980,7 +980,10 @@ impl GpuStages {
         let started = std::time::Instant::now();
         // The regroupings' one rebuild, with the last regrouping pass's pipeline: at the end of
         // the submit, or where the step is read back, in a submit of its own after the readback's
-        // (the host waits for those alone, and copies while the device rebuilds).
+        // (the host waits for those alone, and copies while the device rebuilds), made before any
+        // wait so that no error on the way leaves a regrouped environment dirty. A driver that
+        // holds a submit until the one before it has finished (lavapipe) holds the host there
+        // until the readback is done; the H200's did not hold the pieces' submits.
         let regrouping = stages
             .iter()
             .rev()
