@@ -6,7 +6,8 @@
 // step; DISABLED leaves it to the caller.
 //
 // Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
-// environment, marks NEXT_STEP's and queues the pool rows of SAME_STEP's finished environments;
+// environment, marks NEXT_STEP's and queues the pool rows of SAME_STEP's finished environments
+// (and the environments for the submit's one obstacle rebuild: `pool_reset_queue_rebuild`);
 // `main` keeps the finals of each queued environment and resets it with a team of lanes
 // (common/pool_reset.wgsl): a lane keeps the slots of the finals that it then overwrites, so no
 // lane reads what another writes.
@@ -18,6 +19,7 @@ fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     if (params.autoreset == AUTORESET_SAME_STEP) {
+        pool_reset_queue_rebuild(e);
         rare_push(RARE_AUTORESET, pool_row_of(e));
     } else if (params.autoreset == AUTORESET_NEXT_STEP) {
         su[batch.c_pending_reset + e] = 1u;

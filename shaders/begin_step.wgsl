@@ -7,9 +7,12 @@
 //
 // Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
 // environment, clears the flags, counts the tick and queues the pool row of each environment that
-// resets (`pool_row_of`, chosen before the reset moves the episode counter on); `main` resets
-// each queued environment with a team of lanes (a reset copies a whole state row and
-// observation: common/pool_reset.wgsl). Each environment's operations keep their order.
+// resets (`pool_row_of`, chosen before the reset moves the episode counter on) and, where the
+// rows leave the ORCA obstacles to the device, the environment for the submit's one rebuild
+// (`pool_reset_queue_rebuild`: a reset environment takes no dynamics this step, so nothing reads
+// its obstacles before then); `main` resets each queued environment with a team of lanes (a reset
+// copies a whole state row and observation: common/pool_reset.wgsl). Each environment's
+// operations keep their order.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -24,6 +27,7 @@ fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if (su[batch.c_pending_reset + e] != 0u) {
         su[batch.c_stepping + e] = 0u;
+        pool_reset_queue_rebuild(e);
         rare_push(RARE_BEGIN_STEP, pool_row_of(e));
     } else {
         let stepping = select(0u, 1u, su[batch.c_done + e] == 0u);

@@ -12,9 +12,21 @@
 // `pool_copy_observation` are generated with the prelude. Where the device asks for it
 // (`GpuDevice::obstacles_after_resets`), a row leaves the ORCA obstacles dirty and out of the row
 // (`batch.pool_obstacles` 0, `backend::wgsl::POOL_OBSTACLE_COLUMNS`: the copy leaves the old ones
-// and their count in place), and the resetting pass rebuilds them after `main` in entry points
-// generated with the obstacle library (`backend::wgsl::assemble_pass_rebuilding_resets`), which
-// zero the old tail past the new count as every rebuild does.
+// and their count in place), and they are rebuilt in entry points generated with the obstacle
+// library (`backend::wgsl::assemble_pass_rebuilding_resets`), which zero the old tail past the
+// new count as every rebuild does: a step's resets queue their environments
+// (`pool_reset_queue_rebuild`) for the submit's one rebuild after its stages, with the
+// regroupings' (backend::wgsl::QUEUED_REBUILD_PASSES); the reset pass rebuilds after `main`.
+
+// Queue environment e, about to reset from its pool row, for the submit's one obstacle rebuild
+// (RARE_REBUILD) where the rows leave the obstacles to the device, unless a regrouping queued it
+// already this submit: its obstacles are then dirty, which no environment is at a submit's start.
+// Called before `main` copies the row (which sets the flag).
+fn pool_reset_queue_rebuild(e: u32) {
+    if (batch.pool_obstacles == 0u && su[batch.c_obstacles_dirty + e] != 1u) {
+        rare_push(RARE_REBUILD, e);
+    }
+}
 
 // Resets by many lanes. A reset is about 1,500 words (exp2) copied from the pool, a chain of
 // loads and stores that one lane runs at memory latency. The queued resets of a step

@@ -169,48 +169,59 @@ pub const QUEUE_ENTRY: &str = "queue_work";
 /// `shaders/common/regroup.wgsl`), leaving their ORCA obstacles to rebuild: each regrouped
 /// environment is queued once a submit (`RARE_REBUILD`, [`REBUILD_QUEUE`]), and one dispatch of a
 /// third entry point, generated (`rebuild_entries`), rebuilds them all after the submit's last
-/// stage (the GPU backend's `record_regroup_rebuild`; after the step's readback copies where a
-/// step is read back), before anything reads the `ov_*` columns (only the ORCA velocities of the
+/// stage, with the resets' ([`QUEUED_REBUILD_PASSES`]; the GPU backend's
+/// `record_queued_rebuild`, after the step's readback copies where a step is read back), before
+/// anything reads the `ov_*` columns (only the ORCA velocities of the
 /// next step's `motion` and `crowd` do). One rebuild per environment, after its last regrouping,
 /// gives the columns the CPU's stages leave, since a rebuild depends on the obstacles alone: the
 /// CPU rebuilds inside each regrouping, and the second of two in a step replaces the first's.
 pub const REBUILD_PASSES: [&str; 2] = ["formation", "social_events"];
 
-/// The rare-work queue of the environments whose obstacles the [`REBUILD_PASSES`] left to rebuild
-/// (`RARE_REBUILD`), after the [`RARE_WORK_STAGES`]' queues: an environment is pushed when its
-/// `obstacles_dirty` becomes 1, so at most once a submit (no environment ends a submit dirty).
+/// The rare-work queue of the environments whose obstacles the [`QUEUED_REBUILD_PASSES`] left to
+/// rebuild (`RARE_REBUILD`), after the [`RARE_WORK_STAGES`]' queues: an environment is pushed when
+/// its `obstacles_dirty` becomes 1, so at most once a submit (no environment ends a submit dirty).
 pub const REBUILD_QUEUE: usize = RARE_WORK_STAGES.len();
+
+/// The passes whose rebuilds wait in the [`REBUILD_QUEUE`] for the submit's one rebuild dispatch:
+/// the [`REBUILD_PASSES`], and the step's [`RESET_REBUILD_PASSES`] where the pool's rows leave
+/// their obstacles to the device. A reset of `begin_step` (NEXT_STEP) takes no dynamics in its
+/// step and one of `autoreset` (SAME_STEP) ends it, so neither environment's obstacles are read
+/// before the next step's ORCA velocities, as after a regrouping; a SAME_STEP reset of an
+/// environment regrouped in the same step is queued once (`pool_reset_queue_rebuild`). The reset
+/// pass, a submit of its own, rebuilds after its `main`.
+pub const QUEUED_REBUILD_PASSES: [&str; 4] =
+    ["begin_step", "formation", "social_events", "autoreset"];
 
 /// Queues of the `rare` binding: one per [`RARE_WORK_STAGES`] stage and [`REBUILD_QUEUE`].
 pub const RARE_QUEUES: usize = RARE_WORK_STAGES.len() + 1;
 
-/// The entry point of a [`REBUILD_PASSES`] shader that rebuilds the obstacles of one queued
+/// The rebuild entry point ([`REBUILD_PASSES`], [`RESET_REBUILD_PASSES`]) that takes one queued
 /// environment per lane, its working memory in the environment's region of `scratch`.
 pub const REBUILD_ENTRY: &str = "rebuild";
 
-/// The entry point of a [`REBUILD_PASSES`] shader that rebuilds the obstacles of the queued
-/// environments a workgroup at a time, its working memory in workgroup memory (built from
-/// [`with_obstacles_in_workgroup`]'s source; a dispatch of a workgroup per environment of the
-/// batch, at most `GpuDevice::rebuild_workgroups`, workgroup `w` of `W` taking queue entries `w`,
-/// `w + W`, ...), its first lane running the serial parts and every lane a share of each tree
-/// node's split candidates (`orca_obstacles_rebuild_on_lanes`): the GPU backend's choice on
-/// hardware adapters (`GpuDevice::obstacles_in_workgroups`), where a rebuild over `scratch` is a
-/// chain of dependent storage-buffer accesses (2.4 of exp2's 5.1 ms a step on an H100), and in
-/// one lane the split search's quadratic loop was most of a rebuild (about 0.4 ms on an H200).
-/// (llvmpipe ends the loops of an invocation after 65,535 iterations in all, so there a
-/// workgroup must not take several large rebuilds; lavapipe rebuilds per lane, and tests that
-/// force this path keep to small batches.)
+/// The rebuild entry point that takes the queued environments a workgroup at a time, its working
+/// memory in workgroup memory (built from [`with_obstacles_in_workgroup`]'s source; a dispatch of a
+/// workgroup per environment of the batch, at most `GpuDevice::rebuild_workgroups`, workgroup `w`
+/// of `W` taking queue entries `w`, `w + W`, ...), its first lane running the serial parts and
+/// every lane a share of each tree node's split candidates (`orca_obstacles_rebuild_on_lanes`): the
+/// GPU backend's choice on hardware adapters (`GpuDevice::obstacles_in_workgroups`), where a
+/// rebuild over `scratch` is a chain of dependent storage-buffer accesses (2.4 of exp2's 5.1 ms a
+/// step on an H100), and in one lane the split search's quadratic loop was most of a rebuild (about
+/// 0.4 ms on an H200). (llvmpipe ends the loops of an invocation after 65,535 iterations in all, so
+/// there a workgroup must not take several large rebuilds; lavapipe rebuilds per lane, and tests
+/// that force this path keep to small batches.)
 pub const REBUILD_IN_WORKGROUPS_ENTRY: &str = "rebuild_in_workgroups";
 
 /// The passes that reset environments from the reset pool: where the pool's rows leave their ORCA
 /// obstacles to the device (`GpuDevice::obstacles_after_resets`,
 /// `systems::reset::ObstacleBuild::Deferred`), each is assembled with the obstacle library and
-/// the two rebuild entry points of a [`REBUILD_PASSES`] pass ([`REBUILD_ENTRY`],
-/// [`REBUILD_IN_WORKGROUPS_ENTRY`]) over the environments it reset
-/// ([`assemble_pass_rebuilding_resets`]): the queued pool rows of `begin_step` and `autoreset`,
-/// the masked environments of the reset pass. Nothing reads the `ov_*` columns or their count
-/// between a reset and the rebuild after it (the copy leaves the old ones in place:
-/// [`POOL_OBSTACLE_COLUMNS`]).
+/// the two rebuild entry points ([`REBUILD_ENTRY`], [`REBUILD_IN_WORKGROUPS_ENTRY`];
+/// [`assemble_pass_rebuilding_resets`]): `begin_step` and `autoreset` queue the environments they
+/// reset with the regroupings' for the submit's one rebuild after its stages
+/// ([`QUEUED_REBUILD_PASSES`], [`REBUILD_QUEUE`]); the reset pass rebuilds its masked
+/// environments after its `main`. Nothing reads the `ov_*` columns or their count between a
+/// reset and the rebuild after it (the copy leaves the old ones in place:
+/// [`POOL_OBSTACLE_COLUMNS`]; a reset environment takes no dynamics until the next step).
 pub const RESET_REBUILD_PASSES: [&str; 3] = ["begin_step", "autoreset", RESET_PASS];
 
 /// A pass's two rebuild entry points over `target`, a WGSL function of `k`, the entry's index,
@@ -238,31 +249,28 @@ fn rebuild_entries(what: &str, target: &str) -> String {
     )
 }
 
-/// A [`REBUILD_PASSES`] pass's two rebuild entry points, over the environments the submit's
-/// regroupings queued ([`REBUILD_QUEUE`]): the same in each such pass.
-fn regroup_rebuild_entries() -> String {
+/// A [`QUEUED_REBUILD_PASSES`] pass's two rebuild entry points, over the environments the
+/// submit's regroupings and resets queued ([`REBUILD_QUEUE`]): the same in each such pass.
+fn queued_rebuild_entries() -> String {
     format!(
         "\nfn rebuild_target(k: u32) -> u32 {{\n    return rare_env(RARE_REBUILD, k);\n}}\n{}",
-        rebuild_entries("the environments the submit regrouped", "rebuild_target")
+        rebuild_entries(
+            "the environments the submit regrouped or reset",
+            "rebuild_target"
+        )
     )
 }
 
-/// The [`RESET_REBUILD_PASSES`] pass `pass`'s two rebuild entry points, over the environments it
-/// reset: the pool rows in its queue, or the reset pass's mask (the first action float non-zero).
+/// The [`RESET_REBUILD_PASSES`] pass `pass`'s two rebuild entry points: over the
+/// [`REBUILD_QUEUE`] for the step's ([`QUEUED_REBUILD_PASSES`]), over the reset pass's mask (the
+/// first action float non-zero) for it.
 fn reset_rebuild_entries(pass: &str) -> String {
-    let target = if pass == RESET_PASS {
-        "    if (k >= batch.n_envs) {\n        return NONE;\n    }\n\
+    if pass != RESET_PASS {
+        return queued_rebuild_entries();
+    }
+    let target = "    if (k >= batch.n_envs) {\n        return NONE;\n    }\n\
          \x20   if (actions[3u * k] != 0.0) {\n        return k;\n    }\n\
-         \x20   return ORCA_OBSTACLES_SKIP;\n"
-            .to_owned()
-    } else {
-        format!(
-            "    let row = rare_env(RARE_{}, k);\n\
-             \x20   if (row == NONE) {{\n        return NONE;\n    }}\n\
-             \x20   return pool_env_of(row);\n",
-            pass.to_uppercase()
-        )
-    };
+         \x20   return ORCA_OBSTACLES_SKIP;\n";
     format!(
         "\nfn rebuild_target(k: u32) -> u32 {{\n{target}}}\n{}",
         rebuild_entries(
@@ -1157,8 +1165,9 @@ pub const POOL_OUTPUT_COLUMNS: [&str; 5] =
 /// leaves them to the device ([`ObstacleBuild::Deferred`]) does not hold: two fifths of an exp2
 /// row, which the host would write, the device's pool keep and every reset copy, only for the
 /// rebuild to replace. Such a row's copy leaves the environment's old obstacles in place, their
-/// count included, and the rebuild after it ([`RESET_REBUILD_PASSES`]) replaces them, zeroing
-/// the old tail past the new count as every rebuild does: the bits of a build on the host.
+/// count included, and the rebuild after it ([`RESET_REBUILD_PASSES`]: the submit's one rebuild
+/// of the [`REBUILD_QUEUE`], or the reset pass's own) replaces them, zeroing the old tail past
+/// the new count as every rebuild does: the bits of a build on the host.
 pub const POOL_OBSTACLE_COLUMNS: [&str; 8] = [
     "ov_x",
     "ov_y",
@@ -1568,7 +1577,7 @@ pub fn assemble_pass(pass: &str, prelude: &str) -> Result<String, String> {
     let Some((_, members)) = FUSED_PASSES.iter().find(|(p, _)| *p == pass) else {
         let src = assemble(&format!("{pass}.wgsl"), prelude)?;
         if REBUILD_PASSES.contains(&pass) {
-            return Ok(src + &regroup_rebuild_entries());
+            return Ok(src + &queued_rebuild_entries());
         }
         return Ok(src);
     };

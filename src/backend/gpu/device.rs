@@ -353,8 +353,9 @@ pub struct GpuDevice {
     pub records_in_lanes: bool,
     /// Whether the reset pool's rows leave their ORCA obstacles to the device
     /// (`systems::reset::ObstacleBuild::Deferred`), which rebuilds them after each reset's copy
-    /// in a dispatch of the resetting pass (`backend::wgsl::RESET_REBUILD_PASSES`; in workgroup
-    /// memory where [`GpuDevice::obstacles_in_workgroups`] says so), instead of building them
+    /// (a step's in the one rebuild after its stages, the reset pass's after its `main`:
+    /// `backend::wgsl::RESET_REBUILD_PASSES`; in workgroup memory where
+    /// [`GpuDevice::obstacles_in_workgroups`] says so), instead of building them
     /// on the host into each row: the build is about two thirds of a row's instructions, and the
     /// host's rows made ahead are what the delivered step waits on once the device's step is
     /// short. On by default on a hardware GPU; off on a software one, where the device's

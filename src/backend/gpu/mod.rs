@@ -107,7 +107,7 @@ pub struct GpuStages {
     pool_scatter: PoolScatter,
     /// The stages' working memory (`wgsl::ObstacleScratch`).
     scratch: wgpu::Buffer,
-    /// The queues of the rare work (`wgsl::RARE_WORK_STAGES`) and of the regroupings' rebuild
+    /// The queues of the rare work (`wgsl::RARE_WORK_STAGES`) and of the queued rebuilds
     /// (`wgsl::REBUILD_QUEUE`): counters cleared before every submit of stages, then the lists.
     rare: wgpu::Buffer,
     pool_row_words: usize,
@@ -968,9 +968,9 @@ impl GpuStages {
     /// the episode counters into the step readback buffer, which is read into `read`'s outputs
     /// and counters. The host runs `while_device_works` between the submit and the wait for the
     /// readback; it may stage pool rows ([`GpuStages::stage_pool_rows`]), which reach the pool at
-    /// the start of the next submit. Where `stages` regroup, the obstacles of the environments
-    /// they regrouped are rebuilt once after them (`record_regroup_rebuild`), with a read in a
-    /// submit of its own after the readback's.
+    /// the start of the next submit. Where `stages` regroup or reset, the obstacles of the
+    /// environments they queued for it are rebuilt once after them (`record_queued_rebuild`),
+    /// with a read in a submit of its own after the readback's.
     pub fn run_stages(
         &mut self,
         stages: &[&str],
@@ -978,17 +978,13 @@ impl GpuStages {
         while_device_works: impl FnOnce(&mut Self),
     ) -> Result<(), SimError> {
         let started = std::time::Instant::now();
-        // The regroupings' one rebuild, with the last regrouping pass's pipeline: at the end of
-        // the submit, or where the step is read back, in a submit of its own after the readback's
-        // (the host waits for those alone, and copies while the device rebuilds), made before any
-        // wait so that no error on the way leaves a regrouped environment dirty. A driver that
-        // holds a submit until the one before it has finished (lavapipe) holds the host there
-        // until the readback is done; the H200's did not hold the pieces' submits.
-        let regrouping = stages
-            .iter()
-            .rev()
-            .find(|s| wgsl::REBUILD_PASSES.contains(s))
-            .copied();
+        // The queued rebuilds' one dispatch: at the end of the submit, or where the step is read
+        // back, in a submit of its own after the readback's (the host waits for those alone, and
+        // copies while the device rebuilds), made before any wait so that no error on the way
+        // leaves a queued environment dirty. A driver that holds a submit until the one before it
+        // has finished (lavapipe) holds the host there until the readback is done; the H200's did
+        // not hold the pieces' submits.
+        let queueing = self.last_queueing(stages);
         let mut enc = self
             .dev
             .device
@@ -1016,8 +1012,8 @@ impl GpuStages {
             for dispatch in plan(stages) {
                 self.sngnn_unread |= self.record(&mut pass, &dispatch)?;
             }
-            if let (None, Some(of)) = (&read, regrouping) {
-                self.record_regroup_rebuild(&mut pass, of)?;
+            if let (None, Some(of)) = (&read, queueing) {
+                self.record_queued_rebuild(&mut pass, of)?;
             }
             if selective {
                 self.step_read.record(&mut pass);
@@ -1078,8 +1074,8 @@ impl GpuStages {
             submits.extend(others);
             piece_bytes += bytes;
         }
-        if let Some(of) = regrouping {
-            self.submit_regroup_rebuild(of)?;
+        if let Some(of) = queueing {
+            self.submit_queued_rebuild(of)?;
         }
         let submit_s = started.elapsed().as_secs_f64() - host_work_s;
         let copies = submits.len();
@@ -1202,9 +1198,9 @@ impl GpuStages {
             pass.set_bind_group(0, &self.bind_groups[0], &[members * self.mask_stride]);
         }
         pass.dispatch_workgroups(workgroups, 1, 1);
-        // A regrouping pass's rebuild waits for the submit's end (`record_regroup_rebuild`).
+        // A queueing pass's rebuild waits for the submit's end (`record_queued_rebuild`).
         if let Some(rebuild) = &pipeline.rebuild
-            && !wgsl::REBUILD_PASSES.contains(&dispatch.pass)
+            && !wgsl::QUEUED_REBUILD_PASSES.contains(&dispatch.pass)
         {
             self.dispatch_rebuild(pass, rebuild);
         }
@@ -1248,12 +1244,25 @@ impl GpuStages {
         }
     }
 
+    /// The last of `stages` whose rebuilds wait in the queue (`wgsl::QUEUED_REBUILD_PASSES`, with
+    /// a rebuild pipeline on this batch: `begin_step` and `autoreset` only where the pool's rows
+    /// leave their obstacles to the device), whose pipeline then rebuilds the queue.
+    fn last_queueing<'a>(&self, stages: &[&'a str]) -> Option<&'a str> {
+        stages.iter().rev().copied().find(|stage| {
+            wgsl::QUEUED_REBUILD_PASSES.contains(stage)
+                && self.pipelines.iter().any(|(pass, pipelines)| {
+                    pass == stage && pipelines.as_ref().is_some_and(|p| p.rebuild.is_some())
+                })
+        })
+    }
+
     /// Record into `pass` the one rebuild of the ORCA obstacles of every environment that the
-    /// submit's regroupings queued (`wgsl::REBUILD_QUEUE`), with regrouping pass `of`'s rebuild
-    /// pipeline (the same entry point in each). It follows the submit's last stage: nothing in a
-    /// step reads the obstacles after the regroupings, so the rebuild costs the step's latency
-    /// nothing where it follows the readback ([`Self::run_stages`]).
-    fn record_regroup_rebuild(
+    /// submit's regroupings and resets queued (`wgsl::REBUILD_QUEUE`), with queueing pass `of`'s
+    /// rebuild pipeline (the same entry point in each). It follows the submit's last stage:
+    /// nothing in a step reads the obstacles of an environment after it regrouped or reset
+    /// (`wgsl::QUEUED_REBUILD_PASSES`), so the rebuild costs the step's latency nothing where it
+    /// follows the readback ([`Self::run_stages`]).
+    fn record_queued_rebuild(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         of: &str,
@@ -1269,22 +1278,22 @@ impl GpuStages {
         Ok(())
     }
 
-    /// The regroupings' rebuild (`record_regroup_rebuild`) in a submit of its own, after the
+    /// The queued rebuilds' dispatch (`record_queued_rebuild`) in a submit of its own, after the
     /// submits made so far.
-    fn submit_regroup_rebuild(&self, of: &str) -> Result<(), SimError> {
+    fn submit_queued_rebuild(&self, of: &str) -> Result<(), SimError> {
         let mut enc = self
             .dev
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("regroupings' obstacle rebuild"),
+                label: Some("queued obstacle rebuilds"),
             });
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("regroupings' obstacle rebuild"),
+                label: Some("queued obstacle rebuilds"),
                 timestamp_writes: None,
             });
             self.bind(&mut pass);
-            self.record_regroup_rebuild(&mut pass, of)?;
+            self.record_queued_rebuild(&mut pass, of)?;
         }
         self.dev.queue.submit([enc.finish()]);
         Ok(())
@@ -1352,10 +1361,10 @@ impl GpuStages {
             label: Some("timed passes"),
         });
         self.begin_submit(&mut enc);
-        // The regroupings' one rebuild is timed with the last regrouping stage timed.
-        let regrouping = stages
-            .iter()
-            .rposition(|s| wgsl::REBUILD_PASSES.contains(s));
+        // The queued rebuilds' one dispatch is timed with the last queueing stage timed.
+        let queueing = self
+            .last_queueing(stages)
+            .and_then(|of| stages.iter().rposition(|s| *s == of));
         for (k, &stage) in (0u32..).zip(stages) {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(stage),
@@ -1369,8 +1378,8 @@ impl GpuStages {
             for dispatch in plan(&[stage]) {
                 self.sngnn_unread |= self.record(&mut pass, &dispatch)?;
             }
-            if regrouping == Some(k as usize) {
-                self.record_regroup_rebuild(&mut pass, stage)?;
+            if queueing == Some(k as usize) {
+                self.record_queued_rebuild(&mut pass, stage)?;
             }
         }
         enc.resolve_query_set(&set, 0..count, &resolved, 0);
@@ -1419,8 +1428,8 @@ impl GpuStages {
         Ok(Some((u, f.into_iter().map(f32::from_bits).collect())))
     }
 
-    /// The environments the last submit's regroupings queued for their one obstacle rebuild
-    /// (`wgsl::REBUILD_QUEUE`), in the order they were queued: each at most once.
+    /// The environments the last submit's regroupings and resets queued for their one obstacle
+    /// rebuild (`wgsl::REBUILD_QUEUE`), in the order they were queued: each at most once.
     pub fn queued_rebuilds(&self) -> Result<Vec<u32>, SimError> {
         let counters = self.read_words(&self.rare, wgsl::RARE_QUEUES)?;
         let count = counters[wgsl::REBUILD_QUEUE] as usize;

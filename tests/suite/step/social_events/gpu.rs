@@ -348,70 +348,88 @@ fn zero_unused_obstacle_slots(s: &mut BatchState) {
     }
 }
 
-/// Contract: `formation` and `social_events` in one submit, as a step runs them, leave the CPU's
-/// columns, though the device rebuilds the obstacles of each environment that either regrouped
-/// once, after both (`wgsl::REBUILD_QUEUE`): its queue holds exactly the environments whose
-/// obstacles the CPU's two stages rebuilt, each once, some regrouped by both stages. Rebuilt in
-/// workgroup memory (the hardware adapters' way, where an environment queued twice would be
-/// rebuilt by two workgroups at once), poisoned before each rebuild.
+/// Contract: `formation`, `social_events` and `autoreset` (SAME_STEP) in one submit, as a step
+/// runs them, leave the CPU's columns, though the device rebuilds the obstacles of each
+/// environment that regrouped or reset from a row that leaves them to it once, after all three
+/// (`wgsl::QUEUED_REBUILD_PASSES`, `wgsl::REBUILD_QUEUE`): its queue holds exactly the
+/// environments whose obstacles the CPU's three stages rebuilt, each once, some regrouped by both
+/// regrouping stages and some regrouped and then reset. Rebuilt in workgroup memory (the hardware
+/// adapters' way, where an environment queued twice would be rebuilt by two workgroups at once),
+/// poisoned before each rebuild.
 #[test]
-fn regroupings_in_one_submit_rebuild_each_environment_once() {
-    const STAGES: [&str; 2] = ["formation", "social_events"];
+fn regroupings_and_resets_in_one_submit_rebuild_each_environment_once() {
+    const STAGES: [&str; 3] = ["formation", "social_events", "autoreset"];
     let Some(mut dev) = device() else { return };
     dev.obstacles_in_workgroups = true;
+    dev.obstacles_after_resets = true;
     dev.poison_orca_lists = true;
     let mut config = eventful("exp3", 0.5);
     config.episode.time_step = 0.3;
     let n_envs = 256;
-    let env = rolled_out(config, n_envs, 40);
-    let p = *env.params();
+    let env = rolled_out_mode(config, socnav::AutoresetMode::SameStep, n_envs, 40);
+    let (p, layout) = (*env.params(), *env.layout());
     let mut cpu = env.state().unwrap().clone();
     let mut cpu_out = env.outputs().clone();
     let mut gpu = GpuStages::new(dev, &p, &cpu, &cpu_out, &STAGES).expect("GPU stages");
-    let mut from_gpu = cpu.clone();
+    let (mut from_gpu, mut from_gpu_out) = (cpu.clone(), cpu_out.clone());
     let mode = parity_mode(gpu.adapter());
     let mut lockstep = Lockstep::default();
     let mut rng = RngStream::new(11, 2);
-    let (mut both, mut queued) = (0, 0);
+    let (mut both, mut regrouped_and_reset, mut queued) = (0, 0, 0);
     for run in 0..4 {
         crate::step::formation::perturb_formation(&mut cpu, &mut cpu_out, &p, &mut rng);
         zero_unused_obstacle_slots(&mut cpu);
+        for e in 0..n_envs {
+            cpu.done[e] |= u32::from(rng.next_f32() < 0.3);
+        }
         gpu.upload_state(&cpu);
         gpu.upload_outputs(&cpu_out);
+        fill_pool(&mut gpu, &p, &cpu, layout);
         let actions = random_actions(&mut rng, n_envs, p.holonomic != 0);
-        // Which environments each CPU stage rebuilt: the marker again before the second.
-        cpu_stage(STAGES[0], &p, &mut cpu, &mut cpu_out, &actions);
-        let by_formation = rebuilt_envs(&cpu);
-        let mut marked = cpu.clone();
-        let cap = marked.strides.obstacle_vertices;
-        for e in 0..n_envs {
-            marked.ov_x[e * cap] = GARBAGE;
+        // Which environments each CPU stage rebuilt: the marker again before each.
+        let mut rebuilt = Vec::new();
+        for stage in STAGES {
+            let mut marked = cpu.clone();
+            let cap = marked.strides.obstacle_vertices;
+            for e in 0..n_envs {
+                marked.ov_x[e * cap] = GARBAGE;
+            }
+            cpu_stage(stage, &p, &mut marked, &mut cpu_out.clone(), &actions);
+            rebuilt.push(rebuilt_envs(&marked));
+            cpu_stage(stage, &p, &mut cpu, &mut cpu_out, &actions);
         }
-        cpu_stage(STAGES[1], &p, &mut marked, &mut cpu_out.clone(), &actions);
-        let by_events = rebuilt_envs(&marked);
-        cpu_stage(STAGES[1], &p, &mut cpu, &mut cpu_out, &actions);
         gpu.upload_actions(&actions);
         gpu.run_stages(&STAGES, None, |_| {}).expect("GPU stages");
-        let mut expected: Vec<u32> = by_formation.iter().chain(&by_events).copied().collect();
+        let mut expected: Vec<u32> = rebuilt.concat();
         expected.sort_unstable();
         expected.dedup();
         let mut got = gpu.queued_rebuilds().expect("the rebuild queue");
         got.sort_unstable();
         assert_eq!(got, expected, "run {run}: the queued rebuilds");
+        let [by_formation, by_events, by_reset] = &rebuilt[..] else {
+            unreachable!("three stages")
+        };
         both += by_formation
             .iter()
             .filter(|e| by_events.contains(e))
             .count();
+        regrouped_and_reset += by_reset
+            .iter()
+            .filter(|e| by_formation.contains(e) || by_events.contains(e))
+            .count();
         queued += got.len();
         gpu.download_state(&mut from_gpu).expect("readback");
+        gpu.download_outputs(&mut from_gpu_out).expect("readback");
         if mode == Parity::Lockstep {
-            lockstep.add(n_envs, (&cpu, &from_gpu), None);
+            lockstep.add(n_envs, (&cpu, &from_gpu), Some((&cpu_out, &from_gpu_out)));
             continue;
         }
         let differ = cpu.differing_columns(&from_gpu);
+        let differ_out = cpu_out.differing_columns(&from_gpu_out);
         assert!(
-            differ.is_empty(),
-            "run {run}: state columns {differ:?} differ between CPU and GPU on {}; {}",
+            differ.is_empty() && differ_out.is_empty(),
+            "run {run}: state columns {differ:?} and output columns {differ_out:?} differ \
+             between CPU and GPU on {}; {}",
             gpu.adapter(),
             first_differences(
                 &cpu.columns(),
@@ -421,11 +439,15 @@ fn regroupings_in_one_submit_rebuild_each_environment_once() {
         );
     }
     if mode == Parity::Lockstep {
-        lockstep.check("formation + social_events", gpu.adapter());
+        lockstep.check("formation + social_events + autoreset", gpu.adapter());
     }
     assert!(
-        both > 0,
-        "no environment regrouped in both stages ({queued} queued in all)"
+        both > 0 && regrouped_and_reset > 0,
+        "{both} environments regrouped by both stages and {regrouped_and_reset} regrouped and \
+         reset ({queued} queued in all)"
     );
-    println!("{queued} rebuilds queued, {both} of environments regrouped by both stages");
+    println!(
+        "{queued} rebuilds queued: {both} of environments regrouped by both stages, \
+         {regrouped_and_reset} regrouped and reset"
+    );
 }
