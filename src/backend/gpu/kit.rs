@@ -470,6 +470,10 @@ pub(crate) fn map_and_read(
     map_and_read_after(dev, buffer, bytes, None, read)
 }
 
+/// How long a failed readback waits for the submits before it, so that a destroyed device's
+/// loss is recorded (`map_and_read_after`): far longer than any one step takes.
+const LOST_DEVICE_WAIT: std::time::Duration = std::time::Duration::from_secs(10);
+
 /// [`map_and_read`] waiting only for the submit `after` (with `None`, for the work submitted so
 /// far): the submits after it go on while `read` runs.
 pub(crate) fn map_and_read_after(
@@ -492,9 +496,14 @@ pub(crate) fn map_and_read_after(
     });
     if let Err(e) = waited {
         // A wait for one submit fails before wgpu's maintenance, which is where a destroyed
-        // device's loss is recorded (`GpuDevice::lost`, through the lost callback): run it, so
-        // that the batch's next call says the device was lost.
-        let _ = dev.device.poll(wgpu::PollType::Poll);
+        // device's loss is recorded (`GpuDevice::lost`, through the lost callback), and only
+        // once no submit is in flight: wait for those made before the failure (a step leaves its
+        // queued obstacle rebuild running when it returns), for a bounded time, so that the
+        // batch's next call says the device was lost.
+        let _ = dev.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: Some(LOST_DEVICE_WAIT),
+        });
         return Err(failed(&e));
     }
     rx.recv().map_err(|e| failed(&e))?.map_err(|e| failed(&e))?;
