@@ -298,27 +298,13 @@ pub fn check_parity_on(
                 *count += usize::from(cpu_out.info[e * N_INFO + k] != 0.0);
             }
         }
-        if mode == Parity::Lockstep {
-            lockstep.add(n_envs, (&cpu, &from_gpu), Some((&cpu_out, &from_gpu_out)));
-            continue;
-        }
-        let differ = cpu.differing_columns(&from_gpu);
-        let differ_out = cpu_out.differing_columns(&from_gpu_out);
-        assert!(
-            differ.is_empty() && differ_out.is_empty(),
-            "{stage} on {}, run {run}: state columns {differ:?} and output columns {differ_out:?} \
-             differ between CPU and GPU; first differences: {}{}",
-            gpu.adapter(),
-            first_differences(
-                &cpu.columns(),
-                |f, u| cpu.pack(f, u),
-                |f, u| from_gpu.pack(f, u)
-            ) + "; ",
-            first_differences(
-                &cpu_out.columns(),
-                |f, u| cpu_out.pack(f, u),
-                |f, u| { from_gpu_out.pack(f, u) }
-            ),
+        let what = format!("{stage} on {}, run {run}", gpu.adapter());
+        agree_or_tally(
+            &what,
+            mode,
+            &mut lockstep,
+            (&cpu, &from_gpu),
+            (&cpu_out, &from_gpu_out),
         );
     }
     if mode == Parity::Lockstep {
@@ -330,6 +316,35 @@ pub fn check_parity_on(
         gpu.adapter()
     );
     Some(raised)
+}
+
+/// After a run on both backends, the CPU's and the GPU's state and outputs: bit for bit the same
+/// where `mode` asks for it (else a panic naming `what`, the columns and their first
+/// differences), or added to `lockstep` to be judged at the end.
+pub fn agree_or_tally(
+    what: &str,
+    mode: Parity,
+    lockstep: &mut Lockstep,
+    (cpu, gpu): (&BatchState, &BatchState),
+    (cpu_out, gpu_out): (&Outputs, &Outputs),
+) {
+    if mode == Parity::Lockstep {
+        lockstep.add(cpu.n_envs, (cpu, gpu), Some((cpu_out, gpu_out)));
+        return;
+    }
+    let differ = cpu.differing_columns(gpu);
+    let differ_out = cpu_out.differing_columns(gpu_out);
+    assert!(
+        differ.is_empty() && differ_out.is_empty(),
+        "{what}: state columns {differ:?} and output columns {differ_out:?} differ between CPU \
+         and GPU; first differences: {}{}",
+        first_differences(&cpu.columns(), |f, u| cpu.pack(f, u), |f, u| gpu.pack(f, u)) + "; ",
+        first_differences(
+            &cpu_out.columns(),
+            |f, u| cpu_out.pack(f, u),
+            |f, u| gpu_out.pack(f, u)
+        ),
+    );
 }
 
 /// The first differing element of each differing column of two packed tables with `columns`:

@@ -420,22 +420,16 @@ fn regroupings_and_resets_in_one_submit_rebuild_each_environment_once() {
         queued += got.len();
         gpu.download_state(&mut from_gpu).expect("readback");
         gpu.download_outputs(&mut from_gpu_out).expect("readback");
-        if mode == Parity::Lockstep {
-            lockstep.add(n_envs, (&cpu, &from_gpu), Some((&cpu_out, &from_gpu_out)));
-            continue;
-        }
-        let differ = cpu.differing_columns(&from_gpu);
-        let differ_out = cpu_out.differing_columns(&from_gpu_out);
-        assert!(
-            differ.is_empty() && differ_out.is_empty(),
-            "run {run}: state columns {differ:?} and output columns {differ_out:?} differ \
-             between CPU and GPU on {}; {}",
-            gpu.adapter(),
-            first_differences(
-                &cpu.columns(),
-                |f, u| cpu.pack(f, u),
-                |f, u| from_gpu.pack(f, u)
-            ),
+        let what = format!(
+            "formation + social_events + autoreset on {}, run {run}",
+            gpu.adapter()
+        );
+        agree_or_tally(
+            &what,
+            mode,
+            &mut lockstep,
+            (&cpu, &from_gpu),
+            (&cpu_out, &from_gpu_out),
         );
     }
     if mode == Parity::Lockstep {
