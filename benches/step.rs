@@ -7,7 +7,8 @@
 //!
 //! `pool_rows`: the GPU backend's reset-pool rows, generated on the host, per second.
 //! `obs_rows`: observation rows into the host's outputs, expanded from the device's rows without
-//! their one-hot floats or copied whole, bytes per second.
+//! their one-hot floats or copied whole, bytes per second; `obs_rows_cold` the same for a padded
+//! step's 65,536 rows from memory, not from the caches.
 //! `obstacle_build`: RVO2's `processObstacles` of an environment's ORCA obstacles (every reset,
 //! every pool row and every regrouping builds one), builds per second.
 //!
@@ -211,12 +212,45 @@ fn pool_rows(c: &mut Criterion) {
 /// (`backend::obs_payload::expand`), where it copied whole rows before (`copy_from_slice`): both
 /// over 16,384 rows of exp2 (full and padded, real rows of a stepped batch), on one thread and on
 /// every core, in bytes of the host's rows a second. The model counts the copy's time as the
-/// same either way.
+/// same either way. These rows stay in the caches from one iteration to the next.
 fn obs_rows(c: &mut Criterion) {
-    use socnav::backend::obs_payload::{expand, strip_row};
     const ROWS: usize = 16_384;
-    let cores = std::thread::available_parallelism().map_or(1, usize::from);
     for padded in [false, true] {
+        let rows = Exp2Rows::new(padded, ROWS);
+        let label = if padded { "padded" } else { "full" };
+        let mut group = c.benchmark_group(format!("obs_rows/exp2_{label}"));
+        rows.bench(&mut group, 1);
+        group.finish();
+    }
+}
+
+/// `obs_rows_cold`: [`obs_rows`] for a padded step's 65,536 rows, each iteration on the next of
+/// [`COLD_SETS`] sets of rows, so that what it reads and writes comes from memory, as in a step
+/// of that size, where the copy reads what the device wrote and writes more rows than the caches
+/// keep: how far the host's memory, and not the readback's, sets the copy's pace.
+fn obs_rows_cold(c: &mut Criterion) {
+    let rows = Exp2Rows::new(true, 65_536);
+    let mut group = c.benchmark_group("obs_rows_cold/exp2_padded_65536");
+    rows.bench(&mut group, COLD_SETS);
+    group.finish();
+}
+
+/// Sets of rows `obs_rows_cold` goes round: 8 padded steps of 65,536 rows hold 740 MB, more than
+/// a server's last-level cache.
+const COLD_SETS: usize = 8;
+
+/// Observation rows of exp2 from a stepped batch, whole and as the device keeps them.
+struct Exp2Rows {
+    layout: socnav::spec::ObsLayout,
+    whole: Vec<u32>,
+    payload: Vec<u32>,
+    counts: Vec<u32>,
+}
+
+impl Exp2Rows {
+    /// `rows` rows, the rows of a 256-environment batch after 10 steps over and over.
+    fn new(padded: bool, rows: usize) -> Self {
+        use socnav::backend::obs_payload::{expand, strip_row};
         let mut config = Config::from_name_or_path("exp2").expect("shipped config");
         config.observation.padded = padded;
         let n = 256;
@@ -232,41 +266,77 @@ fn obs_rows(c: &mut Criterion) {
         }
         let layout = env.outputs().strides.layout;
         let (dim, width) = (layout.dim, layout.payload_dim());
-        let whole: Vec<u32> = (0..ROWS)
+        let whole: Vec<u32> = (0..rows)
             .flat_map(|e| env.outputs().obs[(e % n) * dim..(e % n + 1) * dim].iter())
             .map(|v| v.to_bits())
             .collect();
-        let counts: Vec<u32> = (0..ROWS)
+        let counts: Vec<u32> = (0..rows)
             .flat_map(|e| {
                 env.outputs().obs_count[5 * (e % n)..5 * (e % n + 1)]
                     .iter()
                     .copied()
             })
             .collect();
-        let mut payload = vec![0u32; ROWS * width];
+        let mut payload = vec![0u32; rows * width];
         for (row, p) in whole.chunks_exact(dim).zip(payload.chunks_exact_mut(width)) {
             strip_row(&layout, row, p);
         }
-        let mut out = vec![0u32; ROWS * dim];
+        let mut out = vec![0u32; rows * dim];
         expand(&layout, 0, &payload, &counts, &mut out, None);
         assert!(out == whole, "the expanded rows are the whole rows");
-        let label = if padded { "padded" } else { "full" };
-        let mut group = c.benchmark_group(format!("obs_rows/exp2_{label}"));
+        Self {
+            layout,
+            whole,
+            payload,
+            counts,
+        }
+    }
+
+    /// Expanding and copying the rows on one thread and on every core, each iteration on the
+    /// next of `sets` copies of the rows and their outputs.
+    fn bench(
+        &self,
+        group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+        sets: usize,
+    ) {
+        use socnav::backend::obs_payload::expand;
+        let dim = self.layout.dim;
+        let cores = std::thread::available_parallelism().map_or(1, usize::from);
         group
             .measurement_time(Duration::from_secs(3))
             .warm_up_time(Duration::from_secs(1))
             .sample_size(20)
-            .throughput(Throughput::Bytes(4 * (ROWS * dim) as u64));
+            .throughput(Throughput::Bytes(4 * self.whole.len() as u64));
+        let copies = |v: &Vec<u32>| vec![v.clone(); sets];
+        let (payloads, counts, wholes) = (
+            copies(&self.payload),
+            copies(&self.counts),
+            copies(&self.whole),
+        );
+        let mut outs = vec![vec![0u32; self.whole.len()]; sets];
         for threads in [1, cores] {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .expect("a thread pool");
+            let mut k = 0;
             group.bench_function(BenchmarkId::new("expand", threads), |b| {
-                b.iter(|| expand(&layout, 0, &payload, &counts, &mut out, Some(&pool)));
+                b.iter(|| {
+                    k = (k + 1) % sets;
+                    expand(
+                        &self.layout,
+                        0,
+                        &payloads[k],
+                        &counts[k],
+                        &mut outs[k],
+                        Some(&pool),
+                    );
+                });
             });
             group.bench_function(BenchmarkId::new("copy", threads), |b| {
                 b.iter(|| {
+                    k = (k + 1) % sets;
+                    let (out, whole) = (&mut outs[k], &wholes[k]);
                     pool.install(|| {
                         use rayon::prelude::*;
                         out.par_chunks_mut(512 * dim)
@@ -276,7 +346,6 @@ fn obs_rows(c: &mut Criterion) {
                 });
             });
         }
-        group.finish();
     }
 }
 
@@ -331,6 +400,7 @@ criterion_group!(
     step_sngnn_gpu,
     pool_rows,
     obs_rows,
+    obs_rows_cold,
     obstacle_build
 );
 criterion_main!(benches);

@@ -72,10 +72,11 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
         backend = env.backend_name();
         // The whole batch's buffers go before the halves take theirs.
         drop(env);
-        let halves = if a.halves && n >= 2 {
-            Some(halves_env_steps_per_s(a, &config, n)?)
+        let (halves, halves_host_path) = if a.halves && n >= 2 {
+            let (rate, paths) = halves_env_steps_per_s(a, &config, n)?;
+            (Some(rate), paths)
         } else {
-            None
+            (None, Vec::new())
         };
         rows.push(json!({
             "envs": n,
@@ -85,6 +86,8 @@ pub fn bench(a: &BenchArgs) -> Result<(), Box<dyn std::error::Error>> {
             "device_only_env_steps_per_s": device_only,
             // `--halves`: the same environments as two batches stepped on two host threads.
             "halves_env_steps_per_s": halves,
+            // GPU: each half's host path per step, as `host_path` (where two halves lose).
+            "halves_host_path": halves_host_path,
             // GPU: the host path's time and bytes per step over the timed steps.
             "host_path": host_path,
             // GPU with timestamps: a shorter run's passes and readback copies on the device's
@@ -200,35 +203,48 @@ fn on_chosen_device(
 }
 
 /// `n` environments as two batches of about `n / 2`, each stepped on a host thread of its own
-/// for `a.seconds` after the warm-up: their env-steps per second together.
+/// for `a.seconds` after the warm-up: their env-steps per second together, and on the GPU backend
+/// each half's host path per step.
 fn halves_env_steps_per_s(
     a: &BenchArgs,
     config: &Config,
     n: usize,
-) -> Result<f64, Box<dyn std::error::Error>> {
+) -> Result<(f64, Vec<serde_json::Value>), Box<dyn std::error::Error>> {
     let sizes = [n / 2, n - n / 2];
     let mut halves = Vec::with_capacity(2);
     for (k, &size) in sizes.iter().enumerate() {
         // The second half's environments play the episodes the whole batch's second half would.
         halves.push(warmed_up(a, config, size, (k * sizes[0]) as u64)?);
     }
-    let timed: Vec<Result<(usize, f64), socnav::SimError>> = std::thread::scope(|s| {
+    type Timed = Result<(usize, f64, Option<serde_json::Value>), socnav::SimError>;
+    let timed: Vec<Timed> = std::thread::scope(|s| {
         let running: Vec<_> = halves
             .iter_mut()
-            .map(|(env, actions)| s.spawn(|| timed_steps(env, actions, a.seconds)))
+            .map(|(env, actions)| {
+                s.spawn(|| {
+                    let before = env.host_path();
+                    let (steps, secs) = timed_steps(env, actions, a.seconds)?;
+                    Ok((
+                        steps,
+                        secs,
+                        host_path_per_step(before, env.host_path(), steps, secs),
+                    ))
+                })
+            })
             .collect();
         running
             .into_iter()
             .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
             .collect()
     });
-    let (mut env_steps, mut longest) = (0usize, 0.0f64);
+    let (mut env_steps, mut longest, mut paths) = (0usize, 0.0f64, Vec::new());
     for (size, result) in sizes.iter().zip(timed) {
-        let (steps, secs) = result?;
+        let (steps, secs, path) = result?;
         env_steps += size * steps;
         longest = longest.max(secs);
+        paths.extend(path);
     }
-    Ok(env_steps as f64 / longest)
+    Ok((env_steps as f64 / longest, paths))
 }
 
 fn print_row(row: &serde_json::Value, header: bool, backend: &str, device: &str) {
@@ -256,18 +272,13 @@ fn print_row(row: &serde_json::Value, header: bool, backend: &str, device: &str)
         println!("    as two halves on two host threads: {h:.0} env-steps/s");
     }
     if let Some(p) = row["host_path"].as_object() {
-        let ms = |k: &str| 1e3 * p[k].as_f64().unwrap_or(0.0);
-        println!(
-            "    host path per step: {:.2} ms refilling the reset pool ({:.2} ms more while the device works, {:.1} rows), {:.2} ms waiting for the device ({:.2} of them submitting), {:.2} ms copying out, {:.2} ms else; {:.1} MB read back ({:.1} finished rows)",
-            ms("refill_s"),
-            ms("refill_ahead_s"),
-            p["ahead_rows"].as_f64().unwrap_or(0.0),
-            ms("wait_s"),
-            ms("submit_s"),
-            ms("copy_s"),
-            ms("other_s"),
-            p["bytes"].as_f64().unwrap_or(0.0) / 1e6,
-            p["finished_rows"].as_f64().unwrap_or(0.0)
+        print_host_path("host path per step", p);
+    }
+    let halves = row["halves_host_path"].as_array().into_iter().flatten();
+    for (k, p) in halves.filter_map(|p| p.as_object()).enumerate() {
+        print_host_path(
+            &format!("half {} of the two, its host path per step", k + 1),
+            p,
         );
     }
     if let Some(t) = row["timeline"].as_object() {
@@ -300,6 +311,23 @@ fn print_row(row: &serde_json::Value, header: bool, backend: &str, device: &str)
             .collect();
         println!("    {}", cells.join(" | "));
     }
+}
+
+/// One line of a host path's figures per step (`host_path_per_step`'s), after `label`.
+fn print_host_path(label: &str, p: &serde_json::Map<String, serde_json::Value>) {
+    let ms = |k: &str| 1e3 * p[k].as_f64().unwrap_or(0.0);
+    println!(
+        "    {label}: {:.2} ms refilling the reset pool ({:.2} ms more while the device works, {:.1} rows), {:.2} ms waiting for the device ({:.2} of them submitting), {:.2} ms copying out, {:.2} ms else; {:.1} MB read back ({:.1} finished rows)",
+        ms("refill_s"),
+        ms("refill_ahead_s"),
+        p["ahead_rows"].as_f64().unwrap_or(0.0),
+        ms("wait_s"),
+        ms("submit_s"),
+        ms("copy_s"),
+        ms("other_s"),
+        p["bytes"].as_f64().unwrap_or(0.0) / 1e6,
+        p["finished_rows"].as_f64().unwrap_or(0.0)
+    );
 }
 
 /// The host path's figures per step between two totals over `steps` steps that took `secs`

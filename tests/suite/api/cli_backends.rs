@@ -164,3 +164,39 @@ fn bench_lane_paths_names_the_paths_it_took() {
         "{device}"
     );
 }
+
+/// `socnav bench --halves` steps the batch as two halves on two host threads and reports their
+/// env-steps per second together; on the GPU backend each half's host path per step besides (where
+/// two halves lose against one batch), on the CPU backend none.
+#[test]
+fn bench_halves_report_each_half_host_path_on_the_gpu() {
+    let halves = |backend: &str| -> Value {
+        let out = Command::new(env!("CARGO_BIN_EXE_socnav"))
+            .args(["bench", "--json", "--config", "exp1", "--envs", "5"])
+            .args(["--seconds", "0.1", "--halves", "--backend", backend])
+            .output()
+            .expect("socnav runs");
+        assert!(
+            out.status.success(),
+            "socnav bench --halves --backend {backend} failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let report: Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+        report["rows"][0].clone()
+    };
+    let cpu = halves("cpu");
+    assert!(cpu["halves_env_steps_per_s"].as_f64() > Some(0.0), "{cpu}");
+    assert_eq!(cpu["halves_host_path"], serde_json::json!([]), "{cpu}");
+    if common::gpu::device().is_none() {
+        return;
+    }
+    let gpu = halves("gpu");
+    assert!(gpu["halves_env_steps_per_s"].as_f64() > Some(0.0), "{gpu}");
+    let paths = gpu["halves_host_path"].as_array().expect("a list");
+    assert_eq!(paths.len(), 2, "{gpu}");
+    for path in paths {
+        // Every step reads back its outputs: 2 and 3 environments' observations at least.
+        assert!(path["bytes"].as_f64() > Some(2.0 * 4.0 * 37.0), "{path}");
+        assert!(path["wait_s"].as_f64() > Some(0.0), "{path}");
+    }
+}
