@@ -193,7 +193,8 @@ pub struct BenchArgs {
     pub padded: bool,
     /// Also step each batch size as two halves on two host threads, each half's readback and
     /// copy overlapping the other's device work (what `send`/`recv` on two batches does from
-    /// Python). Batch sizes below 2 have no halves.
+    /// Python); on the GPU backend each half's host path is reported too. Batch sizes below 2
+    /// have no halves.
     #[arg(long)]
     pub halves: bool,
     /// The optional per-step outputs each step delivers (on the GPU backend: reads back).
