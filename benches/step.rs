@@ -290,32 +290,39 @@ impl Exp2Rows {
                 .num_threads(threads)
                 .build()
                 .expect("a thread pool");
-            group.bench_function(BenchmarkId::new("expand", threads), |b| {
-                let mut all = vec![self.made().clone(); sets];
-                let mut k = 0;
-                b.iter(|| {
-                    k = (k + 1) % sets;
-                    let r = &mut all[k];
-                    expand(&r.layout, 0, &r.payload, &r.counts, &mut r.out, Some(&pool));
-                });
+            self.rotating(group, ("expand", threads), sets, |r| {
+                expand(&r.layout, 0, &r.payload, &r.counts, &mut r.out, Some(&pool));
             });
-            group.bench_function(BenchmarkId::new("copy", threads), |b| {
-                let mut all = vec![self.made().clone(); sets];
-                let mut k = 0;
-                b.iter(|| {
-                    k = (k + 1) % sets;
-                    let r = &mut all[k];
-                    let dim = r.layout.dim;
-                    pool.install(|| {
-                        use rayon::prelude::*;
-                        r.out
-                            .par_chunks_mut(512 * dim)
-                            .zip(r.whole.par_chunks(512 * dim))
-                            .for_each(|(o, w)| o.copy_from_slice(w));
-                    });
+            self.rotating(group, ("copy", threads), sets, |r| {
+                let dim = r.layout.dim;
+                pool.install(|| {
+                    use rayon::prelude::*;
+                    r.out
+                        .par_chunks_mut(512 * dim)
+                        .zip(r.whole.par_chunks(512 * dim))
+                        .for_each(|(o, w)| o.copy_from_slice(w));
                 });
             });
         }
+    }
+
+    /// Benchmark `work` (`id`: its name and threads), each iteration on the next of `sets`
+    /// copies of the rows and their outputs.
+    fn rotating(
+        &self,
+        group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+        (name, threads): (&str, usize),
+        sets: usize,
+        mut work: impl FnMut(&mut RowSet),
+    ) {
+        group.bench_function(BenchmarkId::new(name, threads), |b| {
+            let mut all = vec![self.made().clone(); sets];
+            let mut k = 0;
+            b.iter(|| {
+                k = (k + 1) % sets;
+                work(&mut all[k]);
+            });
+        });
     }
 }
 

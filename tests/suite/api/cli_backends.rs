@@ -12,14 +12,19 @@ use serde_json::Value;
 
 /// `socnav run --json` with `args`, parsed.
 fn run_json(args: &[&str]) -> Value {
+    json_of("run", args)
+}
+
+/// `socnav <command> --json` with `args`, which must succeed, its report parsed.
+fn json_of(command: &str, args: &[&str]) -> Value {
     let out = Command::new(env!("CARGO_BIN_EXE_socnav"))
-        .args(["run", "--json"])
+        .args([command, "--json"])
         .args(args)
         .output()
         .expect("socnav runs");
     assert!(
         out.status.success(),
-        "socnav run {args:?} failed: {}",
+        "socnav {command} {args:?} failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).expect("JSON on stdout")
@@ -171,18 +176,16 @@ fn bench_lane_paths_names_the_paths_it_took() {
 #[test]
 fn bench_halves_report_each_half_host_path_on_the_gpu() {
     let halves = |backend: &str| -> Value {
-        let out = Command::new(env!("CARGO_BIN_EXE_socnav"))
-            .args(["bench", "--json", "--config", "exp1", "--envs", "5"])
-            .args(["--seconds", "0.1", "--halves", "--backend", backend])
-            .output()
-            .expect("socnav runs");
-        assert!(
-            out.status.success(),
-            "socnav bench --halves --backend {backend} failed: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let report: Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
-        report["rows"][0].clone()
+        let args = [
+            "--config",
+            "exp1",
+            "--envs",
+            "5",
+            "--seconds",
+            "0.1",
+            "--halves",
+        ];
+        json_of("bench", &[&args[..], &["--backend", backend]].concat())["rows"][0].clone()
     };
     let cpu = halves("cpu");
     assert!(cpu["halves_env_steps_per_s"].as_f64() > Some(0.0), "{cpu}");
