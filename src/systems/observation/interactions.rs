@@ -12,6 +12,7 @@
 
 use super::Frame;
 use crate::state::StateChunk;
+use crate::state::columns::zero;
 
 /// Write the pairs of environment `e` into `hh` (human-human) and `hl` (human-laptop), zero the
 /// rest of both, and return the pair counts.
@@ -27,14 +28,6 @@ pub(super) fn write_interactions<const W: bool, const P: bool>(
     let n_hl = human_laptop(s, e, f, hl);
     zero(&mut hl[2 * n_hl..]);
     [n_hh as u32, n_hl as u32]
-}
-
-/// Zero the unused pair slots (most environments use all or none: skip the empty call).
-#[inline]
-fn zero(rest: &mut [u32]) {
-    if !rest.is_empty() {
-        rest.fill(0);
-    }
 }
 
 /// Whether the sensor sees human slot `slot` of environment `e`.
