@@ -20,6 +20,7 @@
 
 use std::sync::{Arc, Mutex};
 
+use super::spirv::Contraction;
 use crate::error::SimError;
 
 /// Which adapters may be used.
@@ -121,9 +122,11 @@ pub fn list_adapters() -> Vec<AdapterSummary> {
 
 /// The environment variable that chooses how pipelines are built on Vulkan: `spirv` (the
 /// default, also when unset or empty) from the backend's own SPIR-V (`super::spirv`: the ORCA
-/// lists not zeroed at every call), `wgsl` from the WGSL as wgpu compiles it, the way every other
-/// API does. The second is the way back should a driver refuse the first, and the other half of
-/// a comparison of the two on hardware (`scripts/bench-gpu`).
+/// lists not zeroed at every call, no product and sum fused into a multiply-add), `spirv-fma` from
+/// the same SPIR-V with the driver free to fuse them (what that freedom buys, measured), `wgsl`
+/// from the WGSL as wgpu compiles it, the way every other API does. The last is the way back
+/// should a driver refuse the first, and the other half of a comparison of the two on hardware
+/// (`scripts/bench-gpu`).
 pub const SHADERS_VAR: &str = "SOCNAV_SHADERS";
 
 /// What this module asks a Vulkan device's driver itself, through the handles wgpu-hal exposes
@@ -267,34 +270,39 @@ fn lane_paths_wanted() -> Result<bool, SimError> {
 /// Whether a value of [`PATHS_VAR`] asks for a software adapter's paths; an error names a value
 /// that is neither `device` nor `lane`.
 fn lane_paths_from(value: Option<&str>) -> Result<bool, SimError> {
-    other_choice(PATHS_VAR, value, ("device", "lane"))
+    choice(PATHS_VAR, value, &["device", "lane"]).map(|k| k == 1)
 }
 
-/// Whether [`SHADERS_VAR`] asks for the backend's own SPIR-V.
-fn own_spirv_wanted() -> Result<bool, SimError> {
-    own_spirv_from(std::env::var(SHADERS_VAR).ok().as_deref())
+/// What [`SHADERS_VAR`] asks for ([`shaders_from`]).
+fn shaders_wanted() -> Result<Option<Contraction>, SimError> {
+    shaders_from(std::env::var(SHADERS_VAR).ok().as_deref())
 }
 
-/// Whether a value of [`SHADERS_VAR`] asks for the backend's own SPIR-V; an error names a value
-/// that is neither `spirv` nor `wgsl`.
-fn own_spirv_from(value: Option<&str>) -> Result<bool, SimError> {
-    other_choice(SHADERS_VAR, value, ("spirv", "wgsl")).map(|wgsl| !wgsl)
+/// The backend's own SPIR-V, and whether its products and sums may be fused, that a value of
+/// [`SHADERS_VAR`] asks for (`None`: the WGSL through wgpu); an error names a value that is none
+/// of `spirv`, `spirv-fma` and `wgsl`.
+fn shaders_from(value: Option<&str>) -> Result<Option<Contraction>, SimError> {
+    let k = choice(SHADERS_VAR, value, &["spirv", "spirv-fma", "wgsl"])?;
+    Ok([
+        Some(Contraction::Forbidden),
+        Some(Contraction::Allowed),
+        None,
+    ][k])
 }
 
-/// Whether `value` of the two-way environment variable `var` chooses `other` over `default`
-/// (unset or empty: `default`); an error names any other value.
-fn other_choice(
-    var: &str,
-    value: Option<&str>,
-    (default, other): (&str, &str),
-) -> Result<bool, SimError> {
+/// Which of `values` environment variable `var` chooses, by index (unset or empty: the first,
+/// the default); an error names any other value.
+fn choice(var: &str, value: Option<&str>, values: &[&str]) -> Result<usize, SimError> {
     match value {
-        None | Some("") => Ok(false),
-        Some(v) if v == default => Ok(false),
-        Some(v) if v == other => Ok(true),
-        Some(v) => Err(SimError::Usage(format!(
-            "{var}={v:?}: expected {default:?} (the default) or {other:?}"
-        ))),
+        None | Some("") => Ok(0),
+        Some(v) => values.iter().position(|&w| w == v).ok_or_else(|| {
+            let others: Vec<String> = values[1..].iter().map(|w| format!("{w:?}")).collect();
+            SimError::Usage(format!(
+                "{var}={v:?}: expected {:?} (the default) or {}",
+                values[0],
+                others.join(" or ")
+            ))
+        }),
     }
 }
 
@@ -388,6 +396,9 @@ pub struct GpuDevice {
     /// lists not zeroed at every call), which takes a Vulkan adapter with `PASSTHROUGH_SHADERS`
     /// (every one wgpu 30 opens); otherwise from the WGSL as wgpu compiles it.
     pub(crate) own_spirv: bool,
+    /// Whether that SPIR-V lets the driver fuse a float product and a sum into one multiply-add
+    /// (`super::spirv::Contraction`; [`SHADERS_VAR`]).
+    pub(crate) contraction: Contraction,
     /// Whether the device enabled Vulkan's `robustBufferAccess2` (`VK_EXT_robustness2`), which
     /// makes every storage-buffer access out of bounds read zero and write nothing: wgpu then
     /// leaves buffer bounds to the driver, and so does the backend's own SPIR-V
@@ -466,7 +477,7 @@ impl GpuDevice {
     /// loss or destruction touches only the batches made on it
     /// ([`crate::BatchEnv::on_device`]).
     pub fn open_private(policy: AdapterPolicy) -> Result<Self, SimError> {
-        let own_spirv = own_spirv_wanted()?;
+        let shaders = shaders_wanted()?;
         let lane_paths = lane_paths_wanted()?;
         let (instance, backends) = instance();
         let adapters = pollster::block_on(instance.enumerate_adapters(backends));
@@ -487,7 +498,7 @@ impl GpuDevice {
         let mut wanted = wgpu::Features::PIPELINE_CACHE
             | wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
-        if own_spirv && info.backend == wgpu::Backend::Vulkan {
+        if shaders.is_some() && info.backend == wgpu::Backend::Vulkan {
             wanted |= wgpu::Features::PASSTHROUGH_SHADERS;
         }
         let features = adapter.features() & wanted;
@@ -529,6 +540,7 @@ impl GpuDevice {
             records_in_lanes: adapter.hardware,
             obstacles_after_resets: adapter.hardware,
             own_spirv,
+            contraction: shaders.unwrap_or(Contraction::Forbidden),
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             rebuild_workgroups: DEFAULT_REBUILD_WORKGROUPS,
             poison_orca_lists: false,
@@ -558,6 +570,19 @@ impl GpuDevice {
     /// heap's (`GpuDevice::device_description` says it too); `None` off Vulkan.
     pub fn readback_memory(&self) -> Option<&str> {
         self.readback_memory.as_deref()
+    }
+
+    /// The shader module of entry point `entry` of compute shader `source` (WGSL), built as the
+    /// backend builds its stages' (on Vulkan from socnav's SPIR-V, as [`SHADERS_VAR`] says;
+    /// elsewhere from the WGSL through wgpu), so that a test kernel runs the code the stages
+    /// run. `SimError::Internal` names a shader naga cannot compile.
+    pub fn compute_module(
+        &self,
+        label: &str,
+        source: &str,
+        entry: &str,
+    ) -> Result<wgpu::ShaderModule, SimError> {
+        super::kit::shader_module(self, label, source, entry)
     }
 
     /// Compute pipelines compiled on this device so far, by every batch that shares it.
@@ -658,11 +683,20 @@ mod tests {
     #[test]
     fn the_shaders_variable_chooses_the_spirv_or_names_its_bad_value() {
         for value in [None, Some(""), Some("spirv")] {
-            assert!(own_spirv_from(value).unwrap(), "{value:?}");
+            assert_eq!(
+                shaders_from(value).unwrap(),
+                Some(Contraction::Forbidden),
+                "{value:?}"
+            );
         }
-        assert!(!own_spirv_from(Some("wgsl")).unwrap());
-        let e = own_spirv_from(Some("SPIR-V")).unwrap_err().to_string();
+        assert_eq!(
+            shaders_from(Some("spirv-fma")).unwrap(),
+            Some(Contraction::Allowed)
+        );
+        assert_eq!(shaders_from(Some("wgsl")).unwrap(), None);
+        let e = shaders_from(Some("SPIR-V")).unwrap_err().to_string();
         assert!(e.contains(SHADERS_VAR) && e.contains("\"SPIR-V\""), "{e}");
+        assert!(e.contains("\"spirv-fma\" or \"wgsl\""), "{e}");
     }
 
     #[test]

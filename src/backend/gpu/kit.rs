@@ -286,7 +286,7 @@ impl PipelineCache {
     unsafe_code,
     reason = "wgpu::Device::create_shader_module_passthrough is unsafe; sound here, see below"
 )]
-fn shader_module(
+pub(crate) fn shader_module(
     dev: &GpuDevice,
     label: &str,
     source: &str,
@@ -305,13 +305,14 @@ fn shader_module(
     } else {
         super::spirv::BufferBounds::Clamped
     };
-    let words = super::spirv::compute_spirv(source, entry, buffers)
+    let words = super::spirv::compute_spirv(source, entry, buffers, dev.contraction)
         .map_err(|e| SimError::Internal(format!("shader {label}, entry point {entry}: {e}")))?;
     let desc =
         super::spirv::passthrough(label, entry, crate::backend::wgsl::WORKGROUP_SIZE, &words);
     // SAFETY: the words are naga's SPIR-V of a module naga validated, written with the bounds
-    // checks and loop bounding wgpu would add; the only change (`spirv::without_zero_initialisers`)
-    // leaves variables uninitialised that the shaders write before they read.
+    // checks and loop bounding wgpu would add; the changes leave variables uninitialised that the
+    // shaders write before they read (`spirv::without_zero_initialisers`) and forbid fusing
+    // arithmetic (`spirv::without_contraction`), which changes no memory access.
     Ok(unsafe { dev.device.create_shader_module_passthrough(desc) })
 }
 

@@ -685,12 +685,19 @@ impl GpuStages {
     /// obstacles are built (`GpuDevice::obstacles_after_resets`) and the memory the readback is
     /// mapped from (`GpuDevice::readback_memory`).
     pub fn device_description(&self) -> String {
-        let shaders = match (self.dev.own_spirv, self.dev.driver_checks_buffers) {
-            (true, true) => {
-                "socnav's SPIR-V, buffer bounds checked by the driver (robustBufferAccess2)"
-            }
-            (true, false) => "socnav's SPIR-V, buffer bounds clamped in the shaders",
-            (false, _) => "WGSL through wgpu",
+        let bounds = if self.dev.driver_checks_buffers {
+            "buffer bounds checked by the driver (robustBufferAccess2)"
+        } else {
+            "buffer bounds clamped in the shaders"
+        };
+        let fusing = match self.dev.contraction {
+            spirv::Contraction::Forbidden => "no multiply-add fused",
+            spirv::Contraction::Allowed => "multiply-adds left to the driver to fuse",
+        };
+        let shaders = if self.dev.own_spirv {
+            format!("socnav's SPIR-V, {fusing}, {bounds}")
+        } else {
+            "WGSL through wgpu".to_owned()
         };
         let observations = if self.dev.stage_observations {
             "staged through workgroup memory"

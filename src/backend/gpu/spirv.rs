@@ -1,5 +1,6 @@
 //! The SPIR-V this backend hands a Vulkan driver: naga's, written with the options wgpu uses,
-//! except that the ORCA solver's working lists are not zeroed at every call.
+//! except that the ORCA solver's working lists are not zeroed at every call and no float product
+//! and sum may be fused.
 //!
 //! WGSL gives every function-scope `var` without an initialiser the value zero, and naga's
 //! SPIR-V writer spells that as a zero initialiser on the variable, so a function clears its
@@ -20,10 +21,21 @@
 //! before read as in `scratch`, which a test poisons: `GpuDevice::poison_orca_lists`). Zeroing
 //! the latter's 16 KiB in every workgroup made llvmpipe take minutes to compile its pipelines.
 //!
+//! Nor may a driver fuse a float product and a sum into one multiply-add. WGSL lets it, and naga
+//! never writes SPIR-V's `NoContraction` decoration, so a hardware driver may round `a * b + c`
+//! once where the CPU backend rounds twice (lavapipe rounds twice). Where the exact result is
+//! zero, such as a velocity whose components cancel, the fused form leaves a residual of
+//! rounding's size and the CPU's exactly zero, and a heading taken from it (`atan2`) points
+//! anywhere: the H100's and H200's parity runs diverged so in `h_theta` (benches/RESULTS.md).
+//! Every float product and sum ([`CONTRACTIBLE_OPS`]) is therefore decorated `NoContraction`
+//! ([`without_contraction`]), as glslang does for GLSL's `precise`; `SOCNAV_SHADERS=spirv-fma`
+//! leaves them undecorated, to measure what that costs a device ([`Contraction`]).
+//!
 //! On Vulkan (lavapipe included), through wgpu's `PASSTHROUGH_SHADERS`, the pipelines are built
 //! from this SPIR-V unless `SOCNAV_SHADERS=wgsl` ([`super::SHADERS_VAR`]); elsewhere from the
-//! WGSL, as wgpu compiles it. The results are the same: only entries that are written before
-//! they are read differ in what they hold at the start.
+//! WGSL, as wgpu compiles it. On lavapipe the results are the same: only entries that are
+//! written before they are read differ in what they hold at the start, and lavapipe fuses no
+//! multiply-add either way.
 //!
 //! The bounds checks are wgpu's: every index of a local or uniform array clamped, and the
 //! indices of storage buffers clamped unless the device enabled `robustBufferAccess2`, which
@@ -52,24 +64,81 @@ pub(crate) enum BufferBounds {
     Driver,
 }
 
-/// SPIR-V opcodes and the storage class this module reads.
+/// Whether a driver may fuse a float product and a sum into one multiply-add (see the module
+/// docs): WGSL lets it, and naga's SPIR-V says nothing against it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Contraction {
+    /// Every float product and sum decorated `NoContraction`: each rounds on its own, as on the
+    /// CPU (the default).
+    Forbidden,
+    /// As naga writes it: the driver may fuse them (`SOCNAV_SHADERS=spirv-fma`, to measure what
+    /// forbidding it costs).
+    Allowed,
+}
+
+/// SPIR-V opcodes, the storage class and the decoration this module reads or writes.
+const OP_SOURCE_CONTINUED: u32 = 2;
+const OP_SOURCE: u32 = 3;
+const OP_SOURCE_EXTENSION: u32 = 4;
 const OP_NAME: u32 = 5;
+const OP_MEMBER_NAME: u32 = 6;
+const OP_STRING: u32 = 7;
+const OP_EXTENSION: u32 = 10;
+const OP_EXT_INST_IMPORT: u32 = 11;
+const OP_MEMORY_MODEL: u32 = 14;
+const OP_ENTRY_POINT: u32 = 15;
+const OP_EXECUTION_MODE: u32 = 16;
+const OP_CAPABILITY: u32 = 17;
 const OP_TYPE_POINTER: u32 = 32;
 const OP_VARIABLE: u32 = 59;
+const OP_DECORATE: u32 = 71;
+const OP_MODULE_PROCESSED: u32 = 330;
+const OP_EXECUTION_MODE_ID: u32 = 331;
 const STORAGE_CLASS_FUNCTION: u32 = 7;
+const DECORATION_NO_CONTRACTION: u32 = 42;
 /// Words of the module header before the first instruction.
 const HEADER_WORDS: usize = 5;
 
+/// The float instructions a driver could fuse into a multiply-add: the sums and differences
+/// (`OpFAdd`, `OpFSub`) and every product (`OpFMul`, `OpVectorTimesScalar`, the matrix products,
+/// `OpDot`). Each has its result type and result id as its first two operands.
+pub(crate) const CONTRACTIBLE_OPS: [u32; 9] = [129, 131, 133, 142, 143, 144, 145, 146, 148];
+
+/// The instructions of a module's sections before its annotations (SPIR-V's logical layout,
+/// section 2.4: capabilities to the debug names), after which a decoration may stand.
+const BEFORE_ANNOTATIONS: [u32; 14] = [
+    OP_CAPABILITY,
+    OP_EXTENSION,
+    OP_EXT_INST_IMPORT,
+    OP_MEMORY_MODEL,
+    OP_ENTRY_POINT,
+    OP_EXECUTION_MODE,
+    OP_EXECUTION_MODE_ID,
+    OP_STRING,
+    OP_SOURCE_EXTENSION,
+    OP_SOURCE,
+    OP_SOURCE_CONTINUED,
+    OP_NAME,
+    OP_MEMBER_NAME,
+    OP_MODULE_PROCESSED,
+];
+
 /// The SPIR-V of entry point `entry` of compute shader `source` (WGSL), with the function-scope
-/// variables of [`UNZEROED_TYPES`] not zeroed. The error names what failed (parse, validation
-/// or the writer) in naga's words.
+/// variables of [`UNZEROED_TYPES`] not zeroed and, where `contraction` forbids it, every float
+/// product and sum decorated `NoContraction`. The error names what failed (parse, validation or
+/// the writer) in naga's words.
 pub(crate) fn compute_spirv(
     source: &str,
     entry: &str,
     buffers: BufferBounds,
+    contraction: Contraction,
 ) -> Result<Vec<u32>, String> {
     let words = naga_spirv(source, Some(entry), buffers)?;
-    Ok(without_zero_initialisers(&words, &UNZEROED_TYPES))
+    let words = without_zero_initialisers(&words, &UNZEROED_TYPES);
+    Ok(match contraction {
+        Contraction::Forbidden => without_contraction(&words),
+        Contraction::Allowed => words,
+    })
 }
 
 /// naga's SPIR-V of WGSL `source` as it writes it, zero initialisers included: of entry point
@@ -216,6 +285,46 @@ pub(crate) fn without_zero_initialisers(words: &[u32], types: &[&str]) -> Vec<u3
     out
 }
 
+/// The result ids of module `words`' instructions of [`CONTRACTIBLE_OPS`], in order.
+pub(crate) fn contractible_results(words: &[u32]) -> Vec<u32> {
+    instructions(words)
+        .filter(|i| CONTRACTIBLE_OPS.contains(&i.opcode))
+        .filter_map(|i| i.operands.get(1).copied())
+        .collect()
+}
+
+/// The ids that module `words` decorates `NoContraction`, in order.
+#[cfg(test)]
+fn no_contraction_ids(words: &[u32]) -> Vec<u32> {
+    instructions(words)
+        .filter_map(|i| match (i.opcode, i.operands) {
+            (OP_DECORATE, [id, DECORATION_NO_CONTRACTION]) => Some(*id),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Module `words` with an `OpDecorate %id NoContraction` for the result of each of its
+/// [`CONTRACTIBLE_OPS`], placed first among the annotations; every other word as it was (the
+/// decorations take no new ids).
+pub(crate) fn without_contraction(words: &[u32]) -> Vec<u32> {
+    let ids = contractible_results(words);
+    let mut out = Vec::with_capacity(words.len() + 3 * ids.len());
+    out.extend_from_slice(&words[..HEADER_WORDS.min(words.len())]);
+    let mut decorated = false;
+    for inst in instructions(words) {
+        if !decorated && !BEFORE_ANNOTATIONS.contains(&inst.opcode) {
+            for &id in &ids {
+                out.extend_from_slice(&[(3 << 16) | OP_DECORATE, id, DECORATION_NO_CONTRACTION]);
+            }
+            decorated = true;
+        }
+        out.push(((inst.operands.len() as u32 + 1) << 16) | inst.opcode);
+        out.extend_from_slice(inst.operands);
+    }
+    out
+}
+
 /// The passthrough descriptor of `spirv` for compute entry point `entry`.
 pub(crate) fn passthrough<'a>(
     label: &'a str,
@@ -327,7 +436,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         for stage in orca_passes {
             let source = exp2_pass(stage);
             let zeroed = spirv_of(&source);
-            let ours = compute_spirv(&source, "main", BufferBounds::Clamped).unwrap();
+            let ours = compute_spirv(
+                &source,
+                "main",
+                BufferBounds::Clamped,
+                Contraction::Forbidden,
+            )
+            .unwrap();
             for ty in UNZEROED_TYPES {
                 // Each list type is declared (by `orca_world_velocity`, and LP3's lines) and
                 // naga zeroes it; the module the driver gets does not.
@@ -354,11 +469,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             let source = wgsl::assemble_pass_rebuilding_resets(p, &exp2_prelude()).unwrap();
             (format!("{p}+rebuild"), source)
         });
+        let mut decorated = 0;
         for (file, source) in passes.chain(resets) {
             let module = naga::front::wgsl::parse_str(&source).unwrap();
             for entry in &module.entry_points {
-                let words = compute_spirv(&source, &entry.name, BufferBounds::Clamped)
-                    .unwrap_or_else(|e| panic!("{file} {}: {e}", entry.name));
+                let words = compute_spirv(
+                    &source,
+                    &entry.name,
+                    BufferBounds::Clamped,
+                    Contraction::Forbidden,
+                )
+                .unwrap_or_else(|e| panic!("{file} {}: {e}", entry.name));
                 assert!(
                     function_variables(&words)
                         .iter()
@@ -366,18 +487,102 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                     "{file} {}",
                     entry.name
                 );
+                // No product or sum of any pass may be fused by the driver.
+                let ids = no_contraction_ids(&words);
+                assert_eq!(ids, contractible_results(&words), "{file} {}", entry.name);
+                decorated += ids.len();
             }
         }
+        // The step's arithmetic: thousands of products and sums (ORCA alone has hundreds).
+        assert!(decorated > 5_000, "{decorated}");
+    }
+
+    #[test]
+    fn naga_leaves_every_product_and_sum_free_to_fuse() {
+        let words = spirv_of(SHADER);
+        assert!(!contractible_results(&words).is_empty());
+        assert!(no_contraction_ids(&words).is_empty());
+    }
+
+    #[test]
+    fn every_product_and_sum_is_decorated_once_and_nothing_else_changes() {
+        let words = spirv_of(SHADER);
+        let ids = contractible_results(&words);
+        let out = without_contraction(&words);
+        assert_eq!(no_contraction_ids(&out), ids);
+        assert_eq!(out.len(), words.len() + 3 * ids.len());
+        assert_eq!(out[..HEADER_WORDS], words[..HEADER_WORDS]);
+        // Without the new decorations, the same instructions in the same order.
+        let others = |w: &[u32]| -> Vec<Vec<u32>> {
+            instructions(w)
+                .filter(|i| !(i.opcode == OP_DECORATE && i.operands.get(1) == Some(&42)))
+                .map(|i| [&[i.opcode][..], i.operands].concat())
+                .collect()
+        };
+        assert_eq!(others(&out), others(&words));
+    }
+
+    /// naga's own SPIR-V reader, which refuses an instruction out of the module's logical layout
+    /// (a decoration among the types, say), reads the decorated module.
+    #[test]
+    fn the_decorations_stand_where_spirv_puts_annotations() {
+        let source = exp2_pass(crate::backend::wgsl::pass_of("human_motion"));
+        for words in [
+            without_contraction(&spirv_of(SHADER)),
+            compute_spirv(
+                &source,
+                "main",
+                BufferBounds::Clamped,
+                Contraction::Forbidden,
+            )
+            .unwrap(),
+        ] {
+            let options = naga::front::spv::Options::default();
+            if let Err(e) = naga::front::spv::parse_u8_slice(bytemuck::cast_slice(&words), &options)
+            {
+                panic!("{e}");
+            }
+        }
+        // Misplaced (after the types), the same decoration is refused.
+        let words = spirv_of(SHADER);
+        let id = contractible_results(&words)[0];
+        let mut late = words.clone();
+        late.extend_from_slice(&[(3 << 16) | OP_DECORATE, id, DECORATION_NO_CONTRACTION]);
+        let options = naga::front::spv::Options::default();
+        assert!(naga::front::spv::parse_u8_slice(bytemuck::cast_slice(&late), &options).is_err());
+    }
+
+    #[test]
+    fn contraction_allowed_is_naga_s_module_as_written() {
+        let source = exp2_pass(crate::backend::wgsl::pass_of("human_motion"));
+        let allowed =
+            compute_spirv(&source, "main", BufferBounds::Clamped, Contraction::Allowed).unwrap();
+        let forbidden = compute_spirv(
+            &source,
+            "main",
+            BufferBounds::Clamped,
+            Contraction::Forbidden,
+        )
+        .unwrap();
+        assert!(no_contraction_ids(&allowed).is_empty());
+        assert_eq!(forbidden, without_contraction(&allowed));
     }
 
     #[test]
     fn a_bad_shader_is_an_error_saying_where_it_failed() {
-        let e = compute_spirv("fn main( {", "main", BufferBounds::Clamped).unwrap_err();
+        let e = compute_spirv(
+            "fn main( {",
+            "main",
+            BufferBounds::Clamped,
+            Contraction::Forbidden,
+        )
+        .unwrap_err();
         assert!(e.starts_with("WGSL parse"), "{e}");
         let e = compute_spirv(
             "@compute @workgroup_size(1) fn main() { let x: u32 = 1.5; }",
             "main",
             BufferBounds::Clamped,
+            Contraction::Forbidden,
         )
         .unwrap_err();
         assert!(e.starts_with("WGSL"), "{e}");
@@ -399,15 +604,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 ";
         let lengths = |buffers| {
-            let words = compute_spirv(source, "main", buffers).unwrap();
+            let words = compute_spirv(source, "main", buffers, Contraction::Allowed).unwrap();
             instructions(&words)
                 .filter(|i| i.opcode == OP_ARRAY_LENGTH)
                 .count()
         };
         assert!(lengths(BufferBounds::Clamped) > 0);
         assert_eq!(lengths(BufferBounds::Driver), 0);
-        let clamped = compute_spirv(source, "main", BufferBounds::Clamped).unwrap();
-        let driver = compute_spirv(source, "main", BufferBounds::Driver).unwrap();
+        let clamped =
+            compute_spirv(source, "main", BufferBounds::Clamped, Contraction::Allowed).unwrap();
+        let driver =
+            compute_spirv(source, "main", BufferBounds::Driver, Contraction::Allowed).unwrap();
         assert!(driver.len() < clamped.len());
     }
 }

@@ -229,25 +229,58 @@ const ENTRY_POINTS: [&str; 1] = ["main_blocks"];
 /// The compiled kernel: one pipeline per entry point.
 struct Kernel {
     dev: GpuDevice,
+    /// The kernel's one bind group: bindings 0-4 read, 5 written (`KERNEL`).
+    bindings: wgpu::BindGroupLayout,
     pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
+}
+
+/// The layout of the kernel's bind group, spelled out: a module built from SPIR-V carries no
+/// bindings for wgpu to derive one from.
+fn kernel_bindings(d: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = (0u32..6)
+        .map(|binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage {
+                    read_only: binding < 5,
+                },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        })
+        .collect();
+    d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("gpu_orca"),
+        entries: &entries,
+    })
 }
 
 impl Kernel {
     fn new(dev: GpuDevice) -> Self {
-        let module = dev
+        let source = kernel_source();
+        let bindings = kernel_bindings(&dev.device);
+        let layout = dev
             .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("gpu_orca"),
-                source: wgpu::ShaderSource::Wgsl(kernel_source().into()),
+                bind_group_layouts: &[Some(&bindings)],
+                immediate_size: 0,
             });
         let pipelines = ENTRY_POINTS
             .iter()
             .map(|&entry| {
+                // Built as the stages' modules are (on Vulkan, socnav's SPIR-V: no multiply-add
+                // fused), so that the kernel runs the ORCA code the stages run.
+                let module = dev
+                    .compute_module("gpu_orca", &source, entry)
+                    .unwrap_or_else(|e| panic!("the test kernel's {entry}: {e}"));
                 let p = dev
                     .device
                     .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                         label: Some(entry),
-                        layout: None,
+                        layout: Some(&layout),
                         module: &module,
                         entry_point: Some(entry),
                         compilation_options: Default::default(),
@@ -264,7 +297,11 @@ impl Kernel {
                 (entry, p)
             })
             .collect();
-        Self { dev, pipelines }
+        Self {
+            dev,
+            bindings,
+            pipelines,
+        }
     }
 
     /// Runs entry point `entry` over every agent of `batch`; returns [`OUT`] words per agent.
@@ -321,7 +358,7 @@ impl Kernel {
             .collect();
         let bind_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(entry),
-            layout: &pipeline.get_bind_group_layout(0),
+            layout: &self.bindings,
             entries: &entries,
         });
         let mut enc =
