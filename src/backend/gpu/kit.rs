@@ -274,6 +274,21 @@ impl PipelineCache {
         Ok((pipeline, true))
     }
 
+    /// [`Self::pipeline`] of a pass with one bind group (`group`), with that group's layout, for
+    /// the pass's bind group: the pipeline, the layout, and whether this call compiled it.
+    pub(crate) fn one_group_pipeline(
+        &self,
+        dev: &GpuDevice,
+        label: &str,
+        group: Vec<Binding>,
+        source: &str,
+    ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout, bool), SimError> {
+        let groups = [group];
+        let (pipeline, compiled) = self.pipeline(dev, label, &groups, source, "main")?;
+        let (mut layouts, _) = self.layout(dev, &groups);
+        Ok((pipeline, layouts.swap_remove(0), compiled))
+    }
+
     /// Pipelines compiled so far.
     pub(crate) fn builds(&self) -> usize {
         self.builds.load(Ordering::Relaxed)

@@ -229,12 +229,13 @@ impl PoolScatter {
     /// The pass on `dev` (compiled once per device), with whether this call compiled it.
     fn new(dev: &GpuDevice) -> Result<(Self, bool), SimError> {
         let read = Binding::Storage { read_only: true };
-        let groups = vec![vec![read, read, Binding::Storage { read_only: false }]];
-        let source = wgsl::pool_scatter_shader();
-        let (pipeline, compiled) =
-            dev.pipelines
-                .pipeline(dev, wgsl::POOL_SCATTER_PASS, &groups, &source, "main")?;
-        let (layouts, _) = dev.pipelines.layout(dev, &groups);
+        let group = vec![read, read, Binding::Storage { read_only: false }];
+        let (pipeline, layout, compiled) = dev.pipelines.one_group_pipeline(
+            dev,
+            wgsl::POOL_SCATTER_PASS,
+            group,
+            &wgsl::pool_scatter_shader(),
+        )?;
         // Room for a staging buffer's first rows in runs of one; it grows past that as needed.
         let runs = storage_buffer(
             dev,
@@ -243,7 +244,7 @@ impl PoolScatter {
         );
         let this = Self {
             pipeline,
-            layout: layouts[0].clone(),
+            layout,
             runs,
             list: Vec::new(),
         };

@@ -184,21 +184,22 @@ impl StepReadback {
             mapped_at_creation: false,
         });
         let read = Binding::Storage { read_only: true };
-        let groups = vec![vec![
+        let group = vec![
             read,
             read,
             Binding::Uniform,
             Binding::Storage { read_only: false },
-        ]];
-        let source = wgsl::finished_rows_shader(state, outputs);
-        let (pipeline, compiled) =
-            dev.pipelines
-                .pipeline(dev, wgsl::FINISHED_ROWS_PASS, &groups, &source, "main")?;
-        let (layouts, _) = dev.pipelines.layout(dev, &groups);
+        ];
+        let (pipeline, bind_layout, compiled) = dev.pipelines.one_group_pipeline(
+            dev,
+            wgsl::FINISHED_ROWS_PASS,
+            group,
+            &wgsl::finished_rows_shader(state, outputs),
+        )?;
         let bind_group = bind_buffers(
             dev,
             "finished rows",
-            &layouts[0],
+            &bind_layout,
             &[tables.f32s, tables.u32s, tables.batch, &finished],
         );
         let span_words: usize = spans.iter().map(|s| s.words).sum();
