@@ -199,8 +199,9 @@ impl Scratches {
 /// Fill `rows` (one [`row_words`]-word row per entry of `envs`, in order) with the rows of
 /// environments `envs` starting the episodes of seeds `seeds[env]` with counters
 /// `episodes[env]`, on `pool`'s threads with `scratches`
-/// made for that pool. Returns the environments whose scenario could not be generated, with the
-/// error (allocating only then).
+/// made for that pool: every word of every row, so `rows` need not be cleared first. Returns the
+/// environments whose scenario could not be generated, with the error (allocating only then);
+/// their rows are zeros.
 pub fn write_rows(
     p: &StepParams,
     envs: &[usize],
@@ -217,14 +218,60 @@ pub fn write_rows(
         rows.par_chunks_mut(words)
             .zip(envs.par_iter())
             .filter_map(|(row, &env)| {
-                write_row(p, env, episodes[env], seeds[env], &mut scratches.get(), row)
-                    .err()
-                    .map(|err| (env, err))
+                let written =
+                    write_row(p, env, episodes[env], seeds[env], &mut scratches.get(), row);
+                // A failed row holds zeros (no entity, no count), whatever the buffer held.
+                written.err().map(|err| {
+                    row.fill(0);
+                    (env, err)
+                })
             })
             .collect()
     };
     match pool {
         Some(pool) => pool.install(work),
         None => work(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+
+    /// Rows need no clearing first: a generated row overwrites every word, and a row whose
+    /// scenario finds no free spot is zeros (no entity, no count), whatever the buffer held.
+    #[test]
+    fn every_word_of_a_row_is_written_and_a_failed_row_is_zeros() {
+        let config = Config::from_name_or_path("exp1").unwrap();
+        let caps = Caps::from_config(&config);
+        let layout = ObsLayout::new(&caps, &config.observation);
+        let build = ObstacleBuild::Deferred;
+        let words = row_words(caps, layout, build);
+        let scratches = Scratches::new(caps, layout, build, None);
+        let (envs, episodes, seeds) = ([0, 1], [0; 2], [7, 8]);
+        let write = |p: &StepParams, fill: u32| {
+            let mut rows = vec![fill; 2 * words];
+            let failed = write_rows(p, &envs, &episodes, &seeds, &mut rows, None, &scratches);
+            (rows, failed)
+        };
+        let p = StepParams::new(&config, Default::default());
+        let (zeroed, failed) = write(&p, 0);
+        assert!(failed.is_empty(), "{failed:?}");
+        assert_eq!(write(&p, u32::MAX), (zeroed, Vec::new()));
+        // Walkers a room wide: no attempt places them.
+        let crowded = StepParams {
+            human_radius: 100.0,
+            ..p
+        };
+        let (rows, failed) = write(&crowded, u32::MAX);
+        let failed_envs: Vec<usize> = failed.iter().map(|(e, _)| *e).collect();
+        assert_eq!(failed_envs, envs);
+        assert!(
+            failed
+                .iter()
+                .all(|(_, e)| matches!(e, SimError::Scenario { .. }))
+        );
+        assert!(rows.iter().all(|&w| w == 0));
     }
 }

@@ -22,7 +22,7 @@
 //! it until the next step, and [`Backend::state_mut`] edits that copy, which is uploaded before
 //! the next device work.
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
 use crate::backend::Backend;
@@ -59,7 +59,9 @@ pub struct GpuBackend {
     read_episode: Vec<u32>,
     scratches: reset_pool::Scratches,
     threads: usize,
-    pool: Option<rayon::ThreadPool>,
+    /// The host's threads: the reset pool's rows, the copies into the outputs and into wgpu's
+    /// staging memory (`GpuStages::set_host_threads`).
+    pool: Option<Arc<rayon::ThreadPool>>,
     timing: bool,
     stage_seconds: Vec<f64>,
     actions_mask: Vec<f32>,
@@ -101,7 +103,7 @@ impl GpuBackend {
         let step_stages = step_stages(sngnn.is_some());
         let mut stages = step_stages.clone();
         stages.push(crate::backend::wgsl::RESET_PASS);
-        let gpu = match sngnn {
+        let mut gpu = match sngnn {
             None => GpuStages::new(dev, &params, &state, &out, &stages)?,
             Some(r) => {
                 let mut gpu =
@@ -112,14 +114,15 @@ impl GpuBackend {
         };
         let threads = crate::backend::cpu::resolve_threads(threads);
         // The caller waits while the rows are generated: every thread is a worker.
-        let pool = crate::backend::cpu::thread_pool(threads, "socnav-reset")?;
+        let pool = crate::backend::cpu::thread_pool(threads, "socnav-reset")?.map(Arc::new);
+        gpu.set_host_threads(pool.clone());
         let n = state.n_envs;
         let caps = state.strides;
         let layout = out.strides.layout;
         let episode = state.episode.clone();
         let row_words = gpu.pool_row_words();
         let scratches =
-            reset_pool::Scratches::new(caps, layout, gpu.pool_obstacles(), pool.as_ref());
+            reset_pool::Scratches::new(caps, layout, gpu.pool_obstacles(), pool.as_deref());
         let next_seed = (0..n).map(|e| state.next_seed(e)).collect();
         Ok(Self {
             params,
@@ -179,7 +182,7 @@ impl GpuBackend {
         self.rows
             .select(Which::Next, &self.episode, &self.next_seed);
         self.rows
-            .generate(&self.params, self.pool.as_ref(), &self.scratches);
+            .generate(&self.params, self.pool.as_deref(), &self.scratches);
         self.rows.write(&mut self.gpu);
         Ok(())
     }
@@ -196,14 +199,14 @@ impl GpuBackend {
         let read = StepRead {
             out: &mut self.out,
             episode: &mut self.read_episode,
-            pool: self.pool.as_ref(),
+            pool: self.pool.as_deref(),
         };
         // While the device works: the rows two episodes ahead that the pool lacks, generated and
         // staged for the next submit (they go to the half of the pool this step does not read).
         let (rows, params, pool, scratches) = (
             &mut self.rows,
             &self.params,
-            self.pool.as_ref(),
+            self.pool.as_deref(),
             &self.scratches,
         );
         let (episode, next_seed) = (&self.episode, &self.next_seed);

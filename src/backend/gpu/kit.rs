@@ -426,6 +426,55 @@ pub(crate) fn storage_buffer(dev: &GpuDevice, label: &str, size: u64) -> wgpu::B
     })
 }
 
+/// Bytes from which a queue write is copied into its staging memory on every thread of a pool
+/// ([`write_buffer_split`]): below, one thread's copy costs less than handing it out.
+pub(crate) const SPLIT_WRITE_BYTES: usize = 256 << 10;
+
+/// Bytes each thread copies at a time in [`write_buffer_split`].
+const SPLIT_WRITE_CHUNK: usize = 64 << 10;
+
+/// `queue.write_buffer(buffer, offset, bytes)`, its copy into wgpu's staging memory split over
+/// `pool`'s threads where the write is large ([`SPLIT_WRITE_BYTES`]).
+///
+/// That staging memory is what wgpu's allocator picks for a buffer the host writes and the
+/// device reads: device memory the host can map first (`HOST_VISIBLE | DEVICE_LOCAL`), which
+/// on a discrete GPU is written across the bus, uncached, at what one core's stores push
+/// through (a few GB/s), where several cores' stores fill more of the bus. A step's actions
+/// (exp2 at 65,536 environments: 786 KB, before the step's submit) and its reset-pool rows
+/// (about 1.9 MB) are such writes.
+pub(crate) fn write_buffer_split(
+    dev: &GpuDevice,
+    buffer: &wgpu::Buffer,
+    offset: u64,
+    bytes: &[u8],
+    pool: Option<&rayon::ThreadPool>,
+) {
+    use rayon::prelude::*;
+    let (Some(pool), Some(size)) = (
+        pool.filter(|_| bytes.len() >= SPLIT_WRITE_BYTES),
+        wgpu::BufferSize::new(bytes.len() as u64),
+    ) else {
+        dev.queue.write_buffer(buffer, offset, bytes);
+        return;
+    };
+    // `None` where the write is invalid: `write_buffer` then reports why, as for a small one.
+    let Some(mut view) = dev.queue.write_buffer_with(buffer, offset, size) else {
+        dev.queue.write_buffer(buffer, offset, bytes);
+        return;
+    };
+    // Whole chunks as arrays, which (unlike a slice's `WriteOnly`) may go to another thread.
+    let (chunks, mut tail) = view.slice(..).into_chunks::<SPLIT_WRITE_CHUNK>();
+    let chunks: Vec<wgpu::WriteOnly<'_, [u8; SPLIT_WRITE_CHUNK]>> = chunks.into_iter().collect();
+    let (whole, rest) = bytes.split_at(chunks.len() * SPLIT_WRITE_CHUNK);
+    pool.install(|| {
+        chunks
+            .into_par_iter()
+            .zip(whole.par_chunks_exact(SPLIT_WRITE_CHUNK))
+            .for_each(|(chunk, src)| wgpu::WriteOnly::<'_, [u8]>::from(chunk).copy_from_slice(src));
+    });
+    tail.copy_from_slice(rest);
+}
+
 /// A uniform buffer holding `words`.
 pub(crate) fn uniform_buffer(dev: &GpuDevice, label: &str, words: &[u32]) -> wgpu::Buffer {
     let buffer = dev.device.create_buffer(&wgpu::BufferDescriptor {
@@ -530,4 +579,73 @@ pub(crate) fn map_and_read_after(
     }
     buffer.unmap();
     dev.take_errors()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shared device, or `None` (after saying why) when there is none and none is required
+    /// (`REQUIRE_GPU=1`, as CI sets).
+    fn device() -> Option<GpuDevice> {
+        match GpuDevice::open(super::super::AdapterPolicy::Any) {
+            Ok(d) => Some(d),
+            Err(e) if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+                panic!("REQUIRE_GPU=1 but no GPU adapter: {e}")
+            }
+            Err(e) => {
+                eprintln!("SKIPPED: no GPU adapter ({e})");
+                None
+            }
+        }
+    }
+
+    /// A write split over threads puts every byte where one write puts it: whole chunks and a
+    /// tail, at an offset, around bytes it leaves alone; and a write too small to split.
+    #[test]
+    fn a_write_split_over_threads_lands_as_one_write() {
+        let Some(dev) = device() else { return };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        let words = 3 * SPLIT_WRITE_CHUNK / 4 + 17 + SPLIT_WRITE_BYTES / 4;
+        let before: Vec<u32> = vec![0xDEAD_BEEF; words + 2];
+        let buffer = dev.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("split write"),
+            size: bytes_of::<u32>(before.len()),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let readback = dev.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("split write readback"),
+            size: bytes_of::<u32>(before.len()),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let read = || {
+            let mut enc = dev.device.create_command_encoder(&Default::default());
+            enc.copy_buffer_to_buffer(&buffer, 0, &readback, 0, readback.size());
+            dev.queue.submit([enc.finish()]);
+            let mut got = Vec::new();
+            map_and_read(&dev, &readback, readback.size(), |w| got = w.to_vec()).unwrap();
+            got
+        };
+        for (len, threads) in [(words, Some(&pool)), (words, None), (100, Some(&pool))] {
+            dev.queue
+                .write_buffer(&buffer, 0, bytemuck::cast_slice(&before));
+            let data: Vec<u32> = (0..len as u32)
+                .map(|k| k.wrapping_mul(2_654_435_761))
+                .collect();
+            write_buffer_split(&dev, &buffer, 4, bytemuck::cast_slice(&data), threads);
+            let mut want = before.clone();
+            want[1..=len].copy_from_slice(&data);
+            assert_eq!(
+                read(),
+                want,
+                "{len} words, {} threads",
+                threads.map_or(0, |p| p.current_num_threads())
+            );
+        }
+    }
 }

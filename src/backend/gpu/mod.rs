@@ -36,6 +36,8 @@ pub use device::{
 };
 pub use sngnn_net::GpuNet;
 
+use std::sync::Arc;
+
 use crate::backend::{obs_payload, wgsl};
 use crate::error::SimError;
 use crate::outputs::Outputs;
@@ -49,7 +51,7 @@ use crate::state::BatchState;
 use crate::systems::reset::ObstacleBuild;
 use kit::{
     Binding, CreationScope, Groups, bind_buffers, bind_kinds, bytes_of, check_binding,
-    map_and_read, map_and_read_after, storage_buffer, uniform_buffer,
+    map_and_read, map_and_read_after, storage_buffer, uniform_buffer, write_buffer_split,
 };
 use readback::{StepReadback, words_to_bytes};
 use sngnn_net::StepBuffers;
@@ -102,6 +104,9 @@ pub struct GpuStages {
     /// `pool_staging` they use.
     pool_copies: Vec<(u64, u64, u64)>,
     pool_staged: u64,
+    /// The host threads that copy the large queue writes (the actions, the pool rows) into
+    /// wgpu's staging memory ([`GpuStages::set_host_threads`], [`write_buffer_split`]).
+    host_threads: Option<Arc<rayon::ThreadPool>>,
     /// The pass that makes those copies in one dispatch (`wgsl::pool_scatter_shader`), and the
     /// list of runs it reads (the count, then `wgsl::POOL_RUN_WORDS` words a run).
     pool_scatter: PoolScatter,
@@ -645,6 +650,7 @@ impl GpuStages {
             pool_staging,
             pool_copies: Vec::new(),
             pool_staged: 0,
+            host_threads: None,
             pool_scatter,
             scratch,
             rare,
@@ -858,12 +864,23 @@ impl GpuStages {
         self.write(&self.outputs);
     }
 
+    /// The host threads that copy large queue writes (the actions, the pool rows) into wgpu's
+    /// staging memory, which on a discrete GPU one core fills at a fraction of the bus's speed
+    /// (`kit::write_buffer_split`); without them, the caller's thread copies.
+    pub fn set_host_threads(&mut self, pool: Option<Arc<rayon::ThreadPool>>) {
+        self.host_threads = pool;
+    }
+
     /// Set the actions of the next stages: 3 floats per environment.
     pub fn upload_actions(&mut self, actions: &[f32]) {
         assert_eq!(actions.len(), 3 * self.n_envs, "3 actions per environment");
-        self.dev
-            .queue
-            .write_buffer(&self.actions, 0, bytemuck::cast_slice(actions));
+        write_buffer_split(
+            &self.dev,
+            &self.actions,
+            0,
+            bytemuck::cast_slice(actions),
+            self.host_threads.as_deref(),
+        );
     }
 
     /// Replace the step constants.
@@ -932,10 +949,12 @@ impl GpuStages {
                 .max(rows.len() as u64) as usize;
             self.pool_staging = staging_buffer(&self.dev, words);
         }
-        self.dev.queue.write_buffer(
+        write_buffer_split(
+            &self.dev,
             &self.pool_staging,
             self.pool_staged,
             bytemuck::cast_slice(rows),
+            self.host_threads.as_deref(),
         );
         let mut from = self.pool_staged;
         for &(half, first_env, n) in runs {
