@@ -195,6 +195,35 @@ mod vulkan {
     /// would explain its speed (docs/performance.md), so the bench's device line says which it
     /// is.
     pub(super) fn readback_memory(device: &wgpu::Device) -> Option<String> {
+        mapped_memory(
+            device,
+            ash::vk::BufferUsageFlags::TRANSFER_DST,
+            ash::vk::MemoryPropertyFlags::HOST_CACHED,
+        )
+    }
+
+    /// The memory wgpu's staging buffers of `device` live in (`MAP_WRITE | COPY_SRC`: every
+    /// queue write's, the step's actions and pool rows among them), as its allocator
+    /// (`MemoryLocation::CpuToGpu`) picks it: host-visible, coherent and device-local first (on
+    /// a discrete GPU, device memory the host writes across the bus, uncached), else host-visible
+    /// and coherent. The large writes are split over the host's threads for the first
+    /// (`kit::write_buffer_split`), and the bench's device line says which it is.
+    pub(super) fn staging_memory(device: &wgpu::Device) -> Option<String> {
+        mapped_memory(
+            device,
+            ash::vk::BufferUsageFlags::TRANSFER_SRC,
+            ash::vk::MemoryPropertyFlags::DEVICE_LOCAL,
+        )
+    }
+
+    /// The memory type gpu-allocator picks for a mapped buffer of `usage` on `device`: the first
+    /// the buffer allows that is host-visible, coherent and `preferred`, else the first
+    /// host-visible and coherent one; with its flags and its heap's.
+    fn mapped_memory(
+        device: &wgpu::Device,
+        usage: ash::vk::BufferUsageFlags,
+        preferred: ash::vk::MemoryPropertyFlags,
+    ) -> Option<String> {
         use ash::vk;
         // SAFETY: a probe buffer is created on the device and destroyed before the guard is
         // dropped, never bound or used; everything else is a query of the physical device.
@@ -202,7 +231,7 @@ mod vulkan {
         let raw = hal.raw_device();
         let probe = vk::BufferCreateInfo::default()
             .size(1 << 16)
-            .usage(vk::BufferUsageFlags::TRANSFER_DST)
+            .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: see above.
         let buffer = unsafe { raw.create_buffer(&probe, None) }.ok()?;
@@ -223,7 +252,7 @@ mod vulkan {
             (0..types.len())
                 .find(|&i| allowed & (1 << i) != 0 && types[i].property_flags.contains(wanted))
         };
-        let i = pick(visible | vk::MemoryPropertyFlags::HOST_CACHED).or_else(|| pick(visible))?;
+        let i = pick(visible | preferred).or_else(|| pick(visible))?;
         let heap = memory.memory_heaps[types[i].heap_index as usize];
         Some(format!(
             "memory type {i} ({:?}) of heap {} ({} MiB, {:?})",
@@ -248,6 +277,10 @@ mod vulkan {
     }
 
     pub(super) fn readback_memory(_: &wgpu::Device) -> Option<String> {
+        None
+    }
+
+    pub(super) fn staging_memory(_: &wgpu::Device) -> Option<String> {
         None
     }
 }
@@ -407,6 +440,9 @@ pub struct GpuDevice {
     /// The memory the step's mapped readback lives in (`vulkan::readback_memory`), where the device
     /// says.
     readback_memory: Option<String>,
+    /// The memory wgpu's staging buffers live in (`vulkan::staging_memory`), where the device
+    /// says.
+    staging_memory: Option<String>,
     errors: Arc<Mutex<Vec<String>>>,
     /// Why the device was lost, once it has been.
     lost: Arc<Mutex<Option<String>>>,
@@ -532,6 +568,7 @@ impl GpuDevice {
         let dev = Self {
             driver_checks_buffers: own_spirv && vulkan::robust_buffer_access2(&device),
             readback_memory: vulkan::readback_memory(&device),
+            staging_memory: vulkan::staging_memory(&device),
             device,
             queue,
             stage_observations: adapter.hardware,
@@ -570,6 +607,13 @@ impl GpuDevice {
     /// heap's (`GpuDevice::device_description` says it too); `None` off Vulkan.
     pub fn readback_memory(&self) -> Option<&str> {
         self.readback_memory.as_deref()
+    }
+
+    /// The memory type wgpu's staging buffers of this device live in (every queue write's: the
+    /// step's actions, the reset pool's rows), with its flags and its heap's
+    /// (`GpuDevice::device_description` says it too); `None` off Vulkan.
+    pub fn staging_memory(&self) -> Option<&str> {
+        self.staging_memory.as_deref()
     }
 
     /// The shader module of entry point `entry` of compute shader `source` (WGSL), built as the

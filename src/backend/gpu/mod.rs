@@ -690,7 +690,8 @@ impl GpuStages {
     /// (`GpuDevice::resets_in_workgroups`), the obstacles are rebuilt
     /// (`GpuDevice::obstacles_in_workgroups`, where the batch's passes rebuild any) and a reset's
     /// obstacles are built (`GpuDevice::obstacles_after_resets`) and the memory the readback is
-    /// mapped from (`GpuDevice::readback_memory`).
+    /// mapped from (`GpuDevice::readback_memory`) and the queue writes staged in
+    /// (`GpuDevice::staging_memory`).
     pub fn device_description(&self) -> String {
         let bounds = if self.dev.driver_checks_buffers {
             "buffer bounds checked by the driver (robustBufferAccess2)"
@@ -750,10 +751,14 @@ impl GpuStages {
             .dev
             .readback_memory()
             .map_or(String::new(), |m| format!(", mapped from {m}"));
+        let staging = self
+            .dev
+            .staging_memory()
+            .map_or(String::new(), |m| format!("; queue writes staged in {m}"));
         format!(
             "{}; shaders: {shaders}; observations {observations}; entity records {records}; \
              resets on {resets}; obstacle rebuilds {rebuilds}; a reset's obstacles \
-             {reset_obstacles}; per-step outputs read back in {pieces}{memory}{left_out}",
+             {reset_obstacles}; per-step outputs read back in {pieces}{memory}{staging}{left_out}",
             self.dev.adapter
         )
     }

@@ -34,11 +34,11 @@ fn state_round_trip() {
     );
 }
 
-/// The device names the memory its step readback is mapped from (a diagnosis of the copy out of
-/// it on hardware): on Vulkan a host-visible, coherent memory type, and a batch's device line
-/// says the same.
+/// The device names the memory its step readback is mapped from and the memory its queue writes
+/// are staged in (diagnoses of the copies out of and into them on hardware): on Vulkan
+/// host-visible, coherent memory types, and a batch's device line says the same.
 #[test]
-fn the_readback_memory_is_named() {
+fn the_readback_and_staging_memory_are_named() {
     let Some(dev) = device() else { return };
     if dev.adapter.backend != "Vulkan" {
         println!("skipped: {} is not a Vulkan adapter", dev.adapter);
@@ -48,21 +48,24 @@ fn the_readback_memory_is_named() {
         .readback_memory()
         .expect("a Vulkan device names its readback memory")
         .to_owned();
-    assert!(
-        memory.starts_with("memory type ")
-            && memory.contains("HOST_VISIBLE")
-            && memory.contains("HOST_COHERENT"),
-        "{memory}"
-    );
+    let staging = dev
+        .staging_memory()
+        .expect("a Vulkan device names its staging memory")
+        .to_owned();
+    for m in [&memory, &staging] {
+        assert!(
+            m.starts_with("memory type ")
+                && m.contains("HOST_VISIBLE")
+                && m.contains("HOST_COHERENT"),
+            "{m}"
+        );
+    }
     let env = rolled_out(config("exp1"), 4, 1);
     let state = env.state().unwrap().clone();
     let gpu = GpuStages::new(dev, env.params(), &state, env.outputs(), &[]).expect("GPU stages");
-    assert!(
-        gpu.device_description()
-            .contains(&format!("mapped from {memory}")),
-        "{}",
-        gpu.device_description()
-    );
+    let line = gpu.device_description();
+    assert!(line.contains(&format!("mapped from {memory}")), "{line}");
+    assert!(line.contains(&format!("staged in {staging}")), "{line}");
 }
 
 /// Contract: the masked reset pass (`shaders/reset.wgsl`) equals `CpuBackend::reset` over about
