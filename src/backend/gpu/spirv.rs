@@ -26,7 +26,8 @@
 //! once where the CPU backend rounds twice (lavapipe rounds twice). Where the exact result is
 //! zero, such as a velocity whose components cancel, the fused form leaves a residual of
 //! rounding's size and the CPU's exactly zero, and a heading taken from it (`atan2`) points
-//! anywhere: the H100's and H200's parity runs diverged so in `h_theta` (benches/RESULTS.md).
+//! anywhere. The H100's and H200's parity runs diverged in `h_theta` at such velocities
+//! (benches/RESULTS.md), of which this is the likeliest cause.
 //! Every float product and sum ([`CONTRACTIBLE_OPS`]) is therefore decorated `NoContraction`
 //! ([`without_contraction`]), as glslang does for GLSL's `precise`; `SOCNAV_SHADERS=spirv-fma`
 //! leaves them undecorated, to measure what that costs a device ([`Contraction`]).
@@ -515,7 +516,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         // Without the new decorations, the same instructions in the same order.
         let others = |w: &[u32]| -> Vec<Vec<u32>> {
             instructions(w)
-                .filter(|i| !(i.opcode == OP_DECORATE && i.operands.get(1) == Some(&42)))
+                .filter(|i| {
+                    !(i.opcode == OP_DECORATE
+                        && i.operands.get(1) == Some(&DECORATION_NO_CONTRACTION))
+                })
                 .map(|i| [&[i.opcode][..], i.operands].concat())
                 .collect()
         };
