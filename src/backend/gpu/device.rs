@@ -426,11 +426,13 @@ pub struct GpuDevice {
     /// unless a clone says otherwise.
     pub leave_out: Vec<String>,
     /// Whether pipelines are built from the backend's own SPIR-V (`super::spirv`: the ORCA
-    /// lists not zeroed at every call), which takes a Vulkan adapter with `PASSTHROUGH_SHADERS`
+    /// lists not zeroed at every call, and no multiply-add fused unless [`Self::contraction`]
+    /// allows it), which takes a Vulkan adapter with `PASSTHROUGH_SHADERS`
     /// (every one wgpu 30 opens); otherwise from the WGSL as wgpu compiles it.
     pub(crate) own_spirv: bool,
     /// Whether that SPIR-V lets the driver fuse a float product and a sum into one multiply-add
-    /// (`super::spirv::Contraction`; [`SHADERS_VAR`]).
+    /// (`super::spirv::Contraction`; [`SHADERS_VAR`]); unused where the pipelines are built from
+    /// the WGSL.
     pub(crate) contraction: Contraction,
     /// Whether the device enabled Vulkan's `robustBufferAccess2` (`VK_EXT_robustness2`), which
     /// makes every storage-buffer access out of bounds read zero and write nothing: wgpu then
