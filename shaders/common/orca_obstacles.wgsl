@@ -354,23 +354,41 @@ fn orca_obstacles_box_distance_sq(pos: vec2<f32>, v: array<vec2<f32>, 4>) -> f32
 // squared length a positive finite f32.
 fn orca_obstacles_valid(l: u32) -> bool {
     for (var p = 0u; p < orca_obstacles_list_len(l); p++) {
-        let v = orca_obstacles_list_polygon(l, p);
-        for (var k = 0u; k < 4u; k++) {
-            let a = v[k];
-            if (!math_is_finite_bits(a.x) || !math_is_finite_bits(a.y)) {
-                return false;
-            }
-        }
-        for (var k = 0u; k < 4u; k++) {
-            let a = v[k];
-            let b = v[(k + 1u) % 4u];
-            let len_sq = orca_abs_sq(b - a);
-            if (!(len_sq > 0.0 && math_is_finite_bits(len_sq))) {
-                return false;
-            }
+        if (!orca_obstacles_polygon_valid(orca_obstacles_list_polygon(l, p))) {
+            return false;
         }
     }
     return true;
+}
+
+// Rust `validate_polygons` of one quadrilateral.
+fn orca_obstacles_polygon_valid(v: array<vec2<f32>, 4>) -> bool {
+    for (var k = 0u; k < 4u; k++) {
+        let a = v[k];
+        if (!math_is_finite_bits(a.x) || !math_is_finite_bits(a.y)) {
+            return false;
+        }
+    }
+    for (var k = 0u; k < 4u; k++) {
+        let a = v[k];
+        let b = v[(k + 1u) % 4u];
+        let len_sq = orca_abs_sq(b - a);
+        if (!(len_sq > 0.0 && math_is_finite_bits(len_sq))) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Vertex i of set s: its point, direction, neighbours and convexity.
+fn orca_obstacles_write_vertex(s: u32, i: u32, p: vec2<f32>, dir: vec2<f32>, next: u32, prev: u32, convex: u32) {
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_POINT_X, i)] = bitcast<u32>(p.x);
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_POINT_Y, i)] = bitcast<u32>(p.y);
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_DIR_X, i)] = bitcast<u32>(dir.x);
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_DIR_Y, i)] = bitcast<u32>(dir.y);
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_NEXT, i)] = next;
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_PREV, i)] = prev;
+    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_CONVEX, i)] = convex;
 }
 
 // Rust `ObstacleSet::push_vertex`; false (and the overflow flagged) when the set is full.
@@ -380,39 +398,34 @@ fn orca_obstacles_push_vertex(s: u32, p: vec2<f32>, dir: vec2<f32>, next: u32, p
         scratch[s + 1u] |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
         return false;
     }
-    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_POINT_X, i)] = bitcast<u32>(p.x);
-    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_POINT_Y, i)] = bitcast<u32>(p.y);
-    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_DIR_X, i)] = bitcast<u32>(dir.x);
-    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_DIR_Y, i)] = bitcast<u32>(dir.y);
-    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_NEXT, i)] = next;
-    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_PREV, i)] = prev;
-    scratch[orca_obstacles_at(s, ORCA_OBSTACLES_CONVEX, i)] = convex;
+    orca_obstacles_write_vertex(s, i, p, dir, next, prev, convex);
     scratch[s] = i + 1u;
     return true;
 }
 
+// Corner i of quadrilateral v as Rust `add_polygon` links it: its direction, and 1 when convex.
+struct OrcaObstacleCorner {
+    dir: vec2<f32>,
+    convex: u32,
+}
+
+fn orca_obstacles_corner(v: array<vec2<f32>, 4>, i: u32) -> OrcaObstacleCorner {
+    let p = v[i];
+    let p_prev = v[(i + 3u) % 4u];
+    let p_next = v[(i + 1u) % 4u];
+    var convex = 0u;
+    if (orca_left_of(p_prev, p, p_next) >= 0.0) {
+        convex = 1u;
+    }
+    return OrcaObstacleCorner(orca_normalize(p_next - p), convex);
+}
+
 // Rust `add_polygon` (RVO2's `addObstacle`) for one quadrilateral.
 fn orca_obstacles_add_polygon(s: u32, v: array<vec2<f32>, 4>) {
-    let n = 4u;
     let first = scratch[s];
-    for (var i = 0u; i < n; i++) {
-        var prev_i = i - 1u;
-        if (i == 0u) {
-            prev_i = n - 1u;
-        }
-        var next_i = i + 1u;
-        if (i == n - 1u) {
-            next_i = 0u;
-        }
-        let p = v[i];
-        let p_prev = v[prev_i];
-        let p_next = v[next_i];
-        let dir = orca_normalize(p_next - p);
-        var convex = 0u;
-        if (orca_left_of(p_prev, p, p_next) >= 0.0) {
-            convex = 1u;
-        }
-        if (!orca_obstacles_push_vertex(s, p, dir, first + next_i, first + prev_i, convex)) {
+    for (var i = 0u; i < 4u; i++) {
+        let c = orca_obstacles_corner(v, i);
+        if (!orca_obstacles_push_vertex(s, v[i], c.dir, first + (i + 1u) % 4u, first + (i + 3u) % 4u, c.convex)) {
             return;
         }
     }
@@ -448,7 +461,7 @@ fn orca_obstacles_key_less(a0: u32, a1: u32, b0: u32, b1: u32) -> bool {
 // when the lane has no candidate. A candidate's counts only grow as its loop goes on, so the
 // early exit never drops a candidate that would have been chosen, and every candidate's full
 // key has max(L, R) < n: the least over all positions is Rust `choose_split`'s choice, whichever
-// lanes share the candidates (`orca_obstacles_earlier_split` takes the least of the lanes').
+// lanes share the candidates (`orca_obstacles_split_key` orders the lanes' as the loop would).
 fn orca_obstacles_split_candidates(e: u32, s: u32, start: u32, n: u32, lane: u32, lanes: u32) -> vec3<u32> {
     var best = NONE;
     var min_left = n;
@@ -486,19 +499,6 @@ fn orca_obstacles_split_candidates(e: u32, s: u32, start: u32, n: u32, lane: u32
     return vec3<u32>(best, min_left, min_right);
 }
 
-// Whether split candidate a (`orca_obstacles_split_candidates`) comes before b: a lesser key, or
-// an equal one at an earlier position; no candidate (NONE) comes last.
-fn orca_obstacles_earlier_split(a: vec3<u32>, b: vec3<u32>) -> bool {
-    if (a.x == NONE || b.x == NONE) {
-        return b.x == NONE && a.x != NONE;
-    }
-    let a0 = max(a.y, a.z);
-    let a1 = min(a.y, a.z);
-    let b0 = max(b.y, b.z);
-    let b1 = min(b.y, b.z);
-    return orca_obstacles_key_less(a0, a1, b0, b1) || (a0 == b0 && a1 == b1 && a.x < b.x);
-}
-
 // Rust `choose_split` over the list `arena[start..start + n]` of environment e: (position, L, R).
 fn orca_obstacles_choose_split(e: u32, s: u32, start: u32, n: u32) -> vec3<u32> {
     return orca_obstacles_split_candidates(e, s, start, n, 0u, 1u);
@@ -507,6 +507,19 @@ fn orca_obstacles_choose_split(e: u32, s: u32, start: u32, n: u32) -> vec3<u32> 
 // Rust `split_edge`: splits edge j1 -> next(j1) where it crosses the line of edge i1 -> next(i1);
 // the fresh vertex's id, or NONE when the set is full (overflow flagged).
 fn orca_obstacles_split_edge(s: u32, i1: u32, j1: u32) -> u32 {
+    let fresh = scratch[s];
+    if (fresh == orca_obstacles_cap()) {
+        scratch[s + 1u] |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
+        return NONE;
+    }
+    orca_obstacles_place_split(s, i1, j1, fresh);
+    scratch[s] = fresh + 1u;
+    return fresh;
+}
+
+// The body of Rust `split_edge` with the fresh vertex's id given: vertex `fresh` where edge
+// j1 -> next(j1) crosses the line of edge i1 -> next(i1), linked between them.
+fn orca_obstacles_place_split(s: u32, i1: u32, j1: u32, fresh: u32) {
     let j2 = orca_obstacles_set_next(s, j1);
     let a = orca_obstacles_set_point(s, i1);
     let b = orca_obstacles_set_point(s, orca_obstacles_set_next(s, i1));
@@ -514,14 +527,9 @@ fn orca_obstacles_split_edge(s: u32, i1: u32, j1: u32) -> u32 {
     let pj2 = orca_obstacles_set_point(s, j2);
     let t = orca_det(b - a, pj1 - a) / orca_det(b - a, pj1 - pj2);
     let split_point = pj1 + t * (pj2 - pj1);
-    let fresh = scratch[s];
-    let dir = orca_obstacles_set_dir(s, j1);
-    if (!orca_obstacles_push_vertex(s, split_point, dir, j2, j1, 1u)) {
-        return NONE;
-    }
+    orca_obstacles_write_vertex(s, fresh, split_point, orca_obstacles_set_dir(s, j1), j2, j1, 1u);
     scratch[orca_obstacles_at(s, ORCA_OBSTACLES_NEXT, j1)] = fresh;
     scratch[orca_obstacles_at(s, ORCA_OBSTACLES_PREV, j2)] = fresh;
-    return fresh;
 }
 
 // The tree build's stack of edge lists between two nodes: the lists are `arena[..end]`, their
@@ -531,10 +539,10 @@ struct OrcaObstaclesStack {
     depth: u32,
 }
 
-// The start of Rust `process_obstacles` of environment e's list into its set: the polygons'
-// vertices added, and the stack holding the root list of every vertex (none where the list
-// overflowed or is invalid, or holds no vertex).
-fn orca_obstacles_process_begin(e: u32) -> OrcaObstaclesStack {
+// The start of Rust `process_obstacles` of environment e's list into its set: the set emptied,
+// its overflow the list's (with ORCA_OBSTACLES_INVALID where a polygon is degenerate or not
+// finite); the polygons to add, none where it overflowed.
+fn orca_obstacles_begin_set(e: u32) -> u32 {
     let l = orca_obstacles_region(e) + batch.x_obstacle_list;
     let s = orca_obstacles_set(e);
     scratch[s] = 0u;
@@ -543,9 +551,19 @@ fn orca_obstacles_process_begin(e: u32) -> OrcaObstaclesStack {
         scratch[s + 1u] |= ORCA_OBSTACLES_INVALID;
     }
     if (scratch[s + 1u] != 0u) {
-        return OrcaObstaclesStack(0u, 0u);
+        return 0u;
     }
-    for (var p = 0u; p < orca_obstacles_list_len(l); p++) {
+    return orca_obstacles_list_len(l);
+}
+
+// The start of Rust `process_obstacles` of environment e's list into its set: the polygons'
+// vertices added, and the stack holding the root list of every vertex (none where the list
+// overflowed or is invalid, or holds no vertex).
+fn orca_obstacles_process_begin(e: u32) -> OrcaObstaclesStack {
+    let l = orca_obstacles_region(e) + batch.x_obstacle_list;
+    let s = orca_obstacles_set(e);
+    let polygons = orca_obstacles_begin_set(e);
+    for (var p = 0u; p < polygons; p++) {
         orca_obstacles_add_polygon(s, orca_obstacles_list_polygon(l, p));
     }
     if (scratch[s + 1u] != 0u) {
@@ -555,6 +573,11 @@ fn orca_obstacles_process_begin(e: u32) -> OrcaObstaclesStack {
     for (var i = 0u; i < n; i++) {
         scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, i)] = i;
     }
+    return orca_obstacles_root(e, n);
+}
+
+// The stack of a tree build over n vertices whose root list is in place: that list, or nothing.
+fn orca_obstacles_root(e: u32, n: u32) -> OrcaObstaclesStack {
     if (n == 0u) {
         return OrcaObstaclesStack(0u, 0u);
     }
@@ -629,25 +652,32 @@ fn orca_obstacles_split_node(e: u32, s: u32, node: vec2<u32>, chosen: vec3<u32>,
         scratch[s + 1u] |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
         return false;
     }
+    for (var k = 0u; k < n_right; k++) {
+        scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, (*stack).end + k)] =
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, n_left + k)];
+    }
+    for (var k = 0u; k < n_left; k++) {
+        scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, (*stack).end + n_right + k)] =
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, k)];
+    }
+    orca_obstacles_push_children(e, n_left, n_right, stack);
+    return true;
+}
+
+// The children of the node just popped, in the arena from the stack's end (the right list, then
+// the left), pushed: right first, so that the left subtree is built first. Empty lists are not
+// pushed.
+fn orca_obstacles_push_children(e: u32, n_left: u32, n_right: u32, stack: ptr<function, OrcaObstaclesStack>) {
     if (n_right > 0u) {
-        for (var k = 0u; k < n_right; k++) {
-            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, (*stack).end + k)] =
-                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, n_left + k)];
-        }
         (*stack).end += n_right;
         scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, (*stack).depth)] = n_right;
         (*stack).depth += 1u;
     }
     if (n_left > 0u) {
-        for (var k = 0u; k < n_left; k++) {
-            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, (*stack).end + k)] =
-                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, k)];
-        }
         (*stack).end += n_left;
         scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_LENS, (*stack).depth)] = n_left;
         (*stack).depth += 1u;
     }
-    return true;
 }
 
 // Rust `process_obstacles` of environment e's list into its set (see the header): `build_node`
@@ -694,9 +724,25 @@ fn orca_obstacles_gather(e: u32, l: u32) {
 // Rust `store` of environment e's processed set (a set with an overflow poisons the columns
 // instead; see the header).
 fn orca_obstacles_store(e: u32) {
+    let old = su[batch.c_n_obstacle_vertices + e];
+    orca_obstacles_store_part(e, old, 0u, 1u);
+    su[batch.c_n_obstacle_vertices + e] = orca_obstacles_stored_count(orca_obstacles_set(e));
+}
+
+// The `n_obstacle_vertices` that storing set s leaves.
+fn orca_obstacles_stored_count(s: u32) -> u32 {
+    if (orca_obstacles_set_overflow(s) != 0u) {
+        return batch.s_ov_x;
+    }
+    return orca_obstacles_set_len(s);
+}
+
+// The vertex slots `first`, `first + step`, ... of Rust `store` of environment e's processed
+// set, whose `n_obstacle_vertices` was `old` before (not written here).
+fn orca_obstacles_store_part(e: u32, old: u32, first: u32, step: u32) {
     let s = orca_obstacles_set(e);
     if (orca_obstacles_set_overflow(s) != 0u) {
-        for (var k = 0u; k < batch.s_ov_x; k++) {
+        for (var k = first; k < batch.s_ov_x; k += step) {
             let i = at_obstacle_vertex(e, k);
             sf[batch.c_ov_x + i] = math_nan();
             sf[batch.c_ov_y + i] = math_nan();
@@ -706,24 +752,22 @@ fn orca_obstacles_store(e: u32) {
             su[batch.c_ov_prev + i] = (k + orca_obstacles_cap() - 1u) % orca_obstacles_cap();
             su[batch.c_ov_convex + i] = 1u;
         }
-        su[batch.c_n_obstacle_vertices + e] = batch.s_ov_x;
         return;
     }
     let n = orca_obstacles_set_len(s);
-    // A smaller set than before: its old tail becomes unused slots, which hold zeros.
-    let old = min(su[batch.c_n_obstacle_vertices + e], batch.s_ov_x);
-    for (var k = n; k < old; k++) {
+    for (var k = first; k < max(n, min(old, batch.s_ov_x)); k += step) {
         let i = at_obstacle_vertex(e, k);
-        sf[batch.c_ov_x + i] = 0.0;
-        sf[batch.c_ov_y + i] = 0.0;
-        sf[batch.c_ov_dir_x + i] = 0.0;
-        sf[batch.c_ov_dir_y + i] = 0.0;
-        su[batch.c_ov_next + i] = 0u;
-        su[batch.c_ov_prev + i] = 0u;
-        su[batch.c_ov_convex + i] = 0u;
-    }
-    for (var k = 0u; k < n; k++) {
-        let i = at_obstacle_vertex(e, k);
+        if (k >= n) {
+            // A smaller set than before: its old tail becomes unused slots, which hold zeros.
+            sf[batch.c_ov_x + i] = 0.0;
+            sf[batch.c_ov_y + i] = 0.0;
+            sf[batch.c_ov_dir_x + i] = 0.0;
+            sf[batch.c_ov_dir_y + i] = 0.0;
+            su[batch.c_ov_next + i] = 0u;
+            su[batch.c_ov_prev + i] = 0u;
+            su[batch.c_ov_convex + i] = 0u;
+            continue;
+        }
         let p = orca_obstacles_set_point(s, k);
         let d = orca_obstacles_set_dir(s, k);
         sf[batch.c_ov_x + i] = p.x;
@@ -734,7 +778,6 @@ fn orca_obstacles_store(e: u32) {
         su[batch.c_ov_prev + i] = orca_obstacles_set_prev(s, k);
         su[batch.c_ov_convex + i] = orca_obstacles_set_convex(s, k);
     }
-    su[batch.c_n_obstacle_vertices + e] = n;
 }
 
 // With ORCA_POISON_LISTS (a test's: `GpuDevice::poison_orca_lists`), every word of environment
@@ -765,6 +808,12 @@ fn orca_obstacles_rebuild_if_dirty(e: u32) {
 // at ORCA_OBSTACLES_FAILED where the set overflowed).
 fn orca_obstacles_finish(e: u32) {
     orca_obstacles_store(e);
+    orca_obstacles_clear_flag(e);
+}
+
+// Environment e's `obstacles_dirty` once its set is stored: 0, or ORCA_OBSTACLES_FAILED where
+// the set overflowed.
+fn orca_obstacles_clear_flag(e: u32) {
     if (orca_obstacles_set_overflow(orca_obstacles_set(e)) != 0u) {
         su[batch.c_obstacles_dirty + e] = ORCA_OBSTACLES_FAILED;
     } else {
@@ -777,21 +826,257 @@ fn orca_obstacles_finish(e: u32) {
 // What a rebuild entry's target says besides an environment (src/backend/wgsl.rs,
 // `rebuild_entries`): this entry has nothing to rebuild, but later ones may (NONE: no later one).
 const ORCA_OBSTACLES_SKIP: u32 = 0xfffffffeu;
+// Words of each side's mask of a node's edges (`orca_obstacles_left`, `orca_obstacles_right`):
+// a bit an edge, for lists of up to 32 times as many edges. An obstacle region that fits
+// workgroup memory (src/backend/wgsl.rs, `OBSTACLES_IN_WORKGROUP_WORDS`) has fewer vertices than
+// that; a longer list would stop its rebuild as an overflow.
+const ORCA_OBSTACLES_MASK_WORDS: u32 = 12u;
+// Most lanes that share the edges one split candidate counts (`orca_obstacles_choose_on_lanes`).
+const ORCA_OBSTACLES_LANES_PER_CANDIDATE: u32 = 8u;
 
 // The workgroup's rebuild in hand: (what it rebuilds, whether its obstacles are dirty).
 var<workgroup> orca_obstacles_turn: vec2<u32>;
-// The node being split: (start, len) in the arena, len 0 once the tree is built.
+// The node being split: (start, len) in the arena, len 0 once the tree is built; before the
+// tree, (polygons to add, 0).
 var<workgroup> orca_obstacles_node: vec2<u32>;
-// Each lane's best split candidate of the node (`orca_obstacles_split_candidates`).
-var<workgroup> orca_obstacles_splits: array<vec3<u32>, WORKGROUP_SIZE>;
+// The least split key among the node's candidates (`orca_obstacles_split_key`).
+var<workgroup> orca_obstacles_best: atomic<u32>;
+// Each lane's count of its share of a candidate's edges: left | right << 16.
+var<workgroup> orca_obstacles_partial: array<u32, WORKGROUP_SIZE>;
+// Bit j of word j / 32: edge j of the node goes to the left (right) of the split edge's line;
+// both where the line splits it.
+var<workgroup> orca_obstacles_left: array<atomic<u32>, ORCA_OBSTACLES_MASK_WORDS>;
+var<workgroup> orca_obstacles_right: array<atomic<u32>, ORCA_OBSTACLES_MASK_WORDS>;
+
+// A split candidate (its position in the node's list, L, R) as one word whose order is Rust
+// `choose_split`'s: by max(L, R), then min(L, R), then position, the first winning; the last bit,
+// whether L < R, never decides (positions differ). All three are below 1024
+// (ORCA_OBSTACLES_MASK_WORDS).
+fn orca_obstacles_split_key(pos: u32, left: u32, right: u32) -> u32 {
+    return (max(left, right) << 21u) | (min(left, right) << 11u) | (pos << 1u) | select(0u, 1u, left < right);
+}
+
+// (position, L, R) of a split key.
+fn orca_obstacles_split_of(key: u32) -> vec3<u32> {
+    let most = key >> 21u;
+    let least = (key >> 11u) & 1023u;
+    let pos = (key >> 1u) & 1023u;
+    if ((key & 1u) != 0u) {
+        return vec3<u32>(pos, least, most);
+    }
+    return vec3<u32>(pos, most, least);
+}
+
+// Split candidate i of the list `arena[start..]` of environment e against the list's edges j0..j1
+// (itself left out), counted as Rust `choose_split` counts, whole: left | right << 16.
+fn orca_obstacles_count_sides(e: u32, s: u32, start: u32, i: u32, j0: u32, j1: u32) -> u32 {
+    let i1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + i)];
+    var left = 0u;
+    var right = 0u;
+    for (var j = j0; j < j1; j++) {
+        if (j == i) {
+            continue;
+        }
+        let sides = orca_obstacles_edge_sides(s, i1, scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + j)]);
+        let side = orca_obstacles_classify(sides.x, sides.y);
+        if (side != 1u) {
+            left += 1u;
+        }
+        if (side != 0u) {
+            right += 1u;
+        }
+    }
+    return left | (right << 16u);
+}
+
+// Rust `choose_split` of the node (start, len) of environment e by every lane of the workgroup,
+// called by all of them together: the least key into `orca_obstacles_best` (set to the most
+// before). A list of up to half a workgroup's edges gives each candidate up to
+// ORCA_OBSTACLES_LANES_PER_CANDIDATE lanes (no more than it has edges), each counting a share of
+// the other edges, whole; a longer one gives each lane every WORKGROUP_SIZE-th candidate, with
+// RVO2's early exit against the lane's best (`orca_obstacles_split_candidates`). Either way each
+// candidate that can win is counted whole, and the least key over all of them is RVO2's choice
+// (see `orca_obstacles_split_candidates`).
+fn orca_obstacles_choose_on_lanes(e: u32, s: u32, node: vec2<u32>, lane: u32) {
+    let n = node.y;
+    if (2u * n <= WORKGROUP_SIZE) {
+        // No more lanes than edges: a share is at least about one edge, its sum a load a lane.
+        let per = min(min(WORKGROUP_SIZE / n, ORCA_OBSTACLES_LANES_PER_CANDIDATE), n);
+        let i = lane / per;
+        let part = lane % per;
+        var counts = 0u;
+        if (i < n) {
+            counts = orca_obstacles_count_sides(e, s, node.x, i, part * n / per, (part + 1u) * n / per);
+        }
+        orca_obstacles_partial[lane] = counts;
+        workgroupBarrier();
+        if (i < n && part == 0u) {
+            var total = 0u;
+            for (var k = 0u; k < per; k++) {
+                total += orca_obstacles_partial[lane + k];
+            }
+            atomicMin(&orca_obstacles_best, orca_obstacles_split_key(i, total & 0xffffu, total >> 16u));
+        }
+    } else {
+        let c = orca_obstacles_split_candidates(e, s, node.x, n, lane, WORKGROUP_SIZE);
+        if (c.x != NONE) {
+            atomicMin(&orca_obstacles_best, orca_obstacles_split_key(c.x, c.y, c.z));
+        }
+    }
+    workgroupBarrier();
+}
+
+// The edges of the node's side masks before edge j: (left, right, split: on both sides).
+fn orca_obstacles_sides_before(j: u32) -> vec3<u32> {
+    var counts = vec3<u32>(0u, 0u, 0u);
+    for (var k = 0u; k <= j / 32u && k < ORCA_OBSTACLES_MASK_WORDS; k++) {
+        var left = atomicLoad(&orca_obstacles_left[k]);
+        var right = atomicLoad(&orca_obstacles_right[k]);
+        if (k == j / 32u) {
+            let below = (1u << (j % 32u)) - 1u;
+            left &= below;
+            right &= below;
+        }
+        counts += vec3<u32>(countOneBits(left), countOneBits(right), countOneBits(left & right));
+    }
+    return counts;
+}
+
+// Rust `build_node`'s split of the node (start, len) of environment e at `chosen` (position, L,
+// R) by every lane of the workgroup, called by all of them together: each lane classifies every
+// WORKGROUP_SIZE-th edge into the side masks, then places it by the edges before it on its sides
+// (the left list in `tmp` from 0, the right from L), and splits a straddling edge into the vertex
+// that the split edges before it give (RVO2's ids: the set's length, one more a split edge in list
+// order). Whether the lists have the counts the choice gave and the split vertices fit the set
+// (the same on every lane); where not, lane 0 flags an overflow and the build stops.
+fn orca_obstacles_split_on_lanes(e: u32, s: u32, node: vec2<u32>, chosen: vec3<u32>, lane: u32) -> bool {
+    let start = node.x;
+    var n = node.y;
+    let i1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + chosen.x)];
+    let len = orca_obstacles_set_len(s);
+    for (var j = lane; j < n; j += WORKGROUP_SIZE) {
+        if (j == chosen.x || j >= 32u * ORCA_OBSTACLES_MASK_WORDS) {
+            continue;
+        }
+        let sides = orca_obstacles_edge_sides(s, i1, scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + j)]);
+        let side = orca_obstacles_classify(sides.x, sides.y);
+        let bit = 1u << (j % 32u);
+        if (side != 1u) {
+            atomicOr(&orca_obstacles_left[j / 32u], bit);
+        }
+        if (side != 0u) {
+            atomicOr(&orca_obstacles_right[j / 32u], bit);
+        }
+    }
+    workgroupBarrier();
+    let totals = orca_obstacles_sides_before(min(n, 32u * ORCA_OBSTACLES_MASK_WORDS));
+    let cap = orca_obstacles_cap();
+    let fits = n <= 32u * ORCA_OBSTACLES_MASK_WORDS && totals.x == chosen.y && totals.y == chosen.z
+        && len + totals.z <= cap && start + totals.x + totals.y <= cap;
+    if (!fits) {
+        if (lane == 0u) {
+            scratch[s + 1u] |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
+        }
+        // No lane leaves early, so that the caller's barriers stay in uniform control flow.
+        n = 0u;
+    }
+    for (var j = lane; j < n; j += WORKGROUP_SIZE) {
+        if (j == chosen.x) {
+            continue;
+        }
+        let before = orca_obstacles_sides_before(j);
+        let bit = 1u << (j % 32u);
+        let goes_left = (atomicLoad(&orca_obstacles_left[j / 32u]) & bit) != 0u;
+        let goes_right = (atomicLoad(&orca_obstacles_right[j / 32u]) & bit) != 0u;
+        let j1 = scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, start + j)];
+        var to_left = j1;
+        var to_right = j1;
+        if (goes_left && goes_right) {
+            // Its first end's side, before the split moves its next vertex.
+            let first_left = orca_obstacles_edge_sides(s, i1, j1).x > 0.0;
+            let fresh = len + before.z;
+            orca_obstacles_place_split(s, i1, j1, fresh);
+            if (first_left) {
+                to_right = fresh;
+            } else {
+                to_left = fresh;
+            }
+        }
+        if (goes_left) {
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, before.x)] = to_left;
+        }
+        if (goes_right) {
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, chosen.y + before.y)] = to_right;
+        }
+    }
+    if (lane == 0u && fits) {
+        scratch[s] = len + totals.z;
+    }
+    return fits;
+}
+
+// What `orca_obstacles_add_on_lanes` found wrong (bits of `orca_obstacles_best`): more polygons
+// than a list or the set holds (Rust's list, and set, would overflow), a degenerate polygon.
+const ORCA_OBSTACLES_TOO_MANY: u32 = 1u;
+const ORCA_OBSTACLES_DEGENERATE: u32 = 2u;
+
+// Rust `for_each_polygon`, `validate_polygons` and `add_polygon` of environment e's `raw`
+// polygons (`orca_obstacles_raw_count`) by every lane of the workgroup, called by all of them
+// together: in runs of 32 × ORCA_OBSTACLES_MASK_WORDS, each lane marks every WORKGROUP_SIZE-th
+// polygon present in the left mask, then adds a present one's vertices where the present
+// polygons before it put them (the list's order: the vertices of the p-th from 4p, the root
+// list's entries with them), and flags in `orca_obstacles_best` (0 before) what Rust would
+// reject. The polygons present. No list is kept: its polygons go straight into the set.
+fn orca_obstacles_add_on_lanes(e: u32, s: u32, raw: u32, lane: u32) -> u32 {
+    let run = 32u * ORCA_OBSTACLES_MASK_WORDS;
+    var present = 0u;
+    for (var k0 = 0u; k0 < raw; k0 += run) {
+        if (lane < ORCA_OBSTACLES_MASK_WORDS) {
+            atomicStore(&orca_obstacles_left[lane], 0u);
+        }
+        workgroupBarrier();
+        let end = min(raw, k0 + run);
+        for (var k = k0 + lane; k < end; k += WORKGROUP_SIZE) {
+            if (orca_obstacles_polygon(e, k).present) {
+                atomicOr(&orca_obstacles_left[(k - k0) / 32u], 1u << ((k - k0) % 32u));
+            }
+        }
+        workgroupBarrier();
+        for (var k = k0 + lane; k < end; k += WORKGROUP_SIZE) {
+            let poly = orca_obstacles_polygon(e, k);
+            if (!poly.present) {
+                continue;
+            }
+            let p = present + orca_obstacles_sides_before(k - k0).x;
+            if (p >= orca_obstacles_max_polygons() || 4u * p + 4u > orca_obstacles_cap()) {
+                atomicOr(&orca_obstacles_best, ORCA_OBSTACLES_TOO_MANY);
+                continue;
+            }
+            if (!orca_obstacles_polygon_valid(poly.v)) {
+                atomicOr(&orca_obstacles_best, ORCA_OBSTACLES_DEGENERATE);
+            }
+            let first = 4u * p;
+            for (var i = 0u; i < 4u; i++) {
+                let c = orca_obstacles_corner(poly.v, i);
+                orca_obstacles_write_vertex(s, first + i, poly.v[i], c.dir, first + (i + 1u) % 4u, first + (i + 3u) % 4u, c.convex);
+                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, first + i)] = first + i;
+            }
+        }
+        present += orca_obstacles_sides_before(end - k0).x;
+        // Every lane has read the masks before the next run clears them.
+        workgroupBarrier();
+    }
+    return present;
+}
 
 // `orca_obstacles_rebuild_if_dirty` of `wanted` (an environment, ORCA_OBSTACLES_SKIP or NONE:
-// lane 0's is taken) by every lane of the workgroup, called by all of them together: lane 0 runs
-// the serial parts (the polygons, the set, the splits of the edges), and each node's split
-// candidates are shared out among the lanes and the least of theirs taken, which is RVO2's
-// choice (`orca_obstacles_split_candidates`): the same bits, and a node of n <= 64 edges searched
-// in about n steps a lane instead of up to n² in one. Whether `wanted` was not NONE (the value is
-// the workgroup's own).
+// lane 0's is taken) by every lane of the workgroup, called by all of them together, with the
+// same bits: lane 0 gathers the polygons and checks them, the lanes add a polygon each, and each
+// tree node's split is chosen (`orca_obstacles_choose_on_lanes`) and made
+// (`orca_obstacles_split_on_lanes`) on all the lanes, its children's lists moved into the arena
+// by all of them and pushed by lane 0; the lanes store a vertex each. A node of n <= 32 edges is
+// about n / 2 steps and a few barriers on a lane, where one lane took up to n² steps to choose and
+// n to split. Whether `wanted` was not NONE (the value is the workgroup's own).
 fn orca_obstacles_rebuild_on_lanes(wanted: u32, lane: u32) -> bool {
     if (lane == 0u) {
         var dirty = 0u;
@@ -809,37 +1094,72 @@ fn orca_obstacles_rebuild_on_lanes(wanted: u32, lane: u32) -> bool {
     }
     let e = turn.x;
     let s = orca_obstacles_set(e);
-    var stack: OrcaObstaclesStack;
+    // Read by every lane before lane 0 writes the new count, at the end.
+    let old = su[batch.c_n_obstacle_vertices + e];
     if (lane == 0u) {
         orca_obstacles_poison_region(e);
-        orca_obstacles_gather(e, orca_obstacles_list(e));
-        stack = orca_obstacles_process_begin(e);
+        orca_obstacles_node = vec2<u32>(orca_obstacles_raw_count(e), 0u);
+        atomicStore(&orca_obstacles_best, 0u);
+    }
+    let raw = workgroupUniformLoad(&orca_obstacles_node).x;
+    let polygons = orca_obstacles_add_on_lanes(e, s, raw, lane);
+    var stack: OrcaObstaclesStack;
+    if (lane == 0u) {
+        let failed = atomicLoad(&orca_obstacles_best);
+        scratch[s + 1u] = 0u;
+        if ((failed & ORCA_OBSTACLES_TOO_MANY) != 0u) {
+            scratch[s + 1u] |= ORCA_OVERFLOW_OBSTACLE_VERTICES;
+        }
+        if ((failed & ORCA_OBSTACLES_DEGENERATE) != 0u) {
+            scratch[s + 1u] |= ORCA_OBSTACLES_INVALID;
+        }
+        let n = select(4u * polygons, 0u, failed != 0u);
+        scratch[s] = n;
+        stack = orca_obstacles_root(e, n);
     }
     loop {
         if (lane == 0u) {
             orca_obstacles_node = orca_obstacles_pop(e, &stack);
+            atomicStore(&orca_obstacles_best, 0xffffffffu);
+        }
+        if (lane < ORCA_OBSTACLES_MASK_WORDS) {
+            atomicStore(&orca_obstacles_left[lane], 0u);
+            atomicStore(&orca_obstacles_right[lane], 0u);
         }
         let node = workgroupUniformLoad(&orca_obstacles_node);
         if (node.y == 0u) {
             break;
         }
-        orca_obstacles_splits[lane] = orca_obstacles_split_candidates(e, s, node.x, node.y, lane, WORKGROUP_SIZE);
+        orca_obstacles_choose_on_lanes(e, s, node, lane);
+        let chosen = orca_obstacles_split_of(atomicLoad(&orca_obstacles_best));
+        let fits = orca_obstacles_split_on_lanes(e, s, node, chosen, lane);
         workgroupBarrier();
-        if (lane == 0u) {
-            // Lanes past the node's length had no candidate.
-            var chosen = orca_obstacles_splits[0];
-            for (var l = 1u; l < min(node.y, WORKGROUP_SIZE); l++) {
-                if (orca_obstacles_earlier_split(orca_obstacles_splits[l], chosen)) {
-                    chosen = orca_obstacles_splits[l];
-                }
+        // The children from `tmp` into the arena where the node's list was: the right list, then
+        // the left (none where the split did not fit: the build stops).
+        var children = 0u;
+        if (fits) {
+            children = chosen.y + chosen.z;
+        }
+        for (var k = lane; k < children; k += WORKGROUP_SIZE) {
+            var src = k - chosen.z;
+            if (k < chosen.z) {
+                src = chosen.y + k;
             }
-            if (!orca_obstacles_split_node(e, s, node, chosen, &stack)) {
+            scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_ARENA, node.x + k)] =
+                scratch[orca_obstacles_stack(e, ORCA_OBSTACLES_TMP, src)];
+        }
+        if (lane == 0u) {
+            if (fits) {
+                orca_obstacles_push_children(e, chosen.y, chosen.z, &stack);
+            } else {
                 stack.depth = 0u;
             }
         }
     }
+    orca_obstacles_store_part(e, old, lane, WORKGROUP_SIZE);
     if (lane == 0u) {
-        orca_obstacles_finish(e);
+        su[batch.c_n_obstacle_vertices + e] = orca_obstacles_stored_count(s);
+        orca_obstacles_clear_flag(e);
     }
     return true;
 }

@@ -202,8 +202,9 @@ pub const REBUILD_ENTRY: &str = "rebuild";
 /// The rebuild entry point that takes the queued environments a workgroup at a time, its working
 /// memory in workgroup memory (built from [`with_obstacles_in_workgroup`]'s source; a dispatch of a
 /// workgroup per environment of the batch, at most `GpuDevice::rebuild_workgroups`, workgroup `w`
-/// of `W` taking queue entries `w`, `w + W`, ...), its first lane running the serial parts and
-/// every lane a share of each tree node's split candidates (`orca_obstacles_rebuild_on_lanes`): the
+/// of `W` taking queue entries `w`, `w + W`, ...), its first lane gathering the polygons and
+/// keeping the tree's stack, every lane taking a share of each polygon, of each tree node's split
+/// search and split, and of the store (`orca_obstacles_rebuild_on_lanes`): the
 /// GPU backend's choice on hardware adapters (`GpuDevice::obstacles_in_workgroups`), where a
 /// rebuild over `scratch` is a chain of dependent storage-buffer accesses (2.4 of exp2's 5.1 ms a
 /// step on an H100), and in one lane the split search's quadratic loop was most of a rebuild (about
@@ -285,16 +286,25 @@ fn reset_rebuild_entries(pass: &str) -> String {
 /// default `max_compute_workgroup_storage_size`).
 pub const REBUILD_WORKGROUP_WORDS: usize = 4096;
 
+/// Words of each side's mask of a tree node's edges in a rebuild on a workgroup's lanes (the
+/// shader's `ORCA_OBSTACLES_MASK_WORDS`): a bit an edge, so a node of at most 32 times as many
+/// edges. No obstacle region that fits [`OBSTACLES_IN_WORKGROUP_WORDS`] has that many vertices
+/// (asserted below), and the split keys' fields of 10 bits hold every count and position below it.
+pub const REBUILD_MASK_WORDS: usize = 12;
+
 /// Words of workgroup memory the lanes of a rebuild share besides the obstacle region
-/// (`orca_obstacles_rebuild_on_lanes`): a split candidate of 4 words (a `vec3<u32>`'s stride) for
-/// each lane, and two `vec2<u32>`.
-pub const REBUILD_LANES_WORDS: usize = 4 * WORKGROUP_SIZE as usize + 4;
+/// (`orca_obstacles_rebuild_on_lanes`): the rebuild in hand and the node (two `vec2<u32>`), the
+/// least split key, a count of each lane's share of a candidate's edges, and the two side masks.
+pub const REBUILD_LANES_WORDS: usize = 2 + 2 + 1 + WORKGROUP_SIZE as usize + 2 * REBUILD_MASK_WORDS;
 
 /// Words of workgroup memory [`REBUILD_IN_WORKGROUPS_ENTRY`] keeps an environment's obstacle
 /// region in ([`ObstacleScratch`]): the rest of [`REBUILD_WORKGROUP_WORDS`]. Every shipped
 /// config's region fits (stress, the largest, 3,348 words); a larger one stays in the `scratch`
 /// buffer.
 pub const OBSTACLES_IN_WORKGROUP_WORDS: usize = REBUILD_WORKGROUP_WORDS - REBUILD_LANES_WORDS;
+// A region of as many vertices as the side masks hold does not fit workgroup memory.
+const _: () =
+    assert!(ObstacleScratch::region_words(32 * REBUILD_MASK_WORDS) > OBSTACLES_IN_WORKGROUP_WORDS);
 
 /// The obstacle library's region function as `shaders/common/orca_obstacles.wgsl` writes it.
 const OBSTACLE_REGION_IN_SCRATCH: &str =
@@ -849,16 +859,22 @@ impl ObstacleScratch {
             .find(|c| c.0 == "ov_x")
             .map_or(0, |c| c.2)
             .max(1);
-        let polygons = (vertices / 8).max(1);
         let list = 0;
-        let set = list + 2 + 8 * polygons;
+        let set = list + 2 + 8 * (vertices / 8).max(1);
         let stack = set + 2 + 7 * vertices;
         Self {
-            words: stack + 3 * vertices,
+            words: Self::region_words(vertices),
             list,
             set,
             stack,
         }
+    }
+
+    /// Words of the region for a capacity of `vertices` (at least 1): the list's 2 and 8 a
+    /// polygon, the set's 2 and 7 columns, the stack's 3 columns.
+    pub const fn region_words(vertices: usize) -> usize {
+        let polygons = if vertices / 8 > 1 { vertices / 8 } else { 1 };
+        2 + 8 * polygons + 2 + 7 * vertices + 3 * vertices
     }
 }
 
