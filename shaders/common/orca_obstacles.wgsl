@@ -52,8 +52,9 @@
 // backend::wgsl::scratch_region_words; the library's own part is `batch.obstacle_words`.) The
 // rebuild entry point of hardware adapters (`rebuild_in_workgroups`) takes this file with the
 // region moved into a workgroup array instead (backend::wgsl::with_obstacles_in_workgroup): one
-// environment at a time per workgroup, its lanes sharing each tree node's split search
-// (`orca_obstacles_rebuild_on_lanes`, below).
+// environment at a time per workgroup, its lanes sharing the polygons, each tree node's split
+// search and split, and the store (`orca_obstacles_rebuild_on_lanes`, below; no polygon list
+// there: each lane adds its polygons to the set).
 //
 // Capacities and overflow. The processed set holds orca_obstacles_cap() = batch.s_ov_x vertices,
 // the per-environment capacity of the `ov_*` columns (Rust `store` asserts the same bound); a
@@ -837,9 +838,10 @@ const ORCA_OBSTACLES_LANES_PER_CANDIDATE: u32 = 8u;
 // The workgroup's rebuild in hand: (what it rebuilds, whether its obstacles are dirty).
 var<workgroup> orca_obstacles_turn: vec2<u32>;
 // The node being split: (start, len) in the arena, len 0 once the tree is built; before the
-// tree, (polygons to add, 0).
+// tree, (the polygons `for_each_polygon` walks, present or not, 0).
 var<workgroup> orca_obstacles_node: vec2<u32>;
-// The least split key among the node's candidates (`orca_obstacles_split_key`).
+// The least split key among the node's candidates (`orca_obstacles_split_key`); before the
+// tree, what the polygons' adds found wrong (ORCA_OBSTACLES_TOO_MANY, _DEGENERATE).
 var<workgroup> orca_obstacles_best: atomic<u32>;
 // Each lane's count of its share of a candidate's edges: left | right << 16.
 var<workgroup> orca_obstacles_partial: array<u32, WORKGROUP_SIZE>;
