@@ -13,7 +13,8 @@
 //
 // Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
 // environment, queues those with a crowd forming or a walker at its laptop seat; `main` runs one
-// lane per queued environment. Any other environment `main` would leave as it is. The ORCA
+// lane per queued environment, or one workgroup (REGROUP_LANES: its lane 0 the logic, every lane
+// a share of the regrouping). Any other environment `main` would leave as it is. The ORCA
 // obstacle rebuild that ends a regrouping is queued (RARE_REBUILD) for one dispatch after the
 // submit's last stage, `social_events`' regroupings with these (`rebuild` or
 // `rebuild_in_workgroups`, generated: backend::wgsl::REBUILD_PASSES).
@@ -278,42 +279,80 @@ fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
-// The formations of one queued environment per lane (`queue_work` checked that it steps).
+// The formations of the queued environments (`queue_work` checked that they step): one a lane,
+// or one a workgroup whose lanes share each regrouping (REGROUP_LANES; common/regroup.wgsl).
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = rare_env(RARE_FORMATION, gid.x);
-    if (e == NONE) {
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    if (REGROUP_LANES == 1u) {
+        let e = rare_env(RARE_FORMATION, gid.x);
+        if (e == NONE) {
+            return;
+        }
+        var rng = formation_rng(e);
+        // The crowd, then the laptop seat, each followed by the regrouping when it completed
+        // (see the header).
+        for (var phase = 0u; phase < 2u; phase++) {
+            if (formation_phase(e, phase, &rng)) {
+                regroup_canonicalize(e);
+            }
+        }
         return;
     }
-    // The crowd, then the laptop seat, each followed by the regrouping when it completed (see
-    // the header).
-    for (var phase = 0u; phase < 2u; phase++) {
-        var completed = false;
-        if (phase == 0u) {
-            if (su[batch.c_cf_active + e] != 0u) {
-                var rng = rng_new(
-                    su[batch.c_seed_lo + e],
-                    su[batch.c_seed_hi + e],
-                    rng_stream_id(STREAM_FORMATION, su[batch.c_tick + e]),
-                );
-                let progress = crowd_progress(e, &rng);
-                if (progress == 1u) {
-                    count_formation_event(e, EV_CROWD_FORMATION_COMPLETE);
-                    completed = true;
-                } else if (progress == 2u) {
-                    count_formation_event(e, EV_CROWD_FORMATION_APPROXIMATE);
-                    completed = true;
-                }
-            }
-        } else if (su[batch.c_lf_active + e] != 0u && seat_reached(e)) {
-            sit_down(e);
-            count_formation_event(e, EV_LAPTOP_FORMATION_COMPLETE);
-            completed = true;
+    for (var k = wid.x; ; k += groups.x) {
+        let e = regroup_team_env(RARE_FORMATION, k, lane);
+        if (e == NONE) {
+            break;
         }
-        if (completed) {
-            regroup_canonicalize(e);
+        // Lane 0's stream is the one drawn from.
+        var rng = formation_rng(e);
+        for (var phase = 0u; phase < 2u; phase++) {
+            var completed = false;
+            if (lane == 0u) {
+                completed = formation_phase(e, phase, &rng);
+            }
+            if (regroup_lane0_says(completed, lane)) {
+                regroup_canonicalize_on_lanes(e, lane);
+            }
         }
     }
+}
+
+fn formation_rng(e: u32) -> RngStream {
+    return rng_new(
+        su[batch.c_seed_lo + e],
+        su[batch.c_seed_hi + e],
+        rng_stream_id(STREAM_FORMATION, su[batch.c_tick + e]),
+    );
+}
+
+// Phase `phase` of environment e's formations (0 the crowd, 1 the laptop seat), its events
+// counted: whether it completed, and so regroups.
+fn formation_phase(e: u32, phase: u32, rng: ptr<function, RngStream>) -> bool {
+    if (phase == 0u) {
+        if (su[batch.c_cf_active + e] == 0u) {
+            return false;
+        }
+        let progress = crowd_progress(e, rng);
+        if (progress == 1u) {
+            count_formation_event(e, EV_CROWD_FORMATION_COMPLETE);
+            return true;
+        } else if (progress == 2u) {
+            count_formation_event(e, EV_CROWD_FORMATION_APPROXIMATE);
+            return true;
+        }
+        return false;
+    }
+    if (su[batch.c_lf_active + e] != 0u && seat_reached(e)) {
+        sit_down(e);
+        count_formation_event(e, EV_LAPTOP_FORMATION_COMPLETE);
+        return true;
+    }
+    return false;
 }
 
 fn count_formation_event(e: u32, ev: u32) {

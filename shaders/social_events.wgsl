@@ -8,13 +8,15 @@
 // laptops) are PERMUTE_CAP long (the largest of those capacities); a group's members and poses
 // place_group_cap() (common/place.wgsl). A dispersal regroups the environment
 // (`regroup_canonicalize`) at the end of the Rust `disperse_group` and `end_laptop_use`; here
-// `main` calls it right after them, from one place (Mesa inlines every call, and each copy of
-// the regrouping costs llvmpipe compile time).
+// `main` calls it right after them, from one place for each way of taking an environment (Mesa
+// inlines every call, and each copy of the regrouping costs llvmpipe compile time): a lane, or a
+// workgroup whose lanes share the regrouping (REGROUP_LANES, `regroup_canonicalize_on_lanes`).
 //
 // Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
 // environment, draws the events' chances in `main`'s order up to the first that hits and queues
-// the environments where one does; `main` runs one lane per queued environment and redraws from
-// the start (the step's stream is keyed by the tick, so it draws the same numbers). Where no
+// the environments where one does; `main` runs one lane per queued environment (or one
+// workgroup: REGROUP_LANES) and redraws from the start (the step's stream is keyed by the tick,
+// so it draws the same numbers). Where no
 // chance hits, `main` would have changed nothing, and the environment is not queued. The ORCA
 // obstacle rebuild that ends a regrouping is queued (RARE_REBUILD) for one dispatch after the
 // submit's last stage, `formation`'s regroupings with these (`rebuild` or
@@ -313,35 +315,76 @@ fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
-// The events of one queued environment per lane (`queue_work` checked that it steps).
+// The events of the queued environments (`queue_work` checked that they step): one a lane, or
+// one a workgroup whose lanes share each regrouping (REGROUP_LANES; common/regroup.wgsl).
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let e = rare_env(RARE_SOCIAL_EVENTS, gid.x);
-    if (e == NONE) {
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    if (REGROUP_LANES == 1u) {
+        let e = rare_env(RARE_SOCIAL_EVENTS, gid.x);
+        if (e == NONE) {
+            return;
+        }
+        var rng = social_rng(e);
+        // The two dispersals, each followed by the regrouping when it happened (see the header).
+        for (var phase = 0u; phase < 2u; phase++) {
+            if (dispersal(e, phase, &rng)) {
+                regroup_canonicalize(e);
+            }
+        }
+        formations(e, &rng);
         return;
     }
-    var rng = social_rng(e);
-    // The two dispersals, each followed by the regrouping when it happened (see the header).
-    for (var phase = 0u; phase < 2u; phase++) {
-        var dispersed = false;
-        if (phase == 0u) {
-            if (params.p_crowd_dispersal > 0.0 && rng_chance(&rng, params.p_crowd_dispersal)
-                && crowd_dispersal(e, &rng)) {
-                count_event(e, EV_CROWD_DISPERSAL);
-                dispersed = true;
-            }
-        } else if (params.p_laptop_dispersal > 0.0 && rng_chance(&rng, params.p_laptop_dispersal)
-            && laptop_dispersal(e, &rng)) {
-            count_event(e, EV_LAPTOP_DISPERSAL);
-            dispersed = true;
+    for (var k = wid.x; ; k += groups.x) {
+        let e = regroup_team_env(RARE_SOCIAL_EVENTS, k, lane);
+        if (e == NONE) {
+            break;
         }
-        if (dispersed) {
-            regroup_canonicalize(e);
+        // Lane 0's stream is the one drawn from.
+        var rng = social_rng(e);
+        for (var phase = 0u; phase < 2u; phase++) {
+            var dispersed = false;
+            if (lane == 0u) {
+                dispersed = dispersal(e, phase, &rng);
+            }
+            if (regroup_lane0_says(dispersed, lane)) {
+                regroup_canonicalize_on_lanes(e, lane);
+            }
+        }
+        if (lane == 0u) {
+            formations(e, &rng);
         }
     }
+}
+
+// Dispersal `phase` of environment e (0 a crowd's, 1 a laptop use's), counted: whether it
+// happened, and so regroups.
+fn dispersal(e: u32, phase: u32, rng: ptr<function, RngStream>) -> bool {
+    if (phase == 0u) {
+        if (params.p_crowd_dispersal > 0.0 && rng_chance(rng, params.p_crowd_dispersal)
+            && crowd_dispersal(e, rng)) {
+            count_event(e, EV_CROWD_DISPERSAL);
+            return true;
+        }
+        return false;
+    }
+    if (params.p_laptop_dispersal > 0.0 && rng_chance(rng, params.p_laptop_dispersal)
+        && laptop_dispersal(e, rng)) {
+        count_event(e, EV_LAPTOP_DISPERSAL);
+        return true;
+    }
+    return false;
+}
+
+// The two formation starts of environment e, after its dispersals, counted.
+fn formations(e: u32, rng: ptr<function, RngStream>) {
     var idle = su[batch.c_cf_active + e] == 0u && su[batch.c_lf_active + e] == 0u;
-    if (idle && params.p_crowd_formation > 0.0 && rng_chance(&rng, params.p_crowd_formation)) {
-        let start = crowd_formation(e, &rng);
+    if (idle && params.p_crowd_formation > 0.0 && rng_chance(rng, params.p_crowd_formation)) {
+        let start = crowd_formation(e, rng);
         if (start == START_STARTED) {
             count_event(e, EV_CROWD_FORMATION_START);
         } else if (start == START_BLOCKED) {
@@ -349,8 +392,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     idle = su[batch.c_cf_active + e] == 0u && su[batch.c_lf_active + e] == 0u;
-    if (idle && params.p_laptop_formation > 0.0 && rng_chance(&rng, params.p_laptop_formation)) {
-        let start = laptop_formation(e, &rng);
+    if (idle && params.p_laptop_formation > 0.0 && rng_chance(rng, params.p_laptop_formation)) {
+        let start = laptop_formation(e, rng);
         if (start == START_STARTED) {
             count_event(e, EV_LAPTOP_FORMATION_START);
         } else if (start == START_BLOCKED) {

@@ -294,3 +294,238 @@ fn regroup_canonicalize(e: u32) {
         rare_push(RARE_REBUILD, e);
     }
 }
+
+// ---- a regrouping on a workgroup's lanes --------------------------------------------------------
+//
+// The environments `formation` and `social_events` work on run one a lane (REGROUP_LANES 1,
+// generated) or, on a GPU (`GpuDevice::regroups_in_workgroups`: REGROUP_LANES = WORKGROUP_SIZE),
+// one a workgroup: its lane 0 runs the pass's logic, and a regrouping is shared out among every
+// lane (`regroup_canonicalize_on_lanes`): lane 0 sorts, then the lanes take a slot each of the
+// permutations, the remaps and the list positions. A regrouping in one lane is a chain of
+// dependent memory round trips, two a slot for the permutations alone (docs/performance.md).
+
+// One kind's sort keys (`regroup_key`), a kind at a time.
+var<workgroup> regroup_wg_keys: array<vec4<u32>, PERMUTE_CAP>;
+// The first sorted position of a kind whose slot is dropped (`regroup_live`).
+var<workgroup> regroup_wg_live: atomic<u32>;
+// Each kind's sorted slots (`regroup_sorted`, kinds as `regroup_key`), and how many are kept.
+var<workgroup> regroup_wg_perm: array<array<u32, PERMUTE_CAP>, 4>;
+var<workgroup> regroup_wg_len: array<u32, 4>;
+// Each kind's slot count before the regrouping.
+var<workgroup> regroup_wg_used: array<u32, 4>;
+// Each kind's inverse (`regroup_inverse`): old slot -> new slot, NONE for a dropped one.
+var<workgroup> regroup_wg_inv: array<array<u32, PERMUTE_CAP>, 4>;
+// Each group's members and first member (Rust `remap`'s recount).
+var<workgroup> regroup_wg_members: array<atomic<u32>, PERMUTE_CAP>;
+var<workgroup> regroup_wg_first: array<atomic<u32>, PERMUTE_CAP>;
+// Lone static humans and lone walkers.
+var<workgroup> regroup_wg_roles: array<atomic<u32>, 2>;
+// A word lane 0 hands every lane (`workgroupUniformLoad`): the environment in hand, or whether a
+// regrouping follows.
+var<workgroup> regroup_wg_word: u32;
+
+// Queue `queue`'s entry k (`rare_env`) as lane 0 reads it, for every lane of the workgroup.
+fn regroup_team_env(queue: u32, k: u32, lane: u32) -> u32 {
+    if (lane == 0u) {
+        regroup_wg_word = rare_env(queue, k);
+    }
+    return workgroupUniformLoad(&regroup_wg_word);
+}
+
+// Lane 0's `yes` (what its logic decided: whether a regrouping follows), for every lane.
+fn regroup_lane0_says(yes: bool, lane: u32) -> bool {
+    if (lane == 0u) {
+        regroup_wg_word = u32(yes);
+    }
+    return workgroupUniformLoad(&regroup_wg_word) != 0u;
+}
+
+// Rust `remap`'s `map` through kind `kind`'s inverse in workgroup memory.
+fn regroup_map_on_lanes(kind: u32, v: u32) -> u32 {
+    if (v == NONE) {
+        return NONE;
+    }
+    return regroup_wg_inv[kind][v];
+}
+
+// Slot `k` of kind `kind`'s permutation, both halves apart (`state_permute_*`): the old slot into
+// the region, or the region into the slot.
+fn regroup_permute_save(e: u32, kind: u32, k: u32) {
+    let old = regroup_wg_perm[kind][k];
+    if (kind == 0u) {
+        state_permute_groups_save(e, k, old);
+    } else if (kind == 1u) {
+        state_permute_laptop_users_save(e, k, old);
+    } else if (kind == 2u) {
+        state_permute_humans_save(e, k, old);
+    } else {
+        state_permute_laptops_save(e, k, old);
+    }
+}
+
+fn regroup_permute_restore(e: u32, kind: u32, k: u32) {
+    let kept = k < regroup_wg_len[kind];
+    if (kind == 0u) {
+        state_permute_groups_restore(e, k, kept);
+    } else if (kind == 1u) {
+        state_permute_laptop_users_restore(e, k, kept);
+    } else if (kind == 2u) {
+        state_permute_humans_restore(e, k, kept);
+    } else {
+        state_permute_laptops_restore(e, k, kept);
+    }
+}
+
+// Rust `sorted_groups`, `sorted_users`, `sorted_humans` or `sorted_laptops` of environment e (as
+// `regroup_sorted`) by every lane of the workgroup, called by all of them together: each slot's
+// key a lane, each slot placed at its rank (the keys below it, and the equal keys of earlier
+// slots: the stable order of Rust's `sort_by_key`), then the live prefix (the first position
+// whose slot is dropped, by `atomicMin`), into `regroup_wg_perm[kind]`, `regroup_wg_len[kind]`
+// and `regroup_wg_used[kind]`.
+fn regroup_sort_on_lanes(e: u32, kind: u32, lane: u32) {
+    let n = regroup_count(e, kind);
+    for (var k = lane; k < n; k += WORKGROUP_SIZE) {
+        regroup_wg_keys[k] = regroup_key(e, kind, k);
+    }
+    if (lane == 0u) {
+        atomicStore(&regroup_wg_live, n);
+        regroup_wg_used[kind] = n;
+    }
+    workgroupBarrier();
+    for (var k = lane; k < n; k += WORKGROUP_SIZE) {
+        let key = regroup_wg_keys[k];
+        var rank = 0u;
+        for (var j = 0u; j < n; j++) {
+            let other = regroup_wg_keys[j];
+            if (regroup_key_less(other, key) || (j < k && all(other == key))) {
+                rank += 1u;
+            }
+        }
+        regroup_wg_perm[kind][rank] = k;
+    }
+    workgroupBarrier();
+    for (var p = lane; p < n; p += WORKGROUP_SIZE) {
+        if (!regroup_live(e, kind, regroup_wg_perm[kind][p])) {
+            atomicMin(&regroup_wg_live, p);
+        }
+    }
+    workgroupBarrier();
+    if (lane == 0u) {
+        regroup_wg_len[kind] = atomicLoad(&regroup_wg_live);
+    }
+}
+
+// `regroup_canonicalize` of environment e by every lane of the workgroup, called by all of them
+// together, with the same results: the sorts (`regroup_sort_on_lanes`), then every lane takes a
+// share of each kind's permutation (the region holds one kind at a time, as in
+// `regroup_canonicalize`: a barrier after each half), of the remaps and recounts, and of the list
+// positions; lane 0 writes the counts and queues the rebuild. The barriers take every lane's
+// stores to the state with them (`storageBarrier`), lane 0's before it included.
+fn regroup_canonicalize_on_lanes(e: u32, lane: u32) {
+    storageBarrier();
+    for (var kind = 0u; kind < 4u; kind++) {
+        regroup_sort_on_lanes(e, kind, lane);
+    }
+    if (lane == 0u) {
+        atomicStore(&regroup_wg_roles[0], 0u);
+        atomicStore(&regroup_wg_roles[1], 0u);
+    }
+    workgroupBarrier();
+    for (var kind = 0u; kind < 4u; kind++) {
+        for (var k = lane; k < regroup_wg_len[kind]; k += WORKGROUP_SIZE) {
+            regroup_permute_save(e, kind, k);
+        }
+        storageBarrier();
+        for (var k = lane; k < regroup_wg_used[kind]; k += WORKGROUP_SIZE) {
+            regroup_permute_restore(e, kind, k);
+        }
+        storageBarrier();
+    }
+    // Rust `remap`: the inverses, then every slot index through them.
+    for (var kind = 0u; kind < 4u; kind++) {
+        for (var k = lane; k < regroup_wg_used[kind]; k += WORKGROUP_SIZE) {
+            regroup_wg_inv[kind][k] = NONE;
+        }
+    }
+    for (var g = lane; g < PERMUTE_CAP; g += WORKGROUP_SIZE) {
+        atomicStore(&regroup_wg_members[g], 0u);
+        atomicStore(&regroup_wg_first[g], NONE);
+    }
+    workgroupBarrier();
+    for (var kind = 0u; kind < 4u; kind++) {
+        for (var k = lane; k < regroup_wg_len[kind]; k += WORKGROUP_SIZE) {
+            regroup_wg_inv[kind][regroup_wg_perm[kind][k]] = k;
+        }
+    }
+    workgroupBarrier();
+    let n_humans = regroup_wg_used[2];
+    for (var k = lane; k < n_humans; k += WORKGROUP_SIZE) {
+        let i = at_human(e, k);
+        let g = regroup_map_on_lanes(0u, su[batch.c_h_group + i]);
+        su[batch.c_h_group + i] = g;
+        su[batch.c_h_laptop_user + i] = regroup_map_on_lanes(1u, su[batch.c_h_laptop_user + i]);
+        let role = su[batch.c_h_role + i];
+        if (role == ROLE_STATIC) {
+            atomicAdd(&regroup_wg_roles[0], 1u);
+        } else if (role == ROLE_DYNAMIC) {
+            atomicAdd(&regroup_wg_roles[1], 1u);
+        }
+        // Members are consecutive now: each group's first slot and count from the humans.
+        if (g != NONE) {
+            atomicAdd(&regroup_wg_members[g], 1u);
+            atomicMin(&regroup_wg_first[g], k);
+        }
+    }
+    for (var k = lane; k < regroup_wg_len[1]; k += WORKGROUP_SIZE) {
+        let u = at_laptop_user(e, k);
+        su[batch.c_lu_human + u] = regroup_map_on_lanes(2u, su[batch.c_lu_human + u]);
+        su[batch.c_lu_laptop + u] = regroup_map_on_lanes(3u, su[batch.c_lu_laptop + u]);
+    }
+    for (var k = lane; k < regroup_wg_used[3]; k += WORKGROUP_SIZE) {
+        let l = at_laptop(e, k);
+        su[batch.c_l_user + l] = regroup_map_on_lanes(1u, su[batch.c_l_user + l]);
+    }
+    for (var k = lane; k < su[batch.c_cf_count + e]; k += WORKGROUP_SIZE) {
+        let c = at_crowd_slot(e, k);
+        su[batch.c_cf_human + c] = regroup_map_on_lanes(2u, su[batch.c_cf_human + c]);
+    }
+    workgroupBarrier();
+    for (var k = lane; k < regroup_wg_len[0]; k += WORKGROUP_SIZE) {
+        let g = at_group(e, k);
+        let members = atomicLoad(&regroup_wg_members[k]);
+        su[batch.c_g_count + g] = members;
+        if (members != 0u) {
+            su[batch.c_g_first + g] = atomicLoad(&regroup_wg_first[k]);
+        }
+    }
+    // Rust `number_lists`: list positions from the slot order.
+    for (var k = lane; k < n_humans; k += WORKGROUP_SIZE) {
+        su[batch.c_h_seq + at_human(e, k)] = k;
+    }
+    for (var k = lane; k < regroup_wg_len[0]; k += WORKGROUP_SIZE) {
+        su[batch.c_g_seq + at_group(e, k)] = k;
+    }
+    for (var k = lane; k < regroup_wg_used[3]; k += WORKGROUP_SIZE) {
+        su[batch.c_l_seq + at_laptop(e, k)] = k;
+    }
+    for (var k = lane; k < regroup_wg_len[1]; k += WORKGROUP_SIZE) {
+        su[batch.c_lu_seq + at_laptop_user(e, k)] = k;
+    }
+    if (lane == 0u) {
+        su[batch.c_n_static + e] = atomicLoad(&regroup_wg_roles[0]);
+        su[batch.c_n_dynamic + e] = atomicLoad(&regroup_wg_roles[1]);
+        su[batch.c_n_groups + e] = regroup_wg_len[0];
+        su[batch.c_n_laptop_users + e] = regroup_wg_len[1];
+        if (su[batch.c_lf_active + e] != 0u) {
+            su[batch.c_lf_human + e] = regroup_map_on_lanes(2u, su[batch.c_lf_human + e]);
+            su[batch.c_lf_laptop + e] = regroup_map_on_lanes(3u, su[batch.c_lf_laptop + e]);
+        }
+        su[batch.c_seq_next + e] = n_humans + regroup_wg_len[0] + regroup_wg_used[3] + regroup_wg_len[1];
+        // As `regroup_canonicalize`: one rebuild after the submit's last stage.
+        if (su[batch.c_obstacles_dirty + e] != 1u) {
+            su[batch.c_obstacles_dirty + e] = 1u;
+            rare_push(RARE_REBUILD, e);
+        }
+    }
+    storageBarrier();
+}

@@ -990,6 +990,7 @@ pub fn shared_head() -> String {
     out.push_str(&format!("const OBS_TILE: u32 = {OBS_ROWS_TILE}u;\n"));
     out.push_str(ORCA_LISTS_KEPT);
     out.push_str(RESETS_BY_ONE_LANE);
+    out.push_str(REGROUPS_BY_ONE_LANE);
     out.push_str(&geometry_constants());
     out
 }
@@ -1012,6 +1013,30 @@ pub fn with_poisoned_orca_lists(src: &str) -> String {
 /// The line of [`shared_head`] that gives each reset of a step one lane
 /// (`shaders/common/pool_reset.wgsl`); [`with_resets_in_workgroups`] turns it.
 const RESETS_BY_ONE_LANE: &str = "const RESET_LANES: u32 = 1u;\n";
+
+/// The line of [`shared_head`] that gives each regrouping of a step's social events and
+/// formations one lane (`shaders/common/regroup.wgsl`); [`with_regroups_in_workgroups`] turns it.
+const REGROUPS_BY_ONE_LANE: &str = "const REGROUP_LANES: u32 = 1u;\n";
+
+/// Bytes of workgroup memory a regrouping on a workgroup's lanes takes with these size classes
+/// (`shaders/common/regroup.wgsl`'s `regroup_wg_*`: one kind's sort keys, the four kinds' sorted
+/// slots and inverses, each group's members and first member, a few words): with `PERMUTE_CAP`
+/// 64, 3.5 KiB.
+pub fn regroup_workgroup_bytes(classes: &SizeClasses) -> usize {
+    4 * (14 * classes.permute + 1 + 4 + 4 + 2 + 1)
+}
+
+/// `src` (a prelude, or a shader assembled from one) with each environment that `formation` and
+/// `social_events` work on taken by all the lanes of a workgroup, its regroupings shared out
+/// among them (`GpuDevice::regroups_in_workgroups`, where [`regroup_workgroup_bytes`] fits the
+/// device).
+pub fn with_regroups_in_workgroups(src: &str) -> String {
+    src.replacen(
+        REGROUPS_BY_ONE_LANE,
+        "const REGROUP_LANES: u32 = WORKGROUP_SIZE;\n",
+        1,
+    )
+}
 
 /// `src` (a prelude, or a shader assembled from one) with each reset of a step run by all the
 /// lanes of a workgroup (`GpuDevice::resets_in_workgroups`).
@@ -1434,7 +1459,11 @@ fn permute_words(state: Columns<'_>) -> usize {
 /// which reorders the first `used` slots of that kind of environment `e` in every column of the
 /// kind: slot `k` receives the old slot `perm[k]` for `k < n`, and slots `n..used` are zeroed.
 /// (`PERMUTE_CAP`, the array size, is a [`SizeClasses`] class at least the largest capacity of
-/// those kinds.)
+/// those kinds.) It runs in two halves, each a slot at a time, which a regrouping on a
+/// workgroup's lanes calls a slot a lane with a barrier between (`regroup_canonicalize_on_lanes`):
+/// `fn state_permute_<kinds>_save(e: u32, k: u32, old: u32)`, old slot `old` into place `k` of
+/// the region, and `fn state_permute_<kinds>_restore(e: u32, k: u32, kept: bool)`, slot `k` from
+/// place `k` (or zeroed where not `kept`).
 ///
 /// The old slots pass through the environment's region of `scratch` ([`scratch_region_words`];
 /// the obstacle rebuild's working memory, free here: the rebuild runs in a dispatch of its own
@@ -1452,41 +1481,42 @@ fn permute_functions(state: Columns<'_>) -> String {
         let width = columns.len();
         out.push_str(&format!(
             "fn {name}(e: u32, perm: array<u32, PERMUTE_CAP>, n: u32, used: u32) {{\n\
-             \x20   let region = scratch_region(e);\n\
              \x20   for (var k = 0u; k < n; k++) {{\n\
-             \x20       let old = at_{kind}(e, perm[k]);\n\
-             \x20       let to = region + k * {width}u;\n"
+             \x20       {name}_save(e, k, perm[k]);\n    }}\n\
+             \x20   for (var k = 0u; k < used; k++) {{\n\
+             \x20       {name}_restore(e, k, k < n);\n    }}\n}}\n\
+             fn {name}_save(e: u32, k: u32, old_slot: u32) {{\n\
+             \x20   let old = at_{kind}(e, old_slot);\n\
+             \x20   let to = scratch_region(e) + k * {width}u;\n"
         ));
         for (j, &&(col, elem, _)) in columns.iter().enumerate() {
             let value = match elem {
                 Elem::F32 => format!("bitcast<u32>(sf[batch.c_{col} + old])"),
                 Elem::U32 => format!("su[batch.c_{col} + old]"),
             };
-            out.push_str(&format!("        scratch[to + {j}u] = {value};\n"));
+            out.push_str(&format!("    scratch[to + {j}u] = {value};\n"));
         }
         out.push_str(&format!(
-            "    }}\n\
-             \x20   for (var k = 0u; k < used; k++) {{\n\
-             \x20       let at = at_{kind}(e, k);\n\
-             \x20       if (k < n) {{\n\
-             \x20           let kept = region + k * {width}u;\n"
+            "}}\n\
+             fn {name}_restore(e: u32, k: u32, kept: bool) {{\n\
+             \x20   let at = at_{kind}(e, k);\n\
+             \x20   if (kept) {{\n\
+             \x20       let kept_at = scratch_region(e) + k * {width}u;\n"
         ));
         let mut zeroes = String::new();
         for (j, &&(col, elem, _)) in columns.iter().enumerate() {
             let (buf, value, zero) = match elem {
-                Elem::F32 => ("sf", format!("bitcast<f32>(scratch[kept + {j}u])"), "0.0"),
-                Elem::U32 => ("su", format!("scratch[kept + {j}u]"), "0u"),
+                Elem::F32 => (
+                    "sf",
+                    format!("bitcast<f32>(scratch[kept_at + {j}u])"),
+                    "0.0",
+                ),
+                Elem::U32 => ("su", format!("scratch[kept_at + {j}u]"), "0u"),
             };
-            out.push_str(&format!(
-                "            {buf}[batch.c_{col} + at] = {value};\n"
-            ));
-            zeroes.push_str(&format!(
-                "            {buf}[batch.c_{col} + at] = {zero};\n"
-            ));
+            out.push_str(&format!("        {buf}[batch.c_{col} + at] = {value};\n"));
+            zeroes.push_str(&format!("        {buf}[batch.c_{col} + at] = {zero};\n"));
         }
-        out.push_str(&format!(
-            "        }} else {{\n{zeroes}        }}\n    }}\n}}\n"
-        ));
+        out.push_str(&format!("    }} else {{\n{zeroes}    }}\n}}\n"));
     }
     out
 }

@@ -210,7 +210,8 @@ pub fn check_parity_mode(
 
 /// The shared device with the other observation paths than its defaults
 /// (`GpuDevice::stage_observations`, `GpuDevice::records_in_lanes`), the other ways of
-/// running the step's resets (`GpuDevice::resets_in_workgroups`) and its obstacle rebuilds
+/// running the step's resets (`GpuDevice::resets_in_workgroups`), its regroupings
+/// (`GpuDevice::regroups_in_workgroups`) and its obstacle rebuilds
 /// (`GpuDevice::obstacles_in_workgroups`), the other place a reset's obstacles are built (the
 /// host or the device: `GpuDevice::obstacles_after_resets`), and every step's readback in the
 /// most pieces
@@ -220,6 +221,7 @@ pub fn device_other_paths() -> Option<GpuDevice> {
     let mut dev = device()?;
     dev.stage_observations = !dev.stage_observations;
     dev.resets_in_workgroups = !dev.resets_in_workgroups;
+    dev.regroups_in_workgroups = !dev.regroups_in_workgroups;
     dev.obstacles_in_workgroups = !dev.obstacles_in_workgroups;
     dev.records_in_lanes = !dev.records_in_lanes;
     dev.obstacles_after_resets = !dev.obstacles_after_resets;

@@ -287,9 +287,10 @@ mod vulkan {
 
 /// The environment variable that chooses the paths of the devices this process opens: `device`
 /// (the default) takes the adapter's (on a hardware GPU the observation staged through workgroup
-/// memory, each reset on a workgroup's lanes, each obstacle rebuild in workgroup memory, the
-/// observation's entity records a lane each and the reset's obstacles rebuilt on the device:
-/// [`GpuDevice::stage_observations`], [`GpuDevice::resets_in_workgroups`],
+/// memory, each reset and each regrouping on a workgroup's lanes, each obstacle rebuild in
+/// workgroup memory, the observation's entity records a lane each and the reset's obstacles
+/// rebuilt on the device: [`GpuDevice::stage_observations`], [`GpuDevice::resets_in_workgroups`],
+/// [`GpuDevice::regroups_in_workgroups`],
 /// [`GpuDevice::obstacles_in_workgroups`], [`GpuDevice::records_in_lanes`],
 /// [`GpuDevice::obstacles_after_resets`]), `lane` a software adapter's on any adapter: the way
 /// back should a driver refuse a hardware path's pipeline.
@@ -376,6 +377,15 @@ pub struct GpuDevice {
     /// for one reset shared than for one reset per lane. Both give the same bits; a clone with
     /// the other setting is how a caller (or a test) chooses.
     pub resets_in_workgroups: bool,
+    /// Whether the passes that regroup (`formation`, `social_events`) take each queued
+    /// environment on all the lanes of a workgroup, its regroupings shared out among them
+    /// (`backend::wgsl::with_regroups_in_workgroups`: lane 0 runs the pass's logic and sorts, the
+    /// lanes take a slot each of the permutations, remaps and list positions), instead of one
+    /// lane: a regrouping is a chain of dependent memory round trips in one lane (up to 0.15-0.18
+    /// ms of each pass on an H100). On by default on a hardware GPU; off on a software one, as
+    /// [`Self::resets_in_workgroups`]. Both give the same bits; a clone with the other setting is
+    /// how a caller (or a test) chooses.
+    pub regroups_in_workgroups: bool,
     /// Whether the passes that regroup (`backend::wgsl::REBUILD_PASSES`) rebuild the ORCA
     /// obstacles of each regrouped environment in a workgroup of its own, the rebuild's working
     /// memory in workgroup memory (`backend::wgsl::REBUILD_IN_WORKGROUPS_ENTRY`), instead of one
@@ -462,13 +472,15 @@ impl std::fmt::Debug for GpuDevice {
 
 impl GpuDevice {
     /// This device with the paths a software adapter takes, whatever the adapter: observations
-    /// written in place, each reset on one lane, each obstacle rebuild over `scratch`, the entity
+    /// written in place, each reset and regrouping on one lane, each obstacle rebuild over
+    /// `scratch`, the entity
     /// records in the observing lane, each reset's obstacles built on the host
     /// ([`PATHS_VAR`]`=lane`, `socnav bench --lane-paths`).
     #[must_use]
     pub fn with_lane_paths(mut self) -> Self {
         self.stage_observations = false;
         self.resets_in_workgroups = false;
+        self.regroups_in_workgroups = false;
         self.obstacles_in_workgroups = false;
         self.records_in_lanes = false;
         self.obstacles_after_resets = false;
@@ -575,6 +587,7 @@ impl GpuDevice {
             queue,
             stage_observations: adapter.hardware,
             resets_in_workgroups: adapter.hardware,
+            regroups_in_workgroups: adapter.hardware,
             obstacles_in_workgroups: adapter.hardware,
             records_in_lanes: adapter.hardware,
             obstacles_after_resets: adapter.hardware,

@@ -91,6 +91,9 @@ pub struct GpuStages {
     /// Whether the step's parameters ask for a whole view, which `records` needs to write
     /// anything (a limited sensor's records are the observing lane's).
     whole_view: bool,
+    /// Whether `formation` and `social_events` take an environment a workgroup
+    /// (`GpuDevice::regroups_in_workgroups`, where the workgroup memory fits).
+    regroups_in_workgroups: bool,
     state: DeviceTable,
     outputs: DeviceTable,
     params: wgpu::Buffer,
@@ -588,12 +591,21 @@ impl GpuStages {
             .map(|(g, l)| bind_kinds(&dev, "stage bindings", l, g))
             .collect();
         let columns = state.columns();
-        let mut prelude = wgsl::prelude(&columns, &out_columns, &wgsl::SizeClasses::of(&columns));
+        let classes = wgsl::SizeClasses::of(&columns);
+        let mut prelude = wgsl::prelude(&columns, &out_columns, &classes);
         if dev.poison_orca_lists {
             prelude = wgsl::with_poisoned_orca_lists(&prelude);
         }
         if dev.resets_in_workgroups {
             prelude = wgsl::with_resets_in_workgroups(&prelude);
+        }
+        // The regroupings on a workgroup's lanes where the device asks for it and their
+        // workgroup memory fits.
+        let regroups_in_workgroups = dev.regroups_in_workgroups
+            && wgsl::regroup_workgroup_bytes(&classes)
+                <= dev.limits.max_compute_workgroup_storage_size as usize;
+        if regroups_in_workgroups {
+            prelude = wgsl::with_regroups_in_workgroups(&prelude);
         }
         // The obstacle rebuilds in workgroup memory where the device asks for it and the
         // environment's region fits.
@@ -642,6 +654,7 @@ impl GpuStages {
             obs_row_tiles: (obs_layout.payload_dim() as u32).div_ceil(wgsl::OBS_ROWS_TILE),
             entity_records: u32::try_from(entity_records).unwrap_or(u32::MAX),
             whole_view: params.obs_partial == 0,
+            regroups_in_workgroups,
             state: state_table,
             outputs: outputs_table,
             params: params_buf,
@@ -717,6 +730,11 @@ impl GpuStages {
         } else {
             "one lane each"
         };
+        let regroups = if self.regroups_in_workgroups {
+            "a workgroup's lanes each"
+        } else {
+            "one lane each"
+        };
         let in_workgroups = self.pipelines.iter().any(|(_, p)| {
             p.as_ref()
                 .is_some_and(|p| matches!(p.rebuild, Some((_, Rebuild::InWorkgroups))))
@@ -757,7 +775,8 @@ impl GpuStages {
             .map_or(String::new(), |m| format!("; queue writes staged in {m}"));
         format!(
             "{}; shaders: {shaders}; observations {observations}; entity records {records}; \
-             resets on {resets}; obstacle rebuilds {rebuilds}; a reset's obstacles \
+             resets on {resets}; regroupings on {regroups}; obstacle rebuilds {rebuilds}; \
+             a reset's obstacles \
              {reset_obstacles}; per-step outputs read back in {pieces}{memory}{staging}{left_out}",
             self.dev.adapter
         )

@@ -120,6 +120,9 @@ pub enum LanePath {
     Staging,
     /// Each reset on one lane, not a workgroup's.
     Resets,
+    /// Each environment of `formation` and `social_events`, its regroupings included, on one
+    /// lane, not a workgroup's.
+    Regroups,
     /// Each ORCA obstacle rebuild over the scratch buffer, not in workgroup memory.
     Obstacles,
     /// The observation's entity records in the observing lane, not a lane each.

@@ -170,6 +170,7 @@ fn on_chosen_device(
                 match path {
                     LanePath::Staging => dev.stage_observations = false,
                     LanePath::Resets => dev.resets_in_workgroups = false,
+                    LanePath::Regroups => dev.regroups_in_workgroups = false,
                     LanePath::Obstacles => dev.obstacles_in_workgroups = false,
                     LanePath::Records => dev.records_in_lanes = false,
                     LanePath::ResetObstacles => dev.obstacles_after_resets = false,

@@ -163,6 +163,7 @@ fn bench_lane_paths_names_the_paths_it_took() {
         device.contains("observations written in place")
             && device.contains("entity records in the observing lane")
             && device.contains("resets on one lane each")
+            && device.contains("regroupings on one lane each")
             && device.contains("obstacle rebuilds over the scratch buffer")
             && device.contains("a reset's obstacles built on the host")
             && device.contains("read back in one piece"),

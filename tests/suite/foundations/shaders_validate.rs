@@ -73,15 +73,24 @@ fn resolve(path: &Path, order: &mut Vec<PathBuf>, visiting: &mut Vec<PathBuf>) {
 
 /// Parses and validates `src` (named `label` in messages).
 fn validate_source(src: &str, label: &str) -> Result<naga::Module, String> {
+    validate_with_info(src, label).map(|(module, _)| module)
+}
+
+/// [`validate_source`], with what the validator found of each function (the globals each entry
+/// point uses, say).
+fn validate_with_info(
+    src: &str,
+    label: &str,
+) -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
     let module =
         naga::front::wgsl::parse_str(src).map_err(|e| e.emit_to_string_with_path(src, label))?;
-    naga::valid::Validator::new(
+    let info = naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::default(),
     )
     .validate(&module)
     .map_err(|e| e.emit_to_string_with_path(src, label))?;
-    Ok(module)
+    Ok((module, info))
 }
 
 /// Parses and validates `path` with its requirements prepended.
@@ -1097,12 +1106,62 @@ fn passes_have_their_second_entry_points() {
     assert!(wgsl::assemble_pass_rebuilding_resets("formation", &exp2_prelude()).is_err());
 }
 
+/// The passes that regroup (`wgsl::REBUILD_PASSES`) validate with their environments taken a
+/// workgroup each (`wgsl::with_regroups_in_workgroups`, the hardware adapters' way: every barrier
+/// of the regrouping on lanes in uniform control flow), and their `main` then uses the
+/// regrouping's workgroup variables, `wgsl::regroup_workgroup_bytes` of them (what the GPU
+/// backend checks against the device's limit).
+#[test]
+fn regroup_passes_validate_with_their_regroupings_on_lanes() {
+    let env = socnav::BatchEnv::new(
+        socnav::Config::from_name_or_path("exp2").expect("exp2"),
+        socnav::EnvOptions::default(),
+    )
+    .expect("batch");
+    let classes = wgsl::SizeClasses::of(&env.state().unwrap().columns());
+    let prelude = exp2_prelude();
+    let lanes = wgsl::with_regroups_in_workgroups(&prelude);
+    assert_ne!(
+        lanes, prelude,
+        "the prelude says how many lanes a regrouping takes"
+    );
+    for pass in wgsl::REBUILD_PASSES {
+        let src = wgsl::assemble_pass(pass, &lanes).expect("assembled");
+        let (module, info) = validate_with_info(&src, &format!("pass {pass} (regroupings)"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let main = module
+            .entry_points
+            .iter()
+            .position(|e| e.name == "main")
+            .expect("main");
+        let uses = info.get_entry_point(main);
+        let bytes: u32 = module
+            .global_variables
+            .iter()
+            .filter(|&(h, v)| {
+                v.space == naga::AddressSpace::WorkGroup
+                    && v.name
+                        .as_deref()
+                        .is_some_and(|n| n.starts_with("regroup_wg_"))
+                    && !uses[h].is_empty()
+            })
+            .map(|(_, v)| module.types[v.ty].inner.size(module.to_ctx()))
+            .sum();
+        assert_eq!(
+            bytes as usize,
+            wgsl::regroup_workgroup_bytes(&classes),
+            "{pass}: the regrouping's workgroup memory"
+        );
+    }
+}
+
 /// The passes that rebuild ORCA obstacles (`wgsl::REBUILD_PASSES`) validate with the obstacle
 /// library's working memory in a workgroup array (`wgsl::with_obstacles_in_workgroup`), as the
 /// GPU backend builds their `wgsl::REBUILD_IN_WORKGROUPS_ENTRY` on hardware adapters: no access
 /// to `scratch` left, one workgroup variable of `OBSTACLES_IN_WORKGROUP_WORDS` words, which every
 /// shipped config's obstacle region fits, and with the lanes' shared words
-/// `REBUILD_WORKGROUP_WORDS` in all (16 KiB, which every WebGPU adapter has); no pass but those
+/// `REBUILD_WORKGROUP_WORDS` in all that the entry point uses (16 KiB, which every WebGPU adapter
+/// has; the module's other entry points have workgroup variables of their own); no pass but those
 /// regroups, and none of their `main`s rebuilds (the rebuild entry points do, after it). The same
 /// for the passes that reset, as a batch whose pool rows leave their obstacles to the device
 /// assembles them.
@@ -1126,12 +1185,19 @@ fn rebuild_passes_keep_their_obstacles_in_workgroup_memory() {
         let moved = wgsl::with_obstacles_in_workgroup(&src)
             .unwrap_or_else(|| panic!("{pass}: no obstacle library"));
         assert!(!moved.contains("scratch["), "{pass}: scratch still read");
-        let module = validate_source(&moved, &format!("pass {pass} (obstacles in workgroup)"))
-            .unwrap_or_else(|e| panic!("{e}"));
+        let (module, info) =
+            validate_with_info(&moved, &format!("pass {pass} (obstacles in workgroup)"))
+                .unwrap_or_else(|e| panic!("{e}"));
+        let entry = module
+            .entry_points
+            .iter()
+            .position(|e| e.name == wgsl::REBUILD_IN_WORKGROUPS_ENTRY)
+            .unwrap_or_else(|| panic!("{pass}: no {}", wgsl::REBUILD_IN_WORKGROUPS_ENTRY));
+        let uses = info.get_entry_point(entry);
         let workgroup: Vec<(u32, u32)> = module
             .global_variables
             .iter()
-            .filter(|(_, v)| v.space == naga::AddressSpace::WorkGroup)
+            .filter(|&(h, v)| v.space == naga::AddressSpace::WorkGroup && !uses[h].is_empty())
             .map(|(_, v)| {
                 let inner = &module.types[v.ty].inner;
                 let len = match *inner {

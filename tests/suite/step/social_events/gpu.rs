@@ -274,6 +274,43 @@ fn rebuilds_in_workgroup_memory_match_the_cpu() {
     );
 }
 
+/// Contract: the regroupings of `formation` and `social_events` give the same bits with each
+/// queued environment on all the lanes of a workgroup (`GpuDevice::regroups_in_workgroups`, the
+/// hardware adapters' way: lane 0 runs the pass's logic and sorts, every lane takes slots of the
+/// permutations, remaps and list positions), as the CPU's: crowd and laptop-use formations
+/// completing in exp3, and the dispersals of exp3, corridor_mixed (the largest crowds) and
+/// stress. The one-lane way is every other parity test's on lavapipe.
+#[test]
+fn regroupings_on_a_workgroups_lanes_match_the_cpu() {
+    let Some(mut dev) = device() else { return };
+    dev.regroups_in_workgroups = true;
+    let mut exp3 = eventful("exp3", 0.3);
+    exp3.episode.time_step = 0.3;
+    let perturb = crate::step::formation::perturb_formation;
+    let formed = parity_on(dev.clone(), "formation", exp3, 256, 6, perturb).expect("a device");
+    assert!(
+        formed.events[event::CROWD_FORMATION_COMPLETE] > 0
+            && formed.events[event::LAPTOP_FORMATION_COMPLETE] > 0,
+        "{formed:?}"
+    );
+    let mut total = Seen::default();
+    for (name, n) in [("exp3", 256), ("corridor_mixed", 256), ("stress", 64)] {
+        let seen = parity_on(
+            dev.clone(),
+            "social_events",
+            eventful(name, 0.5),
+            n,
+            6,
+            perturb_events,
+        );
+        add(&mut total, seen.expect("a device"));
+    }
+    assert!(
+        total.events[event::CROWD_DISPERSAL] > 0 && total.events[event::LAPTOP_DISPERSAL] > 0,
+        "{total:?}"
+    );
+}
+
 /// Contract: `social_events` (dispersal of standing and moving groups, with and without
 /// dissolution; laptop-use dispersal; crowd and laptop-use formation starts, and laptop-use
 /// formations blocked; the regrouping and obstacle rebuild after each; see `perturb_events` for
