@@ -300,9 +300,10 @@ fn regroup_canonicalize(e: u32) {
 // The environments `formation` and `social_events` work on run one a lane (REGROUP_LANES 1,
 // generated) or, on a GPU (`GpuDevice::regroups_in_workgroups`: REGROUP_LANES = WORKGROUP_SIZE),
 // one a workgroup: its lane 0 runs the pass's logic, and a regrouping is shared out among every
-// lane (`regroup_canonicalize_on_lanes`): lane 0 sorts, then the lanes take a slot each of the
-// permutations, the remaps and the list positions. A regrouping in one lane is a chain of
-// dependent memory round trips, two a slot for the permutations alone (docs/performance.md).
+// lane (`regroup_canonicalize_on_lanes`), each taking slots of the sorts, the permutations, the
+// remaps and the list positions. A regrouping in one lane is a chain of dependent memory round
+// trips, two a slot for the permutations alone (docs/performance.md). The same results as the
+// one-lane functions above, whose order of operations the Rust twin's is.
 
 // One kind's sort keys (`regroup_key`), a kind at a time.
 var<workgroup> regroup_wg_keys: array<vec4<u32>, PERMUTE_CAP>;

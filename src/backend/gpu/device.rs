@@ -379,8 +379,8 @@ pub struct GpuDevice {
     pub resets_in_workgroups: bool,
     /// Whether the passes that regroup (`formation`, `social_events`) take each queued
     /// environment on all the lanes of a workgroup, its regroupings shared out among them
-    /// (`backend::wgsl::with_regroups_in_workgroups`: lane 0 runs the pass's logic and sorts, the
-    /// lanes take a slot each of the permutations, remaps and list positions), instead of one
+    /// (`backend::wgsl::with_regroups_in_workgroups`: lane 0 runs the pass's logic, the lanes take
+    /// a slot each of the sorts, permutations, remaps and list positions), instead of one
     /// lane: a regrouping is a chain of dependent memory round trips in one lane (up to 0.15-0.18
     /// ms of each pass on an H100). On by default on a hardware GPU; off on a software one, as
     /// [`Self::resets_in_workgroups`]. Both give the same bits; a clone with the other setting is
@@ -473,9 +473,8 @@ impl std::fmt::Debug for GpuDevice {
 impl GpuDevice {
     /// This device with the paths a software adapter takes, whatever the adapter: observations
     /// written in place, each reset and regrouping on one lane, each obstacle rebuild over
-    /// `scratch`, the entity
-    /// records in the observing lane, each reset's obstacles built on the host
-    /// ([`PATHS_VAR`]`=lane`, `socnav bench --lane-paths`).
+    /// `scratch`, the entity records in the observing lane, each reset's obstacles built on the
+    /// host ([`PATHS_VAR`]`=lane`, `socnav bench --lane-paths`).
     #[must_use]
     pub fn with_lane_paths(mut self) -> Self {
         self.stage_observations = false;
