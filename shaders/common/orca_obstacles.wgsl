@@ -540,10 +540,10 @@ struct OrcaObstaclesStack {
     depth: u32,
 }
 
-// The start of Rust `process_obstacles` of environment e's list into its set: the set emptied,
-// its overflow the list's (with ORCA_OBSTACLES_INVALID where a polygon is degenerate or not
-// finite); the polygons to add, none where it overflowed.
-fn orca_obstacles_begin_set(e: u32) -> u32 {
+// The start of Rust `process_obstacles` of environment e's list into its set: the polygons'
+// vertices added, and the stack holding the root list of every vertex (none where the list
+// overflowed or is invalid, or holds no vertex).
+fn orca_obstacles_process_begin(e: u32) -> OrcaObstaclesStack {
     let l = orca_obstacles_region(e) + batch.x_obstacle_list;
     let s = orca_obstacles_set(e);
     scratch[s] = 0u;
@@ -552,19 +552,9 @@ fn orca_obstacles_begin_set(e: u32) -> u32 {
         scratch[s + 1u] |= ORCA_OBSTACLES_INVALID;
     }
     if (scratch[s + 1u] != 0u) {
-        return 0u;
+        return OrcaObstaclesStack(0u, 0u);
     }
-    return orca_obstacles_list_len(l);
-}
-
-// The start of Rust `process_obstacles` of environment e's list into its set: the polygons'
-// vertices added, and the stack holding the root list of every vertex (none where the list
-// overflowed or is invalid, or holds no vertex).
-fn orca_obstacles_process_begin(e: u32) -> OrcaObstaclesStack {
-    let l = orca_obstacles_region(e) + batch.x_obstacle_list;
-    let s = orca_obstacles_set(e);
-    let polygons = orca_obstacles_begin_set(e);
-    for (var p = 0u; p < polygons; p++) {
+    for (var p = 0u; p < orca_obstacles_list_len(l); p++) {
         orca_obstacles_add_polygon(s, orca_obstacles_list_polygon(l, p));
     }
     if (scratch[s + 1u] != 0u) {

@@ -303,8 +303,9 @@ pub const REBUILD_LANES_WORDS: usize = 2 + 2 + 1 + WORKGROUP_SIZE as usize + 2 *
 /// buffer.
 pub const OBSTACLES_IN_WORKGROUP_WORDS: usize = REBUILD_WORKGROUP_WORDS - REBUILD_LANES_WORDS;
 // A region of as many vertices as the side masks hold does not fit workgroup memory.
-const _: () =
-    assert!(ObstacleScratch::region_words(32 * REBUILD_MASK_WORDS) > OBSTACLES_IN_WORKGROUP_WORDS);
+const _: () = assert!(
+    ObstacleScratch::for_vertices(32 * REBUILD_MASK_WORDS).words > OBSTACLES_IN_WORKGROUP_WORDS
+);
 
 /// The obstacle library's region function as `shaders/common/orca_obstacles.wgsl` writes it.
 const OBSTACLE_REGION_IN_SCRATCH: &str =
@@ -859,22 +860,22 @@ impl ObstacleScratch {
             .find(|c| c.0 == "ov_x")
             .map_or(0, |c| c.2)
             .max(1);
+        Self::for_vertices(vertices)
+    }
+
+    /// The region for a capacity of `vertices` (at least 1): the list's 2 words and 8 a polygon,
+    /// the set's 2 and 7 columns, the stack's 3 columns.
+    pub const fn for_vertices(vertices: usize) -> Self {
+        let polygons = if vertices / 8 > 1 { vertices / 8 } else { 1 };
         let list = 0;
-        let set = list + 2 + 8 * (vertices / 8).max(1);
+        let set = list + 2 + 8 * polygons;
         let stack = set + 2 + 7 * vertices;
         Self {
-            words: Self::region_words(vertices),
+            words: stack + 3 * vertices,
             list,
             set,
             stack,
         }
-    }
-
-    /// Words of the region for a capacity of `vertices` (at least 1): the list's 2 and 8 a
-    /// polygon, the set's 2 and 7 columns, the stack's 3 columns.
-    pub const fn region_words(vertices: usize) -> usize {
-        let polygons = if vertices / 8 > 1 { vertices / 8 } else { 1 };
-        2 + 8 * polygons + 2 + 7 * vertices + 3 * vertices
     }
 }
 

@@ -776,8 +776,8 @@ impl GpuStages {
         format!(
             "{}; shaders: {shaders}; observations {observations}; entity records {records}; \
              resets on {resets}; regroupings on {regroups}; obstacle rebuilds {rebuilds}; \
-             a reset's obstacles \
-             {reset_obstacles}; per-step outputs read back in {pieces}{memory}{staging}{left_out}",
+             a reset's obstacles {reset_obstacles}; per-step outputs read back in \
+             {pieces}{memory}{staging}{left_out}",
             self.dev.adapter
         )
     }
