@@ -305,10 +305,10 @@ fn regroup_canonicalize(e: u32) {
 // trips, two a slot for the permutations alone (docs/performance.md). The same results as the
 // one-lane functions above, whose order of operations the Rust twin's is.
 
-// One kind's sort keys (`regroup_key`), a kind at a time.
-var<workgroup> regroup_wg_keys: array<vec4<u32>, PERMUTE_CAP>;
-// The first sorted position of a kind whose slot is dropped (`regroup_live`).
-var<workgroup> regroup_wg_live: atomic<u32>;
+// Each kind's sort keys (`regroup_key`, kinds as there): the four sorts run at once.
+var<workgroup> regroup_wg_keys: array<array<vec4<u32>, PERMUTE_CAP>, 4>;
+// Each kind's first sorted position whose slot is dropped (`regroup_live`).
+var<workgroup> regroup_wg_live: array<atomic<u32>, 4>;
 // Each kind's sorted slots (`regroup_sorted`, kinds as `regroup_key`), and how many are kept.
 var<workgroup> regroup_wg_perm: array<array<u32, PERMUTE_CAP>, 4>;
 var<workgroup> regroup_wg_len: array<u32, 4>;
@@ -377,27 +377,52 @@ fn regroup_permute_restore(e: u32, kind: u32, k: u32) {
     }
 }
 
-// Rust `sorted_groups`, `sorted_users`, `sorted_humans` or `sorted_laptops` of environment e (as
-// `regroup_sorted`) by every lane of the workgroup, called by all of them together: each slot's
-// key a lane, each slot placed at its rank (the keys below it, and the equal keys of earlier
-// slots: the stable order of Rust's `sort_by_key`), then the live prefix (the first position
-// whose slot is dropped, by `atomicMin`), into `regroup_wg_perm[kind]`, `regroup_wg_len[kind]`
-// and `regroup_wg_used[kind]`.
-fn regroup_sort_on_lanes(e: u32, kind: u32, lane: u32) {
-    let n = regroup_count(e, kind);
-    for (var k = lane; k < n; k += WORKGROUP_SIZE) {
-        regroup_wg_keys[k] = regroup_key(e, kind, k);
+// The kind (as `regroup_key`) and slot of item `t` of the four kinds' slots laid end to end,
+// `counts[kind]` of each (`t` below their sum).
+fn regroup_item(t: u32, counts: array<u32, 4>) -> vec2<u32> {
+    var kind = 0u;
+    var k = t;
+    while (kind < 3u && k >= counts[kind]) {
+        k -= counts[kind];
+        kind += 1u;
     }
-    if (lane == 0u) {
-        atomicStore(&regroup_wg_live, n);
-        regroup_wg_used[kind] = n;
+    return vec2<u32>(kind, k);
+}
+
+// The sum of `counts`: the items `regroup_item` takes.
+fn regroup_items(counts: array<u32, 4>) -> u32 {
+    return counts[0] + counts[1] + counts[2] + counts[3];
+}
+
+// Rust `sorted_groups`, `sorted_users`, `sorted_humans` and `sorted_laptops` of environment e (as
+// `regroup_sorted`), all four at once (each reads the state before any permutation), by every
+// lane of the workgroup, called by all of them together: each slot's key a lane, each slot placed
+// at its rank among its kind's keys (the keys below it, and the equal keys of earlier slots: the
+// stable order of Rust's `sort_by_key`), then each kind's live prefix (its first position whose
+// slot is dropped, by `atomicMin`), into `regroup_wg_perm`, `regroup_wg_len` and
+// `regroup_wg_used`.
+fn regroup_sort_on_lanes(e: u32, lane: u32) {
+    if (lane < 4u) {
+        let n = regroup_count(e, lane);
+        regroup_wg_used[lane] = n;
+        atomicStore(&regroup_wg_live[lane], n);
     }
     workgroupBarrier();
-    for (var k = lane; k < n; k += WORKGROUP_SIZE) {
-        let key = regroup_wg_keys[k];
+    let used = regroup_wg_used;
+    let items = regroup_items(used);
+    for (var t = lane; t < items; t += WORKGROUP_SIZE) {
+        let it = regroup_item(t, used);
+        regroup_wg_keys[it.x][it.y] = regroup_key(e, it.x, it.y);
+    }
+    workgroupBarrier();
+    for (var t = lane; t < items; t += WORKGROUP_SIZE) {
+        let it = regroup_item(t, used);
+        let kind = it.x;
+        let k = it.y;
+        let key = regroup_wg_keys[kind][k];
         var rank = 0u;
-        for (var j = 0u; j < n; j++) {
-            let other = regroup_wg_keys[j];
+        for (var j = 0u; j < regroup_wg_used[kind]; j++) {
+            let other = regroup_wg_keys[kind][j];
             if (regroup_key_less(other, key) || (j < k && all(other == key))) {
                 rank += 1u;
             }
@@ -405,43 +430,45 @@ fn regroup_sort_on_lanes(e: u32, kind: u32, lane: u32) {
         regroup_wg_perm[kind][rank] = k;
     }
     workgroupBarrier();
-    for (var p = lane; p < n; p += WORKGROUP_SIZE) {
-        if (!regroup_live(e, kind, regroup_wg_perm[kind][p])) {
-            atomicMin(&regroup_wg_live, p);
+    for (var t = lane; t < items; t += WORKGROUP_SIZE) {
+        let it = regroup_item(t, used);
+        if (!regroup_live(e, it.x, regroup_wg_perm[it.x][it.y])) {
+            atomicMin(&regroup_wg_live[it.x], it.y);
         }
     }
     workgroupBarrier();
-    if (lane == 0u) {
-        regroup_wg_len[kind] = atomicLoad(&regroup_wg_live);
+    if (lane < 4u) {
+        regroup_wg_len[lane] = atomicLoad(&regroup_wg_live[lane]);
     }
 }
 
 // `regroup_canonicalize` of environment e by every lane of the workgroup, called by all of them
 // together, with the same results: the sorts (`regroup_sort_on_lanes`), then every lane takes a
-// share of each kind's permutation (the region holds one kind at a time, as in
-// `regroup_canonicalize`: a barrier after each half), of the remaps and recounts, and of the list
-// positions; lane 0 writes the counts and queues the rebuild. The barriers take every lane's
+// share of the permutations (every kind's at once, each through its own part of the region: a
+// barrier after each half), of the remaps and recounts, and of the list positions; lane 0 writes
+// the counts and queues the rebuild. The barriers take every lane's
 // stores to the state with them (`storageBarrier`), lane 0's before it included.
 fn regroup_canonicalize_on_lanes(e: u32, lane: u32) {
     storageBarrier();
-    for (var kind = 0u; kind < 4u; kind++) {
-        regroup_sort_on_lanes(e, kind, lane);
-    }
+    regroup_sort_on_lanes(e, lane);
     if (lane == 0u) {
         atomicStore(&regroup_wg_roles[0], 0u);
         atomicStore(&regroup_wg_roles[1], 0u);
     }
     workgroupBarrier();
-    for (var kind = 0u; kind < 4u; kind++) {
-        for (var k = lane; k < regroup_wg_len[kind]; k += WORKGROUP_SIZE) {
-            regroup_permute_save(e, kind, k);
-        }
-        storageBarrier();
-        for (var k = lane; k < regroup_wg_used[kind]; k += WORKGROUP_SIZE) {
-            regroup_permute_restore(e, kind, k);
-        }
-        storageBarrier();
+    // Every kind's permutation at once, each kind through its own part of the region.
+    let kept = regroup_wg_len;
+    for (var t = lane; t < regroup_items(kept); t += WORKGROUP_SIZE) {
+        let it = regroup_item(t, kept);
+        regroup_permute_save(e, it.x, it.y);
     }
+    storageBarrier();
+    let used = regroup_wg_used;
+    for (var t = lane; t < regroup_items(used); t += WORKGROUP_SIZE) {
+        let it = regroup_item(t, used);
+        regroup_permute_restore(e, it.x, it.y);
+    }
+    storageBarrier();
     // Rust `remap`: the inverses, then every slot index through them.
     for (var kind = 0u; kind < 4u; kind++) {
         for (var k = lane; k < regroup_wg_used[kind]; k += WORKGROUP_SIZE) {

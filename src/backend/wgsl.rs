@@ -625,7 +625,8 @@ fn slot_index_functions(state: Columns<'_>) -> String {
 /// `pool_observation` (the observation's first word in a row) and `pool_obstacles` (1 when a row
 /// holds the ORCA obstacles: [`BatchLayout::with_pool_obstacles`]); the `scratch` region of an
 /// environment (`s_scratch`, [`scratch_region_words`]), the obstacle library's part of it
-/// (`obstacle_words`, `x_obstacle_*`: [`ObstacleScratch`]), `x_obs_staged`, where the staged
+/// (`obstacle_words`, `x_obstacle_*`: [`ObstacleScratch`]) and the slot permutations' part of
+/// each kind (`x_permute_<kind>`, where its old slots start), `x_obs_staged`, where the staged
 /// observation starts in it ([`scratch_words`]), `obs_staged` (1 when the observation is staged)
 /// and `obs_records_apart` (1 when [`OBS_RECORDS_ENTRY`] writes the entity records); and the
 /// SNGNN-v2 sizes (`sn_*`, 0 without the SNGNN graphs). None of it is compiled into a shader, so
@@ -705,6 +706,9 @@ impl BatchLayout {
         fields.push(("x_obstacle_list".into(), scratch.list));
         fields.push(("x_obstacle_set".into(), scratch.set));
         fields.push(("x_obstacle_stack".into(), scratch.stack));
+        for ((kind, _), (part, _)) in PERMUTED_KINDS.iter().zip(permute_parts(state)) {
+            fields.push((format!("x_permute_{kind}"), part));
+        }
         fields.push(("x_obs_staged".into(), n_envs * region));
         // 1 when the observation is staged ([`BatchLayout::with_staged_observation`]).
         fields.push(("obs_staged".into(), 0));
@@ -825,8 +829,9 @@ pub fn scratch_words(n_envs: usize, state: Columns<'_>, staged_obs_dim: usize) -
 
 /// Words of an environment's region of `scratch` (`s_scratch` of the [`BatchLayout`]): the
 /// working memory of the obstacle rebuild ([`ObstacleScratch`]) and of the slot permutations
-/// (the prelude's generated `state_permute_*`), which never run at once in one environment, so
-/// they share it.
+/// (the prelude's generated `state_permute_*`, every kind's part: `permute_words`), which
+/// never run at once in one environment, so they share it. In every shipped config the
+/// obstacles' part is the larger (exp2: 796 words against 162).
 pub fn scratch_region_words(state: Columns<'_>) -> usize {
     ObstacleScratch::of(state).words.max(permute_words(state))
 }
@@ -1020,11 +1025,11 @@ const RESETS_BY_ONE_LANE: &str = "const RESET_LANES: u32 = 1u;\n";
 const REGROUPS_BY_ONE_LANE: &str = "const REGROUP_LANES: u32 = 1u;\n";
 
 /// Bytes of workgroup memory a regrouping on a workgroup's lanes takes with these size classes
-/// (`shaders/common/regroup.wgsl`'s `regroup_wg_*`: one kind's sort keys, the four kinds' sorted
-/// slots and inverses, each group's members and first member, a few words): with `PERMUTE_CAP`
-/// 64, 3.5 KiB.
+/// (`shaders/common/regroup.wgsl`'s `regroup_wg_*`: the four kinds' sort keys (four words each),
+/// sorted slots and inverses, each group's members and first member, a few words): with
+/// `PERMUTE_CAP` 64, 6.6 KiB.
 pub fn regroup_workgroup_bytes(classes: &SizeClasses) -> usize {
-    4 * (14 * classes.permute + 1 + 4 + 4 + 2 + 1)
+    4 * (26 * classes.permute + 4 + 4 + 4 + 2 + 1)
 }
 
 /// `src` (a prelude, or a shader assembled from one) with each environment that `formation` and
@@ -1441,17 +1446,28 @@ fn columns_of<'a>(state: Columns<'a>, kind: &str) -> Vec<&'a (&'static str, Elem
         .collect()
 }
 
-/// Words of the `scratch` region a slot permutation of environment `e` passes its old slots
-/// through ([`permute_functions`]): for the kind that needs most, a word per column and slot.
+/// Words of the `scratch` region the slot permutations of environment `e` pass their old slots
+/// through ([`permute_functions`]): a part for each kind, a word per column and slot, so that a
+/// regrouping on a workgroup's lanes moves every kind's slots at once.
 fn permute_words(state: Columns<'_>) -> usize {
+    permute_parts(state)
+        .last()
+        .map_or(0, |&(at, words)| at + words)
+}
+
+/// Where each kind of [`PERMUTED_KINDS`] keeps its old slots in an environment's region of
+/// `scratch`, and how many words they take: (offset, words), the kinds end to end.
+fn permute_parts(state: Columns<'_>) -> Vec<(usize, usize)> {
+    let mut at = 0;
     PERMUTED_KINDS
         .iter()
         .map(|&(kind, _)| {
             let columns = columns_of(state, kind);
-            columns.len() * columns.iter().map(|c| c.2).max().unwrap_or(0)
+            let words = columns.len() * columns.iter().map(|c| c.2).max().unwrap_or(0);
+            at += words;
+            (at - words, words)
         })
-        .max()
-        .unwrap_or(0)
+        .collect()
 }
 
 /// The twins of `StateChunk::permute` for the kinds the social events reorder, generated from the
@@ -1463,8 +1479,11 @@ fn permute_words(state: Columns<'_>) -> usize {
 /// those kinds.) It runs in two halves, each a slot at a time, which a regrouping on a
 /// workgroup's lanes calls a slot a lane with a barrier between (`regroup_canonicalize_on_lanes`):
 /// `fn state_permute_<kinds>_save(e: u32, k: u32, old: u32)`, old slot `old` into place `k` of
-/// the region, and `fn state_permute_<kinds>_restore(e: u32, k: u32, kept: bool)`, slot `k` from
-/// place `k` (or zeroed where not `kept`).
+/// the kind's part of the region, and `fn state_permute_<kinds>_restore(e: u32, k: u32, kept:
+/// bool)`, slot `k` from place `k` (or zeroed where not `kept`). Each kind has a part of its own
+/// ([`permute_parts`]; `x_permute_<kind>` of the [`BatchLayout`], data, so that the prelude stays
+/// the same for every config), so the lanes move every kind's slots between the same two
+/// barriers.
 ///
 /// The old slots pass through the environment's region of `scratch` ([`scratch_region_words`];
 /// the obstacle rebuild's working memory, free here: the rebuild runs in a dispatch of its own
@@ -1488,7 +1507,7 @@ fn permute_functions(state: Columns<'_>) -> String {
              \x20       {name}_restore(e, k, k < n);\n    }}\n}}\n\
              fn {name}_save(e: u32, k: u32, old_slot: u32) {{\n\
              \x20   let old = at_{kind}(e, old_slot);\n\
-             \x20   let to = scratch_region(e) + k * {width}u;\n"
+             \x20   let to = scratch_region(e) + batch.x_permute_{kind} + k * {width}u;\n"
         ));
         for (j, &&(col, elem, _)) in columns.iter().enumerate() {
             let value = match elem {
@@ -1502,7 +1521,7 @@ fn permute_functions(state: Columns<'_>) -> String {
              fn {name}_restore(e: u32, k: u32, kept: bool) {{\n\
              \x20   let at = at_{kind}(e, k);\n\
              \x20   if (kept) {{\n\
-             \x20       let kept_at = scratch_region(e) + k * {width}u;\n"
+             \x20       let kept_at = scratch_region(e) + batch.x_permute_{kind} + k * {width}u;\n"
         ));
         let mut zeroes = String::new();
         for (j, &&(col, elem, _)) in columns.iter().enumerate() {
