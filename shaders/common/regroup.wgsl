@@ -446,8 +446,8 @@ fn regroup_sort_on_lanes(e: u32, lane: u32) {
 // together, with the same results: the sorts (`regroup_sort_on_lanes`), then every lane takes a
 // share of the permutations (every kind's at once, each through its own part of the region: a
 // barrier after each half), of the remaps and recounts, and of the list positions; lane 0 writes
-// the counts and queues the rebuild. The barriers take every lane's
-// stores to the state with them (`storageBarrier`), lane 0's before it included.
+// the counts and queues the rebuild. The barriers take every lane's stores to the state with them
+// (`storageBarrier`), lane 0's before it included.
 fn regroup_canonicalize_on_lanes(e: u32, lane: u32) {
     storageBarrier();
     regroup_sort_on_lanes(e, lane);
