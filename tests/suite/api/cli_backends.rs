@@ -204,3 +204,64 @@ fn bench_halves_report_each_half_host_path_on_the_gpu() {
         assert!(path["wait_s"].as_f64() > Some(0.0), "{path}");
     }
 }
+
+/// `scripts/bench-gpu` with `DRY_RUN=1` in a tree whose `scripts/bench-gpu` is `script` and
+/// whose `shaders` and `benches` are the repository's: its exit status and output.
+fn bench_gpu_dry_run(test: &str, script: &str) -> (bool, String) {
+    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tree = std::env::temp_dir().join(format!("socnav-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tree);
+    std::fs::create_dir_all(tree.join("scripts")).expect("a temporary tree");
+    for dir in ["shaders", "benches"] {
+        std::os::unix::fs::symlink(repo.join(dir), tree.join(dir)).expect("a link");
+    }
+    std::fs::write(tree.join("scripts/bench-gpu"), script).expect("the script written");
+    let out = Command::new("bash")
+        .arg(tree.join("scripts/bench-gpu"))
+        .env("DRY_RUN", "1")
+        .env("SOCNAV", env!("CARGO_BIN_EXE_socnav"))
+        .env("OUT_DIR", tree.join("out"))
+        .output()
+        .expect("bash runs");
+    let _ = std::fs::remove_dir_all(&tree);
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.success(), text)
+}
+
+/// Every row of `scripts/bench-gpu`, the script a GPU machine runs for issue 19's figures, is
+/// one `socnav bench` takes (its flags and their values), names functions of the shaders in
+/// `--leave-out` and groups of the bench `step` (its dry run: a typo found here, not on a GPU
+/// machine's scarce time); and the dry run refuses a row with an unknown flag, an unknown lane
+/// path, a function no shader defines and a criterion group the bench lacks, naming each.
+#[test]
+fn every_row_of_bench_gpu_is_taken() {
+    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let script = std::fs::read_to_string(repo.join("scripts/bench-gpu")).expect("the script");
+    let (ok, out) = bench_gpu_dry_run("bench-gpu-dry", &script);
+    assert!(ok, "{out}");
+    let taken = out.matches("its arguments are taken").count();
+    assert!(taken >= 20, "only {taken} rows checked:\n{out}");
+    assert!(
+        out.contains("== obs_rows: a group of the bench step"),
+        "{out}"
+    );
+
+    let last = "measure exp2-cpu ";
+    let bad_rows = "measure bad-flag --config exp2 --backend gpu --paded\n\
+                    measure bad-path --config exp2 --backend gpu --lane-paths regrup\n\
+                    measure bad-function --config exp2 --backend gpu --leave-out regroup_sort\n\
+                    criterion obs_rowz\n";
+    let broken = script.replacen(last, &format!("{bad_rows}{last}"), 1);
+    assert_ne!(broken, script, "the script has no row `{last}`");
+    let (ok, out) = bench_gpu_dry_run("bench-gpu-dry-broken", &broken);
+    assert!(!ok, "a dry run with bad rows passed:\n{out}");
+    for name in ["bad-flag", "bad-path", "bad-function", "obs_rowz"] {
+        assert!(
+            out.lines()
+                .any(|l| l.contains("FAILED") && l.contains(name)),
+            "{name} not refused:\n{out}"
+        );
+    }
+    assert!(out.contains("dry run: 4 rows not taken"), "{out}");
+}
