@@ -214,9 +214,9 @@ pub fn check_parity_mode(
 /// (`GpuDevice::regroups_in_workgroups`) and its obstacle rebuilds
 /// (`GpuDevice::obstacles_in_workgroups`), the other place a reset's obstacles are built (the
 /// host or the device: `GpuDevice::obstacles_after_resets`), and every step's readback in the
-/// most pieces
-/// (`GpuDevice::readback_piece_bytes` of 1 KiB), so that tests cover the paths a test-sized batch
-/// on this device would not take.
+/// most pieces (`GpuDevice::readback_piece_bytes` of 1 KiB), submitted at the other time
+/// (`GpuDevice::readback_before_host_work`), so that tests cover the paths a test-sized batch on
+/// this device would not take.
 pub fn device_other_paths() -> Option<GpuDevice> {
     let mut dev = device()?;
     dev.stage_observations = !dev.stage_observations;
@@ -225,6 +225,7 @@ pub fn device_other_paths() -> Option<GpuDevice> {
     dev.obstacles_in_workgroups = !dev.obstacles_in_workgroups;
     dev.records_in_lanes = !dev.records_in_lanes;
     dev.obstacles_after_resets = !dev.obstacles_after_resets;
+    dev.readback_before_host_work = !dev.readback_before_host_work;
     dev.readback_piece_bytes = 1 << 10;
     Some(dev)
 }

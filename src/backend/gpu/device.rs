@@ -288,11 +288,12 @@ mod vulkan {
 /// The environment variable that chooses the paths of the devices this process opens: `device`
 /// (the default) takes the adapter's (on a hardware GPU the observation staged through workgroup
 /// memory, each reset and each regrouping on a workgroup's lanes, each obstacle rebuild in
-/// workgroup memory, the observation's entity records a lane each and the reset's obstacles
-/// rebuilt on the device: [`GpuDevice::stage_observations`], [`GpuDevice::resets_in_workgroups`],
-/// [`GpuDevice::regroups_in_workgroups`],
-/// [`GpuDevice::obstacles_in_workgroups`], [`GpuDevice::records_in_lanes`],
-/// [`GpuDevice::obstacles_after_resets`]), `lane` a software adapter's on any adapter: the way
+/// workgroup memory, the observation's entity records a lane each, the reset's obstacles
+/// rebuilt on the device and the readback submitted before the host's work:
+/// [`GpuDevice::stage_observations`], [`GpuDevice::resets_in_workgroups`],
+/// [`GpuDevice::regroups_in_workgroups`], [`GpuDevice::obstacles_in_workgroups`],
+/// [`GpuDevice::records_in_lanes`], [`GpuDevice::obstacles_after_resets`],
+/// [`GpuDevice::readback_before_host_work`]), `lane` a software adapter's on any adapter: the way
 /// back should a driver refuse a hardware path's pipeline.
 pub const PATHS_VAR: &str = "SOCNAV_GPU_PATHS";
 
@@ -413,6 +414,17 @@ pub struct GpuDevice {
     /// rebuild is a lane's serial work on the same cores. Both give the same bits; a clone with
     /// the other setting is how a caller (or a test) chooses.
     pub obstacles_after_resets: bool,
+    /// Whether a step that is read back submits its readback's other pieces and its queued
+    /// obstacle rebuild right after its own submit, before the host's work that overlaps its
+    /// passes (the reset pool's rows made ahead), instead of after that work. On a driver that
+    /// takes submits as they come (the H200's did) the pieces' copies then follow the passes on
+    /// the device whatever the host is doing; and where two batches share the device (`socnav
+    /// bench --halves`, Python's `send`/`recv`), they are queued before the other batch's next
+    /// step, not behind its passes. A driver that holds a submit until the one before it has
+    /// finished (lavapipe) would hold the host there instead, and its rows ahead would wait for
+    /// the passes. On by default on a hardware GPU; off on a software one. Both give the same
+    /// bits; a clone with the other setting is how a caller (or a test) chooses.
+    pub readback_before_host_work: bool,
     /// Most workgroups a rebuild dispatch in workgroup memory takes: each workgroup rebuilds the
     /// queued environments its index and every this-many-th after it. A workgroup per environment
     /// of the batch (65,536 of them, each holding 16 KiB of workgroup memory, all but a few
@@ -474,7 +486,8 @@ impl GpuDevice {
     /// This device with the paths a software adapter takes, whatever the adapter: observations
     /// written in place, each reset and regrouping on one lane, each obstacle rebuild over
     /// `scratch`, the entity records in the observing lane, each reset's obstacles built on the
-    /// host ([`PATHS_VAR`]`=lane`, `socnav bench --lane-paths`).
+    /// host, the readback submitted after the host's work ([`PATHS_VAR`]`=lane`, `socnav bench
+    /// --lane-paths`).
     #[must_use]
     pub fn with_lane_paths(mut self) -> Self {
         self.stage_observations = false;
@@ -483,6 +496,7 @@ impl GpuDevice {
         self.obstacles_in_workgroups = false;
         self.records_in_lanes = false;
         self.obstacles_after_resets = false;
+        self.readback_before_host_work = false;
         self
     }
 
@@ -590,6 +604,7 @@ impl GpuDevice {
             obstacles_in_workgroups: adapter.hardware,
             records_in_lanes: adapter.hardware,
             obstacles_after_resets: adapter.hardware,
+            readback_before_host_work: adapter.hardware,
             own_spirv,
             contraction: shaders.unwrap_or(Contraction::Forbidden),
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,

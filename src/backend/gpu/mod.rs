@@ -773,11 +773,16 @@ impl GpuStages {
             .dev
             .staging_memory()
             .map_or(String::new(), |m| format!("; queue writes staged in {m}"));
+        let submitted = if self.dev.readback_before_host_work {
+            "before"
+        } else {
+            "after"
+        };
         format!(
             "{}; shaders: {shaders}; observations {observations}; entity records {records}; \
              resets on {resets}; regroupings on {regroups}; obstacle rebuilds {rebuilds}; \
              a reset's obstacles {reset_obstacles}; per-step outputs read back in \
-             {pieces}{memory}{staging}{left_out}",
+             {pieces}{memory}, submitted {submitted} the host's work{staging}{left_out}",
             self.dev.adapter
         )
     }
@@ -1111,22 +1116,19 @@ impl GpuStages {
             t.resolve(&mut enc);
         }
         let mut submits = vec![self.dev.queue.submit([enc.finish()])];
+        // The readback's other pieces and the queued rebuild, each in a submit of its own: right
+        // after the step's where the driver takes submits as they come; after the host's work
+        // that overlaps the step's passes where it may hold a submit until the one before it
+        // has finished (`GpuDevice::readback_before_host_work`).
+        let early = self.dev.readback_before_host_work;
+        if early {
+            piece_bytes += self.submit_after_step(selective, timed, queueing, &mut submits)?;
+        }
         let working = std::time::Instant::now();
-        // The host's work that overlaps the step's passes comes before any other submit: a
-        // driver may hold a submit until the one before it has finished (`submit_other_pieces`).
         while_device_works(self);
         let host_work_s = working.elapsed().as_secs_f64();
-        if selective {
-            let tables = self.output_tables();
-            let timeline = self.timeline.as_ref().filter(|_| timed);
-            let (others, bytes) = self
-                .step_read
-                .submit_other_pieces(&self.dev, &tables, timeline);
-            submits.extend(others);
-            piece_bytes += bytes;
-        }
-        if let Some(of) = queueing {
-            self.submit_queued_rebuild(of)?;
+        if !early {
+            piece_bytes += self.submit_after_step(selective, timed, queueing, &mut submits)?;
         }
         let submit_s = started.elapsed().as_secs_f64() - host_work_s;
         let copies = submits.len();
@@ -1327,6 +1329,33 @@ impl GpuStages {
             .ok_or_else(|| SimError::Internal(format!("pass {of} has no rebuild pipeline")))?;
         self.dispatch_rebuild(pass, rebuild);
         Ok(())
+    }
+
+    /// What a step read back submits after its own submit: the readback's other pieces where
+    /// the read is `selective` (appended to `submits`, with a timestamp each where `timed`),
+    /// then the rebuilds the stages queued, where one of them (`queueing`) did. The bytes the
+    /// pieces copy.
+    fn submit_after_step(
+        &self,
+        selective: bool,
+        timed: bool,
+        queueing: Option<&str>,
+        submits: &mut Vec<wgpu::SubmissionIndex>,
+    ) -> Result<u64, SimError> {
+        let mut bytes = 0;
+        if selective {
+            let tables = self.output_tables();
+            let timeline = self.timeline.as_ref().filter(|_| timed);
+            let (others, copied) = self
+                .step_read
+                .submit_other_pieces(&self.dev, &tables, timeline);
+            submits.extend(others);
+            bytes = copied;
+        }
+        if let Some(of) = queueing {
+            self.submit_queued_rebuild(of)?;
+        }
+        Ok(bytes)
     }
 
     /// The queued rebuilds' dispatch (`record_queued_rebuild`) in a submit of its own, after the

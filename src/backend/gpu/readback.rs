@@ -305,8 +305,10 @@ impl StepReadback {
     /// last submit resolves them.
     ///
     /// A driver may hold a submit until the one before it has finished (lavapipe does, in
-    /// `vkQueueSubmit`: wgpu chains its submits with semaphores), so the caller makes these
-    /// submits after the host's work that overlaps the step's passes, not before it.
+    /// `vkQueueSubmit`: wgpu chains its submits with semaphores), so on such a device the caller
+    /// makes these submits after the host's work that overlaps the step's passes, and on one that
+    /// takes submits as they come right after the step's
+    /// ([`GpuDevice::readback_before_host_work`]).
     pub(crate) fn submit_other_pieces(
         &self,
         dev: &GpuDevice,

@@ -130,6 +130,9 @@ pub enum LanePath {
     /// Each reset's ORCA obstacles built on the host, in its reset-pool row, not rebuilt on the
     /// device after the reset.
     ResetObstacles,
+    /// The readback's other pieces and the queued obstacle rebuilds submitted after the host's
+    /// work that overlaps the step's passes, not right after the step's submit.
+    ReadbackAfterHostWork,
 }
 
 /// How actions are chosen.

@@ -174,6 +174,7 @@ fn on_chosen_device(
                     LanePath::Obstacles => dev.obstacles_in_workgroups = false,
                     LanePath::Records => dev.records_in_lanes = false,
                     LanePath::ResetObstacles => dev.obstacles_after_resets = false,
+                    LanePath::ReadbackAfterHostWork => dev.readback_before_host_work = false,
                 }
             }
         }

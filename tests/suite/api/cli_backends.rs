@@ -152,10 +152,15 @@ fn bench_lane_paths_names_the_paths_it_took() {
     };
     // exp1's rows have entity records, so the line says where they are written. Three
     // environments' per-step outputs (about 8 KB) in pieces of 64 bytes: the most pieces, four.
-    let device = device_line(&["records", "--readback-piece-bytes", "64"]);
+    let device = device_line(&[
+        "records,readback-after-host-work",
+        "--readback-piece-bytes",
+        "64",
+    ]);
     assert!(
         device.contains("entity records in the observing lane")
-            && device.contains("read back in 4 pieces"),
+            && device.contains("read back in 4 pieces")
+            && device.contains("submitted after the host's work"),
         "{device}"
     );
     let device = device_line(&[]);
@@ -166,7 +171,8 @@ fn bench_lane_paths_names_the_paths_it_took() {
             && device.contains("regroupings on one lane each")
             && device.contains("obstacle rebuilds over the scratch buffer")
             && device.contains("a reset's obstacles built on the host")
-            && device.contains("read back in one piece"),
+            && device.contains("read back in one piece")
+            && device.contains("submitted after the host's work"),
         "{device}"
     );
 }
