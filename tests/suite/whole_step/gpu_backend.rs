@@ -1,7 +1,8 @@
 //! The GPU backend outside the stages (DESIGN.md section 4): the state's and the outputs' trip to
 //! the device and back, and the masked reset pass (`shaders/reset.wgsl`, the twin of
 //! `CpuBackend::reset`) against the CPU's, bit for bit on lavapipe (the harness:
-//! `tests/common/gpu.rs`), and episode seeds through the reset pool.
+//! `tests/common/gpu.rs`), episode seeds through the reset pool, and two batches stepped at once
+//! on one device.
 
 use crate::common::gpu::*;
 use socnav::backend::gpu::GpuStages;
@@ -371,6 +372,73 @@ fn the_other_observation_path_steps_as_the_cpu() {
     twins.finish("the other paths");
     assert!(finals > n, "only {finals} SAME_STEP finals");
     assert!(regroupings > 0, "no regrouping: the rebuilds went untested");
+}
+
+/// Two batches on one device, stepped at once on two threads (what `socnav bench --halves` and
+/// Python's `send`/`recv` on two batches do), each hand the host the CPU's outputs and state bit
+/// for bit, with their readback submitted after the host's work and before it
+/// (`GpuDevice::readback_before_host_work`: with it, a batch's other pieces and queued rebuild
+/// are submitted while the other batch may be submitting its step), over episodes that end and
+/// social events that regroup.
+#[test]
+fn two_batches_stepped_at_once_on_one_device_step_as_the_cpu() {
+    use socnav::AutoresetMode;
+    let Some(dev) = device() else {
+        return;
+    };
+    let mut c = config("exp2");
+    c.episode.length = 8;
+    c.events.laptop_dispersal_probability = 0.2;
+    c.events.laptop_formation_probability = 0.2;
+    for before in [false, true] {
+        let mut dev = dev.clone();
+        dev.readback_before_host_work = before;
+        // Four pieces a step, so that there are other pieces to submit.
+        dev.readback_piece_bytes = 1 << 10;
+        let twins: Vec<Twins> = [(33, 5), (34, 6)]
+            .into_iter()
+            .map(|(n, seed)| {
+                let options = socnav::EnvOptions {
+                    n_envs: n,
+                    seed,
+                    autoreset: AutoresetMode::SameStep,
+                    ..Default::default()
+                };
+                let mut cpu = socnav::BatchEnv::new(c.clone(), options.clone()).expect("CPU");
+                let mut gpu =
+                    socnav::BatchEnv::on_device(c.clone(), options, dev.clone()).expect("GPU");
+                cpu.reset(None).expect("reset");
+                gpu.reset(None).expect("reset");
+                Twins::new(cpu, gpu)
+            })
+            .collect();
+        let finals: usize = std::thread::scope(|scope| {
+            let runs: Vec<_> = twins
+                .into_iter()
+                .enumerate()
+                .map(|(k, mut twins)| {
+                    scope.spawn(move || {
+                        let mut rng = socnav::rng::RngStream::new(7 + k as u64, 0);
+                        let n = twins.cpu.n_envs();
+                        let mut finals = 0;
+                        for _ in 0..20 {
+                            twins.step(&random_actions(&mut rng, n, false));
+                            let out = twins.cpu.outputs();
+                            finals += out.has_final.iter().filter(|&&f| f != 0).count();
+                        }
+                        twins.finish(&format!(
+                            "batch {k}, readback before the host's work: {before}"
+                        ));
+                        finals
+                    })
+                })
+                .collect();
+            runs.into_iter()
+                .map(|run| run.join().expect("a batch's thread"))
+                .sum()
+        });
+        assert!(finals > 67, "only {finals} SAME_STEP finals");
+    }
 }
 
 /// Stage timing on the GPU backend (what `socnav bench`'s per-stage shares come from): every
