@@ -313,37 +313,53 @@ fn reads_back_only_what_it_hands_the_host(
     assert_eq!(gpu.host_path().expect("host path").full_reads, full + 1);
 }
 
+/// exp2 with episodes of `length` steps and its laptop events (0.01 a step each) made frequent,
+/// so that environments finish and regroup within a short run.
+fn regrouping_exp2(length: u32) -> socnav::Config {
+    let mut c = config("exp2");
+    c.episode.length = length;
+    c.events.laptop_dispersal_probability = 0.2;
+    c.events.laptop_formation_probability = 0.2;
+    c
+}
+
+/// A CPU batch of `c` (`n` environments, seed `seed`, SAME_STEP autoresets) and its twin on
+/// `dev`, both reset.
+fn same_step_twins(
+    c: &socnav::Config,
+    n: usize,
+    seed: u64,
+    dev: socnav::backend::gpu::GpuDevice,
+) -> Twins {
+    let options = socnav::EnvOptions {
+        n_envs: n,
+        seed,
+        autoreset: socnav::AutoresetMode::SameStep,
+        ..Default::default()
+    };
+    let mut cpu = socnav::BatchEnv::new(c.clone(), options.clone()).expect("CPU batch");
+    let mut gpu = socnav::BatchEnv::on_device(c.clone(), options, dev).expect("GPU batch");
+    cpu.reset(None).expect("reset");
+    gpu.reset(None).expect("reset");
+    Twins::new(cpu, gpu)
+}
+
 /// Contract: whole steps on the other paths than the device's defaults (the observation staged
 /// slot-major and moved into rows through workgroup memory, or written into the rows in place;
 /// the resets and the obstacle rebuilds on a workgroup's lanes, or on one lane each:
 /// `common::gpu::device_other_paths`; a reset's obstacles built on the host, or rebuilt on the
-/// device), read back in four pieces, hand the host the CPU's outputs and state bit for bit,
-/// SAME_STEP finals (copied from the rows after the move) included, over episodes that end,
-/// social events that regroup and a caller's masked reset.
+/// device), read back in four pieces (submitted on the other side of the host's work), hand the
+/// host the CPU's outputs and state bit for bit, SAME_STEP finals (copied from the rows after the
+/// move) included, over episodes that end, social events that regroup and a caller's masked
+/// reset.
 #[test]
 fn the_other_observation_path_steps_as_the_cpu() {
-    use socnav::AutoresetMode;
     use socnav::spec::{N_EVENTS, event};
     let Some(other) = device_other_paths() else {
         return;
     };
-    let mut c = config("exp2");
-    c.episode.length = 10;
-    // exp2's laptop events (0.01 a step each) made frequent, so that environments regroup.
-    c.events.laptop_dispersal_probability = 0.2;
-    c.events.laptop_formation_probability = 0.2;
     let n = 67;
-    let options = socnav::EnvOptions {
-        n_envs: n,
-        seed: 5,
-        autoreset: AutoresetMode::SameStep,
-        ..Default::default()
-    };
-    let mut cpu = socnav::BatchEnv::new(c.clone(), options.clone()).expect("CPU batch");
-    let mut gpu = socnav::BatchEnv::on_device(c, options, other).expect("GPU batch");
-    cpu.reset(None).expect("reset");
-    gpu.reset(None).expect("reset");
-    let mut twins = Twins::new(cpu, gpu);
+    let mut twins = same_step_twins(&regrouping_exp2(10), n, 5, other);
     let mut rng = socnav::rng::RngStream::new(4, 0);
     let (mut finals, mut regroupings) = (0, 0);
     // The events after which an environment regroups, and its obstacles are rebuilt.
@@ -382,14 +398,10 @@ fn the_other_observation_path_steps_as_the_cpu() {
 /// social events that regroup.
 #[test]
 fn two_batches_stepped_at_once_on_one_device_step_as_the_cpu() {
-    use socnav::AutoresetMode;
     let Some(dev) = device() else {
         return;
     };
-    let mut c = config("exp2");
-    c.episode.length = 8;
-    c.events.laptop_dispersal_probability = 0.2;
-    c.events.laptop_formation_probability = 0.2;
+    let c = regrouping_exp2(8);
     for before in [false, true] {
         let mut dev = dev.clone();
         dev.readback_before_host_work = before;
@@ -397,20 +409,7 @@ fn two_batches_stepped_at_once_on_one_device_step_as_the_cpu() {
         dev.readback_piece_bytes = 1 << 10;
         let twins: Vec<Twins> = [(33, 5), (34, 6)]
             .into_iter()
-            .map(|(n, seed)| {
-                let options = socnav::EnvOptions {
-                    n_envs: n,
-                    seed,
-                    autoreset: AutoresetMode::SameStep,
-                    ..Default::default()
-                };
-                let mut cpu = socnav::BatchEnv::new(c.clone(), options.clone()).expect("CPU");
-                let mut gpu =
-                    socnav::BatchEnv::on_device(c.clone(), options, dev.clone()).expect("GPU");
-                cpu.reset(None).expect("reset");
-                gpu.reset(None).expect("reset");
-                Twins::new(cpu, gpu)
-            })
+            .map(|(n, seed)| same_step_twins(&c, n, seed, dev.clone()))
             .collect();
         let finals: usize = std::thread::scope(|scope| {
             let runs: Vec<_> = twins
