@@ -276,10 +276,11 @@ fn rebuilds_in_workgroup_memory_match_the_cpu() {
 
 /// Contract: the regroupings of `formation` and `social_events` give the same bits with each
 /// queued environment on all the lanes of a workgroup (`GpuDevice::regroups_in_workgroups`, the
-/// hardware adapters' way: lane 0 runs the pass's logic and sorts, every lane takes slots of the
-/// permutations, remaps and list positions), as the CPU's: crowd and laptop-use formations
-/// completing in exp3, and the dispersals of exp3, corridor_mixed (the largest crowds) and
-/// stress. The one-lane way is every other parity test's on lavapipe.
+/// hardware adapters' way: lane 0 runs the pass's logic, every lane takes slots of the four
+/// kinds' sorts and permutations, the remaps and the list positions), as the CPU's: crowd and
+/// laptop-use formations completing in exp3, and the dispersals of exp3, corridor_mixed (the
+/// largest crowds) and stress. The one-lane way is lavapipe's default, which the other parity
+/// tests take.
 #[test]
 fn regroupings_on_a_workgroups_lanes_match_the_cpu() {
     let Some(mut dev) = device() else { return };
