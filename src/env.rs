@@ -470,7 +470,17 @@ impl BatchEnv {
             state.copy_env_from(env, &backup, 0);
             return Err(err);
         }
-        self.backend.state_changed(env)
+        // What follows from the loaded state can fail too (obstacles too many for the config's
+        // capacity): the environment goes back as it was, and what follows from it with it.
+        if let Err(err) = self.backend.state_changed(env) {
+            self.backend.state_mut()?.copy_env_from(env, &backup, 0);
+            self.backend.state_changed(env)?;
+            return Err(match err {
+                SimError::Shape { message, .. } => SimError::shape("state document", message),
+                other => other,
+            });
+        }
+        Ok(())
     }
 
     /// Replace the whole batch state with `other`'s (a batch of the same config and size,

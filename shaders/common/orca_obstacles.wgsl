@@ -65,15 +65,17 @@
 // before the right one, as in the recursive Rust. The lists on the stack hold distinct vertex ids
 // (each edge goes to one side; a split edge's two pieces have two ids), so the stack never holds
 // more than `len` <= batch.s_ov_x ids or lists: its arrays of batch.s_ov_x cannot overflow unless
-// the vertex set does. Where Rust panics (a processed set larger than batch.s_ov_x; a degenerate
-// or non-finite polygon, which `validate_polygons` rejects), the set gets a non-zero `overflow`
+// the vertex set does. Where the processed set is larger than batch.s_ov_x (overlapping
+// obstacles split each other's edges many times over: a state loaded or edited so, never a
+// generated scene), or a polygon is degenerate or non-finite (which Rust's `validate_polygons`
+// rejects, and no state holds), the set gets a non-zero `overflow`
 // (ORCA_OVERFLOW_OBSTACLE_VERTICES, ORCA_OBSTACLES_INVALID) and processing stops; a caller of
 // `orca_obstacles_process` must treat it as an error (an ORCA result that ORs it in is NaN by
 // common/orca.wgsl's convention). `orca_obstacles_rebuild_if_dirty` then poisons the columns:
-// every one of the batch.s_ov_x vertices gets NaN coordinates and directions
+// every one of the batch.s_ov_x vertices gets NaN coordinates and directions, in one ring
 // (`n_obstacle_vertices` = batch.s_ov_x), and `obstacles_dirty` is left at
-// ORCA_OBSTACLES_FAILED (2) instead of 0, so the host can see it. Neither can happen under the
-// shipped capacities (the CPU would have panicked).
+// ORCA_OBSTACLES_FAILED (the prelude's, Rust's `OBSTACLES_FAILED`) instead of 0, so the host
+// can see it: the same columns and flag as Rust's `rebuild_if_dirty` leaves for a set too large.
 //
 // Loop budget on lavapipe: llvmpipe stops every loop of an invocation after 65535 loop iterations
 // in total (docs/ARCHITECTURE.md). `choose_split` costs up to n² iterations per node (fewer with
@@ -92,8 +94,6 @@ fn orca_obstacles_max_polygons() -> u32 {
 }
 // `overflow` bit of a polygon list the Rust scenario would reject (see the header).
 const ORCA_OBSTACLES_INVALID: u32 = 16u;
-// `obstacles_dirty` after a rebuild that failed (see the header).
-const ORCA_OBSTACLES_FAILED: u32 = 2u;
 
 // One polygon of `for_each_polygon` (see the header).
 struct OrcaObstaclePolygon {

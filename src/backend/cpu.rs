@@ -283,7 +283,7 @@ impl Backend for CpuBackend {
     fn state_changed(&mut self, env: usize) -> Result<(), SimError> {
         let p = self.params;
         let mut s = self.state.env_chunk(env);
-        crate::systems::orca_obstacles::rebuild_if_dirty(&p, &mut s, 0);
+        crate::systems::orca_obstacles::rebuild_edited(&p, &mut s, 0, env)?;
         let mut o = self.out.env_chunk(env);
         crate::systems::observation::write_observation(&p, &mut s, &mut o, 0);
         Ok(())

@@ -175,7 +175,10 @@ pub trait Backend: Send + Sync {
     /// The batch state, for loading a snapshot; call [`Backend::state_changed`] afterwards.
     fn state_mut(&mut self) -> Result<&mut BatchState, SimError>;
     /// Re-derive what depends on a state edited through [`Backend::state_mut`] for environment
-    /// `env` (ORCA obstacles, observation) without stepping.
+    /// `env` (ORCA obstacles, observation) without stepping: `SimError::Shape` where its
+    /// obstacles need more processed vertices than the config holds
+    /// (`systems::orca_obstacles::rebuild_edited`; the environment's obstacles are then poisoned
+    /// and its observation not rewritten).
     fn state_changed(&mut self, env: usize) -> Result<(), SimError>;
     /// Replace the step constants (same config; e.g. a new seed or replay mode).
     fn set_params(&mut self, params: StepParams);

@@ -1544,7 +1544,7 @@ fn permute_functions(state: Columns<'_>) -> String {
 /// The codes the shaders share with the Rust stages, by their WGSL names: the absent index, human
 /// roles, group kinds, the ORCA policy, a walker's forming-crowd mark, the rejection samplers'
 /// try limit, RNG stream kinds, the robot's noise slot, the observation's one-hot positions and
-/// the SNGNN-v2 reward's kind.
+/// the SNGNN-v2 reward's kind and the obstacle flag of a rebuild that overflowed.
 #[expect(clippy::expect_used, reason = "the constants are small table indices")]
 fn shared_constants() -> Vec<(&'static str, u32)> {
     use crate::params::AutoresetMode;
@@ -1593,6 +1593,10 @@ fn shared_constants() -> Vec<(&'static str, u32)> {
         // The entity records' one-hot floats are the host's (`backend::obs_payload`).
         ("ONE_HOT_ROBOT", index(one_hot::ROBOT)),
         ("REWARD_SNGNN", systems::reward::REWARD_SNGNN),
+        (
+            "ORCA_OBSTACLES_FAILED",
+            systems::orca_obstacles::OBSTACLES_FAILED,
+        ),
     ]
 }
 

@@ -31,16 +31,89 @@ thread_local! {
     static BUILD: RefCell<(ObstacleScratch, ObstacleSet)> = RefCell::new(Default::default());
 }
 
-/// Rebuild the processed obstacles of environment `e` if they are stale.
-pub fn rebuild_if_dirty(p: &StepParams, s: &mut StateChunk, e: usize) {
+/// `obstacles_dirty` after a rebuild whose processed set did not fit the environment's
+/// capacity ([`rebuild_if_dirty`]); the shaders' `ORCA_OBSTACLES_FAILED`.
+pub const OBSTACLES_FAILED: u32 = 2;
+
+/// The bits of the NaN a failed rebuild leaves in the obstacle columns: `math_nan()` of
+/// `shaders/common/math.wgsl`, so that both backends leave the same bits.
+const POISON_BITS: u32 = 0x7fc0_0000;
+
+/// Rebuild the processed obstacles of environment `e` if they are stale. Where the processed set
+/// is larger than the environment's capacity (RVO2 splits an edge wherever a splitting line
+/// crosses it, so overlapping obstacles can split each other's edges many times over: a state
+/// edited or loaded with overlapping tables can need more than `Caps` allows; no scene a config
+/// generates does, `tests/suite/whole_step/scenario_props.rs`), the columns are poisoned as the
+/// shaders poison them (every slot NaN, in one ring of the whole capacity), `obstacles_dirty`
+/// is left at [`OBSTACLES_FAILED`], and the vertices the set needed are returned.
+pub fn rebuild_if_dirty(p: &StepParams, s: &mut StateChunk, e: usize) -> Option<usize> {
     if s.obstacles_dirty[e] == 0 {
-        return;
+        return None;
     }
     let mut polygons: Fixed<Polygon, MAX_POLYGONS> = Fixed::default();
     for_each_polygon(p, s, e, |_, polygon| polygons.push(polygon));
     let cap = s.strides.obstacle_vertices;
-    with_processed(cap, polygons.as_slice(), |set| store(s, e, set));
-    s.obstacles_dirty[e] = 0;
+    let needed = with_processed(cap, polygons.as_slice(), |set| {
+        if set.len() > cap {
+            poison(s, e);
+            return Some(set.len());
+        }
+        store(s, e, set);
+        None
+    });
+    s.obstacles_dirty[e] = if needed.is_some() {
+        OBSTACLES_FAILED
+    } else {
+        0
+    };
+    needed
+}
+
+/// Rebuild environment `e`'s obstacles (of a state edited or loaded, outside a step) if they are
+/// stale, `env` being its index in the batch.
+///
+/// # Errors
+/// `SimError::Shape` naming the vertices needed and the capacity where the processed set does
+/// not fit (the environment is left as [`rebuild_if_dirty`] leaves it).
+pub fn rebuild_edited(
+    p: &StepParams,
+    s: &mut StateChunk,
+    e: usize,
+    env: usize,
+) -> Result<(), crate::error::SimError> {
+    match rebuild_if_dirty(p, s, e) {
+        None => Ok(()),
+        Some(needed) => Err(crate::error::SimError::shape(
+            "state",
+            format!(
+                "environment {env}: its ORCA obstacles need {needed} processed vertices, more \
+                 than the {} this config holds (RVO2 splits an obstacle's edge wherever another \
+                 obstacle's edge line crosses it, and overlapping tables, laptops or plants do \
+                 so many times over): move them apart",
+                s.strides.obstacle_vertices
+            ),
+        )),
+    }
+}
+
+/// What the shaders store for a processed set that overflowed (`orca_obstacles_store_part` in
+/// `shaders/common/orca_obstacles.wgsl`): every slot of the capacity NaN, linked in one ring,
+/// convex.
+fn poison(s: &mut StateChunk, e: usize) {
+    let cap = s.strides.obstacle_vertices;
+    let nan = f32::from_bits(POISON_BITS);
+    let b = e * cap;
+    for k in 0..cap {
+        let i = b + k;
+        s.ov_x[i] = nan;
+        s.ov_y[i] = nan;
+        s.ov_dir_x[i] = nan;
+        s.ov_dir_y[i] = nan;
+        s.ov_next[i] = ((k + 1) % cap) as u32;
+        s.ov_prev[i] = ((k + cap - 1) % cap) as u32;
+        s.ov_convex[i] = 1;
+    }
+    s.n_obstacle_vertices[e] = cap as u32;
 }
 
 /// The processed ORCA obstacles of environment `e`.
@@ -185,13 +258,9 @@ fn square(x: f32, y: f32, h: f32) -> Polygon {
     ]
 }
 
+/// Store processed set `set`, which fits the capacity ([`rebuild_if_dirty`] checks).
 fn store(s: &mut StateChunk, e: usize, set: &ObstacleSet) {
     let cap = s.strides.obstacle_vertices;
-    assert!(
-        set.len() <= cap,
-        "{} processed obstacle vertices exceed the capacity of {cap} (raise SPLIT_VERTICES_PER_VERTEX)",
-        set.len()
-    );
     let v = set.as_view();
     let b = e * cap;
     let n = set.len();

@@ -101,6 +101,8 @@ pub fn canonicalize(p: &StepParams, s: &mut StateChunk, e: usize) {
     // loaded after an event is the same state.
     number_lists(s, e);
     s.obstacles_dirty[e] = 1;
+    // A set too large for the capacity (overlapping obstacles loaded or edited into the state)
+    // leaves the flag at `OBSTACLES_FAILED` and the columns poisoned, as on the GPU.
     super::orca_obstacles::rebuild_if_dirty(p, s, e);
 }
 

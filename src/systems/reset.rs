@@ -74,7 +74,10 @@ pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize, obstacles: Obs
     crate::sngnn::frame::start_episode(s, e);
     s.obstacles_dirty[e] = 1;
     match obstacles {
-        ObstacleBuild::Now => super::orca_obstacles::rebuild_if_dirty(p, s, e),
+        ObstacleBuild::Now => {
+            // A generated scene's set always fits (`Caps`); the flag would say otherwise.
+            super::orca_obstacles::rebuild_if_dirty(p, s, e);
+        }
         ObstacleBuild::Deferred => super::orca_obstacles::clear(s, e),
     }
 }

@@ -378,11 +378,12 @@ impl Backend for GpuBackend {
     fn state_changed(&mut self, env: usize) -> Result<(), SimError> {
         let p = self.params;
         self.host_state()?;
+        // Edited, whether or not the rebuild fits: a failed one leaves poisoned columns.
+        self.state_edited = true;
         let mut s = downloaded(&mut self.state)?.env_chunk(env);
-        crate::systems::orca_obstacles::rebuild_if_dirty(&p, &mut s, 0);
+        crate::systems::orca_obstacles::rebuild_edited(&p, &mut s, 0, env)?;
         let mut o = self.out.env_chunk(env);
         crate::systems::observation::write_observation(&p, &mut s, &mut o, 0);
-        self.state_edited = true;
         self.outputs_edited = true;
         Ok(())
     }

@@ -256,6 +256,66 @@ fn load_rejected(env: &mut BatchEnv, doc: &Value, needles: &[&str]) -> String {
     msg.clone()
 }
 
+/// exp2 with four tables and no laptop, and a state document of environment 0 whose tables lie
+/// across each other at the room's centre, a star of four: RVO2 splits their edges (and the
+/// walls') where the others' edge lines cross them, to 94 processed obstacle vertices where the
+/// config holds 8 a polygon (72 with the walls and the standing group). Generated scenes never
+/// overlap so (`whole_step::scenario_props`).
+pub(crate) fn overlapping_tables(backend: socnav::backend::BackendChoice) -> (BatchEnv, Value) {
+    let mut c = config("exp2");
+    c.counts.tables = [4, 4];
+    c.counts.laptops = [0, 0];
+    let mut env = BatchEnv::new(
+        c,
+        EnvOptions {
+            n_envs: 2,
+            seed: 0,
+            backend,
+            ..Default::default()
+        },
+    )
+    .expect("a batch");
+    env.reset(None).unwrap();
+    let mut doc = env.get_state(0).unwrap();
+    let tables = doc["state"]["tables"].as_array_mut().expect("tables");
+    assert_eq!(tables.len(), 4);
+    for (k, t) in tables.iter_mut().enumerate() {
+        t["x"] = json!(0.0);
+        t["y"] = json!(0.0);
+        t["theta"] = json!(0.1 + k as f64 * std::f64::consts::FRAC_PI_4);
+    }
+    (env, doc)
+}
+
+/// Contract: a document whose obstacles need more processed ORCA vertices than the config holds
+/// (tables loaded across each other) is rejected with both numbers, not a panic, and the
+/// environment stays as it was and steps on.
+#[test]
+fn set_state_rejects_obstacles_beyond_the_capacity() {
+    let (mut env, doc) = overlapping_tables(socnav::backend::BackendChoice::Cpu);
+    let cap = env.state().unwrap().strides.obstacle_vertices;
+    let msg = load_rejected(
+        &mut env,
+        &doc,
+        &[
+            "environment 0",
+            "ORCA obstacles need",
+            &format!("more than the {cap} this config holds"),
+            "move them apart",
+        ],
+    );
+    let needed: usize = msg
+        .split("need ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no count in {msg:?}"));
+    assert!(needed > cap, "{msg}");
+    println!("{msg}");
+    env.step(Actions::Discrete(&[2, 2])).unwrap();
+    assert!(env.outputs().obs.iter().all(|v| v.is_finite()));
+}
+
 /// Contract: a document missing a key is rejected with the path of the key.
 #[test]
 fn set_state_names_the_path_of_a_missing_key() {
