@@ -215,8 +215,9 @@ pub fn check_parity_mode(
 /// (`GpuDevice::obstacles_in_workgroups`), the other place a reset's obstacles are built (the
 /// host or the device: `GpuDevice::obstacles_after_resets`), and every step's readback in the
 /// most pieces (`GpuDevice::readback_piece_bytes` of 1 KiB), submitted at the other time
-/// (`GpuDevice::readback_before_host_work`), so that tests cover the paths a test-sized batch on
-/// this device would not take.
+/// (`GpuDevice::readback_before_host_work`), and the reset pool's staged rows copied last first
+/// (`GpuDevice::scatter_last_first`), so that tests cover the paths a test-sized batch on this
+/// device would not take.
 pub fn device_other_paths() -> Option<GpuDevice> {
     let mut dev = device()?;
     dev.stage_observations = !dev.stage_observations;
@@ -227,6 +228,7 @@ pub fn device_other_paths() -> Option<GpuDevice> {
     dev.obstacles_after_resets = !dev.obstacles_after_resets;
     dev.readback_before_host_work = !dev.readback_before_host_work;
     dev.readback_piece_bytes = 1 << 10;
+    dev.scatter_last_first = !dev.scatter_last_first;
     Some(dev)
 }
 

@@ -441,6 +441,12 @@ pub struct GpuDevice {
     /// (`super::spirv`) and no entry is read before it is written, so the results are the same
     /// bits either way; a test compares them. Off unless a clone says otherwise.
     pub poison_orca_lists: bool,
+    /// For tests: whether the pool scatter pass (`backend::wgsl::pool_scatter_shader`) gives its
+    /// workgroups the staged copies last first, as a GPU whose workgroups finish in another
+    /// order than they start would, so that a test on a driver that runs them in order sees what
+    /// such a GPU does with copies that depend on their order (none may). Off unless a clone
+    /// says otherwise.
+    pub scatter_last_first: bool,
     /// For diagnosis only: functions of the stage shaders that return at once, with their type's
     /// zero value (`backend::wgsl::with_functions_returning_at_once`), so that a pass timed
     /// without one says what that function costs on this device (`socnav bench --leave-out`).
@@ -610,6 +616,7 @@ impl GpuDevice {
             readback_piece_bytes: DEFAULT_READBACK_PIECE_BYTES,
             rebuild_workgroups: DEFAULT_REBUILD_WORKGROUPS,
             poison_orca_lists: false,
+            scatter_last_first: false,
             leave_out: Vec::new(),
             adapter,
             limits,

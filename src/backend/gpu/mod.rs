@@ -107,6 +107,10 @@ pub struct GpuStages {
     /// `pool_staging` they use.
     pool_copies: Vec<(u64, u64, u64)>,
     pool_staged: u64,
+    /// The places of the pool (`half * n_envs + env`) whose staged row still waits for its copy,
+    /// a bit each: a place staged again before then waits for the earlier copy
+    /// ([`GpuStages::stage_pool_rows`]).
+    pool_pending: Vec<u64>,
     /// The host threads that copy the large queue writes (the actions, the pool rows) into
     /// wgpu's staging memory ([`GpuStages::set_host_threads`], [`write_buffer_split`]).
     host_threads: Option<Arc<rayon::ThreadPool>>,
@@ -242,7 +246,7 @@ impl PoolScatter {
             dev,
             wgsl::POOL_SCATTER_PASS,
             group,
-            &wgsl::pool_scatter_shader(),
+            &wgsl::pool_scatter_shader(dev.scatter_last_first),
         )?;
         // Room for a staging buffer's first rows in runs of one; it grows past that as needed.
         let runs = storage_buffer(
@@ -663,6 +667,7 @@ impl GpuStages {
             pool_staging,
             pool_copies: Vec::new(),
             pool_staged: 0,
+            pool_pending: vec![0; (2 * n_envs).div_ceil(64)],
             host_threads: None,
             pool_scatter,
             scratch,
@@ -956,21 +961,30 @@ impl GpuStages {
     /// its number of rows. A queue write per run costs several microseconds of the host's time
     /// each, and the rows of a step are scattered; one write, and one dispatch that moves every
     /// run into place (`wgsl::pool_scatter_shader`), cost less (a copy command per run cost about
-    /// 0.7 µs each).
+    /// 0.7 µs each). A run is copied in pieces of at most `wgsl::POOL_SCATTER_PIECE_WORDS`, a
+    /// workgroup each.
+    ///
+    /// The dispatch's workgroups copy in no particular order, so a place staged again while its
+    /// earlier row still waits (a state loaded, new seeds or constants make the host generate a
+    /// place's row anew) would race with it: the copies still waiting are then made first, in a
+    /// submit of their own, as they are before the staging buffer grows.
     pub fn stage_pool_rows(&mut self, rows: &[u32], runs: &[(usize, usize, usize)]) {
         let bytes = words_to_bytes(rows.len());
-        if self.pool_staged + bytes > self.pool_staging.size() {
-            // Copies still to make read the staging buffer: make them before it is replaced.
-            if !self.pool_copies.is_empty() {
-                let mut enc =
-                    self.dev
-                        .device
-                        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                            label: Some("pool rows"),
-                        });
-                self.flush_pool_copies(&mut enc);
-                self.dev.queue.submit([enc.finish()]);
-            }
+        let grows = self.pool_staged + bytes > self.pool_staging.size();
+        let restaged = runs
+            .iter()
+            .any(|&(half, env, n)| self.places(half, env, n).any(|at| self.pending(at)));
+        if (grows || restaged) && !self.pool_copies.is_empty() {
+            let mut enc = self
+                .dev
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("pool rows"),
+                });
+            self.flush_pool_copies(&mut enc);
+            self.dev.queue.submit([enc.finish()]);
+        }
+        if grows {
             // No larger than the pool (which fits one storage binding) unless the rows are:
             // the pool scatter pass binds the staging buffer whole.
             let words = (2 * self.pool_staging.size() / 4)
@@ -985,14 +999,31 @@ impl GpuStages {
             bytemuck::cast_slice(rows),
             self.host_threads.as_deref(),
         );
+        let piece = words_to_bytes(wgsl::POOL_SCATTER_PIECE_WORDS);
         let mut from = self.pool_staged;
-        for &(half, first_env, n) in runs {
-            let to = self.pool_row_at(half, first_env);
+        for &(half, env, n) in runs {
+            let to = self.pool_row_at(half, env);
             let size = words_to_bytes(n * self.pool_row_words);
-            self.pool_copies.push((from, to, size));
+            for at in (0..size).step_by(piece as usize) {
+                self.pool_copies
+                    .push((from + at, to + at, piece.min(size - at)));
+            }
+            for at in self.places(half, env, n) {
+                self.pool_pending[at / 64] |= 1 << (at % 64);
+            }
             from += size;
         }
         self.pool_staged += bytes;
+    }
+
+    /// The places of the pool (`half * n_envs + env`) of `n` rows from environment `env` on.
+    fn places(&self, half: usize, env: usize, n: usize) -> std::ops::Range<usize> {
+        half * self.n_envs + env..half * self.n_envs + env + n
+    }
+
+    /// Whether place `at` holds a staged row that waits for its copy.
+    fn pending(&self, at: usize) -> bool {
+        self.pool_pending[at / 64] & (1 << (at % 64)) != 0
     }
 
     /// Byte offset in the pool of environment `env`'s row in half `half`.
@@ -1008,6 +1039,7 @@ impl GpuStages {
             self.pool_scatter
                 .record(&self.dev, enc, buffers, &self.pool_copies);
             self.pool_copies.clear();
+            self.pool_pending.fill(0);
         }
         self.pool_staged = 0;
     }

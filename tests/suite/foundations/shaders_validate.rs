@@ -727,7 +727,9 @@ fn scratch_region_holds_obstacles_and_permutations() {
 /// as `wgsl::POOL_RUN_WORDS` words in a workgroup of `wgsl::WORKGROUP_SIZE` lanes.
 #[test]
 fn the_pool_scatter_pass_validates() {
-    let src = wgsl::pool_scatter_shader();
+    validate_source(&wgsl::pool_scatter_shader(true), "pool scatter, last first")
+        .expect("validates");
+    let src = wgsl::pool_scatter_shader(false);
     validate_source(&src, "pool scatter").expect("validates");
     assert!(src.contains(&format!(
         "const RUN_WORDS: u32 = {}u;",

@@ -538,44 +538,74 @@ fn the_step_timeline_times_the_wait_on_the_devices_clock() {
     assert_eq!(after.device_s, timed.device_s);
 }
 
+/// The state and first outputs after the reset pass on `dev` over exp1's 100 environments 30
+/// steps in, every one reset from the next pool row that `stage` hands the device (given every
+/// environment's row and its half); and the state before.
+fn reset_from_rows(
+    dev: &socnav::backend::gpu::GpuDevice,
+    stage: impl Fn(&mut GpuStages, &HalfRows),
+) -> ((BatchState, Outputs), BatchState, Outputs) {
+    use socnav::backend::wgsl::RESET_PASS;
+    let env = rolled_out(config("exp1"), 100, 30);
+    let (p, state, out) = (*env.params(), env.state().unwrap().clone(), env.outputs());
+    let mut gpu = GpuStages::new(dev.clone(), &p, &state, out, &[RESET_PASS]).expect("GPU stages");
+    let rows = next_pool_rows(&gpu, &p, &state, out.strides.layout);
+    stage(&mut gpu, &rows);
+    gpu.upload_actions(&vec![1.0f32; 3 * state.n_envs]);
+    gpu.run(RESET_PASS).expect("reset pass");
+    let mut back = BatchState::zeroed(state.n_envs, state.strides);
+    gpu.download_state(&mut back).expect("readback");
+    let mut first = Outputs::zeroed(out.n_envs, out.strides);
+    gpu.download_outputs(&mut first).expect("readback");
+    ((back, first), state, out.clone())
+}
+
+/// Every row of `rows` written in place, one queue write each.
+fn written_in_place(gpu: &mut GpuStages, rows: &HalfRows) {
+    for (e, (half, row)) in rows.iter().enumerate() {
+        gpu.write_pool_rows(*half, e, row);
+    }
+}
+
+/// Environments `envs`'s rows staged in one queue write (`GpuStages::stage_pool_rows`), a run
+/// each, each at environment `place(e)`'s place.
+fn stage_rows(
+    gpu: &mut GpuStages,
+    rows: &HalfRows,
+    envs: std::ops::Range<usize>,
+    place: impl Fn(usize) -> usize,
+) {
+    let words: Vec<u32> = envs.clone().flat_map(|e| rows[e].1.clone()).collect();
+    let runs: Vec<(usize, usize, usize)> = envs.map(|e| (rows[place(e)].0, place(e), 1)).collect();
+    gpu.stage_pool_rows(&words, &runs);
+}
+
+/// `a` and `b` hold the same bits in every state and output column.
+fn same_reset(what: &str, a: &(BatchState, Outputs), b: &(BatchState, Outputs)) {
+    assert!(
+        a.0.differing_columns(&b.0).is_empty(),
+        "{what}: the state differs in {:?}",
+        a.0.differing_columns(&b.0)
+    );
+    // A row's observation (its last words) too.
+    assert!(
+        a.1.differing_columns(&b.1).is_empty(),
+        "{what}: the first observations differ in {:?}",
+        a.1.differing_columns(&b.1)
+    );
+}
+
 /// Pool rows staged in one queue write each and copied into place before the next submit
 /// (`GpuStages::stage_pool_rows`, how `GpuBackend` writes them) reset environments exactly as
 /// rows written in place do, their first observations included, also when the staging buffer
 /// must grow while copies of an earlier write are still pending (10 rows, then 90).
 #[test]
 fn staged_pool_rows_land_where_written_ones_do() {
-    use socnav::backend::wgsl::RESET_PASS;
     let Some(dev) = device() else { return };
-    let env = rolled_out(config("exp1"), 100, 30);
-    let (p, state, out) = (*env.params(), env.state().unwrap().clone(), env.outputs());
-    let layout = out.strides.layout;
-    let mask = vec![1.0f32; 3 * state.n_envs];
-    let after_reset = |stage: fn(&mut GpuStages, &HalfRows)| {
-        let mut gpu =
-            GpuStages::new(dev.clone(), &p, &state, out, &[RESET_PASS]).expect("GPU stages");
-        let rows = next_pool_rows(&gpu, &p, &state, layout);
-        stage(&mut gpu, &rows);
-        gpu.upload_actions(&mask);
-        gpu.run(RESET_PASS).expect("reset pass");
-        let mut back = BatchState::zeroed(state.n_envs, state.strides);
-        gpu.download_state(&mut back).expect("readback");
-        let mut first = Outputs::zeroed(out.n_envs, out.strides);
-        gpu.download_outputs(&mut first).expect("readback");
-        (back, first)
-    };
-    let written = after_reset(|gpu, rows| {
-        for (e, (half, row)) in rows.iter().enumerate() {
-            gpu.write_pool_rows(*half, e, row);
-        }
-    });
-    let staged = after_reset(|gpu, rows| {
+    let (written, state, out) = reset_from_rows(&dev, written_in_place);
+    let (staged, _, _) = reset_from_rows(&dev, |gpu, rows| {
         for range in [0..10, 10..rows.len()] {
-            let words: Vec<u32> = rows[range.clone()]
-                .iter()
-                .flat_map(|r| r.1.clone())
-                .collect();
-            let runs: Vec<(usize, usize, usize)> = range.map(|e| (rows[e].0, e, 1)).collect();
-            gpu.stage_pool_rows(&words, &runs);
+            stage_rows(gpu, rows, range, |e| e);
         }
     });
     assert!(
@@ -583,18 +613,54 @@ fn staged_pool_rows_land_where_written_ones_do() {
         "the pass reset nothing"
     );
     assert!(
-        written.1.differing_columns(out).contains(&"obs"),
+        written.1.differing_columns(&out).contains(&"obs"),
         "the pass wrote no first observation"
     );
-    assert!(
-        written.0.differing_columns(&staged.0).is_empty(),
-        "staged rows differ in {:?}",
-        written.0.differing_columns(&staged.0)
-    );
-    // A row's observation (its last words) too.
-    assert!(
-        written.1.differing_columns(&staged.1).is_empty(),
-        "staged rows' first observations differ in {:?}",
-        written.1.differing_columns(&staged.1)
-    );
+    same_reset("staged rows", &written, &staged);
+}
+
+/// Contract: a place of the pool staged again while its earlier row still waits to be copied (as
+/// a state loaded, new seeds or new constants make the host do) takes the later row, whatever
+/// order the device's workgroups copy the staged rows in: here the scatter takes them last first
+/// (`GpuDevice::scatter_last_first`), and 30 places first get their neighbour's row, then their
+/// own, in two queue writes before one submit (within the staging buffer's first room, so that
+/// no growth orders them).
+#[test]
+fn a_place_staged_twice_before_a_submit_takes_the_later_row() {
+    let Some(mut dev) = device() else { return };
+    dev.scatter_last_first = true;
+    let (written, _, _) = reset_from_rows(&dev, written_in_place);
+    let (staged, _, _) = reset_from_rows(&dev, |gpu, rows| {
+        written_in_place(gpu, rows);
+        // The stale rows: environment e's row at environment e - 1's place.
+        stage_rows(gpu, rows, 1..31, |e| e - 1);
+        stage_rows(gpu, rows, 0..30, |e| e);
+    });
+    same_reset("rows staged twice", &written, &staged);
+}
+
+/// Contract: a document loaded between steps (here environment 0's into environment 1, whose
+/// next episodes then differ from the ones the pool was filled for) steps on as the CPU's, bit for
+/// bit, through the resets that follow, with the reset pool's staged rows copied last first
+/// (`GpuDevice::scatter_last_first`): the rows the load makes the host generate go to places
+/// whose earlier rows still wait for their copy.
+#[test]
+fn a_loaded_document_steps_as_the_cpu_whatever_the_copies_order() {
+    let Some(mut dev) = device() else { return };
+    dev.scatter_last_first = true;
+    let mut c = config("exp1");
+    c.episode.length = 4;
+    let mut twins = same_step_twins(&c, 8, 3, dev);
+    let mut rng = socnav::rng::RngStream::new(29, 0);
+    for t in 0..14 {
+        if t % 5 == 0 {
+            for env in [&mut twins.cpu, &mut twins.gpu] {
+                let doc = env.get_state(0).expect("a document");
+                env.set_state(1, &doc).expect("loaded");
+            }
+            twins.compare();
+        }
+        twins.step(&random_actions(&mut rng, 8, false));
+    }
+    twins.finish("documents loaded between steps");
 }
