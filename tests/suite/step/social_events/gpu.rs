@@ -35,6 +35,9 @@ pub(crate) struct Seen {
     pub(crate) rebuilds_with_splits: usize,
     /// The most rebuilds in one run.
     pub(crate) most_rebuilds_in_a_run: usize,
+    /// Rebuilds whose processed set did not fit the capacity (`obstacles_dirty` left at
+    /// `orca_obstacles::OBSTACLES_FAILED`).
+    pub(crate) failed_rebuilds: usize,
 }
 
 /// `name` with every event probability set to `prob` (and its capacities grown to match).
@@ -178,6 +181,8 @@ pub(crate) fn parity_on(
                 let mut inputs = 0;
                 orca_obstacles::for_each_polygon(&p, &chunk, e, |_, _| inputs += 4);
                 seen.rebuilds_with_splits += usize::from(cpu.n_obstacle_vertices[e] > inputs);
+                seen.failed_rebuilds +=
+                    usize::from(cpu.obstacles_dirty[e] == orca_obstacles::OBSTACLES_FAILED);
             }
         }
         seen.rebuilds += rebuilds;
@@ -233,6 +238,52 @@ pub(crate) fn add(total: &mut Seen, s: Seen) {
     total.rebuilds += s.rebuilds;
     total.rebuilds_with_splits += s.rebuilds_with_splits;
     total.most_rebuilds_in_a_run = total.most_rebuilds_in_a_run.max(s.most_rebuilds_in_a_run);
+    total.failed_rebuilds += s.failed_rebuilds;
+}
+
+/// [`perturb_events`], and every environment's tables laid across each other at the room's
+/// centre, a star: their edges split each other's (and the walls') more often than the
+/// config's obstacle capacity allows for.
+fn perturb_into_a_star(s: &mut BatchState, o: &mut Outputs, p: &StepParams, rng: &mut RngStream) {
+    perturb_events(s, o, p, rng);
+    for e in 0..s.n_envs {
+        let n = s.n_tables[e] as usize;
+        for k in 0..n {
+            let t = e * s.strides.tables + k;
+            let theta = 0.1 + k as f32 * std::f32::consts::PI / n as f32;
+            let (sin, cos) = socnav::math::sin_cos(theta);
+            (s.t_x[t], s.t_y[t], s.t_theta[t], s.t_sin[t], s.t_cos[t]) =
+                (0.0, 0.0, theta, sin, cos);
+        }
+    }
+}
+
+/// Contract: a regrouping's obstacle rebuild whose processed set does not fit the capacity (a
+/// state with tables across each other, such as `BatchEnv::set_state` now refuses, but a state
+/// edited through `state_mut` can hold) leaves on the device what it leaves on the CPU, bit for
+/// bit: every slot of the capacity NaN in one ring, the count at the capacity, the flag at
+/// `OBSTACLES_FAILED`. In one lane and on a workgroup's lanes
+/// (`GpuDevice::obstacles_in_workgroups`), with the dispersals and formations of exp2 with seven
+/// tables and standing groups that disperse.
+#[test]
+fn a_rebuild_beyond_the_capacity_poisons_as_the_cpu() {
+    let Some(dev) = device() else { return };
+    let mut c = eventful("exp2", 0.5);
+    c.counts.tables = [7, 7];
+    c.counts.laptops = [0, 0];
+    c.counts.dynamic_humans = [3, 3];
+    c.counts.standing_groups = [1, 1];
+    c.counts.standing_groups_non_dispersing = [0, 0];
+    for in_workgroups in [false, true] {
+        let mut d = dev.clone();
+        d.obstacles_in_workgroups = in_workgroups;
+        let seen = parity_on(d, "social_events", c.clone(), 32, 8, perturb_into_a_star);
+        let seen = seen.expect("a device");
+        assert!(
+            seen.failed_rebuilds > 0,
+            "in workgroups: {in_workgroups}: {seen:?}"
+        );
+    }
 }
 
 /// Contract: the obstacle rebuilds after a regrouping give the same bits with their working
