@@ -828,7 +828,8 @@ const ORCA_OBSTACLES_LANES_PER_CANDIDATE: u32 = 8u;
 // The workgroup's rebuild in hand: (what it rebuilds, whether its obstacles are dirty).
 var<workgroup> orca_obstacles_turn: vec2<u32>;
 // The node being split: (start, len) in the arena, len 0 once the tree is built; before the
-// tree, (the polygons `for_each_polygon` walks, present or not, 0).
+// tree, (the polygons `for_each_polygon` walks, present or not, the environment's stored vertex
+// count before the rebuild, which lane 0 overwrites at its end).
 var<workgroup> orca_obstacles_node: vec2<u32>;
 // The least split key among the node's candidates (`orca_obstacles_split_key`); before the
 // tree, what the polygons' adds found wrong (ORCA_OBSTACLES_TOO_MANY, _DEGENERATE).
@@ -1086,14 +1087,18 @@ fn orca_obstacles_rebuild_on_lanes(wanted: u32, lane: u32) -> bool {
     }
     let e = turn.x;
     let s = orca_obstacles_set(e);
-    // Read by every lane before lane 0 writes the new count, at the end.
-    let old = su[batch.c_n_obstacle_vertices + e];
     if (lane == 0u) {
         orca_obstacles_poison_region(e);
-        orca_obstacles_node = vec2<u32>(orca_obstacles_raw_count(e), 0u);
+        // The old count, which lane 0 overwrites at the end, handed to every lane through
+        // workgroup memory: a lane's own read of the storage word, ordered only by workgroup
+        // barriers against that write, could be moved after it.
+        let count = su[batch.c_n_obstacle_vertices + e];
+        orca_obstacles_node = vec2<u32>(orca_obstacles_raw_count(e), count);
         atomicStore(&orca_obstacles_best, 0u);
     }
-    let raw = workgroupUniformLoad(&orca_obstacles_node).x;
+    let first = workgroupUniformLoad(&orca_obstacles_node);
+    let raw = first.x;
+    let old = first.y;
     let polygons = orca_obstacles_add_on_lanes(e, s, raw, lane);
     var stack: OrcaObstaclesStack;
     if (lane == 0u) {
