@@ -941,7 +941,9 @@ impl GpuStages {
     /// Write `rows` (whole pool rows) into the reset pool from environment `first_env` on, in the
     /// half of the pool for episode counters of parity `half` (0 or 1): the rows that start
     /// episodes after counters of the other parity, since a reset moves the counter on
-    /// (`pool_row_of` in `shaders/common/pool_reset.wgsl`).
+    /// (`pool_row_of` in `shaders/common/pool_reset.wgsl`). A place whose row
+    /// [`GpuStages::stage_pool_rows`] staged and the next submit has not copied yet takes that
+    /// row after this one (queue writes land before a submit's work).
     pub fn write_pool_rows(&mut self, half: usize, first_env: usize, rows: &[u32]) {
         assert!(half < 2, "the pool has two halves");
         assert_eq!(
