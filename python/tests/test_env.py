@@ -1,6 +1,8 @@
 """The Python package against its contract: gymnasium's API, zero-copy outputs, errors that
 name the bad value, and agreement between the dict and flat observations."""
 
+import json
+import math
 import os
 
 import numpy as np
@@ -181,6 +183,24 @@ def test_errors_carry_their_fields_and_keep_python_conventions(tmp_path):
     with pytest.raises(OSError) as err:
         socnav.make_vec(str(tmp_path))
     assert not isinstance(err.value, FileNotFoundError), type(err.value)
+
+
+def test_a_document_with_overlapping_tables_is_refused_not_a_panic():
+    """Tables loaded across each other make RVO2 split their edges past the config's obstacle
+    capacity: `set_state` raises a ShapeError naming both counts (it used to panic) and the
+    environment keeps its state."""
+    env = socnav.make_vec({"base": "exp2", "counts": {"tables": [4, 4], "laptops": [0, 0]}}, num_envs=2)
+    env.reset(seed=0)
+    batch = env._batch
+    before = batch.get_state(0)
+    doc = json.loads(before)
+    for k, table in enumerate(doc["state"]["tables"]):
+        table.update(x=0.0, y=0.0, theta=0.1 + k * math.pi / 4)
+    with pytest.raises(socnav.ShapeError) as err:
+        batch.set_state(0, json.dumps(doc))
+    assert err.value.what == "state document"
+    assert "ORCA obstacles need" in str(err.value) and "this config holds" in str(err.value)
+    assert batch.get_state(0) == before
 
 
 @pytest.mark.parametrize("config, obs_mode, action_type", [("exp1", "dict", "continuous"), ("exp3", "flat", "discrete")])
