@@ -13,6 +13,7 @@
 
 use std::cell::RefCell;
 
+use crate::error::SimError;
 use crate::fixed::Fixed;
 use crate::geometry::{Disc, Rect, Shape};
 use crate::limits::MAX_POLYGONS;
@@ -80,10 +81,10 @@ pub fn rebuild_edited(
     s: &mut StateChunk,
     e: usize,
     env: usize,
-) -> Result<(), crate::error::SimError> {
+) -> Result<(), SimError> {
     match rebuild_if_dirty(p, s, e) {
         None => Ok(()),
-        Some(needed) => Err(crate::error::SimError::shape(
+        Some(needed) => Err(SimError::shape(
             "state",
             format!(
                 "environment {env}: its ORCA obstacles need {needed} processed vertices, more \

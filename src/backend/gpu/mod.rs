@@ -1018,9 +1018,16 @@ impl GpuStages {
         self.pool_staged += bytes;
     }
 
-    /// The places of the pool (`half * n_envs + env`) of `n` rows from environment `env` on.
+    /// The place of environment `env`'s row in half `half` of the pool: its index among the
+    /// pool's rows.
+    fn place(&self, half: usize, env: usize) -> usize {
+        half * self.n_envs + env
+    }
+
+    /// The places of `n` rows from environment `env` on in half `half`.
     fn places(&self, half: usize, env: usize, n: usize) -> std::ops::Range<usize> {
-        half * self.n_envs + env..half * self.n_envs + env + n
+        let first = self.place(half, env);
+        first..first + n
     }
 
     /// Whether place `at` holds a staged row that waits for its copy.
@@ -1030,7 +1037,7 @@ impl GpuStages {
 
     /// Byte offset in the pool of environment `env`'s row in half `half`.
     fn pool_row_at(&self, half: usize, env: usize) -> u64 {
-        words_to_bytes((half * self.n_envs + env) * self.pool_row_words)
+        words_to_bytes(self.place(half, env) * self.pool_row_words)
     }
 
     /// Record the staged pool rows' copies into `enc` (before its passes): one dispatch of the
