@@ -276,8 +276,44 @@ fn export_crowd_forming(s: &BatchState, e: usize) -> Value {
            "almost_formed_count": s.cf_close_steps[e]})
 }
 
+/// What a document must be before its keys are read: a JSON object, and where it names its
+/// format (an [`export`]ed document does; a golden episode's header and snapshot do not), this
+/// one.
+fn check_envelope(doc: &Value) -> Result<(), SimError> {
+    let refuse = |why: String| {
+        Err(SimError::shape(
+            "state document",
+            format!("state document: {why}"),
+        ))
+    };
+    let Some(map) = doc.as_object() else {
+        return refuse(format!("must be a JSON object, got {}", json_kind(doc)));
+    };
+    match map.get("format") {
+        None | Some(Value::Null) => Ok(()),
+        Some(Value::String(f)) if f == FORMAT => Ok(()),
+        Some(other) => refuse(format!(
+            "`format` is {other}, where this version reads \"{FORMAT}\" (or a golden episode's \
+             snapshot, which names none)"
+        )),
+    }
+}
+
+/// The kind of a JSON value, for an error message.
+fn json_kind(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "a list",
+        Value::Object(_) => "an object",
+    }
+}
+
 /// Load environment `e` of `s` from `doc`.
 pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Result<(), SimError> {
+    check_envelope(doc)?;
     let r = Reader::root(doc);
     // Unused slots hold zeros (crate::state): nothing of the environment's previous contents
     // remains beyond what the document fills.

@@ -12,6 +12,11 @@ use crate::sngnn::SngnnReward;
 use crate::spec::{DISCRETE_ACTIONS, ObsLayout};
 use crate::state::{BatchState, Caps};
 
+/// The most CPU threads a batch takes ([`EnvOptions::threads`]): more than the largest hosts'
+/// cores, and few enough that a mistyped count is refused at once instead of starting hundreds
+/// of thousands of threads.
+pub const MAX_THREADS: usize = 1024;
+
 /// Options of a batch that are not part of the scenario configuration.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct EnvOptions {
@@ -22,7 +27,8 @@ pub struct EnvOptions {
     pub seed: u64,
     /// What happens to finished environments.
     pub autoreset: AutoresetMode,
-    /// CPU threads (all cores when `None`); the GPU backend generates resets on them.
+    /// CPU threads (all cores when `None`), 1 to [`MAX_THREADS`]; the GPU backend generates
+    /// resets on them.
     pub threads: Option<usize>,
     /// Which backend steps the batch.
     pub backend: BackendChoice,
@@ -145,10 +151,10 @@ impl BatchEnv {
                 "a batch needs at least one environment, got n_envs = 0",
             ));
         }
-        if options.threads == Some(0) {
+        if let Some(n) = options.threads.filter(|n| !(1..=MAX_THREADS).contains(n)) {
             return Err(SimError::shape(
                 "threads",
-                "`threads` must be at least 1, got 0",
+                format!("`threads` must be in 1..={MAX_THREADS}, got {n}"),
             ));
         }
         let caps = Caps::from_config(&config);

@@ -57,6 +57,6 @@ pub mod systems;
 pub mod viewer;
 
 pub use config::Config;
-pub use env::{Actions, BatchEnv, EnvOptions};
+pub use env::{Actions, BatchEnv, EnvOptions, MAX_THREADS};
 pub use error::SimError;
 pub use params::{AutoresetMode, StepParams};

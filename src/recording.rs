@@ -46,11 +46,47 @@ fn observation(layout: &ObsLayout, row: &[f32], out: &mut Map<String, Value>) {
     }
 }
 
+/// Refuse a layout whose robot record or entity blocks reach past its rows (one handed in from
+/// Python, say), naming the block.
+fn check_layout(layout: &ObsLayout) -> Result<(), SimError> {
+    let past = |what: String, end: Option<usize>| {
+        SimError::shape(
+            "recording",
+            format!(
+                "recording: {what} ends at float {}, past the layout's {} a row",
+                end.map_or_else(|| "2^64 or more".to_owned(), |e| e.to_string()),
+                layout.dim
+            ),
+        )
+    };
+    if layout.robot > layout.dim {
+        return Err(past(
+            format!("the robot record of {} floats", layout.robot),
+            Some(layout.robot),
+        ));
+    }
+    for (t, key) in ENTITY_KEYS.iter().enumerate() {
+        let (offset, capacity) = (layout.offset[t], layout.capacity[t]);
+        let end = capacity
+            .checked_mul(RECORD)
+            .and_then(|n| n.checked_add(offset));
+        if end.is_none_or(|end| end > layout.dim) {
+            return Err(past(
+                format!("`{key}` (offset {offset}, {capacity} records of {RECORD})"),
+                end,
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The JSON text of one episode's recording.
 ///
 /// # Errors
-/// [`SimError::Shape`] when an observation row is not `layout.dim` floats long.
+/// [`SimError::Shape`] when an observation row is not `layout.dim` floats long, or the layout's
+/// blocks reach past its rows.
 pub fn episode_json(layout: &ObsLayout, steps: &[Step<'_>]) -> Result<String, SimError> {
+    check_layout(layout)?;
     // Written by hand at the top level: a serde_json map would order the step keys as strings
     // ("10" before "2"), and 0.1.1's files list the steps in order.
     let mut doc = String::from("{");

@@ -31,16 +31,12 @@ def build_batch(
     if isinstance(config, Mapping):
         overrides = dict(config)
         base = overrides.pop("base", "exp1")
-        bad = list(_non_finite(overrides, ""))
-        if bad:
-            raise config_error([(key, f"`{key}` must be finite, got {value}") for key, value in bad])
-        text = json.dumps(overrides)
+        text = json_text(overrides, config_error)
     elif isinstance(config, str):
         base, text = config, None
     else:
         raise TypeError(f"config must be a name, a path or a dict, got {type(config).__name__}")
-    if not isinstance(num_envs, (int, np.integer)) or isinstance(num_envs, bool) or num_envs < 1:
-        raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+    num_envs = check_count("num_envs", num_envs)
     check_choice("backend", backend, BACKENDS)
     return Batch(
         base, int(num_envs), 0 if seed is None else check_seed(seed), autoreset_mode, threads, text, None, backend
@@ -56,18 +52,37 @@ def config_error(problems: list[tuple[str | None, str]], prefix: str = "") -> Co
     return err
 
 
-def _non_finite(table: Mapping[str, Any], prefix: str):
-    """(dotted key, value) of every NaN or infinite float in a nested table (JSON has none)."""
-    for key, value in table.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, Mapping):
-            yield from _non_finite(value, name + ".")
-        elif isinstance(value, (list, tuple)):
-            for i, item in enumerate(value):
-                if isinstance(item, float) and not np.isfinite(item):
-                    yield f"{name}[{i}]", item
-        elif isinstance(value, float) and not np.isfinite(value):
-            yield name, value
+def json_text(value: Mapping[str, Any], refuse: Callable[[list[tuple[str | None, str]]], Exception]) -> str:
+    """``value`` (a table of overrides, a parsed YAML config, a state document) as JSON text,
+    numpy scalars and arrays as numbers and lists. What JSON cannot hold (a NaN or infinity at
+    any depth, an object of another type) is raised as ``refuse(problems)``, every such value
+    named by its dotted key, so that the core's parser never sees it and says only where in the
+    text it stopped."""
+    problems: list[tuple[str | None, str]] = []
+    plain = _plain_json(value, "", problems)
+    if problems:
+        raise refuse(problems)
+    return json.dumps(plain, allow_nan=False)
+
+
+def _plain_json(value: Any, name: str, problems: list[tuple[str | None, str]]) -> Any:
+    """``value`` with numpy's types made Python's; see :func:`json_text`."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain_json(v, f"{name}.{k}" if name else str(k), problems) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_plain_json(v, f"{name}[{i}]", problems) for i, v in enumerate(value)]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if value is None or isinstance(value, (bool, int, str)):
+        return value
+    if isinstance(value, float):
+        if not np.isfinite(value):
+            problems.append((name, f"`{name}` must be finite, got {value}"))
+        return value
+    problems.append((name, f"`{name}` is a {type(value).__name__} ({value!r}), which JSON cannot hold"))
+    return None
 
 
 def observation_space(batch: Batch, obs_mode: str) -> spaces.Space:
@@ -113,6 +128,16 @@ def reset_single(batch: Batch, seed: int | None) -> None:
 _SEED_LIMIT = 1 << 64
 
 
+def check_count(name: str, value: Any) -> int:
+    """``value`` as an int of at least 1 (a count of environments, episodes, pixels), or an
+    error naming ``name``: a float or a bool is refused, not rounded."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an int, got {value!r} ({type(value).__name__})")
+    if value < 1:
+        raise ValueError(f"{name} must be at least 1, got {value}")
+    return int(value)
+
+
 def check_seed(seed: Any) -> int:
     """``seed`` as an int in 0..2**64, or a ValueError naming it."""
     if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
@@ -127,6 +152,8 @@ def episode_seeds(seed: Any, num_envs: int) -> list[int | None] | None:
     (wrapping at 2**64) for an int ``s``, or a list's own (one per environment)."""
     if seed is None:
         return None
+    if isinstance(seed, np.ndarray) and seed.ndim != 1:
+        raise ValueError(f"seeds must be one per environment, shape ({num_envs},), got shape {seed.shape}")
     if isinstance(seed, (list, tuple, np.ndarray)):
         seeds = list(seed)
         if len(seeds) != num_envs:

@@ -158,16 +158,12 @@ def iter_episodes(
     make writing faster)."""
     import socnav
 
-    episodes = int(episodes)
-    if episodes < 1:
-        raise ValueError(f"episodes must be at least 1, got {episodes}")
+    episodes = _batch.check_count("episodes", episodes)
     config = _plain_config(config)
     obs_mode = _batch.check_choice("obs_mode", obs_mode, _batch.OBS_MODES)
     seed = _batch.check_seed(seed)
     act, _ = _resolve_policy(policy, seed)
-    n = min(episodes, int(num_envs) if num_envs is not None else 64)
-    if n < 1:
-        raise ValueError(f"num_envs must be at least 1, got {num_envs}")
+    n = min(episodes, _batch.check_count("num_envs", num_envs) if num_envs is not None else 64)
     policy_obs = getattr(act, "obs_mode", obs_mode)
     env = socnav.make_vec(
         config,

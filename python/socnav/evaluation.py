@@ -30,6 +30,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from socnav import policies
+from socnav._batch import check_count, check_seed
 from socnav.metrics import EPISODE_KEYS, TABLE_KEYS, EpisodeLog, Summary, aggregate
 
 __all__ = ["Evaluation", "evaluate", "resolve_policy"]
@@ -185,13 +186,10 @@ def evaluate(
     """
     import socnav
 
-    if int(episodes) < 1:
-        raise ValueError(f"episodes must be at least 1, got {episodes}")
-    episodes = int(episodes)
+    episodes = check_count("episodes", episodes)
+    seed = check_seed(seed)
     act, name = resolve_policy(policy, seed=seed)
-    n = min(episodes, int(num_envs) if num_envs is not None else 64)
-    if n < 1:
-        raise ValueError(f"num_envs must be at least 1, got {num_envs}")
+    n = min(episodes, check_count("num_envs", num_envs) if num_envs is not None else 64)
     env = socnav.make_vec(
         config,
         num_envs=n,

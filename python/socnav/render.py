@@ -146,7 +146,7 @@ def record(
     config : str or mapping
         As ``socnav.make_vec``.
     path : str or Path
-        ``.gif`` (always available) or ``.mp4`` (needs imageio-ffmpeg).
+        ``.gif`` (always available) or ``.mp4`` (needs imageio and imageio-ffmpeg).
     speedup : float
         Simulated seconds per second of animation (the paper's configs step 1 s).
 
@@ -156,8 +156,14 @@ def record(
         ``path``.
     """
     import socnav
+    from socnav._batch import check_count, check_seed
     from socnav.evaluation import resolve_policy
 
+    episodes = check_count("episodes", episodes)
+    size = check_count("size", size)
+    seed = check_seed(seed)
+    if not speedup > 0:
+        raise ValueError(f"speedup must be positive, got {speedup}")
     if not isinstance(policies, Mapping):
         policies = {"policy": policies}
     runs = []
@@ -174,10 +180,10 @@ def record(
         )
         runs.append((label, act, env))
     frames: list[np.ndarray] = []
-    for k in range(int(episodes)):
+    for k in range(episodes):
         states = []
         for _, act, env in runs:
-            obs, _ = env.reset(seed=seed + k)
+            obs, _ = env.reset(seed=(seed + k) % (1 << 64))
             states.append({"obs": obs, "done": False, "frame": _frame(env)})
         while True:
             frames.append(tile([s["frame"] for s in states], columns=len(states)))

@@ -29,7 +29,7 @@ import numpy as np
 from gymnasium import spaces
 
 from socnav import _batch
-from socnav._socnav import DISCRETE_ACTIONS, Batch, ConfigError, socnavgym_config_toml
+from socnav._socnav import DISCRETE_ACTIONS, Batch, ConfigError, ShapeError, socnavgym_config_toml
 
 #: 0.1.1's boolean info keys.
 BOOL_INFO = frozenset(
@@ -54,10 +54,19 @@ def load_socnavgym_yaml(path: str | os.PathLike[str]) -> str:
         raise _batch.config_error(
             [(None, f"a SocNavGym config is a YAML mapping, got {type(parsed).__name__}")], f"{os.fspath(path)}: "
         )
+    text = _batch.json_text(parsed, lambda problems: _batch.config_error(problems, f"{os.fspath(path)}: "))
     try:
-        return socnavgym_config_toml(json.dumps(parsed))
+        return socnavgym_config_toml(text)
     except ConfigError as e:
         raise _batch.config_error(e.problems, f"{os.fspath(path)}: ") from None
+
+
+def _document_error(problems: list[tuple[str | None, str]]) -> ShapeError:
+    """The ``ShapeError`` the core raises for a bad state document, for values that JSON
+    cannot hold."""
+    err = ShapeError("state document: " + "; ".join(message for _, message in problems))
+    err.what = "state document"
+    return err
 
 
 class SocNavGymEnv(gym.Env):
@@ -116,7 +125,9 @@ class SocNavGymEnv(gym.Env):
     def set_state(self, document: str | Mapping[str, Any]) -> None:
         """Load a state document (:meth:`get_state`'s, or a golden episode's header and snapshot);
         the episode continues from it."""
-        self._batch.set_state(0, document if isinstance(document, str) else json.dumps(document))
+        if not isinstance(document, (str, Mapping)):
+            raise TypeError(f"a state document is JSON text or a mapping, got {type(document).__name__}")
+        self._batch.set_state(0, document if isinstance(document, str) else _batch.json_text(document, _document_error))
         self._ended = False
 
     def _obs(self) -> dict[str, np.ndarray]:

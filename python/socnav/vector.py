@@ -58,9 +58,12 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self.action_type = _batch.check_choice("action_type", action_type, _batch.ACTION_TYPES)
         self.copy = copy
         self.config = config
+        if reward_fn is not None and not callable(reward_fn):
+            raise TypeError(f"reward_fn must be callable (a function of RewardInputs), got {reward_fn!r}")
         if reward_fn is not None and not step_info:
             raise ValueError("step_info=False leaves out the metrics that a reward_fn reads (its inputs' info)")
         self.step_info = bool(step_info)
+        size = _batch.check_count("render_size", render_size)
         self._batch: Batch = _batch.build_batch(config, num_envs, seed, mode, threads, backend)
         # What this env hands out of a step: the observation, reward and flags, the metrics
         # unless ``step_info=False``, never the interactions or events; the GPU backend reads
@@ -75,7 +78,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self.render_mode = check_render_mode(render_mode)
         self._human = None
         self._steps = 0
-        self.render_size = int(render_size)
+        self.render_size = size
         self.render_envs = list(range(min(self.num_envs, 4))) if render_envs is None else [int(e) for e in render_envs]
         bad = [e for e in self.render_envs if not 0 <= e < self.num_envs]
         if bad:
@@ -148,6 +151,8 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         (``None``: its next one); without a seed each environment plays the next episode of
         its sequence. With a mask, only the masked environments' seeds are used.
         ``info["episode"]["seed"]`` reports the seed of every episode that ends."""
+        if options is not None and not isinstance(options, Mapping):
+            raise TypeError(f"options must be a dict (or None), got {type(options).__name__}")
         mask = (options or {}).get("reset_mask")
         if mask is not None:
             mask = np.asarray(mask)
@@ -372,7 +377,10 @@ def make_vec(
         reward_fn: a vectorised reward: called after every step with the step's arrays
             (``socnav.RewardInputs``), it returns one reward per environment, which replaces
             the built-in one (also in the episode returns of ``info["episode"]``). Plain numpy
-            over the batch costs microseconds; a Python loop over environments does not.
+            over the batch costs microseconds; a Python loop over environments does not. It
+            runs after the batch has stepped, so an exception it raises (or a ``ValueError``
+            for what it returns) comes out of ``step`` with the step taken: the environments
+            are where the step left them, and the step's rewards are lost.
         render_mode: ``"rgb_array"``: ``render()`` returns frames (``socnav.render``); the
             robot's path is then read from the state at every step.
         render_envs: the environments ``render()`` draws (default: the first four).

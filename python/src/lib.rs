@@ -16,8 +16,11 @@ mod viewer;
 
 use stepper::{Job, OwnedActions, SendState, Stepper};
 
-use ndarray::{ArrayView, IxDyn};
-use numpy::{Element, PyArray, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2};
+use ndarray::{ArrayView, Dimension, IxDyn};
+use numpy::{
+    Element, PyArray, PyArrayDyn, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyIndexError, PyValueError};
 use pyo3::prelude::*;
@@ -136,6 +139,46 @@ fn dual_errors(py: Python<'_>) -> PyResult<&DualErrors> {
             )?,
         })
     })
+}
+
+/// `array`'s elements as one slice in C order, refused with `error` (a message naming what was
+/// found) unless its shape is `shape` and its elements lie in C order. The flat slice is read as
+/// rows, and rust-numpy's `as_slice` also takes a Fortran-ordered array, whose rows it would hand
+/// over transposed.
+fn c_order<'a, T: Element, D: Dimension>(
+    array: &'a PyReadonlyArray<'_, T, D>,
+    shape: &[usize],
+    error: impl Fn(String) -> SimError,
+) -> PyResult<&'a [T]> {
+    let tuple = |dims: &[usize]| match dims {
+        [n] => format!("({n},)"),
+        _ => format!(
+            "({})",
+            dims.iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    if array.shape() != shape {
+        return Err(py_err(error(format!(
+            "expected an array of shape {}, got {}",
+            tuple(shape),
+            tuple(array.shape())
+        ))));
+    }
+    match array.as_slice() {
+        Ok(slice) if array.is_c_contiguous() => Ok(slice),
+        _ => Err(py_err(error(format!(
+            "expected an array in C order (np.ascontiguousarray), got strides {:?} bytes",
+            array.strides()
+        )))),
+    }
+}
+
+/// An action error about the array as a whole.
+fn action_error(message: String) -> SimError {
+    SimError::action(None, message)
 }
 
 /// The Python exception for a core error, with the error's fields as attributes: `problems` (a
@@ -439,7 +482,7 @@ impl Batch {
         .map_err(py_err)?;
         if let Some(text) = overrides {
             let json: serde_json::Value = serde_json::from_str(text)
-                .map_err(|e| ConfigError::new_err(format!("overrides are not JSON: {e}")))?;
+                .map_err(|e| py_err(SimError::config([format!("overrides are not JSON: {e}")])))?;
             c = c.with_overrides(&json).map_err(py_err)?;
         }
         let options = EnvOptions {
@@ -591,10 +634,7 @@ impl Batch {
 
     /// Reset the environments where `mask` is true.
     fn reset_envs(&self, py: Python<'_>, mask: PyReadonlyArray1<'_, bool>) -> PyResult<()> {
-        let mask = mask
-            .as_slice()
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .to_vec();
+        let mask = c_order(&mask, &[self.n_envs], |m| SimError::shape("reset mask", m))?.to_vec();
         let mut inner = self.lock()?;
         let env = &mut inner.env;
         let result = py.detach(|| env.reset_envs(&mask));
@@ -604,9 +644,7 @@ impl Batch {
     /// One step with continuous actions: float32 `(num_envs, 3)` in [-1, 1] (forward, lateral,
     /// rotation). The GIL is released while the batch steps.
     fn step_continuous(&self, py: Python<'_>, actions: PyReadonlyArray2<'_, f32>) -> PyResult<()> {
-        let actions = actions
-            .as_slice()
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let actions = c_order(&actions, &[self.n_envs, 3], action_error)?;
         let mut inner = self.lock()?;
         let env = &mut inner.env;
         let result = py.detach(|| env.step(Actions::Continuous(actions)));
@@ -615,9 +653,7 @@ impl Batch {
 
     /// One step with discrete actions: uint32 `(num_envs,)` in 0..7.
     fn step_discrete(&self, py: Python<'_>, actions: PyReadonlyArray1<'_, u32>) -> PyResult<()> {
-        let actions = actions
-            .as_slice()
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let actions = c_order(&actions, &[self.n_envs], action_error)?;
         let mut inner = self.lock()?;
         let env = &mut inner.env;
         let result = py.detach(|| env.step(Actions::Discrete(actions)));
@@ -628,19 +664,15 @@ impl Batch {
     /// own and return at once; `recv` waits for it. Until then every other call on the batch
     /// raises `UsageError`, and its output arrays are being written: read them after `recv`.
     fn send_continuous(slf: &Bound<'_, Self>, actions: PyReadonlyArray2<'_, f32>) -> PyResult<()> {
-        let actions = actions
-            .as_slice()
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .to_vec();
+        let n_envs = slf.get().n_envs;
+        let actions = c_order(&actions, &[n_envs, 3], action_error)?.to_vec();
         Self::send(slf, OwnedActions::Continuous(actions))
     }
 
     /// Start a step with discrete actions (as `step_discrete`); see `send_continuous`.
     fn send_discrete(slf: &Bound<'_, Self>, actions: PyReadonlyArray1<'_, u32>) -> PyResult<()> {
-        let actions = actions
-            .as_slice()
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .to_vec();
+        let n_envs = slf.get().n_envs;
+        let actions = c_order(&actions, &[n_envs], action_error)?.to_vec();
         Self::send(slf, OwnedActions::Discrete(actions))
     }
 
@@ -893,8 +925,11 @@ fn write_gif(
 /// A SocNavGym 0.1.1 config (its YAML parsed and given as JSON text) as socnav TOML.
 #[pyfunction]
 fn socnavgym_config_toml(yaml_json: &str) -> PyResult<String> {
-    let yaml: serde_json::Value = serde_json::from_str(yaml_json)
-        .map_err(|e| ConfigError::new_err(format!("the SocNavGym config is not JSON: {e}")))?;
+    let yaml: serde_json::Value = serde_json::from_str(yaml_json).map_err(|e| {
+        py_err(SimError::config([format!(
+            "the SocNavGym config is not JSON: {e}"
+        )]))
+    })?;
     let c = Config::from_socnavgym(&yaml).map_err(py_err)?;
     Ok(c.to_toml_string())
 }

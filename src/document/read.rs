@@ -180,7 +180,7 @@ impl<'a> Reader<'a> {
                 .ok_or_else(|| {
                     err(
                         &self.path,
-                        format!("must be a non-negative integer, got {v}"),
+                        format!("must be an integer in 0..=4294967295, got {v}"),
                     )
                 }),
         }

@@ -9,6 +9,7 @@ use common::valid_outputs;
 use std::path::Path;
 
 use serde_json::{Value, json};
+use socnav::document::FORMAT;
 use socnav::state::columns::FNV_OFFSET;
 use socnav::{Actions, BatchEnv, Config, EnvOptions, SimError};
 
@@ -175,6 +176,22 @@ fn options_are_validated() {
         matches!(&err, SimError::Shape { what: "threads", message: m } if m.contains("threads") && m.contains('0')),
         "{err:?}"
     );
+    // A count past the bound is refused before any thread starts (2^63 of them would hang).
+    for threads in [socnav::MAX_THREADS + 1, 1 << 63] {
+        let err = BatchEnv::new(
+            config("exp1"),
+            EnvOptions {
+                threads: Some(threads),
+                ..Default::default()
+            },
+        )
+        .unwrap_err();
+        assert!(
+            matches!(&err, SimError::Shape { what: "threads", message: m }
+                if m.contains(&threads.to_string()) && m.contains("1..=1024")),
+            "{err:?}"
+        );
+    }
 }
 
 /// Contract: a reset mask has one entry per environment; a wrong one changes nothing.
@@ -385,6 +402,28 @@ fn set_state_names_a_radius_that_differs_from_the_config() {
         &["state.robot.radius", "0.7", "0.25", "robot.radius"],
     );
     println!("{msg}");
+}
+
+/// Contract: a document is a JSON object, and one that names its format names socnav's (a
+/// golden snapshot names none); the message says what was found.
+#[test]
+fn set_state_refuses_what_is_not_a_socnav_document() {
+    let mut env = make(config("exp1"), 1, 0);
+    for (doc, needles) in [
+        (json!(null), &["must be a JSON object", "null"][..]),
+        (json!([1, 2]), &["must be a JSON object", "a list"]),
+        (json!("{}"), &["must be a JSON object", "a string"]),
+    ] {
+        load_rejected(&mut env, &doc, needles);
+    }
+    let mut doc = env.get_state(0).unwrap();
+    doc["format"] = json!("socnav-state/0");
+    load_rejected(&mut env, &doc, &["`format`", "socnav-state/0", FORMAT]);
+    doc["format"] = json!(1);
+    load_rejected(&mut env, &doc, &["`format` is 1"]);
+    // Without a format (a golden episode's snapshot) the same document loads.
+    doc.as_object_mut().unwrap().remove("format");
+    env.set_state(0, &doc).unwrap();
 }
 
 /// Contract: `get_state` → `set_state` → `get_state` gives the same JSON, exactly, for several

@@ -6,7 +6,7 @@ use std::process::Command;
 
 use serde_json::Value;
 use socnav::recording::{RecordingDir, Step, episode_json};
-use socnav::spec::{ENTITY_KEYS, RECORD};
+use socnav::spec::{ENTITY_KEYS, ObsLayout, RECORD};
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions};
 
 #[test]
@@ -114,6 +114,29 @@ fn recordings_have_0_1_1s_layout() {
         err.contains("step 0") && err.contains(&layout.dim.to_string()),
         "{err}"
     );
+    // A layout whose blocks reach past its rows is refused by name, whatever the rows.
+    let step = Step {
+        obs: &rows[0],
+        action: [0.0; 3],
+        reward: 0.0,
+    };
+    let refused = |broken: ObsLayout, names: &[&str]| {
+        let err = episode_json(&broken, &[step]).unwrap_err().to_string();
+        assert!(names.iter().all(|n| err.contains(n)), "{names:?}: {err}");
+    };
+    refused(
+        ObsLayout {
+            robot: layout.dim + 1,
+            ..layout
+        },
+        &["robot record", &(layout.dim + 1).to_string()],
+    );
+    let mut walls_past = layout;
+    walls_past.offset[4] = layout.dim - RECORD * layout.capacity[4] + 1;
+    refused(walls_past, &["`walls`", "past the layout's"]);
+    let mut huge = layout;
+    huge.capacity[0] = usize::MAX / 2;
+    refused(huge, &["`humans`", "2^64 or more"]);
 }
 
 #[test]
