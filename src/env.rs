@@ -1,6 +1,9 @@
 //! [`BatchEnv`]: the public face of the simulator. It validates what callers hand in (actions,
 //! masks, state documents) with exact messages, then passes plain slices to the backend.
 
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+use crate::backend::cpu::panic_message;
 use crate::backend::{Backend, BackendChoice};
 use crate::config::{Config, Kinematics, RewardKind};
 use crate::document;
@@ -466,27 +469,31 @@ impl BatchEnv {
     /// A rejected document leaves the environment as it was.
     pub fn set_state(&mut self, env: usize, doc: &serde_json::Value) -> Result<(), SimError> {
         self.check_env(env)?;
-        let params = self.params;
-        let state = self.backend.state_mut()?;
-        // A document can fail half-way through (a missing key, a capacity): keep a copy to
-        // restore, so that a failed load changes nothing.
+        // A document can fail half-way through (a missing key, a capacity), and so can what
+        // follows from it (obstacles too many for the config's capacity): keep a copy to
+        // restore, so that a failed load changes nothing. A panic on the way (a bug: a document
+        // the checks let through that breaks an invariant) is caught and restored the same way.
         let mut backup = BatchState::new(1, self.caps);
-        backup.copy_env_from(0, state, env);
-        if let Err(err) = document::import(&params, state, env, doc) {
-            state.copy_env_from(env, &backup, 0);
-            return Err(err);
-        }
-        // What follows from the loaded state can fail too (obstacles too many for the config's
-        // capacity): the environment goes back as it was, and what follows from it with it.
-        if let Err(err) = self.backend.state_changed(env) {
-            self.backend.state_mut()?.copy_env_from(env, &backup, 0);
-            self.backend.state_changed(env)?;
-            return Err(match err {
+        backup.copy_env_from(0, self.backend.state_mut()?, env);
+        let params = self.params;
+        // Whether the load reached what follows from the state (and may have written to it).
+        let mut derived = false;
+        let loaded = catch_unwind(AssertUnwindSafe(|| {
+            document::import(&params, self.backend.state_mut()?, env, doc)?;
+            derived = true;
+            self.backend.state_changed(env).map_err(|err| match err {
                 SimError::Shape { message, .. } => SimError::shape("state document", message),
                 other => other,
-            });
+            })
+        }))
+        .unwrap_or_else(|payload| Err(SimError::Internal(panic_message(payload.as_ref()))));
+        if loaded.is_err() {
+            self.backend.state_mut()?.copy_env_from(env, &backup, 0);
+            if derived {
+                self.backend.state_changed(env)?;
+            }
         }
-        Ok(())
+        loaded
     }
 
     /// Replace the whole batch state with `other`'s (a batch of the same config and size,

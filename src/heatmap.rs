@@ -164,10 +164,12 @@ impl Scene {
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Heatmap, SimError> {
         check_grid(n)?;
-        if !heading.is_finite() {
+        // Beyond a million radians an f32 angle keeps no fraction of a turn (and `sin_cos`
+        // gives NaN past 2^20).
+        if !(heading.is_finite() && heading.abs() <= 1e6) {
             return Err(SimError::shape(
                 "heatmap",
-                format!("heatmap: heading {heading} rad is not finite"),
+                format!("heatmap: heading {heading} rad is not a finite angle within ±1e6 rad"),
             ));
         }
         let map = (self.after.map_x[0], self.after.map_y[0]);

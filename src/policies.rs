@@ -85,9 +85,11 @@ impl OrcaRobot {
             let agent = orca_world::agent(&s, e, [x, y], [vel.0, vel.1], pref, p.robot_radius);
             let v = orca_world::with_world(|w| w.velocity(&p, &s, e, &agent, others));
             let (vx, vy, w) = command_from_velocity(&p, theta, v[0], v[1]);
-            a[0] = vx / p.robot_max_speed;
-            a[1] = vy / p.robot_max_speed;
-            a[2] = w / p.robot_max_rotation;
+            // A robot that cannot move or turn (a limit of 0) is given 0, not 0 / 0.
+            let scaled = |v: f32, max: f32| if max > 0.0 { v / max } else { 0.0 };
+            a[0] = scaled(vx, p.robot_max_speed);
+            a[1] = scaled(vy, p.robot_max_speed);
+            a[2] = scaled(w, p.robot_max_rotation);
         }
         Ok(())
     }

@@ -73,11 +73,13 @@ pub fn segments(length: f32, step: f32) -> (u32, f32) {
     (full as u32, length - full * step)
 }
 
-/// Number of observed segments of a wall of `length` (m).
+/// Number of observed segments of a wall of `length` (m); `u32::MAX` for a wall of that many
+/// or more (a loaded document's, which the capacity check then refuses), never a count wrapped
+/// past it.
 #[inline]
 pub fn segment_count(length: f32, step: f32) -> u32 {
     let (full, rest) = segments(length, step);
-    full + u32::from(rest > 0.0)
+    full.saturating_add(u32::from(rest > 0.0))
 }
 
 /// Build the walls of an `x` by `y` room (m) of shape `shape` ([`room_shape`]); `l_location`

@@ -387,33 +387,62 @@ impl Counts {
         ]
     }
 
-    /// The largest number of groups a reset can place.
-    pub fn max_groups(&self) -> i32 {
-        self.moving_groups[1]
-            + self.moving_groups_non_dispersing[1]
-            + self.standing_groups[1]
-            + self.standing_groups_non_dispersing[1]
+    /// The largest number of groups a reset can place (i64, negative maxima as 0: no overflow
+    /// on absurd inputs, which validation reports).
+    pub fn max_groups(&self) -> i64 {
+        at_most(self.moving_groups)
+            + at_most(self.moving_groups_non_dispersing)
+            + at_most(self.standing_groups)
+            + at_most(self.standing_groups_non_dispersing)
     }
 
-    /// The largest number of laptop users a reset can place.
-    pub fn max_laptop_users(&self) -> i32 {
-        self.laptop_users[1] + self.laptop_users_non_dispersing[1]
+    /// The largest number of laptop users a reset can place (as [`Counts::max_groups`]).
+    pub fn max_laptop_users(&self) -> i64 {
+        at_most(self.laptop_users) + at_most(self.laptop_users_non_dispersing)
     }
 
     /// The largest number of humans of every role a reset can place (i64: no overflow on
     /// absurd inputs, which validation reports).
     pub fn max_humans(&self) -> i64 {
-        let m = |r: [i32; 2]| i64::from(r[1].max(0));
-        m(self.static_humans)
-            + m(self.dynamic_humans)
-            + i64::from(self.max_laptop_users().max(0))
-            + i64::from(self.max_groups().max(0)) * m(self.group_size)
+        at_most(self.static_humans)
+            + at_most(self.dynamic_humans)
+            + self.max_laptop_users()
+            + self.max_groups() * at_most(self.group_size)
     }
 
     /// The largest number of laptops, free and in use.
     pub fn max_laptops(&self) -> i64 {
-        i64::from(self.laptops[1].max(0)) + i64::from(self.max_laptop_users().max(0))
+        at_most(self.laptops) + self.max_laptop_users()
     }
+}
+
+/// Every array of the config is a `[min, max]` range, and serde reads the first two items of a
+/// longer one without a word: each array of `text` with more items, by its dotted key.
+fn longer_ranges(text: &str) -> Vec<String> {
+    fn walk(table: &toml::Table, prefix: &str, out: &mut Vec<String>) {
+        for (key, value) in table {
+            let name = format!("{prefix}{key}");
+            match value {
+                toml::Value::Table(t) => walk(t, &format!("{name}."), out),
+                toml::Value::Array(items) if items.len() > 2 => out.push(format!(
+                    "`{name}` must be [min, max], got an array of {} items",
+                    items.len()
+                )),
+                _ => {}
+            }
+        }
+    }
+    let mut out = Vec::new();
+    // The text parsed as a config already; a table that does not parse has no ranges to report.
+    if let Ok(table) = text.parse::<toml::Table>() {
+        walk(&table, "", &mut out);
+    }
+    out
+}
+
+/// A count range's maximum as i64, a negative one (which validation reports) as 0.
+fn at_most(range: [i32; 2]) -> i64 {
+    i64::from(range[1].max(0))
 }
 
 /// Per-step probabilities of the social events, evaluated after the observation (spec 4.5).
@@ -714,6 +743,7 @@ impl Config {
                 },
             }
         };
+        problems.extend(longer_ranges(&text));
         problems.extend(validate(&config));
         if problems.is_empty() {
             Ok(config)

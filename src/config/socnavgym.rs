@@ -37,7 +37,12 @@ impl<'a> Reader<'a> {
 
     fn int(&mut self, section: &str, key: &str) -> i32 {
         match self.get(section, key).map(Value::as_i64) {
-            Some(Some(x)) => x as i32,
+            Some(Some(x)) => i32::try_from(x).unwrap_or_else(|_| {
+                self.problems.push(format!(
+                    "SocNavGym `{section}.{key}` is {x}, outside the 32-bit integers socnav takes"
+                ));
+                0
+            }),
             Some(None) => {
                 self.problems
                     .push(format!("SocNavGym `{section}.{key}` must be an integer"));

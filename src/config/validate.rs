@@ -10,6 +10,9 @@ use crate::limits::{MAX_GROUP, MAX_PERMUTE, MAX_POLYGONS};
 /// its largest derived configs about 42 %.
 const MAX_FILL_FRACTION: f32 = 0.55;
 
+/// The shortest step a config may take (s).
+pub const MIN_TIME_STEP: f32 = 1e-3;
+
 /// Every problem of `config`, as human-readable lines naming the key and value (empty if valid).
 pub fn validate(config: &Config) -> Vec<String> {
     let mut v = Problems::default();
@@ -218,7 +221,14 @@ fn check_scalars(c: &Config, v: &mut Problems) {
     if c.episode.length == 0 {
         v.0.push("`episode.length` must be >= 1 step, got 0".into());
     }
-    v.positive("episode.time_step", c.episode.time_step);
+    // Below a millisecond a step's f32 sums lose its motion, and the SNGNN-v2 history holds
+    // about 2 / dt frames an environment.
+    if !(c.episode.time_step.is_finite() && c.episode.time_step >= MIN_TIME_STEP) {
+        v.0.push(format!(
+            "`episode.time_step` must be a finite number of at least {MIN_TIME_STEP} s, got {}",
+            c.episode.time_step
+        ));
+    }
     v.positive("robot.radius", c.robot.radius);
     v.non_negative("robot.goal_radius", c.robot.goal_radius);
     v.non_negative("robot.max_speed", c.robot.max_speed);
@@ -389,11 +399,9 @@ fn check_counts(c: &Config, v: &mut Problems) {
             c.counts.tables[0]
         ));
     }
-    if c.counts.dynamic_humans[1]
-        + c.counts.static_humans[1]
-        + c.counts.max_laptop_users()
-        + c.counts.max_groups()
-        > 0
+    let lone_humans =
+        i64::from(c.counts.dynamic_humans[1].max(0)) + i64::from(c.counts.static_humans[1].max(0));
+    if lone_humans + c.counts.max_laptop_users() + c.counts.max_groups() > 0
         && c.human.diameter <= 0.0
     {
         v.0.push("humans are asked for but `human.diameter` is not > 0".into());
@@ -463,9 +471,11 @@ fn check_room_fits(c: &Config, other_problems: bool, v: &mut Problems) {
     }
     let n = &c.counts;
     let disc = |r: f32| std::f32::consts::PI * r * r;
-    let max_group_members = n.max_groups() * n.group_size[1];
-    let humans =
-        n.static_humans[1] + n.dynamic_humans[1] + n.max_laptop_users() + max_group_members;
+    let max_group_members = n.max_groups() * i64::from(n.group_size[1]);
+    let humans = i64::from(n.static_humans[1])
+        + i64::from(n.dynamic_humans[1])
+        + n.max_laptop_users()
+        + max_group_members;
     // Entities only (goals may lie anywhere free); a group's disc covers its members; laptops on
     // tables take no floor space.
     let lone_humans = humans - max_group_members;

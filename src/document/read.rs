@@ -341,8 +341,13 @@ pub(super) fn human_params(
     e: usize,
 ) -> Result<(), SimError> {
     s.orca_neighbor_dist[e] = r.f("orca_neighborDist")?;
-    s.orca_time_horizon[e] = r.f("orca_timeHorizon")?;
-    s.orca_time_horizon_obst[e] = r.f("orca_timeHorizonObst")?;
+    // RVO2 divides by the horizons: a generated one is at least 0.1 s (docs/fidelity.md).
+    for (key, column) in [
+        ("orca_timeHorizon", &mut s.orca_time_horizon),
+        ("orca_timeHorizonObst", &mut s.orca_time_horizon_obst),
+    ] {
+        column[e] = r.f_in(key, 0.1, 1e9, "ORCA divides by its time horizons")?;
+    }
     s.orca_max_speed[e] = r.f_in(
         "orca_maxSpeed",
         0.0,
@@ -628,12 +633,23 @@ fn groups(
     for (k, g) in list.iter().enumerate() {
         let members = g.at("members")?;
         let items = members.items()?;
+        if items.is_empty() {
+            return Err(err(&members.path, "must list at least one member"));
+        }
+        // A group's members fill pair rows of the observation sized by the config's group size.
+        capacity(
+            "members of a group",
+            items.len(),
+            s.strides.group_size,
+            "counts.group_size",
+        )?;
         let mut first = 0;
         for (m, item) in items.iter().enumerate() {
             let id = item
                 .value
                 .as_u64()
-                .ok_or_else(|| err(&item.path, "must be a human id"))? as u32;
+                .and_then(|id| u32::try_from(id).ok())
+                .ok_or_else(|| err(&item.path, "must be a human id"))?;
             let slot = slot_of(ids, id, &item.path)?;
             if m == 0 {
                 first = slot;
@@ -740,6 +756,18 @@ fn laptop_users(
     Ok(())
 }
 
+/// A formation at `r` ends in a new one of `n` `what` (a group, a laptop user): refused when
+/// the environment's `cap` are all taken, where the step would have nowhere to put it.
+fn slot_to_form(r: &Reader<'_>, n: u32, cap: usize, what: &str) -> Result<(), SimError> {
+    if n as usize >= cap {
+        return Err(err(
+            r.path(),
+            format!("cannot form: the {n} {what} already fill the config's capacity"),
+        ));
+    }
+    Ok(())
+}
+
 fn forming(
     st: &Reader<'_>,
     s: &mut BatchState,
@@ -758,6 +786,11 @@ fn forming(
             s.strides.group_size,
             "counts.group_size",
         )?;
+        if slots.is_empty() {
+            return Err(err(&cf.child_path("slots"), "must hold at least one slot"));
+        }
+        // The crowd becomes a group when it has formed.
+        slot_to_form(&cf, s.n_groups[e], s.strides.groups, "groups")?;
         let sb = e * s.strides.group_size;
         for (k, slot) in slots.iter().enumerate() {
             let items = slot.items()?;
@@ -769,11 +802,23 @@ fn forming(
             s.cf_slot_theta[sb + k] = items[2].as_angle()?;
         }
         let slot_map = cf.at("slot_of")?;
-        for (id, k) in slot_map
+        let entries = slot_map
             .value
             .as_object()
-            .ok_or_else(|| err(&slot_map.path, "must be an object"))?
-        {
+            .ok_or_else(|| err(&slot_map.path, "must be an object"))?;
+        // Every slot has its walker, one each.
+        if entries.len() != slots.len() {
+            return Err(err(
+                &slot_map.path,
+                format!(
+                    "names {} walkers for {} slots; each slot needs one",
+                    entries.len(),
+                    slots.len()
+                ),
+            ));
+        }
+        let mut taken = vec![false; slots.len()];
+        for (id, k) in entries {
             let id: u32 = id
                 .parse()
                 .map_err(|_| err(&slot_map.path, format!("key {id:?} is not a human id")))?;
@@ -787,6 +832,9 @@ fn forming(
                     format!("slot {k} out of range 0..{}", slots.len()),
                 ));
             }
+            if std::mem::replace(&mut taken[k], true) {
+                return Err(err(&slot_map.path, format!("names slot {k} twice")));
+            }
             s.cf_human[sb + k] = slot_of(ids, id, &slot_map.path)? as u32;
         }
         [s.cf_x[e], s.cf_y[e]] = cf.vec::<2>("centre")?;
@@ -795,6 +843,13 @@ fn forming(
         s.cf_active[e] = 1;
     }
     if let Some(lf) = st.opt("hl_forming") {
+        // The walker becomes a laptop user when it reaches the seat.
+        slot_to_form(
+            &lf,
+            s.n_laptop_users[e],
+            s.strides.laptop_users,
+            "laptop users",
+        )?;
         s.lf_human[e] = slot_of(ids, lf.u("human")?, &lf.child_path("human"))? as u32;
         s.lf_laptop[e] = slot_of(laptop_ids, lf.u("laptop")?, &lf.child_path("laptop"))? as u32;
         [s.lf_seat_x[e], s.lf_seat_y[e], _] = lf.vec::<3>("seat")?;

@@ -182,10 +182,11 @@ pub struct BenchArgs {
     #[arg(long, default_value = "exp1")]
     pub config: String,
     /// Batch sizes, comma separated.
-    #[arg(long, value_delimiter = ',', default_values_t = vec![1usize, 64, 1024, 4096])]
+    #[arg(long, value_delimiter = ',', default_values_t = vec![1usize, 64, 1024, 4096],
+          value_parser = at_least_one())]
     pub envs: Vec<usize>,
-    /// Seconds of measurement per batch size (after a warm-up).
-    #[arg(long, default_value_t = 2.0)]
+    /// Seconds of measurement per batch size (after a warm-up), more than 0 and at most a day.
+    #[arg(long, default_value_t = 2.0, value_parser = seconds)]
     pub seconds: f64,
     /// Backend.
     #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
@@ -278,10 +279,10 @@ pub struct SoakArgs {
     #[arg(long)]
     pub threads: Option<usize>,
     /// Environment steps per config between progress records.
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(1..))]
     pub chunk: u64,
     /// Check the state's invariants every this many batch steps (outputs are checked every step).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub check_every: u64,
     /// Progress record (JSON): written after every chunk, resumed from when it exists.
     #[arg(long, default_value = "soak.json")]
@@ -310,7 +311,7 @@ pub struct PlayArgs {
     #[arg(long, default_value_t = 1.0)]
     pub speed: f32,
     /// Quit after this many episodes have ended (default: play until the window closes).
-    #[arg(long)]
+    #[arg(long, value_parser = at_least_one())]
     pub episodes: Option<usize>,
 }
 
@@ -336,4 +337,18 @@ pub struct HeatmapArgs {
     /// Longer side of each panel (px).
     #[arg(long, default_value_t = 480)]
     pub size: u32,
+}
+
+/// A count of at least 1 (a batch size, episodes).
+fn at_least_one() -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::<usize>::new().range(1..)
+}
+
+/// Seconds of measurement: a finite number above 0, at most a day.
+fn seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(s) if s > 0.0 && s <= 86_400.0 => Ok(s),
+        Ok(s) => Err(format!("{s} is not in (0, 86400] seconds")),
+        Err(e) => Err(e.to_string()),
+    }
 }

@@ -29,6 +29,7 @@ use clap::Parser;
 fn main() -> ExitCode {
     quiet_wayland_probe();
     end_quietly_on_a_closed_pipe();
+    fail_cleanly_when_output_cannot_be_written();
     let cli = args::Cli::parse();
     let result = match cli.command {
         args::Command::Run(a) => run::run(&a),
@@ -64,6 +65,29 @@ fn end_quietly_on_a_closed_pipe() {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+}
+
+/// A write to standard output or error that fails (a full disk: `socnav run > /dev/full`) makes
+/// `println!` panic; the tool's output goes through it everywhere, so that panic is turned here
+/// into what any other failure gives: a line saying why, and exit status 1. Every other panic
+/// keeps Rust's report.
+fn fail_cleanly_when_output_cannot_be_written() {
+    let report = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let message = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or_default();
+        if message.starts_with("failed printing to std") {
+            use std::io::Write;
+            // Standard error may be the stream that failed: nothing more can be said then.
+            let _ = writeln!(std::io::stderr(), "error: {message}");
+            std::process::exit(1);
+        }
+        report(info);
+    }));
 }
 
 /// Mesa's Vulkan drivers probe Wayland while wgpu enumerates adapters, and libwayland prints

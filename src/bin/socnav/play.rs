@@ -260,9 +260,9 @@ fn speed_text(speed: f32) -> String {
 }
 
 pub fn play(a: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
-    if !(a.speed.is_finite() && a.speed > 0.0) {
+    if !(SPEEDS.0..=SPEEDS.1).contains(&a.speed) {
         return Err(format!(
-            "--speed {}: give a positive number (1 is real time)",
+            "--speed {}: give a number from 1/16 to 16 (1 is real time)",
             a.speed
         )
         .into());
@@ -277,7 +277,7 @@ pub fn play(a: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
         env,
         size,
         holonomic,
-        speed: a.speed.clamp(SPEEDS.0, SPEEDS.1),
+        speed: a.speed,
         paused: false,
         episodes: 0,
         outcomes: Vec::new(),

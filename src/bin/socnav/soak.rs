@@ -37,14 +37,19 @@ impl Tally {
         json!({"env_steps": self.steps, "non_finite": self.non_finite, "broken_invariants": self.broken, "panics": self.panics})
     }
 
-    fn from_json(v: &Value) -> Self {
-        let get = |k: &str| v[k].as_u64().unwrap_or(0);
-        Self {
-            steps: get("env_steps"),
-            non_finite: get("non_finite"),
-            broken: get("broken_invariants"),
-            panics: get("panics"),
-        }
+    /// The tally a record holds (zeros for a config it does not name), or the key that is not
+    /// a count.
+    fn from_json(v: &Value) -> Result<Self, &'static str> {
+        let get = |k: &'static str| match &v[k] {
+            Value::Null => Ok(0),
+            other => other.as_u64().ok_or(k),
+        };
+        Ok(Self {
+            steps: get("env_steps")?,
+            non_finite: get("non_finite")?,
+            broken: get("broken_invariants")?,
+            panics: get("panics")?,
+        })
     }
 }
 
@@ -106,17 +111,62 @@ fn non_finite(env: &BatchEnv, e: usize) -> Result<u64, SimError> {
     Ok((obs + infos + reward) as u64)
 }
 
-fn load(path: &Path) -> Result<Value, String> {
-    match std::fs::read_to_string(path) {
-        Ok(text) => serde_json::from_str(&text)
-            .map_err(|e| format!("{}: not a soak record: {e}", path.display())),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(json!({})),
-        Err(e) => Err(format!("{}: {e}", path.display())),
+/// The format tag of a soak record.
+const FORMAT: &str = "socnav-soak/1";
+
+/// The record at `path` to resume, or an empty one where there is no file. Anything but a soak
+/// record (another program's JSON, a record of another format, or of another batch: `envs` and
+/// `backend`, since a resumed run adds to its tallies) is refused, so that the run never
+/// overwrites it.
+fn load(path: &Path, a: &SoakArgs) -> Result<Value, String> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(json!({})),
+        Err(e) => return Err(format!("{}: {e}", path.display())),
+    };
+    let refuse = |why: String| {
+        format!(
+            "{}: not a soak record to resume ({why}); give another --record",
+            path.display()
+        )
+    };
+    let record: Value = serde_json::from_str(&text).map_err(|e| refuse(e.to_string()))?;
+    if record["format"] != FORMAT {
+        return Err(refuse(format!(
+            "its format is {}, not \"{FORMAT}\"",
+            record["format"]
+        )));
     }
+    if let Some(configs) = record["configs"].as_object() {
+        for (name, tally) in configs {
+            Tally::from_json(tally)
+                .map_err(|key| refuse(format!("`configs.{name}.{key}` is not a count")))?;
+        }
+    } else {
+        return Err(refuse("`configs` is not an object".into()));
+    }
+    let backend = backend_name(a);
+    if record["envs"] != a.envs || record["backend"] != backend.as_str() {
+        return Err(refuse(format!(
+            "it was made with --envs {} --backend {}, this run asks for --envs {} --backend {backend}",
+            record["envs"], record["backend"], a.envs
+        )));
+    }
+    Ok(record)
 }
 
+/// The backend as the record names it.
+fn backend_name(a: &SoakArgs) -> String {
+    format!("{:?}", a.backend).to_lowercase()
+}
+
+/// Write `record` to `path` through a temporary file beside it (named after it and this
+/// process, so that it replaces nothing of the user's), renamed over it when whole.
 fn save(path: &Path, record: &Value) -> Result<(), String> {
-    let part = path.with_extension("part");
+    let name = path
+        .file_name()
+        .map_or_else(|| "soak".into(), |n| n.to_string_lossy());
+    let part = path.with_file_name(format!(".{name}.{}.part", std::process::id()));
     let text = serde_json::to_string_pretty(record).map_err(|e| e.to_string())?;
     std::fs::write(&part, text)
         .and_then(|()| std::fs::rename(&part, path))
@@ -134,10 +184,10 @@ pub fn soak(a: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
     if configs.is_empty() {
         return Err("--configs names no config".into());
     }
-    let mut record = load(&a.record)?;
+    let mut record = load(&a.record, a)?;
     let mut tallies: Vec<Tally> = configs
         .iter()
-        .map(|c| Tally::from_json(&record["configs"][c]))
+        .map(|c| Tally::from_json(&record["configs"][c]).unwrap_or_default())
         .collect();
     // Memory samples as [env-steps so far, MB, run]: each run (process) is numbered, since
     // growth only means something within one process.
@@ -188,7 +238,7 @@ pub fn soak(a: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
                 t.steps += a.envs as u64;
                 for e in 0..a.envs {
                     t.non_finite += non_finite(env, e)?;
-                    if tick.is_multiple_of(a.check_every.max(1)) {
+                    if tick.is_multiple_of(a.check_every) {
                         let broken = violations(env.state()?, e);
                         if let Some(first) = broken.first() {
                             if t.broken == 0 {
@@ -207,9 +257,9 @@ pub fn soak(a: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
         let wall = wall_before + start.elapsed().as_secs_f64();
         record = json!({
-            "format": "socnav-soak/1",
+            "format": FORMAT,
             "envs": a.envs,
-            "backend": format!("{:?}", a.backend).to_lowercase(),
+            "backend": backend_name(a),
             "steps_per_config": per_config,
             "configs": others
                 .clone()

@@ -333,6 +333,100 @@ fn set_state_rejects_obstacles_beyond_the_capacity() {
     assert!(env.outputs().obs.iter().all(|v| v.is_finite()));
 }
 
+/// Contract: a group with more members than the config's group size is refused by capacity
+/// (its pairs would overrun the observation's pair rows: a panic before), and the environment
+/// stays as it was.
+#[test]
+fn set_state_refuses_a_group_larger_than_the_group_size() {
+    let source = make(config("exp2"), 1, 0);
+    let doc = source.get_state(0).unwrap();
+    let largest = doc["state"]["groups"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g["members"].as_array().unwrap().len())
+        .max()
+        .unwrap();
+    assert!(largest >= 3, "exp2 has groups of 3");
+    // The same scene's capacities but for the group size: the members count as walkers.
+    let mut smaller = config("exp2");
+    smaller.counts.group_size = [2, 2];
+    smaller.counts.dynamic_humans[1] += 4;
+    let mut env = make(smaller, 1, 0);
+    load_rejected(
+        &mut env,
+        &doc,
+        &[
+            &format!("{largest} members of a group"),
+            "capacity is 2",
+            "counts.group_size",
+        ],
+    );
+}
+
+/// Contract: a formation in a document must be one the step can finish: every slot of a forming
+/// crowd has one walker, and a walker on its way to a laptop has a laptop-user slot to take (the
+/// step asserted both). ORCA's time horizons are at least the 0.1 s a reset draws (RVO2
+/// divides by them).
+#[test]
+fn set_state_refuses_formations_the_step_cannot_finish() {
+    // exp3 forms crowds (a group slot is free for one); exp1 seats no laptop user.
+    let mut env = make(config("exp3"), 1, 0);
+    let doc = env.get_state(0).unwrap();
+    let id = doc["state"]["humans"][0]["id"].clone();
+    let crowd = |slots: Value, slot_of: Value| {
+        let mut d = doc.clone();
+        d["state"]["crowd_forming"] = json!({"slots": slots, "slot_of": slot_of,
+            "centre": [0.0, 0.0], "almost_formed_count": 0});
+        d
+    };
+    let two_slots = json!([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+    let key = id.to_string();
+    for (d, needles) in [
+        (
+            crowd(two_slots.clone(), json!({ key.as_str(): 0 })),
+            &["state.crowd_forming.slot_of", "names 1 walkers for 2 slots"][..],
+        ),
+        (
+            crowd(json!([]), json!({})),
+            &["state.crowd_forming.slots", "at least one slot"],
+        ),
+    ] {
+        load_rejected(&mut env, &d, needles);
+    }
+    let mut env = make(config("exp1"), 1, 0);
+    let doc = env.get_state(0).unwrap();
+    let mut d = doc.clone();
+    d["state"]["hl_forming"] =
+        json!({"human": doc["state"]["humans"][0]["id"], "laptop": 1, "seat": [0.0, 0.0, 0.0]});
+    load_rejected(
+        &mut env,
+        &d,
+        &[
+            "state.hl_forming",
+            "the 0 laptop users already fill the config's capacity",
+        ],
+    );
+    for key in ["orca_timeHorizon", "orca_timeHorizonObst"] {
+        let mut d = doc.clone();
+        d["human_params"][key] = json!(0.0);
+        load_rejected(
+            &mut env,
+            &d,
+            &[&format!("human_params.{key}"), "[0.1, 1000000000]"],
+        );
+    }
+}
+
+/// Contract: a wall too long to count its observed segments in a u32 counts as u32::MAX (which
+/// any capacity refuses), not as a count wrapped to 0 (which every capacity passes).
+#[test]
+fn a_wall_of_more_segments_than_a_u32_holds_saturates() {
+    assert_eq!(socnav::room::segment_count(1e9, 0.1), u32::MAX);
+    assert_eq!(socnav::room::segment_count(2.5, 1.0), 3);
+    assert_eq!(socnav::room::segment_count(2.0, 1.0), 2);
+}
+
 /// Contract: a document missing a key is rejected with the path of the key.
 #[test]
 fn set_state_names_the_path_of_a_missing_key() {

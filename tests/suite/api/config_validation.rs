@@ -225,6 +225,74 @@ fn counts_beyond_the_per_environment_limits_are_rejected() {
     }
 }
 
+/// Contract: counts whose sums pass `i32` (each one a valid range on its own) are reported, not
+/// wrapped into a small number that the checks built on them would pass (a batch with no group
+/// capacity that draws a billion groups).
+#[test]
+fn counts_that_sum_past_i32_are_refused_not_wrapped() {
+    let mut config = Config::default();
+    config.counts.moving_groups = [0, i32::MAX];
+    config.counts.moving_groups_non_dispersing = [0, 1];
+    config.counts.group_size = [2, 2];
+    config.counts.laptop_users = [0, i32::MAX];
+    config.counts.laptop_users_non_dispersing = [0, 1];
+    config.counts.tables = [1, 1];
+    let all = socnav::config::validate(&config).join("\n");
+    for needle in [
+        "at most 256 humans",
+        "6442450945",
+        "laptop users 2147483648",
+        "at most 256 laptops",
+    ] {
+        assert!(all.contains(needle), "no {needle:?} in:\n{all}");
+    }
+}
+
+/// Contract: every array of a config is `[min, max]`; a longer one is refused by key (serde
+/// takes the first two items of it without a word), with the other problems.
+#[test]
+fn a_range_of_more_than_two_items_is_refused() {
+    let problems = config_problems(Config::from_toml_str(
+        "[counts]\nstatic_humans = [0, 1, 2]\n[room]\nsize_x = [8, 9, 10, 11]\n[episode]\nlenght = 3\n",
+    ));
+    let all = problems.join("\n");
+    for needle in [
+        "`counts.static_humans` must be [min, max], got an array of 3 items",
+        "`room.size_x` must be [min, max], got an array of 4 items",
+        "episode.lenght",
+    ] {
+        assert!(all.contains(needle), "no {needle:?} in:\n{all}");
+    }
+    let overridden =
+        Config::default().with_overrides(&serde_json::json!({"counts": {"plants": [0, 1, 2]}}));
+    assert!(
+        config_problems(overridden)
+            .iter()
+            .any(|p| p.contains("`counts.plants` must be [min, max]")),
+    );
+}
+
+/// Contract: a step shorter than a millisecond is refused (at 1e-12 s the step's sums lose
+/// its motion and the outputs go non-finite; with SNGNN-v2 the history would hold 2e12 frames).
+#[test]
+fn a_time_step_below_a_millisecond_is_refused() {
+    for dt in [1e-12, 1e-4, 0.0, -1.0, f32::NAN, f32::INFINITY] {
+        let mut config = Config::default();
+        config.episode.time_step = dt;
+        let all = socnav::config::validate(&config).join("\n");
+        assert!(
+            all.contains("`episode.time_step` must be a finite number of at least 0.001 s"),
+            "{dt}: {all}"
+        );
+    }
+    let mut config = Config::default();
+    config.episode.time_step = 1e-3;
+    config.robot.max_speed = 0.01;
+    config.human.max_speed = 0.01;
+    let all = socnav::config::validate(&config).join("\n");
+    assert!(!all.contains("time_step"), "{all}");
+}
+
 /// Contract: `BatchEnv::new` applies the same validation to a `Config` built in code.
 #[test]
 fn batch_rejects_an_invalid_config_built_in_code() {
@@ -333,11 +401,14 @@ fn socnavgym_missing_keys_are_reported() {
         .unwrap()
         .remove("robot_radius");
     dict["env"].as_object_mut().unwrap().remove("min_tables");
+    // An integer past i32 is named, not wrapped (4294967306 would have read as 10).
+    dict["env"]["max_tables"] = serde_json::json!(4_294_967_306_i64);
     let problems = config_problems(Config::from_socnavgym(&dict));
     for key in [
         "env.max_advance_robot",
         "robot.robot_radius",
         "env.min_tables",
+        "`env.max_tables` is 4294967306, outside the 32-bit integers",
     ] {
         assert!(
             problems.iter().any(|p| p.contains(key)),

@@ -112,8 +112,12 @@ fn bad_grid_and_heading_are_errors() {
         let e = scene.heatmap(n, 0.0, None, &no_progress).unwrap_err();
         assert!(e.to_string().contains("grid size"), "{e}");
     }
-    let e = scene.heatmap(8, f32::NAN, None, &no_progress).unwrap_err();
-    assert!(e.to_string().contains("heading"), "{e}");
+    // Past a million radians an f32 angle keeps no fraction of a turn (sin_cos gives NaN).
+    for heading in [f32::NAN, f32::INFINITY, 2e6] {
+        let e = scene.heatmap(8, heading, None, &no_progress).unwrap_err();
+        assert!(e.to_string().contains("heading"), "{e}");
+    }
+    assert!(scene.heatmap(8, -1e6, None, &no_progress).is_ok());
 }
 
 /// The SNGNN-v2 heatmap of exp2_sngnn seed 3 (two groups and a walker), or `None` without

@@ -4,6 +4,9 @@
 mod api_errors;
 #[cfg(all(feature = "gpu", feature = "cli"))]
 mod cli_backends;
+// The `socnav` binary's bad input; the binary needs the `cli` feature.
+#[cfg(feature = "cli")]
+mod cli_input;
 mod config_validation;
 // Faults caused on the GPU device: destroyed, too small for the batch.
 #[cfg(feature = "gpu")]

@@ -66,3 +66,15 @@ fn goal_and_orca_policies_on_hand_made_scenes() {
         assert!((-1.0..=1.0).contains(a), "actions in [-1, 1]: {a}");
     }
 }
+
+/// Contract: a robot whose limits are 0 (a valid config: it stands still) gets 0 from the ORCA
+/// policy, not 0 / 0, which the step would refuse as a NaN action.
+#[test]
+fn the_orca_policy_of_a_robot_that_cannot_move_is_zero() {
+    let mut config = exp1();
+    config.robot.max_speed = 0.0;
+    config.robot.max_rotation = 0.0;
+    let env = load(config, &[scene(true, [0.0, 0.0, 0.0], [3.0, 0.0])]);
+    let (_, orca) = actions(&env);
+    assert_eq!(orca, [0.0; 3]);
+}

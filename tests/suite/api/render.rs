@@ -482,7 +482,10 @@ fn a_walker_heading_to_a_laptop_seat_is_linked_to_it() {
     let seat = (1.0, -2.0);
     let mut doc = scene_doc();
     doc["state"]["hl_forming"] = json!({"human": 2, "laptop": 4, "seat": [seat.0, seat.1, 0.0]});
-    let (img, view) = frame(&scene_env_with(config(), &doc));
+    // Laptop-use formation on: the walker has a laptop user's slot to take at the seat.
+    let mut forming = config();
+    forming.events.laptop_formation_probability = 0.01;
+    let (img, view) = frame(&scene_env_with(forming, &doc));
     let (plain, _) = frame(&scene_env());
     // The seat's cross is drawn in the laptop user's colour...
     let at_seat = rgb_at(&img, &view, seat);
