@@ -307,8 +307,19 @@ _DISCRETE_TO_CONTINUOUS = np.array(DISCRETE_ACTIONS, dtype=np.float32)
 
 
 def _continuous(actions: np.ndarray) -> np.ndarray:
+    """An episode's actions as 0.1.1 records them: ``(T, 3)`` floats, discrete ones (``(T,)``
+    in 0..7) mapped through its table; anything else is a ``ValueError`` (a negative index
+    would pick an action from the table's end)."""
     if actions.ndim == 1:
+        if not np.issubdtype(actions.dtype, np.integer) or actions.size and not (
+            0 <= actions.min() and actions.max() < len(_DISCRETE_TO_CONTINUOUS)
+        ):
+            raise ValueError(
+                f"discrete actions are integers in 0..{len(_DISCRETE_TO_CONTINUOUS) - 1}, got {actions!r}"
+            )
         return _DISCRETE_TO_CONTINUOUS[actions.astype(np.int64)]
+    if actions.ndim != 2 or actions.shape[1] != 3:
+        raise ValueError(f"continuous actions are (T, 3), got shape {actions.shape}")
     return actions.astype(np.float32, copy=False)
 
 

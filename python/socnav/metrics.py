@@ -65,6 +65,13 @@ _OUTCOMES = (
 )
 
 
+def _keys(keys: Sequence[str]) -> tuple[str, ...]:
+    """Statistic names as a tuple; one name alone is refused, not read as its characters."""
+    if isinstance(keys, str):
+        raise TypeError(f"keys is a sequence of statistic names, got the string {keys!r} (use [{keys!r}])")
+    return tuple(keys)
+
+
 @dataclass(frozen=True)
 class Summary:
     """Means of the episode statistics over a set of finished episodes.
@@ -106,7 +113,8 @@ class Summary:
             "out of map {out_of_map:.1f} %".format(**pct),
             "metrics (means over finished episodes, as the paper's table):",
         ]
-        keys = list(keys)
+        # The table's keys this summary holds (a log of a few statistics prints those).
+        keys = [k for k in _keys(keys) if k in self.means]
         for start in range(0, len(keys), 4):
             lines.append("".join(f"{k:>26} {self[k]:>9.4f}" for k in keys[start : start + 4]))
         return "\n".join(lines)
@@ -197,7 +205,7 @@ class EpisodeLog:
     """
 
     def __init__(self, keys: Sequence[str] = EPISODE_KEYS) -> None:
-        self.keys: tuple[str, ...] = tuple(keys)
+        self.keys: tuple[str, ...] = _keys(keys)
         self._chunks: list[np.ndarray] = []
         self._rows: np.ndarray | None = np.zeros((0, len(self.keys)), np.float32)
         self._count = 0

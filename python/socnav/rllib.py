@@ -37,6 +37,7 @@ from typing import Any, Mapping, Sequence
 import gymnasium as gym
 import numpy as np
 
+from socnav import _batch
 from socnav.vector import SocNavVectorEnv
 
 # The name `register` gives the environment creator in Ray's registry.
@@ -78,8 +79,8 @@ def env_creator(env_config: Mapping[str, Any]) -> gym.vector.VectorEnv:
     cfg = dict(env_config)
     env = SocNavVectorEnv(
         cfg.get("config", "exp1"),
-        int(cfg.get("num_envs", 1)),
-        seed=int(cfg.get("seed", 0)),
+        _batch.check_count("num_envs", cfg.get("num_envs", 1)),
+        seed=_batch.check_seed(cfg.get("seed", 0)),
         obs_mode=cfg.get("obs_mode", "flat"),
         action_type=cfg.get("action_type", "discrete"),
         backend=cfg.get("backend", "cpu"),

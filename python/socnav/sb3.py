@@ -49,6 +49,7 @@ except ImportError as e:  # pragma: no cover - exercised only without SB3
         "socnav.sb3 needs Stable-Baselines3 (and torch): pip install stable-baselines3"
     ) from e
 
+from socnav import _batch
 from socnav.metrics import EPISODE_KEYS, EpisodeLog
 from socnav.vector import SocNavVectorEnv, make_vec
 
@@ -248,7 +249,8 @@ class SocNavSB3VecEnv(VecEnv):
         seed from numpy's global generator, as SB3 does."""
         if seed is None:
             seed = int(np.random.randint(0, np.iinfo(np.uint32).max, dtype=np.uint32))
-        self._seeds = [(int(seed) + i) % (1 << 64) for i in range(self.num_envs)]
+        seed = _batch.check_seed(seed)
+        self._seeds = [(seed + i) % (1 << 64) for i in range(self.num_envs)]
         return list(self._seeds)
 
     def set_options(self, options: list[dict[str, Any]] | dict[str, Any] | None = None) -> None:
@@ -360,8 +362,7 @@ def evaluate(
     socnav.metrics.EpisodeLog
         ``log.summary()`` gives the paper's table.
     """
-    if episodes_per_env < 1:
-        raise ValueError(f"episodes_per_env must be at least 1, got {episodes_per_env}")
+    episodes_per_env = _batch.check_count("episodes_per_env", episodes_per_env)
     if seed is not None:
         env.seed(seed)
     obs = env.reset()

@@ -4,6 +4,7 @@ is as it was."""
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -160,3 +161,28 @@ def test_counts_seeds_and_callables_are_checked_before_anything_runs(tmp_path):
     with pytest.raises(ValueError, match=r"shape \(2,\), got shape \(1, 2\)"):
         env.reset(seed=np.array([[1, 2]]))
     env.step(np.zeros((2, 3), dtype=np.float32))  # still usable
+
+
+def test_recorded_actions_and_statistic_names_are_checked():
+    from socnav.datasets import Episode, JsonWriter
+    from socnav.metrics import EpisodeLog
+
+    layout = socnav.make("exp1", obs_mode="flat").unwrapped._layout
+    obs = np.zeros((3, layout["dim"]), np.float32)
+    flags = np.zeros(2, bool)
+    for actions, needle in ((np.array([0, -1], np.int64), "integers in 0..6"), (np.zeros((2, 2, 3)), "(T, 3)")):
+        episode = Episode(seed=0, config="exp1", observations=obs, actions=actions, rewards=np.zeros(2, np.float32),
+                          terminations=flags, truncations=flags)
+        with pytest.raises(ValueError, match=re.escape(needle)):
+            JsonWriter(tmp_dir(), layout).add(episode)
+    with pytest.raises(TypeError, match=r"got the string 'return' \(use \['return'\]\)"):
+        EpisodeLog(keys="return")
+    log = EpisodeLog(keys=["return", "success"])
+    log.add_rows(np.array([[1.0, 1.0], [3.0, 0.0]], np.float32))
+    assert "episodes finished: 2" in str(log.summary())
+
+
+def tmp_dir():
+    import tempfile
+
+    return tempfile.mkdtemp(prefix="socnav-test-")

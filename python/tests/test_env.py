@@ -161,7 +161,8 @@ def test_errors_carry_their_fields_and_keep_python_conventions(tmp_path):
         socnav.make_vec({"base": "exp1", "robot": {"radius": -1.0}, "events": {"crowd_formation_probability": 2.0}})
     keys = {key for key, _ in err.value.problems}
     assert {"robot.radius", "events.crowd_formation_probability"} <= keys, err.value.problems
-    batch = socnav.make_vec("exp1", num_envs=3)._batch
+    env = socnav.make_vec("exp1", num_envs=3)  # kept: a collected environment closes its batch
+    batch = env._batch
     with pytest.raises(socnav.EnvIndexError) as err:
         batch.get_state(5)
     assert isinstance(err.value, IndexError) and isinstance(err.value, ValueError)

@@ -230,6 +230,14 @@ def test_attributes_methods_seeding_and_monitor():
     env.seed(5)
     assert_obs_equal(env.reset(), b)
     assert not np.array_equal(env.reset()["robot"], b["robot"]), "unseeded resets move on"
+    # A seed outside 0..2**64 or with a fraction is refused, not wrapped or rounded.
+    with pytest.raises(ValueError, match="a seed must be in 0..2\\*\\*64, got -5"):
+        env.seed(-5)
+    with pytest.raises(TypeError, match="a seed must be an int, got 2.5"):
+        env.seed(2.5)
+    # evaluate counts whole episodes (1.5 left a fraction that never reached 0: a hang).
+    with pytest.raises(TypeError, match="episodes_per_env must be an int, got 1.5"):
+        evaluate(lambda obs: np.zeros((4, 3), np.float32), env, 1.5)
 
 
 def test_make_vec_arguments_pass_through_except_the_fixed_ones():

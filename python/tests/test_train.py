@@ -112,11 +112,65 @@ def test_ppo_runs_and_exports(tmp_path, action_type):
 def test_errors_name_the_problem(tmp_path):
     with pytest.raises(ValueError, match="no agent 'nope'"):
         load("nope")
-    with pytest.raises(ValueError, match="action_type must be"):
+    with pytest.raises(ValueError, match="--action-type must be"):
         ppo.train(ppo.Args(out=str(tmp_path / "x"), action_type="both", steps=10))
     agent = load(export_tiny(tmp_path))
     with pytest.raises(ValueError, match="flat observations of 597 floats"):
         agent(np.zeros((2, 5), np.float32))
+
+
+def test_bad_arguments_are_listed_before_anything_runs(tmp_path):
+    bad = dqn.Args(out=str(tmp_path / "bad"), buffer_size=0, batch_size=-1, seed=-1, max_minutes=float("nan"),
+                   chunk_steps=2.5, gamma=1.5)
+    with pytest.raises(ValueError) as err:
+        dqn.train(bad)
+    for needle in ("--buffer-size must be at least 1, got 0", "--batch-size must be at least 1, got -1",
+                   "--seed must be an integer", "--max-minutes must be a positive number of minutes, got nan",
+                   "--chunk-steps must be at least 1, got 2.5", "--gamma must be in [0, 1], got 1.5"):
+        assert needle in str(err.value), str(err.value)
+    assert not (tmp_path / "bad").exists(), "a refused run made its directory"
+    with pytest.raises(ValueError, match=r"--minibatches 100 is more than a rollout's 16 samples"):
+        ppo.Args(num_envs=2, rollout_steps=8, minibatches=100).check()
+    from socnav.train.__main__ import main
+
+    assert main(["dqn", "--max-minutes", "nan", "--out", str(tmp_path / "cli")]) == 2
+    with pytest.raises(SystemExit):  # argparse: an int option takes no fraction
+        main(["dqn", "--chunk-steps", "2.5"])
+
+
+def test_a_run_directory_is_never_spoiled(tmp_path):
+    """Every log row has the episode columns (the first one may come before any episode ends);
+    export never writes over a checkpoint; a moved run resumes; a resume refused for its
+    arguments writes nothing; a file that is not an agent is named."""
+    run = tmp_path / "tiny"
+    agent = export_tiny(tmp_path)
+    rows = _rows(run / "progress.csv")
+    assert "success" in rows[0] and float(rows[0]["episodes_logged"]) == 0 and rows[0]["success"] == "nan"
+    checkpoint = run / "checkpoint.pt"
+    before = checkpoint.read_bytes()
+    for out in (checkpoint, tmp_path / "elsewhere" / ".." / "tiny" / "checkpoint.pt"):
+        with pytest.raises(ValueError, match="a training checkpoint"):
+            export(checkpoint, out)
+    assert checkpoint.read_bytes() == before
+    moved = tmp_path / "moved"
+    moved.mkdir()
+    for f in run.iterdir():
+        if f.is_file():
+            (moved / f.name).write_bytes(f.read_bytes())
+    (moved / "args.json").unlink()  # the checkpoint's own arguments decide
+    base = dict(config=SHORT, num_envs=8, threads=1, learning_starts=10**9, log_every=64)
+    with pytest.raises(ValueError, match=r"other arguments \{'num_envs': \(8, 4\)\}"):
+        dqn.train(dqn.Args(steps=128, out=str(moved), **{**base, "num_envs": 4}))
+    assert not (moved / "args.json").exists()
+    dqn.train(dqn.Args(steps=128, out=str(moved), **base))
+    assert [int(r["step"]) for r in _rows(moved / "progress.csv")] == [64, 128]
+    junk = tmp_path / "junk.pt"
+    junk.write_bytes(b"not a checkpoint")
+    with pytest.raises(ValueError, match="junk.pt: not a socnav agent file"):
+        load(junk)
+    with pytest.raises(ValueError, match="export its agent first"):
+        load(checkpoint)
+    assert load(agent).kind == "dqn"
 
 
 def export_tiny(tmp_path):

@@ -20,6 +20,7 @@ socnav`` never imports this module.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
@@ -41,6 +42,8 @@ class Agent:
     obs_mode = "flat"
 
     def __init__(self, saved: dict[str, Any], name: str) -> None:
+        if not isinstance(saved, dict):
+            raise ValueError(f"{name}: not a socnav agent (a {type(saved).__name__})")
         if saved.get("format") != FORMAT:
             raise ValueError(f"{name}: not a socnav agent (format {saved.get('format')!r}, expected {FORMAT!r})")
         self.name = name
@@ -105,14 +108,31 @@ def load(name_or_path: str | Path) -> Agent:
                 f"({', '.join(shipped()) or 'none shipped'})"
             )
         path = candidate
-    saved = torch.load(path, weights_only=True, map_location="cpu")
+    if path.is_dir():
+        raise ValueError(f"{str(path)!r} is a directory, not an agent file")
+    try:
+        saved = torch.load(path, weights_only=True, map_location="cpu")
+    except Exception as e:  # torch raises what its reader or unpickler met
+        hint = " (a training checkpoint: export its agent first)" if path.name == "checkpoint.pt" else ""
+        raise ValueError(f"{path}: not a socnav agent file{hint}: {type(e).__name__}: {e}") from None
     return Agent(saved, path.stem)
 
 
 def export(checkpoint: str | Path, out: str | Path) -> Path:
-    """Write the agent of a training checkpoint alone, float16, to ``out``."""
-    saved = torch.load(checkpoint, weights_only=False, map_location="cpu")
-    algo = saved.get("algo")
+    """Write the agent of a training checkpoint alone, float16, to ``out`` (never over the
+    checkpoint itself, nor over a run's checkpoint: the run could not resume)."""
+    checkpoint, out = Path(checkpoint), Path(out)
+    # realpath takes `a/missing/../b` to `a/b` as opening the file would.
+    target = Path(os.path.realpath(out))
+    if target == Path(os.path.realpath(checkpoint)) or (target.name == "checkpoint.pt" and (target.parent / "args.json").exists()):
+        raise ValueError(f"{out}: a training checkpoint; write the agent to another file")
+    try:
+        saved = torch.load(checkpoint, weights_only=False, map_location="cpu")
+    except OSError:
+        raise
+    except Exception as e:  # torch raises what its reader or unpickler met
+        raise ValueError(f"{checkpoint}: not a socnav.train checkpoint ({type(e).__name__}: {e})") from None
+    algo = saved.get("algo") if isinstance(saved, dict) else None
     if algo == "dqn":
         from socnav.train.dqn import policy_state
     elif algo == "ppo":
@@ -125,7 +145,6 @@ def export(checkpoint: str | Path, out: str | Path) -> Path:
     agent["config"] = saved["args"]["config"]
     agent["steps"] = int(saved["step"])
     agent.setdefault("action_type", "discrete")
-    out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     torch.save(agent, out)
     return out

@@ -12,7 +12,9 @@ def _add_args(parser: argparse.ArgumentParser, defaults: Any) -> None:
     for f in dataclasses.fields(defaults):
         flag = "--" + f.name.replace("_", "-")
         value = getattr(defaults, f.name)
-        kind = type(value) if value is not None else float
+        # The annotation's type (``int | None`` takes ints), where a None default has none.
+        annotation = str(f.type)
+        kind = type(value) if value is not None else int if annotation.startswith("int") else float
         parser.add_argument(flag, type=kind, default=value, help=f"default: {value}")
 
 
@@ -34,7 +36,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     pl.add_argument("--title")
     args = parser.parse_args(argv)
     if args.command == "export":
-        print(export(args.checkpoint, args.out))
+        try:
+            print(export(args.checkpoint, args.out))
+        except (OSError, ValueError) as e:
+            print(f"python -m socnav.train export: {e}", file=sys.stderr)
+            return 2
         return 0
     if args.command == "plot":
         from socnav.train.plot import DEFAULT_METRICS, plot_runs
@@ -47,7 +53,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     module = dqn if args.command == "dqn" else ppo
     values = {f.name: getattr(args, f.name) for f in dataclasses.fields(module.Args)}
-    module.train(module.Args(**values))
+    run_args = module.Args(**values)
+    try:
+        run_args.check()
+    except ValueError as e:
+        print(f"python -m socnav.train {args.command}: {e}", file=sys.stderr)
+        return 2
+    module.train(run_args)
     return 0
 
 

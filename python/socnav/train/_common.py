@@ -51,6 +51,45 @@ class RunArgs:
     max_minutes: float | None = None
     chunk_steps: int | None = None
 
+    def problems(self) -> list[str]:
+        """What is wrong with these arguments, every problem at once (empty when none); each
+        algorithm's ``Args`` adds its own."""
+        out = [f"--{name.replace('_', '-')} must be at least 1, got {value!r}"
+               for name, value in self._counts() if not (_is_int(value) and value >= 1)]
+        if not (_is_int(self.seed) and 0 <= self.seed < 1 << 64):
+            out.append(f"--seed must be an integer in 0..2**64, got {self.seed!r}")
+        for name, value in (("checkpoint_minutes", self.checkpoint_minutes), ("max_minutes", self.max_minutes)):
+            if value is not None and not (isinstance(value, (int, float)) and 0 < value < float("inf")):
+                out.append(f"--{name.replace('_', '-')} must be a positive number of minutes, got {value!r}")
+        return out
+
+    def _counts(self) -> list[tuple[str, Any]]:
+        """The arguments that count something (at least 1), ``None`` for the unset optional ones."""
+        counts = [("steps", self.steps), ("num_envs", self.num_envs), ("threads", self.threads), ("log_every", self.log_every)]
+        return counts + ([("chunk_steps", self.chunk_steps)] if self.chunk_steps is not None else [])
+
+    def check(self) -> None:
+        """Raise a ``ValueError`` listing every problem of :meth:`problems`, before anything runs."""
+        problems = self.problems()
+        if problems:
+            raise ValueError("invalid training arguments:\n  - " + "\n  - ".join(problems))
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
+def fraction_problems(**values: float) -> list[str]:
+    """A problem for each value outside [0, 1], by its flag."""
+    return [f"--{k.replace('_', '-')} must be in [0, 1], got {v!r}" for k, v in values.items()
+            if not (isinstance(v, (int, float)) and 0.0 <= v <= 1.0)]
+
+
+def positive_problems(**values: float) -> list[str]:
+    """A problem for each value that is not a positive finite number, by its flag."""
+    return [f"--{k.replace('_', '-')} must be a positive number, got {v!r}" for k, v in values.items()
+            if not (isinstance(v, (int, float)) and 0.0 < v < float("inf"))]
+
 
 def seed_everything(seed: int, threads: int) -> np.random.Generator:
     """Seed torch and Python and fix torch's thread count; the run's numpy generator."""
@@ -124,8 +163,11 @@ class EpisodeStats:
         self.total += int(done.sum())
 
     def flush(self) -> dict[str, float]:
+        """The means since the last flush; NaN with ``episodes_logged`` 0 when none finished,
+        so that every log row has the same columns (``progress.csv``'s header is the first
+        row's)."""
         if not self.rows:
-            return {}
+            return {"episodes_logged": 0.0, **{key: float("nan") for key in LOGGED_EPISODE_KEYS}}
         rows = np.concatenate(self.rows).astype(np.float64)
         self.rows.clear()
         out: dict[str, float] = {"episodes_logged": float(rows.shape[0])}
@@ -136,8 +178,9 @@ class EpisodeStats:
         return out
 
 
-#: Arguments that may change between the chunks of one run.
-_CHUNK_ARGS = ("steps", "max_minutes", "chunk_steps", "checkpoint_minutes", "log_every")
+#: Arguments that may change between the chunks of one run (``out`` too: a run's directory may
+#: be moved or copied and resumed there).
+_CHUNK_ARGS = ("steps", "max_minutes", "chunk_steps", "checkpoint_minutes", "log_every", "out")
 
 
 class RunDir:
@@ -147,15 +190,16 @@ class RunDir:
     def __init__(self, path: str | os.PathLike[str], args: Mapping[str, Any]) -> None:
         self.path = Path(path)
         self.path.mkdir(parents=True, exist_ok=True)
+        self.args = dict(args)
         args_file = self.path / "args.json"
-        if args_file.exists():
-            previous = json.loads(args_file.read_text())
-            changed = {k: (previous.get(k), v) for k, v in args.items() if k not in _CHUNK_ARGS and previous.get(k) != v}
-            if changed and self.checkpoint.exists():
-                raise ValueError(
-                    f"{self.path} holds a run with other arguments {changed}; use another --out"
-                )
-        args_file.write_text(json.dumps(dict(args), indent=2, sort_keys=True) + "\n")
+        if args_file.exists() and self.checkpoint.exists():
+            try:
+                previous = json.loads(args_file.read_text())
+            except ValueError as e:
+                raise ValueError(f"{args_file}: not the arguments of a run ({e}); remove it to resume from the checkpoint's") from None
+            if not isinstance(previous, dict):
+                raise ValueError(f"{args_file}: not the arguments of a run (a JSON object); remove it to resume from the checkpoint's")
+            self._check_same_run(previous, args_file)
         self._csv_fields: list[str] | None = None
         self._tb: Any = None
         try:
@@ -198,9 +242,27 @@ class RunDir:
         """The checkpoint to resume from, or None for a fresh run. The progress log is cut back to
         match: rows a stopped run logged after its last checkpoint (or before its first) would
         otherwise appear twice on the learning curve, once from each pass over those steps."""
-        saved = torch.load(self.checkpoint, weights_only=False) if self.checkpoint.exists() else None
+        saved = None
+        if self.checkpoint.exists():
+            try:
+                saved = torch.load(self.checkpoint, weights_only=False)
+            except Exception as e:  # torch raises what its reader or unpickler met
+                raise ValueError(f"{self.checkpoint}: cannot resume from it ({type(e).__name__}: {e})") from None
+            if not (isinstance(saved, dict) and isinstance(saved.get("args"), dict) and "step" in saved):
+                raise ValueError(f"{self.checkpoint}: not a socnav.train checkpoint")
+            # The checkpoint's own arguments decide (args.json may be missing or edited); the run
+            # directory is written only once they agree.
+            self._check_same_run(saved["args"], self.checkpoint)
+        (self.path / "args.json").write_text(json.dumps(self.args, indent=2, sort_keys=True) + "\n")
         self._truncate_progress(after_step=int(saved["step"]) if saved is not None else -1)
         return saved
+
+    def _check_same_run(self, previous: Mapping[str, Any], source: Path) -> None:
+        """Refuse to resume a run made with other arguments (those of ``_CHUNK_ARGS`` may
+        change)."""
+        changed = {k: (previous.get(k), v) for k, v in self.args.items() if k not in _CHUNK_ARGS and previous.get(k) != v}
+        if changed:
+            raise ValueError(f"{self.path} holds a run with other arguments {changed} ({source.name}); use another --out")
 
     def _truncate_progress(self, after_step: int) -> None:
         path = self.path / "progress.csv"

@@ -128,6 +128,22 @@ class Args(common.RunArgs):
     final_epsilon: float = 0.05
     max_grad_norm: float = 10.0
 
+    def _counts(self) -> list[tuple[str, Any]]:
+        return super()._counts() + [
+            ("buffer_size", self.buffer_size),
+            ("batch_size", self.batch_size),
+            ("target_update", self.target_update),
+        ]
+
+    def problems(self) -> list[str]:
+        out = super().problems()
+        if not (common._is_int(self.learning_starts) and self.learning_starts >= 0):
+            out.append(f"--learning-starts must be an integer >= 0, got {self.learning_starts!r}")
+        out += common.fraction_problems(
+            gamma=self.gamma, exploration_fraction=self.exploration_fraction, final_epsilon=self.final_epsilon
+        )
+        return out + common.positive_problems(learning_rate=self.learning_rate, max_grad_norm=self.max_grad_norm)
+
 
 def epsilon(args: Args, step: int) -> float:
     span = max(1.0, args.exploration_fraction * args.steps)
@@ -136,6 +152,7 @@ def epsilon(args: Args, step: int) -> float:
 
 def train(args: Args) -> dict[str, Any]:
     """Train (or resume) a run; returns its last logged scalars."""
+    args.check()
     rng = common.seed_everything(args.seed, args.threads)
     env = common.make_train_env(args.config, args.num_envs, args.seed, args.threads, "discrete")
     run = common.RunDir(args.out, vars(args))

@@ -111,11 +111,35 @@ class Args(common.RunArgs):
     value_coef: float = 0.5
     max_grad_norm: float = 0.5
 
+    def _counts(self) -> list[tuple[str, Any]]:
+        return super()._counts() + [
+            ("rollout_steps", self.rollout_steps),
+            ("epochs", self.epochs),
+            ("minibatches", self.minibatches),
+        ]
+
+    def problems(self) -> list[str]:
+        out = super().problems()
+        if self.action_type not in ("discrete", "continuous"):
+            out.append(f"--action-type must be 'discrete' or 'continuous', got {self.action_type!r}")
+        counts = (self.rollout_steps, self.num_envs, self.minibatches)
+        if all(common._is_int(n) and n >= 1 for n in counts) and self.minibatches > self.rollout_steps * self.num_envs:
+            out.append(
+                f"--minibatches {self.minibatches} is more than a rollout's "
+                f"{self.rollout_steps * self.num_envs} samples (--rollout-steps x --num-envs)"
+            )
+        out += common.fraction_problems(gamma=self.gamma, gae_lambda=self.gae_lambda)
+        out += common.positive_problems(learning_rate=self.learning_rate, clip=self.clip, max_grad_norm=self.max_grad_norm)
+        return out + [
+            f"--{k.replace('_', '-')} must be a number >= 0, got {v!r}"
+            for k, v in (("entropy_coef", self.entropy_coef), ("value_coef", self.value_coef))
+            if not (isinstance(v, (int, float)) and 0.0 <= v < float("inf"))
+        ]
+
 
 def train(args: Args) -> dict[str, Any]:
     """Train (or resume) a run; returns its last logged scalars."""
-    if args.action_type not in ("discrete", "continuous"):
-        raise ValueError(f"action_type must be 'discrete' or 'continuous', got {args.action_type!r}")
+    args.check()
     rng = common.seed_everything(args.seed, args.threads)
     env = common.make_train_env(args.config, args.num_envs, args.seed, args.threads, args.action_type)
     holonomic = env.unwrapped._batch.holonomic
