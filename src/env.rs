@@ -503,6 +503,14 @@ impl BatchEnv {
     /// # Errors
     /// `SimError::Shape` when the batches differ in size or capacities.
     pub fn copy_state_from(&mut self, other: &BatchEnv) -> Result<(), SimError> {
+        // The state's derived columns (the processed obstacles, say) follow from the config's
+        // constants, which the step takes from the batch: another config's would not be its.
+        if other.params != self.params {
+            return Err(SimError::shape(
+                "state",
+                "cannot copy the state of a batch of another config (its step constants differ)",
+            ));
+        }
         if other.n_envs() != self.n_envs() || other.caps != self.caps {
             return Err(SimError::shape(
                 "state",

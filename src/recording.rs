@@ -137,7 +137,16 @@ impl RecordingDir {
                 .strip_suffix(".json")
                 .and_then(|s| s.parse::<u64>().ok())
             {
-                next = next.max(n + 1);
+                // A file numbered u64::MAX leaves no number after it.
+                next = next.max(n.checked_add(1).ok_or_else(|| {
+                    SimError::io_other(
+                        Some(dir),
+                        format!(
+                            "recording directory {}: {name} leaves no number after it",
+                            dir.display()
+                        ),
+                    )
+                })?);
             }
         }
         Ok(Self {
@@ -167,7 +176,10 @@ impl RecordingDir {
 }
 
 fn write_whole(path: &Path, text: &str) -> Result<(), SimError> {
-    let part = path.with_extension("part");
+    // Named after the whole file, so that it replaces nothing else of the directory's.
+    let mut part = path.as_os_str().to_owned();
+    part.push(".part");
+    let part = PathBuf::from(part);
     let io = |e: std::io::Error| SimError::io("cannot write", path, &e);
     fs::write(&part, text).map_err(io)?;
     fs::rename(&part, path).map_err(io)

@@ -292,8 +292,12 @@ class JsonWriter:
         )
         path = self.directory / f"{self._next:08d}.json"
         tmp = path.with_suffix(".json.part")
-        tmp.write_text(doc)
-        tmp.replace(path)  # a file is either whole or absent
+        try:
+            tmp.write_text(doc)
+            tmp.replace(path)  # a file is either whole or absent
+        except OSError:
+            tmp.unlink(missing_ok=True)  # a full disk keeps no half file (and no space taken)
+            raise
         self._next += 1
         self.written.append(path)
         return path
@@ -512,7 +516,7 @@ def collect(
                 print(f"socnav.datasets: {count}/{episodes} episodes", file=sys.stderr)
     except OSError as e:
         raise OSError(e.errno, f"collecting stopped after {count} episodes ({e.strerror}); the episodes "
-                               f"written before stay readable") from e
+                               f"written before stay readable", e.filename) from e
     finally:
         for sink in sinks:
             try:

@@ -22,6 +22,9 @@ use crate::error::SimError;
 pub use validate::validate;
 
 /// The shipped configs, built into the library so that their names work wherever it runs.
+/// The largest config file read (bytes).
+const MAX_CONFIG_BYTES: u64 = 1 << 20;
+
 const SHIPPED: [(&str, &str); 9] = [
     ("exp1", include_str!("../../configs/exp1.toml")),
     ("exp2", include_str!("../../configs/exp2.toml")),
@@ -754,9 +757,24 @@ impl Config {
 
     /// Read and validate a TOML file.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Self, SimError> {
+        use std::io::Read;
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path)
+        // A config is a few kilobytes: a larger file (`/dev/zero`, a dataset given by mistake) is
+        // refused before it fills the memory.
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_CONFIG_BYTES + 1).read_to_end(&mut bytes))
             .map_err(|e| SimError::io("cannot read config", path, &e))?;
+        if bytes.len() as u64 > MAX_CONFIG_BYTES {
+            return Err(SimError::config([format!(
+                "the file is larger than {MAX_CONFIG_BYTES} bytes: not a config"
+            )])
+            .in_file(path));
+        }
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let e = std::io::Error::new(std::io::ErrorKind::InvalidData, e);
+            SimError::io("cannot read config", path, &e)
+        })?;
         Self::from_toml_str(&text).map_err(|e| e.in_file(path))
     }
 

@@ -28,7 +28,7 @@ impl View {
         // 4 % of the image, at least 10 px: enough for the 1 m ticks and the progress bar.
         let margin = (0.04 * size).round().max(10.0);
         let scale = (size - 2.0 * margin) / map_x.max(map_y);
-        let side = |m: f32| ((m * scale + 2.0 * margin).round() as u32).clamp(1, size_px);
+        let side = |m: f32| ((m * scale + 2.0 * margin).round() as u32).clamp(1, size_px.max(1));
         Self {
             width: side(map_x),
             height: side(map_y),

@@ -25,7 +25,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import torch
+
+try:
+    import torch
+except ImportError as e:  # the train extra is not installed
+    raise ImportError("socnav.train needs torch: pip install './python[train]' (or torch itself)") from e
 
 __all__ = ["Agent", "export", "load", "shipped"]
 

@@ -427,6 +427,22 @@ fn a_wall_of_more_segments_than_a_u32_holds_saturates() {
     assert_eq!(socnav::room::segment_count(2.0, 1.0), 2);
 }
 
+/// Contract: a state is copied only between batches of one config: another config's constants
+/// (a human's size, say) would not be the ones its derived columns were made with.
+#[test]
+fn copy_state_from_refuses_a_batch_of_another_config() {
+    let mut env = make(config("exp1"), 2, 0);
+    let mut other_config = config("exp1");
+    other_config.human.diameter *= 1.1;
+    let other = make(other_config, 2, 0);
+    let err = env.copy_state_from(&other).unwrap_err();
+    assert!(
+        matches!(&err, SimError::Shape { what: "state", message } if message.contains("another config")),
+        "{err:?}"
+    );
+    env.copy_state_from(&make(config("exp1"), 2, 7)).unwrap();
+}
+
 /// Contract: a document missing a key is rejected with the path of the key.
 #[test]
 fn set_state_names_the_path_of_a_missing_key() {

@@ -332,6 +332,25 @@ fn partial_toml_fills_defaults() {
     );
 }
 
+/// Contract: a file far larger than any config (`/dev/zero`, a dataset given by mistake) is
+/// refused after its first mebibyte, not read whole.
+#[test]
+fn a_file_larger_than_a_config_is_refused_unread() {
+    let path = std::env::temp_dir().join(format!("socnav-big-config-{}.toml", std::process::id()));
+    std::fs::write(&path, "#".repeat((1 << 20) + 1)).unwrap();
+    let problems = config_problems(Config::from_file(&path));
+    std::fs::remove_file(&path).unwrap();
+    assert!(
+        problems
+            .iter()
+            .any(|p| p.contains("larger than 1048576 bytes")),
+        "{problems:?}"
+    );
+    if Path::new("/dev/zero").exists() {
+        assert!(Config::from_file("/dev/zero").is_err());
+    }
+}
+
 /// Contract: a file that is not TOML at all is a config error, not a panic.
 #[test]
 fn malformed_toml_is_a_config_error() {

@@ -538,3 +538,10 @@ fn a_forming_crowd_shows_its_slots_and_the_walkers_way_to_them() {
         rgb_at(&plain, &view, mid_static)
     );
 }
+
+/// Contract: a view of 0 pixels is a 1-pixel view, not a panic (`clamp(1, 0)`).
+#[test]
+fn a_view_of_no_pixels_is_one_pixel() {
+    let view = socnav::render::View::new(10.0, 10.0, 0);
+    assert_eq!((view.width, view.height), (1, 1));
+}

@@ -166,5 +166,17 @@ fn recording_files_are_numbered_after_the_largest() {
         .unwrap_err()
         .to_string();
     assert!(no_dir.contains("00000041.json"), "{no_dir}");
+    // The temporary file a recording is written through is named after it: a user's
+    // `00000044.part` is not touched.
+    std::fs::write(dir.join("00000044.part"), "mine").unwrap();
+    RecordingDir::open(&dir).unwrap().write("{}", None).unwrap();
+    assert_eq!(
+        std::fs::read_to_string(dir.join("00000044.part")).unwrap(),
+        "mine"
+    );
+    // A file numbered u64::MAX leaves no number after it: an error naming it, not an overflow.
+    std::fs::write(dir.join(format!("{}.json", u64::MAX)), "{}").unwrap();
+    let full = RecordingDir::open(&dir).unwrap_err().to_string();
+    assert!(full.contains(&u64::MAX.to_string()), "{full}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
