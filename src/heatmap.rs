@@ -164,14 +164,7 @@ impl Scene {
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Heatmap, SimError> {
         check_grid(n)?;
-        // Beyond a million radians an f32 angle keeps no fraction of a turn (and `sin_cos`
-        // gives NaN past 2^20).
-        if !(heading.is_finite() && heading.abs() <= 1e6) {
-            return Err(SimError::shape(
-                "heatmap",
-                format!("heatmap: heading {heading} rad is not a finite angle within ±1e6 rad"),
-            ));
-        }
+        check_heading(heading)?;
         let map = (self.after.map_x[0], self.after.map_y[0]);
         let mut scene = self.after.clone();
         let c = scene.chunk();
@@ -270,6 +263,22 @@ fn placement_mask(p: &StepParams, c: &StateChunk, x: f32, y: f32) -> u8 {
             && world::blocker_rect(c, 0, b).distance_sq(x, y) == 0.0
     });
     if outside { cell::OUTSIDE } else { cell::FREE }
+}
+
+/// `heading` (rad) as the robot's heading, or why not: beyond a million radians an f32 angle
+/// keeps no fraction of a turn (and `sin_cos` gives NaN past 2^20).
+///
+/// # Errors
+/// `SimError::Shape` naming the heading.
+pub fn check_heading(heading: f32) -> Result<(), SimError> {
+    if heading.is_finite() && heading.abs() <= 1e6 {
+        Ok(())
+    } else {
+        Err(SimError::shape(
+            "heatmap",
+            format!("heatmap: heading {heading} rad is not a finite angle within ±1e6 rad"),
+        ))
+    }
 }
 
 /// `n` as a grid side, or why not.

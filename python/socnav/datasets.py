@@ -470,12 +470,24 @@ def collect(
 
     if dataset_id is None and json_dir is None:
         raise ValueError("collect needs a sink: dataset_id (Minari) and/or json_dir (SocNavGym JSON)")
+    # Everything is checked before a directory is made.
+    episodes = _batch.check_count("episodes", episodes)
+    if json_dir is not None and obs_mode != "flat":
+        raise ValueError("json_dir needs obs_mode='flat' (the writer drops 0.1.1's padding itself)")
     act, name = _resolve_policy(policy, _batch.check_seed(seed))
     action_type = getattr(act, "action_type", "continuous")
     probe = socnav.make(config, obs_mode=obs_mode, action_type=action_type)
     layout = probe._layout
     spaces = (probe.observation_space, probe.action_space)
     probe.close()
+    if dataset_id is not None and isinstance(spaces[0], gym.spaces.Dict):
+        # Minari writes a block of no records and then cannot read its space back.
+        empty = [key for key, space in spaces[0].spaces.items() if 0 in (space.shape or ())]
+        if empty:
+            raise ValueError(
+                f"{_name(config)} holds no records of {', '.join(empty)}: a Minari dataset of dict "
+                "observations could not be read back; collect with obs_mode='flat'"
+            )
     need = estimate_bytes(config, episodes=episodes, obs_mode=obs_mode, action_type=action_type)
     if json_dir is not None:
         target = Path(json_dir)
@@ -496,8 +508,6 @@ def collect(
         sinks.append(minari_writer)
     json_writer = JsonWriter(json_dir, layout) if json_dir is not None else None
     if json_writer is not None:
-        if obs_mode != "flat":
-            raise ValueError("json_dir needs obs_mode='flat' (the writer drops 0.1.1's padding itself)")
         sinks.append(json_writer)
     start = time.perf_counter()
     count = steps = nbytes = 0
@@ -544,8 +554,16 @@ class RecordEpisodes(gym.Wrapper):  # type: ignore[type-arg]
     sequence)."""
 
     def __init__(self, env: gym.Env[Any, Any], sinks: Sequence[Any]) -> None:
-        super().__init__(env)
         inner: Any = env.unwrapped
+        if getattr(inner, "_batch", None) is None:
+            raise TypeError(f"RecordEpisodes records a socnav.make environment, got {type(inner).__name__}")
+        # What the sinks cannot take is refused now, not at the end of the first episode.
+        for sink in sinks:
+            if not callable(getattr(sink, "add", None)):
+                raise TypeError(f"a sink has add(episode) (and close()), got {type(sink).__name__}")
+            if isinstance(sink, JsonWriter) and inner.obs_mode != "flat":
+                raise ValueError("JsonWriter takes flat observations: make the environment with obs_mode='flat'")
+        super().__init__(env)
         self._batch = inner._batch
         self._config = _plain_config(getattr(inner, "config", None))
         self._layout = inner._layout
@@ -607,17 +625,41 @@ def played_episodes(directory: str | os.PathLike[str], *, obs_mode: str = "flat"
     if not paths:
         raise FileNotFoundError(f"{directory}: no socnav play recordings (NNNNNNNN.socnav.json)")
     for path in paths:
-        side = json.loads(path.read_text())
-        if side.get("format") != "socnav-played/1":
-            raise ValueError(f"{path}: not a socnav play recording (format {side.get('format')!r})")
-        keep = _Keep()
+        try:
+            side = json.loads(path.read_text())
+        except ValueError as e:
+            raise ValueError(f"{path}: not a socnav play recording ({e})") from None
+        if not isinstance(side, dict) or side.get("format") != "socnav-played/1":
+            found = side.get("format") if isinstance(side, dict) else type(side).__name__
+            raise ValueError(f"{path}: not a socnav play recording (format {found!r})")
+        missing = [k for k in ("config", "action_type", "seed", "actions", "steps") if k not in side]
+        if missing:
+            raise ValueError(f"{path}: a socnav play recording without {', '.join(missing)}")
+        yield _replay(path, side, obs_mode)
+
+
+def _replay(path: Path, side: Mapping[str, Any], obs_mode: str) -> Episode:
+    """The episode a play recording's sidecar ``side`` (read from ``path``) names, replayed; any
+    problem of its content is a ``ValueError`` naming the file."""
+    import socnav
+
+    keep = _Keep()
+    try:
         env = RecordEpisodes(socnav.make(side["config"], obs_mode=obs_mode, action_type=side["action_type"]), [keep])
-        env.reset(seed=int(side["seed"]))
+    except (TypeError, ValueError, socnav.SocNavError) as e:
+        raise ValueError(f"{path}: {e}") from None
+    try:
+        env.reset(seed=_batch.check_seed(side["seed"]))
         dtype = np.uint32 if side["action_type"] == "discrete" else np.float32
         for action in side["actions"]:
+            if keep.episode is not None:
+                raise ValueError("it holds actions past the episode's end")
             env.step(np.asarray(action, dtype=dtype))
+    except (TypeError, ValueError, socnav.SocNavError) as e:
+        raise ValueError(f"{path}: {e}") from None
+    finally:
         env.close()
-        if keep.episode is None or len(keep.episode) != int(side["steps"]):
-            raise ValueError(f"{path}: the replay did not end after {side['steps']} steps as the recording did")
-        yield keep.episode
+    if keep.episode is None or len(keep.episode) != int(side["steps"]):
+        raise ValueError(f"{path}: the replay did not end after {side['steps']} steps as the recording did")
+    return keep.episode
 

@@ -81,7 +81,7 @@ class RandomPolicy:
 
     def __call__(self, obs: Any, env: Any) -> np.ndarray:
         inner = getattr(env, "unwrapped", env)
-        n = inner.num_envs
+        n = _batch_of(env).num_envs  # as the other built-ins, any socnav environment (one or a batch)
         if getattr(inner, "action_type", "continuous") == "discrete":
             return self._rng.integers(0, 7, size=n, dtype=np.uint32)
         a = self._rng.uniform(-1.0, 1.0, size=(n, 3)).astype(np.float32)

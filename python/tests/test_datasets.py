@@ -163,6 +163,41 @@ def test_errors_name_the_problem(tmp_path):
         next(iter_episodes("goal", "exp1", episodes=1, obs_mode="pixels"))
     with pytest.raises(ValueError, match="json_dir needs obs_mode='flat'"):
         collect("goal", SHORT, episodes=1, json_dir=tmp_path / "j", obs_mode="dict", progress=False)
+    # Refused before any directory is made.
+    with pytest.raises(ValueError, match="episodes must be at least 1, got 0"):
+        collect("goal", SHORT, episodes=0, json_dir=tmp_path / "none", progress=False)
+    assert not (tmp_path / "none").exists() and not (tmp_path / "j").exists()
+    # exp1 has no laptops or tables: Minari could not read such dict blocks back.
+    with pytest.raises(ValueError, match="holds no records of laptops, tables.*obs_mode='flat'"):
+        collect("goal", "exp1", episodes=1, dataset_id="socnav/empty-v0", root=tmp_path / "m", obs_mode="dict",
+                progress=False)
+    # A recorder refuses what its sinks cannot take when it is made, not at an episode's end.
+    with pytest.raises(ValueError, match="JsonWriter takes flat observations"):
+        RecordEpisodes(socnav.make(SHORT, obs_mode="dict"), [JsonWriter(tmp_path / "k", {})])
+    with pytest.raises(TypeError, match="a sink has add"):
+        RecordEpisodes(socnav.make(SHORT), [object()])
+    with pytest.raises(TypeError, match="records a socnav.make environment, got CartPoleEnv"):
+        RecordEpisodes(gym.make("CartPole-v1"), [])
+
+
+def test_a_bad_play_recording_is_named(tmp_path):
+    from socnav.datasets import played_episodes
+
+    side = {"format": "socnav-played/1", "config": "exp1", "action_type": "discrete", "seed": 0, "steps": 2,
+            "actions": [0] * 300}
+    cases = [
+        ("{not json", "not a socnav play recording"),
+        (json.dumps({k: v for k, v in side.items() if k != "seed"}), "without seed"),
+        (json.dumps({**side, "seed": -1}), "a seed must be in 0..2"),
+        (json.dumps(side), "actions past the episode's end"),
+    ]
+    for k, (text, needle) in enumerate(cases):
+        folder = tmp_path / str(k)
+        folder.mkdir()
+        (folder / "00000000.socnav.json").write_text(text)
+        with pytest.raises(ValueError, match=needle) as err:
+            list(played_episodes(folder))
+        assert "00000000.socnav.json" in str(err.value)
 
 
 # ---- Minari --------------------------------------------------------------------------------------

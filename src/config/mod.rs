@@ -726,7 +726,7 @@ impl Config {
         let config = loop {
             let mut unknown = Vec::new();
             let de =
-                toml::Deserializer::parse(&text).map_err(|e| SimError::config([e.to_string()]))?;
+                toml::Deserializer::parse(&text).map_err(|e| SimError::config([clipped(&e)]))?;
             match serde_ignored::deserialize(de, |path| unknown.push(path.to_string())) {
                 Ok(config) => {
                     problems.extend(unknown.into_iter().map(|k| format!("unknown key `{k}`")));
@@ -740,7 +740,7 @@ impl Config {
                         text = rest;
                     }
                     None => {
-                        problems.push(e.to_string());
+                        problems.push(clipped(&e));
                         return Err(SimError::config(problems));
                     }
                 },
@@ -852,6 +852,21 @@ impl Config {
 
 /// `text` without the `key = value` line of the value that `error` points at, and the problem
 /// naming its dotted key and the value; `None` when the error is not about a single-line value.
+/// A TOML error's text, which quotes the offending line, cut to a readable length (a config of
+/// one long line, machine-written, quoted whole ran to hundreds of kilobytes).
+fn clipped(error: &toml::de::Error) -> String {
+    const MAX_CHARS: usize = 2_000;
+    let text = error.to_string();
+    match text.char_indices().nth(MAX_CHARS) {
+        Some((cut, _)) => format!(
+            "{} ... ({} characters in all)",
+            &text[..cut],
+            text.chars().count()
+        ),
+        None => text,
+    }
+}
+
 fn without_bad_value(text: &str, error: &toml::de::Error) -> Option<(String, String)> {
     let span = error.span()?;
     let start = text[..span.start].rfind('\n').map_or(0, |i| i + 1);
@@ -876,7 +891,12 @@ fn without_bad_value(text: &str, error: &toml::de::Error) -> Option<(String, Str
         .and_then(|l| l.get(1..l.find(']')?))
         .map(str::trim);
     let path = section.map_or(key.to_owned(), |s| format!("{s}.{key}"));
-    let problem = format!("`{path}` = {}: {}", &text[span], error.message());
+    let value = &text[span];
+    let value = match value.char_indices().nth(200) {
+        Some((cut, _)) => format!("{} ...", &value[..cut]),
+        None => value.to_owned(),
+    };
+    let problem = format!("`{path}` = {value}: {}", error.message());
     let mut rest = text[..start].to_owned();
     rest.push_str(&text[end..]);
     Some((rest, problem))

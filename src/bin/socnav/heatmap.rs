@@ -25,7 +25,20 @@ pub fn heatmap(a: &HeatmapArgs) -> Result<(), Box<dyn std::error::Error>> {
         )
         .into());
     }
+    // What the arguments can get wrong is refused before the weights load and the placements run.
     heatmap::check_grid(a.grid)?;
+    if let Some(heading) = a.heading {
+        heatmap::check_heading(heading)?;
+    }
+    if !(socnav::render::MIN_SIZE_PX..=socnav::render::MAX_SIZE_PX).contains(&a.size) {
+        return Err(format!(
+            "--size {}: give a side from {} to {} px",
+            a.size,
+            socnav::render::MIN_SIZE_PX,
+            socnav::render::MAX_SIZE_PX
+        )
+        .into());
+    }
     let config = Config::from_name_or_path(&a.config)?;
     heatmap::require_sngnn(&config, &a.config)?;
     let scorer = Scorer::for_config(&config)?;

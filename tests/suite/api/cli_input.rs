@@ -129,4 +129,17 @@ fn out_of_range_numbers_are_refused_up_front() {
         err.contains("--speed 1000") && err.contains("1/16 to 16"),
         "{err}"
     );
+    // Checked before the SNGNN-v2 weights load (they need not be installed to be refused).
+    for (args, needle) in [
+        (&["--heading", "nan"][..], "heading NaN rad"),
+        (&["--heading", "3e6"], "heading 3000000 rad"),
+        (&["--size", "0"], "--size 0"),
+    ] {
+        let out = socnav(&[&["heatmap", "--out", "never.png"][..], args].concat());
+        let err = refused(&out, 1);
+        assert!(
+            err.contains(needle) && !err.contains("SNGNN-v2 ready"),
+            "{args:?}: {err}"
+        );
+    }
 }

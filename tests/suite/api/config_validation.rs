@@ -356,6 +356,14 @@ fn a_file_larger_than_a_config_is_refused_unread() {
 fn malformed_toml_is_a_config_error() {
     let problems = config_problems(Config::from_toml_str("[robot\nradius = "));
     assert!(!problems.is_empty());
+    // A machine-written config of one long line is not quoted whole.
+    let long = format!("[robot]\nradius = \"{}", "a".repeat(100_000));
+    let problems = config_problems(Config::from_toml_str(&long));
+    assert!(
+        problems.iter().all(|p| p.len() < 3_000) && problems.iter().any(|p| p.contains("in all")),
+        "{:?}",
+        problems.iter().map(String::len).collect::<Vec<_>>()
+    );
 }
 
 /// SocNavGym 0.1.1's `exp1_no_sngnn.yaml` as a JSON dict (spec section 2.1), written out by hand
