@@ -21,10 +21,10 @@ use crate::error::SimError;
 
 pub use validate::validate;
 
-/// The shipped configs, built into the library so that their names work wherever it runs.
 /// The largest config file read (bytes).
 const MAX_CONFIG_BYTES: u64 = 1 << 20;
 
+/// The shipped configs, built into the library so that their names work wherever it runs.
 const SHIPPED: [(&str, &str); 9] = [
     ("exp1", include_str!("../../configs/exp1.toml")),
     ("exp2", include_str!("../../configs/exp2.toml")),
@@ -444,7 +444,7 @@ fn longer_ranges(text: &str) -> Vec<String> {
 }
 
 /// A count range's maximum as i64, a negative one (which validation reports) as 0.
-fn at_most(range: [i32; 2]) -> i64 {
+pub(super) fn at_most(range: [i32; 2]) -> i64 {
     i64::from(range[1].max(0))
 }
 
@@ -850,23 +850,26 @@ impl Config {
     }
 }
 
-/// `text` without the `key = value` line of the value that `error` points at, and the problem
-/// naming its dotted key and the value; `None` when the error is not about a single-line value.
 /// A TOML error's text, which quotes the offending line, cut to a readable length (a config of
 /// one long line, machine-written, quoted whole ran to hundreds of kilobytes).
 fn clipped(error: &toml::de::Error) -> String {
-    const MAX_CHARS: usize = 2_000;
-    let text = error.to_string();
-    match text.char_indices().nth(MAX_CHARS) {
+    clip(&error.to_string(), 2_000)
+}
+
+/// `text` cut after `max_chars` characters, saying how long it was.
+fn clip(text: &str, max_chars: usize) -> String {
+    match text.char_indices().nth(max_chars) {
         Some((cut, _)) => format!(
             "{} ... ({} characters in all)",
             &text[..cut],
             text.chars().count()
         ),
-        None => text,
+        None => text.to_owned(),
     }
 }
 
+/// `text` without the `key = value` line of the value that `error` points at, and the problem
+/// naming its dotted key and the value; `None` when the error is not about a single-line value.
 fn without_bad_value(text: &str, error: &toml::de::Error) -> Option<(String, String)> {
     let span = error.span()?;
     let start = text[..span.start].rfind('\n').map_or(0, |i| i + 1);
@@ -891,12 +894,7 @@ fn without_bad_value(text: &str, error: &toml::de::Error) -> Option<(String, Str
         .and_then(|l| l.get(1..l.find(']')?))
         .map(str::trim);
     let path = section.map_or(key.to_owned(), |s| format!("{s}.{key}"));
-    let value = &text[span];
-    let value = match value.char_indices().nth(200) {
-        Some((cut, _)) => format!("{} ...", &value[..cut]),
-        None => value.to_owned(),
-    };
-    let problem = format!("`{path}` = {value}: {}", error.message());
+    let problem = format!("`{path}` = {}: {}", clip(&text[span], 200), error.message());
     let mut rest = text[..start].to_owned();
     rest.push_str(&text[end..]);
     Some((rest, problem))

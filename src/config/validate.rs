@@ -1,7 +1,7 @@
 //! Cross-field validation of a [`Config`]: returns every problem at once, each naming the key
 //! and the offending value, so a user fixes a file in one go.
 
-use super::{Config, ObsFrame, Shape};
+use super::{Config, ObsFrame, Shape, at_most};
 use crate::limits::{MAX_GROUP, MAX_PERMUTE, MAX_POLYGONS};
 
 /// Fraction of the sampling area that the footprints of the largest entity counts may cover.
@@ -399,8 +399,7 @@ fn check_counts(c: &Config, v: &mut Problems) {
             c.counts.tables[0]
         ));
     }
-    let lone_humans =
-        i64::from(c.counts.dynamic_humans[1].max(0)) + i64::from(c.counts.static_humans[1].max(0));
+    let lone_humans = at_most(c.counts.dynamic_humans) + at_most(c.counts.static_humans);
     if lone_humans + c.counts.max_laptop_users() + c.counts.max_groups() > 0
         && c.human.diameter <= 0.0
     {
@@ -471,11 +470,8 @@ fn check_room_fits(c: &Config, other_problems: bool, v: &mut Problems) {
     }
     let n = &c.counts;
     let disc = |r: f32| std::f32::consts::PI * r * r;
-    let max_group_members = n.max_groups() * i64::from(n.group_size[1]);
-    let humans = i64::from(n.static_humans[1])
-        + i64::from(n.dynamic_humans[1])
-        + n.max_laptop_users()
-        + max_group_members;
+    let max_group_members = n.max_groups() * at_most(n.group_size);
+    let humans = n.max_humans();
     // Entities only (goals may lie anywhere free); a group's disc covers its members; laptops on
     // tables take no floor space.
     let lone_humans = humans - max_group_members;

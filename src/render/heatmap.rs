@@ -198,17 +198,7 @@ pub fn draw(f: &Figure<'_>) -> Result<Pixmap, SimError> {
             "heatmap figure: the heatmap has no SNGNN-v2 field (compute it with a scorer)",
         ));
     }
-    if !(super::MIN_SIZE_PX..=super::MAX_SIZE_PX).contains(&f.panel_px) {
-        return Err(SimError::shape(
-            "heatmap figure",
-            format!(
-                "heatmap figure: panel size {} px is outside {}..={}",
-                f.panel_px,
-                super::MIN_SIZE_PX,
-                super::MAX_SIZE_PX
-            ),
-        ));
-    }
+    super::check_size("heatmap figure", "panel size", f.panel_px)?;
     let floor = dsrnn_floor(f.params);
     let left = panel(f, &h.sngnn, &|q| 1.0 - q)?;
     let right = panel(f, &h.dsrnn, &|r| r / floor)?;

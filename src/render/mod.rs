@@ -58,6 +58,21 @@ pub const MIN_SIZE_PX: u32 = 16;
 /// frame at 256 MiB.
 pub const MAX_SIZE_PX: u32 = 8192;
 
+/// `size_px` as an image side, or a `SimError::Shape` about `what` (the call) naming the `side`
+/// (what the size is of) and the accepted range.
+///
+/// # Errors
+/// As said, when `size_px` is outside `MIN_SIZE_PX..=MAX_SIZE_PX`.
+pub fn check_size(what: &'static str, side: &str, size_px: u32) -> Result<(), SimError> {
+    if (MIN_SIZE_PX..=MAX_SIZE_PX).contains(&size_px) {
+        return Ok(());
+    }
+    Err(SimError::shape(
+        what,
+        format!("{what}: {side} {size_px} px is outside {MIN_SIZE_PX}..={MAX_SIZE_PX}"),
+    ))
+}
+
 /// One frame to draw: environment `env` of a batch, with the robot's trail so far.
 #[derive(Debug, Clone, Copy)]
 pub struct Frame<'a> {
@@ -83,15 +98,7 @@ impl Frame<'_> {
                 n_envs: s.n_envs,
             });
         }
-        if !(MIN_SIZE_PX..=MAX_SIZE_PX).contains(&self.size_px) {
-            return Err(SimError::shape(
-                "render",
-                format!(
-                    "render: image size {} px is outside {MIN_SIZE_PX}..={MAX_SIZE_PX}",
-                    self.size_px
-                ),
-            ));
-        }
+        check_size("render", "image size", self.size_px)?;
         let (mx, my) = (s.map_x[self.env], s.map_y[self.env]);
         if !(mx.is_finite() && my.is_finite() && mx > 0.0 && my > 0.0) {
             return Err(SimError::shape(

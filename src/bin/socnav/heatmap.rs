@@ -30,15 +30,8 @@ pub fn heatmap(a: &HeatmapArgs) -> Result<(), Box<dyn std::error::Error>> {
     if let Some(heading) = a.heading {
         heatmap::check_heading(heading)?;
     }
-    if !(socnav::render::MIN_SIZE_PX..=socnav::render::MAX_SIZE_PX).contains(&a.size) {
-        return Err(format!(
-            "--size {}: give a side from {} to {} px",
-            a.size,
-            socnav::render::MIN_SIZE_PX,
-            socnav::render::MAX_SIZE_PX
-        )
-        .into());
-    }
+    socnav::render::check_size("heatmap figure", "panel size", a.size)
+        .map_err(|e| format!("--size {}: {e}", a.size))?;
     let config = Config::from_name_or_path(&a.config)?;
     heatmap::require_sngnn(&config, &a.config)?;
     let scorer = Scorer::for_config(&config)?;
