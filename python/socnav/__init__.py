@@ -7,7 +7,7 @@
 datasets and SocNavGym JSON, ``socnav.orca`` RVO2's ORCA over numpy, and
 ``socnav.sb3`` (imported on its own: it needs Stable-Baselines3) an SB3 ``VecEnv``, and
 ``socnav.sngnn.install_weights()`` fetches the SNGNN-v2 weights the ``*_sngnn`` configs need. Configs are
-the shipped names (``"exp1"``, ``"exp2"``, ...), TOML paths, or either with a dict of overrides;
+the shipped names (``"exp1"``, ``"exp2"``, ...), TOML or SocNavGym YAML paths, or either with a dict of overrides;
 the shipped ones are also gymnasium ids (``gymnasium.make("socnav/Exp2-v0")``, ``socnav.registration``).
 """
 
@@ -24,6 +24,7 @@ from socnav._socnav import (
     SngnnError,
     SocNavError,
     UsageError,
+    config_toml,
     shipped_configs,
 )
 from socnav._batch import RewardInputs
@@ -54,6 +55,7 @@ __all__ = [
     "SocNavError",
     "SocNavVectorEnv",
     "UsageError",
+    "config_toml",
     "evaluate",
     "make",
     "make_vec",

@@ -26,7 +26,7 @@ def build_batch(
     threads: int | None,
     backend: str = "cpu",
 ) -> Batch:
-    """``config``: a shipped name or a TOML path, or a dict of overrides with an optional
+    """``config``: a shipped name or a TOML or SocNavGym YAML path, or a dict of overrides with an optional
     ``"base"`` key naming the config they apply to (default ``"exp1"``)."""
     if isinstance(config, Mapping):
         overrides = dict(config)

@@ -144,7 +144,7 @@ def make(
     render_mode: str | None = None,
     render_size: int = 400,
 ) -> SocNavEnv:
-    """One environment of ``config`` (a shipped name, a TOML path or a dict of overrides);
+    """One environment of ``config`` (a shipped name, a TOML or SocNavGym YAML path or a dict of overrides);
     ``render_mode="rgb_array"`` makes ``render()`` return frames (``socnav.render``)."""
     return SocNavEnv(
         config,

@@ -48,7 +48,7 @@ def register_envs() -> list[str]:
 def env_spec(config: str | Mapping[str, Any], **kwargs: Any) -> gym.envs.registration.EnvSpec:
     """The ``EnvSpec`` that rebuilds ``socnav.make(config, **kwargs)`` with ``gymnasium.make``
     (what a dataset stores so that ``recover_environment()`` works): the registered id of a
-    shipped config, else ``socnav/Custom-v0`` with the config (a TOML path or a dict of
+    shipped config, else ``socnav/Custom-v0`` with the config (a TOML or SocNavGym YAML path or a dict of
     overrides, JSON-serialisable) in its arguments."""
     if isinstance(config, str) and config in shipped_configs():
         base = gym.spec(env_id(config))

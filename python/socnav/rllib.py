@@ -70,7 +70,7 @@ class _RLlibVectorEnv(gym.vector.VectorWrapper):
 
 def env_creator(env_config: Mapping[str, Any]) -> gym.vector.VectorEnv:
     """The vector environment of one env runner, from RLlib's ``env_config`` (an ``EnvContext``,
-    to which RLlib adds ``num_envs``). Keys: ``config`` (a shipped config name, a TOML path or a
+    to which RLlib adds ``num_envs``). Keys: ``config`` (a shipped config name, a TOML or SocNavGym YAML path or a
     dict of overrides; default ``"exp1"``), ``num_envs``, ``obs_mode`` (default ``"flat"``: RLlib's
     default modules take one vector), ``action_type`` (default ``"discrete"``), ``threads`` (CPU
     threads of the runner's batch; default 1, as a runner has one CPU by default), ``backend``,

@@ -64,7 +64,7 @@ class SocNavSB3VecEnv(VecEnv):
     Parameters
     ----------
     config : str or mapping, default ``"exp1"``
-        A shipped config name, a TOML path, or a dict of overrides with an optional ``"base"``
+        A shipped config name, a TOML or SocNavGym YAML path, or a dict of overrides with an optional ``"base"``
         (as for ``socnav.make_vec``).
     num_envs : int, default 1
         Number of environments in the batch.

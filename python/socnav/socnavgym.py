@@ -10,8 +10,9 @@ and ``interactions`` as lists of index pairs. ``observation_space`` is recompute
 episode's counts, and its ``Dict`` sorts the keys alphabetically as gym's does (which is the order
 SB3's flattening uses).
 
-The config may be a SocNavGym YAML file (``.yaml``/``.yml``, converted key by key; needs PyYAML),
-or anything ``socnav.make`` takes. ``DiscreteActions`` is 0.1.1's wrapper of the same name.
+The config may be a SocNavGym YAML file (``.yaml``/``.yml``, converted key by key in the core, as
+everywhere a config is taken), or anything ``socnav.make`` takes. ``DiscreteActions`` is 0.1.1's
+wrapper of the same name.
 
     env = DiscreteActions(SocNavGymEnv("exp1_no_sngnn.yaml"))
     obs, info = env.reset(seed=0)
@@ -29,7 +30,7 @@ import numpy as np
 from gymnasium import spaces
 
 from socnav import _batch
-from socnav._socnav import DISCRETE_ACTIONS, Batch, ConfigError, ShapeError, socnavgym_config_toml
+from socnav._socnav import DISCRETE_ACTIONS, Batch, ShapeError, config_toml
 
 #: 0.1.1's boolean info keys.
 BOOL_INFO = frozenset(
@@ -40,25 +41,14 @@ INT_INFO = frozenset(["FAILURE_TO_PROGRESS", "TIME_TO_COLLISION"])
 
 
 def load_socnavgym_yaml(path: str | os.PathLike[str]) -> str:
-    """A SocNavGym 0.1.1 YAML config as socnav TOML text (every key converted, the missing
-    ones and values socnav cannot take listed in one ``ConfigError``)."""
-    try:
-        import yaml
-    except ImportError as e:
-        raise ImportError(
-            "reading a SocNavGym YAML config needs PyYAML: pip install pyyaml"
-        ) from e
-    with open(path, encoding="utf-8") as f:
-        parsed = yaml.safe_load(f)
-    if not isinstance(parsed, dict):
-        raise _batch.config_error(
-            [(None, f"a SocNavGym config is a YAML mapping, got {type(parsed).__name__}")], f"{os.fspath(path)}: "
-        )
-    text = _batch.json_text(parsed, lambda problems: _batch.config_error(problems, f"{os.fspath(path)}: "))
-    try:
-        return socnavgym_config_toml(text)
-    except ConfigError as e:
-        raise _batch.config_error(e.problems, f"{os.fspath(path)}: ") from None
+    """A SocNavGym 0.1.1 YAML config as socnav TOML text (every key converted; the missing ones,
+    the ones 0.1.1 does not read and the values socnav cannot take listed in one
+    ``ConfigError``, each message led by the file's name). Any config argument of socnav takes the
+    YAML path itself; this shows what it becomes."""
+    path = os.fspath(path)
+    if not path.endswith((".yaml", ".yml")):
+        raise ValueError(f"a SocNavGym config is a .yaml or .yml file, got {path!r}")
+    return config_toml(path)
 
 
 def _document_error(problems: list[tuple[str | None, str]]) -> ShapeError:
@@ -77,10 +67,7 @@ class SocNavGymEnv(gym.Env):
     def __init__(self, config: str | os.PathLike[str] | Mapping[str, Any] = "exp1", *, threads: int | None = 1) -> None:
         if isinstance(config, os.PathLike):
             config = os.fspath(config)
-        if isinstance(config, str) and config.endswith((".yaml", ".yml")):
-            self._batch: Batch = Batch(config, 1, 0, "disabled", threads, None, load_socnavgym_yaml(config))
-        else:
-            self._batch = _batch.build_batch(config, 1, None, "disabled", threads)
+        self._batch: Batch = _batch.build_batch(config, 1, None, "disabled", threads)
         layout = self._batch.layout()
         self._robot = layout["robot"]
         self._record = layout["record"]

@@ -359,8 +359,8 @@ def make_vec(
     """A vector environment of ``num_envs`` environments.
 
     Args:
-        config: a shipped config name (``socnav.shipped_configs()``), a TOML path, or a dict of
-            overrides in the TOML layout with an optional ``"base"`` name.
+        config: a shipped config name (``socnav.shipped_configs()``), a TOML or SocNavGym YAML
+            path, or a dict of overrides in the TOML layout with an optional ``"base"`` name.
         seed: environment i's first episode has the episode seed ``seed + i`` (``seed`` 0 when
             ``None``); ``reset(seed=...)`` names other episodes.
         obs_mode: ``"dict"`` (SocNavGym's blocks, zero-padded) or ``"flat"`` (one row).

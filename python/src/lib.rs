@@ -934,6 +934,14 @@ fn socnavgym_config_toml(yaml_json: &str) -> PyResult<String> {
     Ok(c.to_toml_string())
 }
 
+/// A config (a shipped name, a TOML file or a SocNavGym 0.1.1 YAML file) resolved and validated,
+/// as socnav TOML with every default written out.
+#[pyfunction]
+fn config_toml(config: &str) -> PyResult<String> {
+    let c = Config::from_name_or_path(config).map_err(py_err)?;
+    Ok(c.to_toml_string())
+}
+
 /// The SNGNN-v2 weight file socnav would load (`SOCNAV_SNGNN_WEIGHTS`, else the cache; a
 /// config's `reward.sngnn_weights` comes between them) and the cache file an install writes.
 #[pyfunction]
@@ -968,6 +976,7 @@ fn _socnav(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Batch>()?;
     m.add_function(wrap_pyfunction!(shipped_configs, m)?)?;
     m.add_function(wrap_pyfunction!(socnavgym_config_toml, m)?)?;
+    m.add_function(wrap_pyfunction!(config_toml, m)?)?;
     m.add_function(wrap_pyfunction!(sngnn_paths, m)?)?;
     m.add_function(wrap_pyfunction!(sngnn_install_from_wheel, m)?)?;
     m.add_function(wrap_pyfunction!(write_gif, m)?)?;

@@ -17,7 +17,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::SimError;
+use crate::error::{ConfigProblem, SimError};
 
 pub use validate::validate;
 
@@ -755,7 +755,8 @@ impl Config {
         }
     }
 
-    /// Read and validate a TOML file.
+    /// Read and validate a config file: socnav's TOML, or SocNavGym 0.1.1's YAML (a `.yaml` or
+    /// `.yml` file, converted by [`Config::from_socnavgym_yaml`]).
     pub fn from_file(path: impl AsRef<Path>) -> Result<Self, SimError> {
         use std::io::Read;
         let path = path.as_ref();
@@ -775,7 +776,12 @@ impl Config {
             let e = std::io::Error::new(std::io::ErrorKind::InvalidData, e);
             SimError::io("cannot read config", path, &e)
         })?;
-        Self::from_toml_str(&text).map_err(|e| e.in_file(path))
+        if is_socnavgym_yaml(path) {
+            Self::from_socnavgym_yaml(&text)
+        } else {
+            Self::from_toml_str(&text)
+        }
+        .map_err(|e| e.in_file(path))
     }
 
     /// Resolve a config name (`"exp1"` → `configs/exp1.toml`) or a path.
@@ -837,6 +843,30 @@ impl Config {
         toml::to_string_pretty(self).expect("a Config always serialises to TOML")
     }
 
+    /// Convert the text of a SocNavGym 0.1.1 YAML config file into a validated socnav config.
+    pub fn from_socnavgym_yaml(text: &str) -> Result<Self, SimError> {
+        let (yaml, values) = socnavgym::parse_yaml(text)?;
+        let values = values
+            .into_iter()
+            .map(ConfigProblem::new)
+            .collect::<Vec<_>>();
+        match (Self::from_socnavgym(&yaml), values.is_empty()) {
+            (result, true) => result,
+            // A value JSON cannot hold was left out as `null`: its own problem replaces the
+            // converter's about the same key, and every other problem is kept.
+            (Ok(_), false) => Err(SimError::Config(values)),
+            (Err(SimError::Config(others)), false) => {
+                let mut problems = values;
+                let named =
+                    |p: &ConfigProblem| problems.iter().any(|v| v.key.is_some() && v.key == p.key);
+                let others: Vec<_> = others.into_iter().filter(|p| !named(p)).collect();
+                problems.extend(others);
+                Err(SimError::Config(problems))
+            }
+            (Err(other), false) => Err(other),
+        }
+    }
+
     /// Convert a SocNavGym 0.1.1 configuration (the YAML file parsed into a JSON value, as the
     /// golden episode headers carry it) into a validated socnav config.
     pub fn from_socnavgym(yaml: &serde_json::Value) -> Result<Self, SimError> {
@@ -848,6 +878,13 @@ impl Config {
             Err(SimError::config(problems))
         }
     }
+}
+
+/// Whether `path` names a SocNavGym YAML config (`.yaml` or `.yml`, in any case).
+pub fn is_socnavgym_yaml(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"))
 }
 
 /// A TOML error's text, which quotes the offending line, cut to a readable length (a config of

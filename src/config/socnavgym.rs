@@ -1,8 +1,12 @@
-//! Import of a SocNavGym 0.1.1 configuration (its YAML file parsed into a JSON value) into a
-//! socnav [`Config`]. Every key of 0.1.1 is mandatory there, so a missing key is an error here
-//! too; all missing or mistyped keys are reported together.
+//! Import of a SocNavGym 0.1.1 configuration into a socnav [`Config`]: its YAML file ([`parse_yaml`]
+//! gives the JSON value that the golden episodes' headers also carry), then [`convert`]. Every key
+//! of 0.1.1 is mandatory there, so a missing key is an error here too, and a key 0.1.1 does not
+//! read is refused (one of a later SocNavGym version says so); all problems are reported together.
 
-use serde_json::Value;
+use std::collections::BTreeSet;
+
+use serde_json::{Map, Number, Value};
+use yaml_rust2::{Yaml, YamlLoader};
 
 use super::{Config, HumanPolicy, Kinematics, RewardKind, Shape};
 use crate::error::SimError;
@@ -11,10 +15,13 @@ use crate::error::SimError;
 struct Reader<'a> {
     root: &'a Value,
     problems: Vec<String>,
+    /// The `(section, key)` pairs read, so that any other key can be refused.
+    read: BTreeSet<(String, String)>,
 }
 
 impl<'a> Reader<'a> {
     fn get(&mut self, section: &str, key: &str) -> Option<&'a Value> {
+        self.read.insert((section.to_owned(), key.to_owned()));
         let value = self.root.get(section).and_then(|s| s.get(key));
         if value.is_none() {
             self.problems
@@ -72,7 +79,7 @@ impl<'a> Reader<'a> {
     }
 
     fn bool(&mut self, section: &str, key: &str) -> bool {
-        match self.get(section, key).map(Value::as_bool) {
+        match self.get(section, key).map(yaml11_bool) {
             Some(Some(b)) => b,
             Some(None) => {
                 self.problems
@@ -89,7 +96,14 @@ pub(super) fn convert(yaml: &Value) -> Result<Config, SimError> {
     let mut r = Reader {
         root: yaml,
         problems: Vec::new(),
+        read: BTreeSet::new(),
     };
+    if !yaml.is_object() {
+        return Err(SimError::config([format!(
+            "a SocNavGym config is a mapping of sections, got {}",
+            kind(yaml)
+        )]));
+    }
     let mut c = Config::default();
     c.render.resolution = r.int("rendering", "resolution_view").max(0) as u32;
     c.render.frame_ms = r.int("rendering", "milliseconds").max(0) as u32;
@@ -148,7 +162,9 @@ pub(super) fn convert(yaml: &Value) -> Result<Config, SimError> {
         "sngnn" => RewardKind::Sngnn,
         other => {
             r.problems.push(format!(
-                "SocNavGym `env.reward_file` {other:?}: only the built-in dsrnn and sngnn rewards can be imported"
+                "SocNavGym `env.reward_file` {other:?}: socnav imports the built-in dsrnn and sngnn \
+                 rewards; a reward of your own goes through `reward_fn` (Python) on top of one of \
+                 them"
             ));
             RewardKind::Dsrnn
         }
@@ -185,9 +201,163 @@ pub(super) fn convert(yaml: &Value) -> Result<Config, SimError> {
     c.room.corridors = r.bool("env", "add_corridors");
     c.room.size_x = r.range("map_x");
     c.room.size_y = r.range("map_y");
+    let unread = unread_keys(yaml, &r.read);
+    r.problems.extend(unread);
     if r.problems.is_empty() {
         Ok(c)
     } else {
         Err(SimError::config(r.problems))
+    }
+}
+
+/// Keys that SocNavGym's `v0.1` branch added after 0.1.1 (spec section 2): refused with that
+/// reason, since socnav follows 0.1.1.
+const LATER_KEYS: [(&str, &str); 2] = [
+    ("episode", "end_with_collision"),
+    ("env", "max_rotation_human"),
+];
+
+/// A problem for every section and key of `root` that 0.1.1 does not read.
+fn unread_keys(root: &Value, read: &BTreeSet<(String, String)>) -> Vec<String> {
+    let Some(sections) = root.as_object() else {
+        return Vec::new();
+    };
+    let mut problems = Vec::new();
+    for (section, keys) in sections {
+        if !read.iter().any(|(s, _)| s == section) {
+            problems.push(format!(
+                "`{section}` is not a section of SocNavGym 0.1.1's config"
+            ));
+            continue;
+        }
+        let Some(keys) = keys.as_object() else {
+            problems.push(format!(
+                "SocNavGym `{section}` must be a mapping of keys, got {}",
+                kind(keys)
+            ));
+            continue;
+        };
+        for key in keys.keys() {
+            if read.contains(&(section.clone(), key.clone())) {
+                continue;
+            }
+            if LATER_KEYS.contains(&(section.as_str(), key.as_str())) {
+                problems.push(format!(
+                    "`{section}.{key}` belongs to a later SocNavGym version (the v0.1 branch); \
+                     socnav follows 0.1.1, which has no such key: remove it"
+                ));
+            } else {
+                problems.push(format!(
+                    "`{section}.{key}` is not a key of SocNavGym 0.1.1's config"
+                ));
+            }
+        }
+    }
+    problems
+}
+
+/// A boolean as PyYAML (YAML 1.1, which 0.1.1 loads its configs with) reads one: `true`/`false`
+/// in any case, and also `yes`/`no`/`on`/`off`, which YAML 1.2 parsers leave as strings.
+fn yaml11_bool(value: &Value) -> Option<bool> {
+    match value {
+        Value::Bool(b) => Some(*b),
+        Value::String(s) => match s.to_ascii_lowercase().as_str() {
+            "yes" | "on" | "true" => Some(true),
+            "no" | "off" | "false" => Some(false),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// What kind of value `v` is, for messages.
+fn kind(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "nothing",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "a list",
+        Value::Object(_) => "a mapping",
+    }
+}
+
+/// A SocNavGym YAML file's text as the JSON value [`convert`] reads (the form the golden episodes'
+/// headers carry), and a problem for each value JSON cannot hold (a NaN or an infinity, named by
+/// its dotted key and left out as `null`); text that is not YAML is the error.
+pub(super) fn parse_yaml(text: &str) -> Result<(Value, Vec<String>), SimError> {
+    let docs = YamlLoader::load_from_str(text)
+        .map_err(|e| SimError::config([format!("not valid YAML: {e}")]))?;
+    let [doc] = docs.as_slice() else {
+        return Err(SimError::config([format!(
+            "a SocNavGym config is one YAML document, got {}",
+            docs.len()
+        )]));
+    };
+    let mut problems = Vec::new();
+    let value = to_json(doc, "", &mut problems);
+    Ok((value, problems))
+}
+
+/// `yaml` as JSON; `path` is its dotted key, for the problems.
+fn to_json(yaml: &Yaml, path: &str, problems: &mut Vec<String>) -> Value {
+    let named = |path: &str| {
+        if path.is_empty() {
+            "the document".to_owned()
+        } else {
+            format!("`{path}`")
+        }
+    };
+    match yaml {
+        Yaml::Null => Value::Null,
+        Yaml::Boolean(b) => Value::Bool(*b),
+        Yaml::Integer(i) => Value::Number((*i).into()),
+        Yaml::String(s) => Value::String(s.clone()),
+        Yaml::Real(text) => match yaml.as_f64().and_then(Number::from_f64) {
+            Some(n) => Value::Number(n),
+            None => {
+                problems.push(format!(
+                    "{} must be a finite number, got {text}",
+                    named(path)
+                ));
+                Value::Null
+            }
+        },
+        Yaml::Array(items) => Value::Array(
+            items
+                .iter()
+                .enumerate()
+                .map(|(i, item)| to_json(item, &format!("{path}[{i}]"), problems))
+                .collect(),
+        ),
+        Yaml::Hash(entries) => {
+            let mut map = Map::new();
+            for (key, item) in entries {
+                let key = match key {
+                    Yaml::String(k) => k.clone(),
+                    Yaml::Integer(i) => i.to_string(),
+                    Yaml::Boolean(b) => b.to_string(),
+                    other => {
+                        problems.push(format!(
+                            "{}: a key must be a name, got {other:?}",
+                            named(path)
+                        ));
+                        continue;
+                    }
+                };
+                let inner = if path.is_empty() {
+                    key.clone()
+                } else {
+                    format!("{path}.{key}")
+                };
+                let item = to_json(item, &inner, problems);
+                map.insert(key, item);
+            }
+            Value::Object(map)
+        }
+        Yaml::Alias(_) | Yaml::BadValue => {
+            problems.push(format!("{}: an unresolved YAML alias", named(path)));
+            Value::Null
+        }
     }
 }

@@ -12,6 +12,7 @@ pub mod gpu;
 pub mod npz;
 pub mod reference;
 pub mod scene;
+pub mod skip;
 pub mod sngnn;
 pub mod sngnn_rollout;
 pub mod torch_zip;

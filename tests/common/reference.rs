@@ -21,9 +21,12 @@ pub fn present(test: &str) -> bool {
     let dir = ref_dir();
     let here = dir.is_dir();
     if !here {
-        println!(
-            "SKIP {test}: no RVO2/PySocialForce reference data at {} (SOCNAV_REF_DIR)",
-            dir.display()
+        super::skip::skip(
+            None,
+            &format!(
+                "{test}: no RVO2/PySocialForce reference data at {} (SOCNAV_REF_DIR)",
+                dir.display()
+            ),
         );
     }
     here

@@ -16,13 +16,19 @@ pub fn real_weights() -> Option<Weights> {
             "no SNGNN-v2 weights at {}: install them with `socnav sngnn install`",
             path.display()
         );
-        if std::env::var("REQUIRE_SNGNN").is_ok_and(|v| v == "1") {
-            panic!("REQUIRE_SNGNN=1 but {why}");
-        }
-        eprintln!("SKIPPED: {why}");
+        super::skip::skip(Some("REQUIRE_SNGNN"), &why);
         return None;
     }
     Some(Weights::load(&path).expect("the installed weights load"))
+}
+
+/// `config` with the DSRNN reward where it has SNGNN-v2's: for tests about something other than
+/// the reward (spawns, interaction pairs), which then run without the weight file.
+pub fn without_sngnn_reward(mut config: socnav::Config) -> socnav::Config {
+    if config.reward.kind == socnav::config::RewardKind::Sngnn {
+        config.reward.kind = socnav::config::RewardKind::Dsrnn;
+    }
+    config
 }
 
 /// The six golden episodes with SNGNN graph dumps.

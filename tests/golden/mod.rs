@@ -46,9 +46,12 @@ pub fn golden_dir_or_skip(test: &str) -> Option<PathBuf> {
     if dir.is_dir() {
         return Some(dir);
     }
-    println!(
-        "SKIP {test}: no golden episodes at {} (SOCNAV_GOLDEN_DIR)",
-        dir.display()
+    crate::common::skip::skip(
+        None,
+        &format!(
+            "{test}: no golden episodes at {} (SOCNAV_GOLDEN_DIR)",
+            dir.display()
+        ),
     );
     None
 }

@@ -62,7 +62,7 @@ pub struct InstallArgs {
 
 #[derive(Debug, Args)]
 pub struct PathArgs {
-    /// Config whose `reward.sngnn_weights` takes part (a shipped name or a TOML path).
+    /// Config whose `reward.sngnn_weights` takes part (a shipped name or a TOML or SocNavGym YAML path).
     #[arg(long)]
     pub config: Option<String>,
 }
@@ -150,7 +150,8 @@ pub enum PolicyChoice {
 #[derive(Debug, Args)]
 pub struct RunArgs {
     /// Config: a shipped name (exp1, exp2, exp3, lroom_mixed, corridor_mixed, stress; with the
-    /// SNGNN-v2 reward exp1_sngnn, exp2_sngnn, exp3_sngnn) or a TOML path.
+    /// SNGNN-v2 reward exp1_sngnn, exp2_sngnn, exp3_sngnn), a TOML path or a SocNavGym 0.1.1
+    /// YAML path (`.yaml`/`.yml`).
     #[arg(long, default_value = "exp1")]
     pub config: String,
     /// Number of environments.
@@ -260,7 +261,7 @@ pub struct RenderArgs {
 
 #[derive(Debug, Args)]
 pub struct SoakArgs {
-    /// Configs, comma-separated (names or TOML paths).
+    /// Configs, comma-separated (names or TOML or SocNavGym YAML paths).
     #[arg(long, default_value = "exp1,exp2,exp3")]
     pub configs: String,
     /// Environment steps per config (the whole run; a resumed run counts what is recorded).
@@ -318,7 +319,7 @@ pub struct PlayArgs {
 #[derive(Debug, Args)]
 pub struct HeatmapArgs {
     /// Config with the SNGNN-v2 reward: a shipped name (exp1_sngnn, exp2_sngnn, exp3_sngnn) or a
-    /// TOML path.
+    /// TOML or SocNavGym YAML path.
     #[arg(long, default_value = "exp2_sngnn")]
     pub config: String,
     /// Seed of the scene.

@@ -96,7 +96,7 @@ fn soak_resumes_only_its_own_record_and_overwrites_nothing_else() {
 #[test]
 fn output_that_cannot_be_written_is_an_error_not_a_panic() {
     let Ok(full) = std::fs::File::create("/dev/full") else {
-        println!("SKIP: no /dev/full here");
+        crate::common::skip::skip(None, "no /dev/full here");
         return;
     };
     let out = Command::new(env!("CARGO_BIN_EXE_socnav"))
@@ -142,4 +142,49 @@ fn out_of_range_numbers_are_refused_up_front() {
             "{args:?}: {err}"
         );
     }
+}
+
+/// Contract: a SocNavGym 0.1.1 YAML file is a `--config` like a TOML file: `run` rolls out the
+/// same episodes as its shipped twin, `check-config` prints the converted TOML, and a bad key in it
+/// is refused by name.
+#[test]
+fn socnavgym_yaml_configs_run_as_their_shipped_twins() {
+    let yaml = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/golden/socnavgym/configs/exp2_no_sngnn.yaml");
+    let yaml = yaml.to_str().unwrap();
+    let outcome = |config: &str| {
+        let args = ["run", "--config", config, "--envs", "8", "--steps", "60"];
+        let out = socnav(&[&args[..], &["--backend", "cpu", "--json"]].concat());
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let o = v.as_object_mut().unwrap();
+        for timing in ["config", "env_steps_per_s", "seconds"] {
+            o.remove(timing).unwrap();
+        }
+        v
+    };
+    assert_eq!(outcome(yaml), outcome("exp2"));
+    let text = |args: &[&str]| String::from_utf8(socnav(args).stdout).unwrap();
+    let skip_title = |s: String| s.lines().skip(1).collect::<Vec<_>>().join("\n");
+    assert_eq!(
+        skip_title(text(&["check-config", yaml])),
+        skip_title(text(&["check-config", "exp2"]))
+    );
+    let dir = scratch("yaml");
+    let bad = dir.join("later.yaml");
+    let source = std::fs::read_to_string(yaml).unwrap();
+    std::fs::write(
+        &bad,
+        source.replace("env:\n", "env:\n  max_rotation_human: 1.57\n"),
+    )
+    .unwrap();
+    let err = refused(&socnav(&["check-config", bad.to_str().unwrap()]), 1);
+    assert!(
+        err.contains("`env.max_rotation_human` belongs to a later SocNavGym version"),
+        "{err}"
+    );
 }

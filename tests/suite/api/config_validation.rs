@@ -23,13 +23,6 @@ fn configs_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("configs")
 }
 
-fn golden_dir() -> PathBuf {
-    match std::env::var_os("SOCNAV_GOLDEN_DIR") {
-        Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/golden/socnavgym"),
-    }
-}
-
 /// Every `configs/*.toml`, sorted by name.
 fn shipped_configs() -> Vec<PathBuf> {
     let mut paths: Vec<PathBuf> = std::fs::read_dir(configs_dir())
@@ -481,27 +474,147 @@ fn golden_header_config(dir: &Path, config_name: &str) -> Option<Value> {
     Some(root["header"]["config"].clone())
 }
 
+/// The golden configs (0.1.1's file stems) and their shipped twins (`configs/<stem>.toml`).
+const GOLDEN_TWINS: [(&str, &str); 7] = [
+    ("exp1_no_sngnn", "exp1"),
+    ("exp2_no_sngnn", "exp2"),
+    ("exp3_no_sngnn", "exp3"),
+    ("exp1_with_sngnn", "exp1_sngnn"),
+    ("exp2_with_sngnn", "exp2_sngnn"),
+    ("lroom_mixed", "lroom_mixed"),
+    ("corridor_mixed", "corridor_mixed"),
+];
+
+/// The SocNavGym 0.1.1 YAML files the golden episodes were recorded with.
+fn golden_yaml(stem: &str) -> PathBuf {
+    crate::golden::published_dir()
+        .join("configs")
+        .join(format!("{stem}.yaml"))
+}
+
+/// Contract: a SocNavGym 0.1.1 YAML file is a config wherever a path is taken
+/// (`Config::from_file`, `from_name_or_path`), parsed in the library, and gives exactly the
+/// shipped twin, so the same trajectories.
+#[test]
+fn socnavgym_yaml_files_load_as_their_shipped_twins() {
+    for (golden, stem) in GOLDEN_TWINS {
+        let path = golden_yaml(golden);
+        let ours = Config::from_file(configs_dir().join(format!("{stem}.toml"))).unwrap();
+        let theirs = Config::from_file(&path).unwrap_or_else(|e| panic!("{golden}.yaml: {e}"));
+        assert_eq!(
+            ours, theirs,
+            "{golden}.yaml differs from configs/{stem}.toml"
+        );
+        let by_name = Config::from_name_or_path(path.to_str().unwrap()).unwrap();
+        assert_eq!(ours, by_name);
+    }
+    // `.yml` and any case of the extension are YAML too; the text is the same.
+    let dir = tempdir("yml");
+    let yml = dir.join("exp2.YML");
+    std::fs::copy(golden_yaml("exp2_no_sngnn"), &yml).unwrap();
+    assert_eq!(
+        Config::from_file(&yml).unwrap(),
+        Config::from_name_or_path("exp2").unwrap()
+    );
+}
+
+/// A fresh directory under the target directory for one test's files.
+fn tempdir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("config_validation_{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Contract: a SocNavGym YAML file's problems come all at once, each naming its key and the file:
+/// a key 0.1.1 does not read, the two keys of a later SocNavGym version (saying so), a section of
+/// its own, a value JSON cannot hold (named once, not again as mistyped), a custom reward file
+/// (pointing at `reward_fn`), and a mistyped boolean; PyYAML's `yes`/`no`/`on`/`off` are booleans.
+#[test]
+fn socnavgym_yaml_problems_are_reported_together() {
+    let text = std::fs::read_to_string(golden_yaml("exp1_no_sngnn")).unwrap();
+    let replace = |text: &str, from: &str, to: &str| {
+        assert!(text.contains(from), "{from}");
+        text.replacen(from, to, 1)
+    };
+    let mut bad = replace(
+        &text,
+        "  episode_length: 200\n",
+        "  episode_length: 200\n  end_with_collision: True\n",
+    );
+    bad = replace(
+        &bad,
+        "  reward_file: dsrnn\n",
+        "  reward_file: my_reward\n  max_rotation_human: 1.57\n  colour: red\n",
+    );
+    bad = replace(&bad, "  margin: 0.5\n", "  margin: .nan\n");
+    bad = replace(&bad, "  add_corridors: false\n", "  add_corridors: maybe\n");
+    bad.push_str("chair:\n  chair_radius: 0.3\n");
+    let dir = tempdir("yaml_problems");
+    let path = dir.join("bad.yaml");
+    std::fs::write(&path, &bad).unwrap();
+    let problems = config_problems(Config::from_file(&path));
+    let expected = [
+        "`env.margin` must be a finite number, got .nan",
+        "`env.reward_file` \"my_reward\"",
+        "`env.add_corridors` must be true or false",
+        "`chair` is not a section of SocNavGym 0.1.1's config",
+        "`env.colour` is not a key of SocNavGym 0.1.1's config",
+        "`env.max_rotation_human` belongs to a later SocNavGym version",
+        "`episode.end_with_collision` belongs to a later SocNavGym version",
+    ];
+    assert_eq!(problems.len(), expected.len(), "{problems:#?}");
+    for (problem, text) in problems.iter().zip(expected) {
+        assert!(problem.contains(text), "{problem:?} lacks {text:?}");
+        assert!(
+            problem.starts_with(&format!("{}: ", path.display())),
+            "{problem}"
+        );
+    }
+    assert!(problems[1].contains("`reward_fn`"), "{}", problems[1]);
+
+    // YAML 1.1 booleans, as 0.1.1's PyYAML reads them.
+    let yes = replace(&text, "  add_corridors: false\n", "  add_corridors: yes\n");
+    let yes = replace(
+        &yes,
+        "  get_padded_observations: false\n",
+        "  get_padded_observations: On\n",
+    );
+    let path = dir.join("yes.yaml");
+    std::fs::write(&path, yes).unwrap();
+    let config = Config::from_file(&path).unwrap();
+    assert!(config.room.corridors && config.observation.padded);
+
+    // Not YAML, not a mapping, two documents.
+    for (name, text, expected) in [
+        ("broken.yaml", "a: [\n", "not valid YAML"),
+        (
+            "list.yaml",
+            "- a\n- b\n",
+            "a mapping of sections, got a list",
+        ),
+        ("two.yaml", "a: 1\n---\nb: 2\n", "one YAML document, got 2"),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let problems = config_problems(Config::from_file(&path));
+        assert!(
+            problems.len() == 1 && problems[0].contains(expected),
+            "{name}: {problems:?}"
+        );
+    }
+}
+
 /// Contract (DESIGN.md section 5, replay rules): the config a golden episode was recorded with,
 /// imported with `Config::from_socnavgym`, is exactly `configs/<stem>.toml`.
 #[test]
 fn golden_socnavgym_configs_equal_shipped_tomls() {
-    let dir = golden_dir();
-    if !dir.is_dir() {
-        println!(
-            "SKIP golden_socnavgym_configs_equal_shipped_tomls: no golden directory at {}",
-            dir.display()
-        );
+    let Some(dir) =
+        crate::golden::golden_dir_or_skip("golden_socnavgym_configs_equal_shipped_tomls")
+    else {
         return;
-    }
-    let pairs = [
-        ("exp1_no_sngnn", "exp1"),
-        ("exp2_no_sngnn", "exp2"),
-        ("exp3_no_sngnn", "exp3"),
-        ("exp1_with_sngnn", "exp1_sngnn"),
-        ("exp2_with_sngnn", "exp2_sngnn"),
-        ("lroom_mixed", "lroom_mixed"),
-        ("corridor_mixed", "corridor_mixed"),
-    ];
+    };
+    let pairs = GOLDEN_TWINS;
     let mut checked = 0;
     for (golden, stem) in pairs {
         let Some(dict) = golden_header_config(&dir, golden) else {

@@ -111,10 +111,13 @@ fn a_batch_larger_than_the_device_is_refused_with_out_of_memory_and_the_batch_be
         .min(dev.limits.max_buffer_size);
     let n_envs = (max / (4 * state_f32_words as u64) + 1) as usize;
     if n_envs * state_f32_words * 4 > 1 << 31 {
-        eprintln!(
-            "SKIPPED: {} binds {max} bytes; a batch beyond it needs more host memory than this \
-             test takes",
-            dev.adapter.name
+        crate::common::skip::skip(
+            None,
+            &format!(
+                "{} binds {max} bytes; a batch beyond it needs more host memory than this test \
+                 takes",
+                dev.adapter.name
+            ),
         );
         return;
     }
