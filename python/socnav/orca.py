@@ -256,7 +256,8 @@ def compute_velocities(
         a value that is not a real number, NaN or infinity anywhere, a negative ``radius``,
         ``max_speed`` or ``neighbor_dist``, a non-positive time horizon or ``time_step``, a
         ``max_neighbors`` that is not a whole number >= 0, an obstacle with fewer than 2
-        vertices or with a zero-length edge.
+        vertices. A repeated vertex (a zero-length edge) is taken as RVO2 takes it: that edge's
+        direction is NaN and never reaches a velocity through RVO2's own arithmetic.
 
     See Also
     --------

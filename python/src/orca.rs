@@ -139,17 +139,6 @@ fn orca_message(e: &OrcaError, scene: &Scene) -> String {
             x,
             y,
         } => format!("obstacles[{polygon}][{vertex}] = ({x}, {y}): vertices must be finite"),
-        OrcaError::DegenerateEdge { polygon, vertex } => {
-            let verts = scene.obstacles.get(polygon).map_or(&[][..], Vec::as_slice);
-            let next = (vertex + 1) % verts.len().max(1);
-            let at = |v: usize| verts.get(v).copied().unwrap_or([f32::NAN; 2]);
-            let ([ax, ay], [bx, by]) = (at(vertex), at(next));
-            format!(
-                "obstacles[{polygon}] edge from vertex {vertex} ({ax}, {ay}) to vertex {next} \
-                 ({bx}, {by}) is degenerate: zero length, or a squared length float32 cannot \
-                 hold (do not repeat the first vertex at the end: polygons close themselves)"
-            )
-        }
         OrcaError::InvalidParameter {
             agent: Some(i),
             name,

@@ -26,18 +26,6 @@ pub enum OrcaError {
         /// y coordinate (m).
         y: f32,
     },
-    /// The edge from `vertex` to the next vertex has zero length, or its squared length
-    /// under- or overflows `f32`, so it has no direction.
-    #[error(
-        "obstacle polygon {polygon} edge from vertex {vertex} is degenerate (zero length or \
-         squared length not representable in f32)"
-    )]
-    DegenerateEdge {
-        /// Index of the polygon.
-        polygon: usize,
-        /// Index of the edge's start vertex inside the polygon.
-        vertex: usize,
-    },
     /// An agent or scene parameter is outside its valid range.
     #[error("invalid {name} = {value}{}: {reason}", agent_suffix(*.agent))]
     InvalidParameter {

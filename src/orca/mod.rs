@@ -87,7 +87,7 @@ pub use neighbors::{
     Neighbor, OBSTACLE_REJECT_FACTOR, agent_neighbors, insert_agent_neighbor,
     insert_obstacle_neighbor, obstacle_neighbors, obstacle_neighbors_tree, obstacle_range_sq,
 };
-pub use obstacle_build::process_obstacles;
+pub use obstacle_build::{first_zero_length_edge, process_obstacles};
 pub use obstacles::{NONE, ObstacleScratch, ObstacleSet, ObstacleTree, ObstacleVerts, RVO_EPSILON};
 pub use scene::{AgentRecord, Scene, Simulator, compute_velocities, compute_velocities_batch};
 pub use vector::{Vec2, det, dist_sq_point_segment, left_of};

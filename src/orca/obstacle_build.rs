@@ -18,11 +18,15 @@ use super::vector::{Vec2, det, left_of};
 /// Each polygon is a list of `[x, y]` vertices in metres, counter-clockwise; 2 vertices make a
 /// segment that blocks from both sides. On error `out` is left empty.
 ///
+/// Like RVO2, it takes a zero-length edge (a repeated vertex) or one whose squared length
+/// over- or underflows `f32`: the edge's unit direction is then NaN (or zero), its vertex
+/// convex, and RVO2's arithmetic carries on (such an edge is never an obstacle neighbour, since
+/// its distance is NaN, and a line uses its direction only where RVO2's does).
+/// [`first_zero_length_edge`] finds one, for callers that build their own polygons.
+///
 /// # Errors
-/// [`OrcaError::TooFewVertices`] for a polygon with fewer than 2 vertices,
-/// [`OrcaError::NonFiniteVertex`] for NaN/infinite coordinates, and
-/// [`OrcaError::DegenerateEdge`] for a zero-length edge (or one whose squared length is not a
-/// positive finite `f32`).
+/// [`OrcaError::TooFewVertices`] for a polygon with fewer than 2 vertices, and
+/// [`OrcaError::NonFiniteVertex`] for NaN/infinite coordinates: what RVO2 cannot take.
 pub fn process_obstacles<P: AsRef<[[f32; 2]]>>(
     polygons: &[P],
     scratch: &mut ObstacleScratch,
@@ -63,16 +67,26 @@ fn validate_polygons<P: AsRef<[[f32; 2]]>>(polygons: &[P]) -> Result<(), OrcaErr
                 });
             }
         }
-        for vertex in 0..verts.len() {
-            let a = Vec2::from_array(verts[vertex]);
-            let b = Vec2::from_array(verts[(vertex + 1) % verts.len()]);
-            let len_sq = (b - a).abs_sq();
-            if !(len_sq > 0.0 && len_sq.is_finite()) {
-                return Err(OrcaError::DegenerateEdge { polygon, vertex });
-            }
-        }
     }
     Ok(())
+}
+
+/// The first edge `(polygon, vertex)` (from `vertex` to the next) with no direction: zero
+/// length, or a squared length that is not a positive finite `f32`. [`process_obstacles`] takes
+/// such edges as RVO2 does; a caller whose polygons must have a direction on every edge (the
+/// simulation's own obstacles) checks with this.
+pub fn first_zero_length_edge<P: AsRef<[[f32; 2]]>>(polygons: &[P]) -> Option<(usize, usize)> {
+    polygons.iter().enumerate().find_map(|(polygon, verts)| {
+        let verts = verts.as_ref();
+        (0..verts.len())
+            .find(|&vertex| {
+                let a = Vec2::from_array(verts[vertex]);
+                let b = Vec2::from_array(verts[(vertex + 1) % verts.len()]);
+                let len_sq = (b - a).abs_sq();
+                !(len_sq > 0.0 && len_sq.is_finite())
+            })
+            .map(|vertex| (polygon, vertex))
+    })
 }
 
 /// RVO2's `addObstacle`: appends one polygon's vertices, linked in a ring.
@@ -316,6 +330,26 @@ mod tests {
         assert_eq!(set.tree().vertex.len(), v.len());
     }
 
+    /// RVO2 takes a repeated vertex: the zero-length edge's direction is NaN, its vertices
+    /// convex, and the other edges are linked and directed as usual.
+    #[test]
+    fn a_repeated_vertex_is_taken_as_rvo2_takes_it() {
+        let polys = vec![vec![[0.0_f32, 0.0], [1.0, 0.0], [1.0, 0.0], [1.0, 1.0]]];
+        assert_eq!(first_zero_length_edge(&polys), Some((0, 1)));
+        let mut set = ObstacleSet::new();
+        process_obstacles(&polys, &mut ObstacleScratch::new(), &mut set).unwrap();
+        let v = set.as_view();
+        assert_eq!(v.len(), 4);
+        assert!(v.dir(1).x.is_nan() && v.dir(1).y.is_nan());
+        assert_eq!(v.dir(2), Vec2::new(0.0, 1.0));
+        assert!(v.convex[1] == 1 && v.convex[2] == 1);
+        assert_eq!((v.next(1), v.prev(2)), (2, 1));
+        let fine = vec![vec![[0.0_f32, 0.0], [1.0, 0.0], [1.0, 1.0]]];
+        assert_eq!(first_zero_length_edge(&fine), None);
+        let overflow = vec![vec![[-3e19_f32, 0.0], [3e19, 0.0]]];
+        assert_eq!(first_zero_length_edge(&overflow), Some((0, 0)));
+    }
+
     #[test]
     fn degenerate_inputs_are_errors() {
         let mut set = ObstacleSet::new();
@@ -326,14 +360,6 @@ mod tests {
             Err(OrcaError::TooFewVertices {
                 polygon: 0,
                 count: 1
-            })
-        ));
-        let zero_edge = vec![vec![[0.0, 0.0], [1.0, 0.0]], vec![[1.0, 1.0], [1.0, 1.0]]];
-        assert!(matches!(
-            process_obstacles(&zero_edge, &mut scratch, &mut set),
-            Err(OrcaError::DegenerateEdge {
-                polygon: 1,
-                vertex: 0
             })
         ));
         assert!(set.is_empty());

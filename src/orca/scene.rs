@@ -58,7 +58,7 @@ fn validate_time_step(time_step: f32) -> Result<(), OrcaError> {
 /// start-of-step state of the others), in agent order.
 ///
 /// # Errors
-/// Invalid parameters or degenerate obstacle polygons (see [`OrcaError`]).
+/// Invalid parameters, or obstacle polygons RVO2 cannot take (see [`OrcaError`]).
 pub fn compute_velocities(scene: &Scene) -> Result<Vec<[f32; 2]>, OrcaError> {
     scene.validate()?;
     let mut sim = Simulator::new(scene.time_step)?;
@@ -168,8 +168,8 @@ impl Simulator {
     /// Builds the obstacle tree from every polygon added so far (RVO2's `processObstacles`).
     ///
     /// # Errors
-    /// A degenerate polygon (see [`process_obstacles`]); obstacles are then disabled until a
-    /// successful call.
+    /// A polygon RVO2 cannot take (see [`process_obstacles`]); obstacles are then disabled until
+    /// a successful call.
     pub fn process_obstacles(&mut self) -> Result<(), OrcaError> {
         process_obstacles(
             &self.polygons,

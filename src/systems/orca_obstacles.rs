@@ -19,7 +19,7 @@ use crate::geometry::{Disc, Rect, Shape};
 use crate::limits::MAX_POLYGONS;
 use crate::orca::{
     OBSTACLE_REJECT_FACTOR, ObstacleScratch, ObstacleSet, ObstacleVerts, OrcaAgent,
-    obstacle_range_sq, process_obstacles,
+    first_zero_length_edge, obstacle_range_sq, process_obstacles,
 };
 use crate::params::StepParams;
 use crate::state::{NONE, StateChunk, group_kind};
@@ -193,8 +193,16 @@ fn with_processed<R>(cap: usize, polygons: &[Polygon], f: impl FnOnce(&ObstacleS
         // Reserved from the capacities on a thread's first build, so no later build allocates.
         set.reserve(cap);
         scratch.reserve(cap);
+        // The scene's obstacles have a direction on every edge by construction (tables, laptops
+        // and squares of positive size, validated where configs and documents are read), as
+        // RVO2's arithmetic on a zero-length edge would make NaN directions.
+        if let Some((polygon, vertex)) = first_zero_length_edge(polygons) {
+            panic!(
+                "scenario produced a zero-length obstacle edge: polygon {polygon} vertex {vertex}"
+            );
+        }
         process_obstacles(polygons, scratch, set)
-            .unwrap_or_else(|err| panic!("scenario produced a degenerate obstacle: {err}"));
+            .unwrap_or_else(|err| panic!("scenario produced an invalid obstacle: {err}"));
         f(set)
     })
 }

@@ -773,7 +773,12 @@ fn reference_scenes_bit_identical() {
 
     let mut batch = Batch::default();
     add_trajectory(&mut batch, "rvo2_circle250_sampled.csv.gz", &[], circle250);
-    assert!(batch.agents() >= 170_000, "{} agents", batch.agents());
+    // The published data's sampled states; other data sets of the format hold their own.
+    assert!(
+        batch.agents() >= 170_000 || !common::reference::is_own_copy(),
+        "{} agents",
+        batch.agents()
+    );
     check(&kernel, "circle250 sampled states", &batch);
 }
 

@@ -8,6 +8,7 @@
 //! Data directory: `SOCNAV_REF_DIR`, or `tests/data/ref/orca_sfm` in the repository.
 
 use std::collections::BTreeMap;
+use std::path::Path;
 
 use crate::common;
 
@@ -34,9 +35,9 @@ fn pref_velocity(pos: [f32; 2], goal: [f32; 2]) -> [f32; 2] {
 // L1: one-step cases
 // ---------------------------------------------------------------------------------------------
 
-/// Input polygons per case, from `rvo2_onestep_obstacles.csv`.
-fn onestep_polygons() -> BTreeMap<usize, Vec<Vec<[f32; 2]>>> {
-    let t = Table::load("rvo2_onestep_obstacles.csv");
+/// Input polygons per case, from `rvo2_onestep_obstacles.csv` in `dir`.
+fn onestep_polygons(dir: &Path) -> BTreeMap<usize, Vec<Vec<[f32; 2]>>> {
+    let t = Table::load_in(dir, "rvo2_onestep_obstacles.csv");
     let (case, obstacle, vertex) = (t.usizes("case"), t.usizes("obstacle"), t.usizes("vertex"));
     let (x, y) = (t.f32s("x"), t.f32s("y"));
     let mut out: BTreeMap<usize, Vec<Vec<[f32; 2]>>> = BTreeMap::new();
@@ -57,13 +58,26 @@ fn build_obstacles(polys: &[Vec<[f32; 2]>]) -> ObstacleSet {
     set
 }
 
+/// Contract: the processed obstacle vertices (positions, links, split vertices) equal RVO2's, in
+/// the published one-step set (or `SOCNAV_REF_DIR`'s).
 #[test]
 fn l1_processed_obstacle_vertices_match() {
     if !common::reference::present("l1_processed_obstacle_vertices_match") {
         return;
     }
-    let polys = onestep_polygons();
-    let t = Table::load("rvo2_onestep_obstacle_vertices_processed.csv");
+    processed_vertices_match(&common::reference::ref_dir());
+}
+
+/// Contract: as [`l1_processed_obstacle_vertices_match`], on the repository's harder cases
+/// (`tests/data/ref/orca_hard`: repeated vertices, collinear edges).
+#[test]
+fn l1_hard_cases_processed_obstacle_vertices_match() {
+    processed_vertices_match(&common::reference::hard_dir());
+}
+
+fn processed_vertices_match(dir: &Path) {
+    let polys = onestep_polygons(dir);
+    let t = Table::load_in(dir, "rvo2_onestep_obstacle_vertices_processed.csv");
     let (id, x, y) = (t.usizes("vertex_id"), t.f32s("x"), t.f32s("y"));
     let (next, prev) = (t.usizes("next_id"), t.usizes("prev_id"));
     let mut compared = 0;
@@ -87,7 +101,10 @@ fn l1_processed_obstacle_vertices_match() {
         }
     }
     assert!(compared > 0, "no processed vertices compared");
-    println!("processed obstacle vertices compared: {compared}");
+    println!(
+        "{}: processed obstacle vertices compared: {compared}",
+        dir.display()
+    );
 }
 
 /// Expected per-agent outputs of the one-step set.
@@ -98,9 +115,9 @@ struct Expected {
     lines: Vec<[u32; 4]>,
 }
 
-fn onestep_expected() -> BTreeMap<(usize, usize), Expected> {
+fn onestep_expected(dir: &Path) -> BTreeMap<(usize, usize), Expected> {
     let mut out: BTreeMap<(usize, usize), Expected> = BTreeMap::new();
-    let t = Table::load("rvo2_onestep_neighbors.csv");
+    let t = Table::load_in(dir, "rvo2_onestep_neighbors.csv");
     let (case, agent, rank, id) = (
         t.usizes("case"),
         t.usizes("agent"),
@@ -118,7 +135,7 @@ fn onestep_expected() -> BTreeMap<(usize, usize), Expected> {
         assert_eq!(list.len(), rank(r), "ranks out of order");
         list.push(id(r) as u32);
     }
-    let t = Table::load("rvo2_onestep_lines.csv");
+    let t = Table::load_in(dir, "rvo2_onestep_lines.csv");
     let (case, agent, line) = (t.usizes("case"), t.usizes("agent"), t.usizes("line"));
     let cols = ["point_x", "point_y", "dir_x", "dir_y"].map(|c| t.f32s(c));
     for r in &t.rows {
@@ -144,6 +161,10 @@ fn indices(list: &[Neighbor]) -> Vec<u32> {
 #[derive(Debug, Default)]
 struct OnestepCounts {
     agents: usize,
+    /// RVO2 lists with two neighbours at exactly the same distance.
+    tied_lists: usize,
+    /// Brute-force lists in another order than RVO2's (among exact ties).
+    brute_force_tie_orders: usize,
     lines: usize,
     lp3: usize,
     reference_violating: usize,
@@ -153,14 +174,45 @@ struct OnestepCounts {
     brute_force_velocity_diffs: usize,
 }
 
+/// Contract: on every one-step case, RVO2's k-d tree search (`AgentKdTree`,
+/// `obstacle_neighbors_tree`) gives RVO2's neighbour lists in RVO2's order, the lines and new
+/// velocity are RVO2's bit for bit, and the step's brute-force agent search gives the same list
+/// up to the order of exactly tied neighbours (RVO2's order among equal distances comes from its
+/// tree traversal; a tie at the `max_neighbors` cut may keep other agents of that distance).
 #[test]
 fn l1_onestep_neighbors_lines_velocities_exact() {
     if !common::reference::present("l1_onestep_neighbors_lines_velocities_exact") {
         return;
     }
-    let polys = onestep_polygons();
-    let expected = onestep_expected();
-    let t = Table::load("rvo2_onestep_agents.csv");
+    let counts = onestep_cases_match(&common::reference::ref_dir());
+    // The published set's README: 2542 agents, 551 of which violate a line by more than 1e-4
+    // (so LP3 ran). LP3 runs for one more agent (case 192 agent 0): LP2 fails there, and LP3's
+    // result violates no line by more than 1e-4. Other data sets of the format have their own.
+    if common::reference::is_own_copy() {
+        assert_eq!(counts.agents, 2542);
+        assert_eq!(counts.reference_violating, 551);
+        assert_eq!(counts.lp3, 552);
+    }
+}
+
+/// Contract: as [`l1_onestep_neighbors_lines_velocities_exact`], on the repository's harder
+/// cases (`tests/data/ref/orca_hard`, `tests/data/gen_orca_onestep_hard.py`): grids of exactly
+/// tied distances with the cut inside a tie, repeated vertices, collinear edges, agents on
+/// vertices and edges.
+#[test]
+fn l1_hard_cases_neighbors_lines_velocities_exact() {
+    let counts = onestep_cases_match(&common::reference::hard_dir());
+    // The cases exercise what they are for.
+    assert!(counts.tied_lists >= 50, "{counts:?}");
+    assert!(counts.brute_force_tie_orders > 0, "{counts:?}");
+    assert!(counts.obstacle_neighbor_lists >= 100, "{counts:?}");
+}
+
+/// Every one-step case of `dir` compared (see the tests above); the counts of what was seen.
+fn onestep_cases_match(dir: &Path) -> OnestepCounts {
+    let polys = onestep_polygons(dir);
+    let expected = onestep_expected(dir);
+    let t = Table::load_in(dir, "rvo2_onestep_agents.csv");
     let f = |n: &str| t.f32s(n);
     let (dt, nd, th, tho) = (
         f("time_step"),
@@ -225,17 +277,28 @@ fn l1_onestep_neighbors_lines_velocities_exact() {
             // Agents with no neighbours and no lines have no rows in the expected files.
             let e = expected.get(&(case, i)).unwrap_or(&empty);
             let what = format!("case {case} agent {i}");
-            // Agent neighbours: brute force and RVO2's tree agree with the reference.
-            agent_neighbors(i, &xs, &ys, a.neighbor_dist, a.max_neighbors, &mut nb);
-            assert_eq!(
-                indices(&nb),
-                e.agent_neighbors,
-                "{what}: agent neighbours (brute)"
-            );
+            // Agent neighbours: RVO2's tree gives RVO2's list; the brute force the same list
+            // up to the order of exact ties.
             let mut nb_tree = Vec::new();
             tree.agent_neighbors(i, &xs, &ys, a.neighbor_dist, a.max_neighbors, &mut nb_tree);
-            assert_eq!(nb_tree, nb, "{what}: agent neighbours (tree)");
-            let gathered: Vec<OrcaNeighbor> = nb
+            assert_eq!(
+                indices(&nb_tree),
+                e.agent_neighbors,
+                "{what}: agent neighbours (tree)"
+            );
+            agent_neighbors(i, &xs, &ys, a.neighbor_dist, a.max_neighbors, &mut nb);
+            let dist_sq = |j: u32| {
+                let o = Vec2::from_array(agents[j as usize].pos);
+                (Vec2::from_array(a.pos) - o).abs_sq().to_bits()
+            };
+            assert_same_up_to_ties(&what, &indices(&nb), &e.agent_neighbors, dist_sq);
+            let tied = e
+                .agent_neighbors
+                .windows(2)
+                .any(|w| dist_sq(w[0]) == dist_sq(w[1]));
+            counts.tied_lists += usize::from(tied);
+            counts.brute_force_tie_orders += usize::from(indices(&nb) != e.agent_neighbors);
+            let gathered: Vec<OrcaNeighbor> = nb_tree
                 .iter()
                 .map(|n| {
                     let o = &agents[n.index as usize];
@@ -299,14 +362,35 @@ fn l1_onestep_neighbors_lines_velocities_exact() {
             "case {case}: standalone API"
         );
     }
-    println!("{counts:?}");
-    // The README's counts: 2542 agents, 551 of which violate a line by more than 1e-4 (so LP3
-    // ran). LP3 runs for one more agent (case 192 agent 0): LP2 fails there, and LP3's result
-    // violates no line by more than 1e-4.
-    assert_eq!(counts.agents, 2542);
-    assert_eq!(counts.reference_violating, 551);
-    assert_eq!(counts.lp3, 552);
-    assert!(counts.lines > 0 && counts.obstacle_neighbor_lists > 0);
+    println!("{}: {counts:?}", dir.display());
+    assert!(
+        counts.agents > 0 && counts.lines > 0,
+        "no cases in {}",
+        dir.display()
+    );
+    counts
+}
+
+/// `ours` is RVO2's neighbour list `rvo2` up to the order of exactly tied neighbours: the same
+/// length, the same squared distances (`dist_sq`, as bits) rank by rank, and no agent twice.
+/// This is all that RVO2's rule determines: every agent of a distance below the last is in the
+/// list (so the agents of a tie group are the same), and at the last distance, where
+/// `max_neighbors` may cut a tie, any of the agents of that distance may be kept.
+fn assert_same_up_to_ties(what: &str, ours: &[u32], rvo2: &[u32], dist_sq: impl Fn(u32) -> u32) {
+    let keys = |list: &[u32]| list.iter().map(|&j| dist_sq(j)).collect::<Vec<_>>();
+    assert_eq!(
+        keys(ours),
+        keys(rvo2),
+        "{what}: agent neighbours (brute force) {ours:?}, RVO2 {rvo2:?}"
+    );
+    let mut unique = ours.to_vec();
+    unique.sort_unstable();
+    unique.dedup();
+    assert_eq!(
+        unique.len(),
+        ours.len(),
+        "{what}: an agent listed twice: {ours:?}"
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -595,10 +679,15 @@ fn l3_circle250_restarts_bit_exact() {
             assert_eq!(bits(p), bits(pos_next), "{what}: position");
         }
     }
-    // 355 restart steps x 250 agents; exact ties are rare (2 agent-steps in this data).
-    assert!(exact >= 300 * 250, "only {exact} agent-steps compared");
+    // The published data: 355 restart steps x 250 agents; exact ties are rare (2 agent-steps).
+    // Other data sets of the format: every agent-step compared, and ties stay rare.
+    let agent_steps: usize = scenes.iter().map(|s| s.agents.len()).sum();
+    assert_eq!(exact + tie_order, agent_steps);
+    if common::reference::is_own_copy() {
+        assert!(exact >= 300 * 250, "only {exact} agent-steps compared");
+    }
     assert!(
-        tie_order <= 10,
+        tie_order <= 10.max(agent_steps / 1000),
         "{tie_order} agent-steps needed another tie order"
     );
     println!(
@@ -706,8 +795,11 @@ fn l3_circle250_free_run_bit_exact() {
         sim.do_step();
         step += 1;
     }
-    // The README: all agents reach their goals after 3547 steps.
-    assert_eq!(step, 3547);
+    // The published README: all agents reach their goals after 3547 steps; any data set of the
+    // format ends at its last recorded step.
+    if common::reference::is_own_copy() {
+        assert_eq!(step, 3547);
+    }
     assert_eq!(step, last);
     println!("circle250 free run: {step} steps, {compared_steps} sampled states bit-exact");
 }
@@ -841,7 +933,10 @@ fn l4_circle24_ensemble_per_seed() {
         }
         compared += 1;
     }
-    assert_eq!(compared, 100, "expected 100 seeds");
+    assert_eq!(compared, summary.rows.len());
+    if common::reference::is_own_copy() {
+        assert_eq!(compared, 100, "the published README's 100 seeds");
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -874,15 +969,12 @@ fn errors_degenerate_polygons() {
             count: 0
         })
     );
-    // A repeated vertex makes a zero-length edge (here the closing edge 2 -> 0).
+    // A repeated vertex makes a zero-length edge (here the closing edge 2 -> 0), which RVO2
+    // takes: its direction is NaN and no velocity reads it (`rvo2_onestep` of `ref/orca_hard`
+    // compares such cases with RVO2 bit for bit).
     let repeated = one_agent_scene(vec![vec![[1.0, 1.0], [2.0, 1.0], [1.0, 1.0]]]);
-    assert_eq!(
-        compute_velocities(&repeated),
-        Err(OrcaError::DegenerateEdge {
-            polygon: 0,
-            vertex: 2
-        })
-    );
+    let v = compute_velocities(&repeated).expect("RVO2 takes a repeated vertex");
+    assert!(v.iter().flatten().all(|c| c.is_finite()), "{v:?}");
     let inf = one_agent_scene(vec![vec![[1.0, 1.0], [f32::INFINITY, 1.0]]]);
     assert!(matches!(
         compute_velocities(&inf),
@@ -892,16 +984,10 @@ fn errors_degenerate_polygons() {
             ..
         })
     ));
-    // The squared length of this edge overflows f32.
-    let huge = one_agent_scene(vec![vec![[-3e19, 0.0], [3e19, 0.0]]]);
-    assert!(matches!(
-        compute_velocities(&huge),
-        Err(OrcaError::DegenerateEdge { .. })
-    ));
     let mut sim = Simulator::new(0.25).expect("valid time step");
-    sim.add_obstacle(vec![[0.0, 0.0], [0.0, 0.0]]);
-    let err = sim.process_obstacles().expect_err("degenerate polygon");
-    assert!(err.to_string().contains("degenerate"), "{err}");
+    sim.add_obstacle(vec![[0.0, 0.0]]);
+    let err = sim.process_obstacles().expect_err("a one-vertex polygon");
+    assert!(err.to_string().contains("at least 2 are needed"), "{err}");
 }
 
 #[test]
