@@ -210,7 +210,7 @@ pub(super) fn convert(yaml: &Value) -> Result<Config, SimError> {
     }
 }
 
-/// Keys that SocNavGym's `v0.1` branch added after 0.1.1 (spec section 2): refused with that
+/// Keys that SocNavGym's `v0.1` branch added to every config after 0.1.1: refused with that
 /// reason, since socnav follows 0.1.1.
 const LATER_KEYS: [(&str, &str); 2] = [
     ("episode", "end_with_collision"),
@@ -256,14 +256,15 @@ fn unread_keys(root: &Value, read: &BTreeSet<(String, String)>) -> Vec<String> {
     problems
 }
 
-/// A boolean as PyYAML (YAML 1.1, which 0.1.1 loads its configs with) reads one: `true`/`false`
-/// in any case, and also `yes`/`no`/`on`/`off`, which YAML 1.2 parsers leave as strings.
+/// A boolean as PyYAML (YAML 1.1, which 0.1.1 loads its configs with) reads one: its `true` and
+/// `false` words, and also `yes`/`no`/`on`/`off` (lower case, capitalised or upper case), which
+/// YAML 1.2 parsers leave as strings.
 fn yaml11_bool(value: &Value) -> Option<bool> {
     match value {
         Value::Bool(b) => Some(*b),
-        Value::String(s) => match s.to_ascii_lowercase().as_str() {
-            "yes" | "on" | "true" => Some(true),
-            "no" | "off" | "false" => Some(false),
+        Value::String(s) => match s.as_str() {
+            "yes" | "Yes" | "YES" | "on" | "On" | "ON" | "true" | "True" | "TRUE" => Some(true),
+            "no" | "No" | "NO" | "off" | "Off" | "OFF" | "false" | "False" | "FALSE" => Some(false),
             _ => None,
         },
         _ => None,
