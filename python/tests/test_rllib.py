@@ -89,6 +89,13 @@ def test_the_env_creator_gives_one_batch_with_the_info_asked_for() -> None:
     assert socnav.rllib.env_creator({"num_envs": 2, "info_keys": None}).reset(seed=0)[1].keys() >= {"SUCCESS", "COLLISION"}
 
 
+def test_the_env_creator_takes_a_socnavgym_yaml_config() -> None:
+    yaml = Path(__file__).resolve().parents[2] / "tests/data/golden/socnavgym/configs/exp1_no_sngnn.yaml"
+    ours = socnav.rllib.env_creator({"config": str(yaml), "num_envs": 4})
+    twin = socnav.rllib.env_creator({"config": "exp1", "num_envs": 4})
+    np.testing.assert_array_equal(ours.reset(seed=5)[0], twin.reset(seed=5)[0])
+
+
 def _greedy_return(module, episodes: int = 64) -> float:
     """Mean return of the module's greedy actions over the episodes of seeds 1,000,000 on
     (never the training runners' seeds), each played to its end."""

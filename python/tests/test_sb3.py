@@ -326,3 +326,19 @@ def test_short_dqn_run_stores_terminal_observations(tmp_path):
                 within += 1
                 assert same
     assert within > 0 and ends > 0
+
+
+def test_a_socnavgym_yaml_config_steps_as_its_shipped_twin():
+    """The adapter takes a SocNavGym 0.1.1 YAML path as every config argument does (the core
+    converts it), and plays the twin's episodes."""
+    yaml = os.path.join(os.path.dirname(__file__), "..", "..", "tests/data/golden/socnavgym/configs/exp2_no_sngnn.yaml")
+    ours, twin = (make_sb3(c, num_envs=4, seed=7, obs_mode="flat") for c in (yaml, "exp2"))
+    np.testing.assert_array_equal(ours.reset(), twin.reset())
+    actions = np.tile(np.array([[1.0, 0.0, 0.3]], dtype=np.float32), (4, 1))
+    for _ in range(30):
+        ours.step_async(actions)
+        twin.step_async(actions)
+        (obs_a, reward_a, done_a, _), (obs_b, reward_b, done_b, _) = ours.step_wait(), twin.step_wait()
+        np.testing.assert_array_equal(obs_a, obs_b)
+        np.testing.assert_array_equal(reward_a, reward_b)
+        np.testing.assert_array_equal(done_a, done_b)

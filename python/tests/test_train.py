@@ -6,6 +6,7 @@ runs it in the torch environment it shares with the SB3 tests."""
 
 import csv
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -92,6 +93,16 @@ def test_the_progress_log_follows_the_checkpoint(tmp_path):
     (fresh / "progress.csv").write_text("step,x\n128,1\n256,1\n")  # no checkpoint.pt beside it
     dqn.train(dqn.Args(steps=512, out=str(fresh), **base))
     assert [int(r["step"]) for r in _rows(fresh / "progress.csv")] == expected
+
+
+def test_a_socnavgym_yaml_config_trains(tmp_path):
+    """`socnav.train` takes a SocNavGym 0.1.1 YAML path like any config (the core converts it)."""
+    yaml = Path(__file__).resolve().parents[2] / "tests/data/golden/socnavgym/configs/exp1_no_sngnn.yaml"
+    out = tmp_path / "yaml"
+    args = dqn.Args(config=str(yaml), steps=256, out=str(out), num_envs=8, threads=1, learning_starts=64,
+                    batch_size=16, buffer_size=512, log_every=128, target_update=128)
+    dqn.train(args)
+    assert [int(r["step"]) for r in _rows(out / "progress.csv")] == [128, 256]
 
 
 @pytest.mark.parametrize("action_type", ["discrete", "continuous"])
