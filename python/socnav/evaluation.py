@@ -21,6 +21,8 @@ the environment made with the attributes ``obs_mode`` (default ``"dict"``) and `
 from __future__ import annotations
 
 import argparse
+import functools
+import json
 import math
 import sys
 import time
@@ -33,10 +35,19 @@ from socnav import policies
 from socnav._batch import check_count, check_seed
 from socnav.metrics import EPISODE_KEYS, TABLE_KEYS, EpisodeLog, Summary, aggregate
 
-__all__ = ["Evaluation", "evaluate", "resolve_policy"]
+__all__ = ["ENDINGS", "Evaluation", "classify_ending", "evaluate", "resolve_policy"]
 
 #: The statistics of the table besides the paper's metrics: outcome rates and the return.
 _LEADING = ("success", "collision", "collision_human", "collision_object", "collision_wall", "timeout", "return", "length")
+#: How an episode ends, for the analysis of what any agent could avoid (``Evaluation.endings``):
+#: a collision the robot caused (it approached what it touched at least as fast as that approached
+#: it; every contact with a table, laptop, plant or wall), one a person caused (a person walked
+#: into a robot that was still or slower: 0.1.1's humans ignore the robot in the paper's configs),
+#: a timeout, leaving the map.
+ENDINGS = ("success", "robot-caused", "person-caused", "timeout", "out-of-map")
+#: Slack (m) on "in contact" between the robot's and a person's discs: the state is f32 at about
+#: 10 m (ulp ~1e-6 m), and the polygon64 contact shape touches at 0.9988 times the radii's sum.
+_CONTACT_SLACK = 2e-3
 #: Two-sided 95 % normal quantile (the intervals are normal approximations: n >= 100 here).
 _Z95 = 1.959963984540054
 
@@ -57,6 +68,9 @@ class Evaluation:
         The statistics of every episode, one row each, in seed order.
     wall_seconds : float
         Time the evaluation took.
+    endings : numpy.ndarray
+        str ``(episodes,)``: how each episode ended, one of :data:`ENDINGS` (a collision
+        classified by :func:`classify_ending` from the state it ended in).
     """
 
     policy: str
@@ -65,6 +79,11 @@ class Evaluation:
     seeds: np.ndarray
     log: EpisodeLog = field(repr=False)
     wall_seconds: float = 0.0
+    endings: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype="<U13"), repr=False)
+
+    def ending_counts(self) -> dict[str, int]:
+        """How many episodes ended each way (:data:`ENDINGS`), in that order."""
+        return {e: int((self.endings == e).sum()) for e in ENDINGS}
 
     @property
     def episodes(self) -> int:
@@ -203,6 +222,8 @@ def evaluate(
     start = time.perf_counter()
     limit = 1 << 64
     rows = np.zeros((episodes, len(EPISODE_KEYS)), dtype=np.float32)
+    endings = np.full(episodes, "", dtype="<U13")
+    batch = policies.batch_of(env)
     obs, _ = env.reset(seed=[(seed + k) % limit for k in range(n)])
     playing = np.arange(n)  # the evaluation index each environment plays; -1 when idle
     next_k, done_count, report = n, 0, max(1, episodes // 10)
@@ -219,6 +240,8 @@ def evaluate(
             if int(info["episode"]["seed"][e]) != (seed + k) % limit:
                 raise RuntimeError(f"environment {e} reported seed {info['episode']['seed'][e]}, expected {seed + k}")
             rows[k] = stats[e]
+            # Before the restart: a collision's cause is read from the state it ended in.
+            endings[k] = classify_ending(dict(zip(EPISODE_KEYS, stats[e])), functools.partial(_state_of, batch, int(e)))
             done_count += 1
             if progress and done_count % report == 0:
                 print(f"socnav.evaluate: {name} on {_config_name(config)}: {done_count}/{episodes} episodes", file=sys.stderr)
@@ -243,7 +266,60 @@ def evaluate(
         seeds=np.array([(seed + k) % limit for k in range(episodes)], dtype=np.uint64),
         log=log,
         wall_seconds=time.perf_counter() - start,
+        endings=endings,
     )
+
+
+def _state_of(batch: Any, env: int) -> dict[str, Any]:
+    document: dict[str, Any] = json.loads(batch.get_state(env))
+    return document
+
+
+def classify_ending(stats: Mapping[str, float], state: Callable[[], Mapping[str, Any]]) -> str:
+    """How an episode ended (:data:`ENDINGS`), from its statistics (``info["episode"]``) and,
+    for a collision, ``state()``: the state document it ended in (``Batch.get_state``).
+
+    A collision is robot-caused when the robot touches a table, laptop, plant or wall, or when,
+    for some person it touches, the robot's speed toward that person is at least the person's
+    speed toward the robot (both along the line between their centres, from the velocities of
+    the step that ended in contact); person-caused when every person it touches approached
+    faster than it did."""
+    if stats["success"]:
+        return "success"
+    if stats["collision"]:
+        if stats["collision_object"] or stats["collision_wall"] or not stats["collision_human"]:
+            return "robot-caused"
+        return _human_contact_cause(state())
+    if stats["out_of_map"]:
+        return "out-of-map"
+    return "timeout"
+
+
+def _human_contact_cause(document: Mapping[str, Any]) -> str:
+    state = document["state"]
+    robot = state["robot"]
+    r = np.array([robot["x"], robot["y"]], dtype=np.float64)
+    heading = float(robot["theta"])
+    vx, vy = float(robot["vel"][0]), float(robot["vel"][1])
+    # The command is in the robot's frame (x forward, y left).
+    v_robot = np.array([vx * math.cos(heading) - vy * math.sin(heading), vx * math.sin(heading) + vy * math.cos(heading)])
+    gaps = []
+    for h in state["humans"]:
+        p = np.array([h["x"], h["y"]], dtype=np.float64)
+        gaps.append((float(np.linalg.norm(p - r)) - float(h["radius"]) - float(robot["radius"]), h, p))
+    if not gaps:
+        return "robot-caused"
+    nearest = min(g for g, _, _ in gaps)
+    touching = [(h, p) for g, h, p in gaps if g <= max(nearest, 0.0) + _CONTACT_SLACK]
+    for h, p in touching:
+        away = p - r
+        u = away / max(float(np.linalg.norm(away)), 1e-12)
+        v_human = float(h["speed"]) * np.array([math.cos(float(h["theta"])), math.sin(float(h["theta"]))])
+        robot_toward = float(v_robot @ u)
+        human_toward = float(v_human @ -u)
+        if robot_toward >= human_toward:
+            return "robot-caused"
+    return "person-caused"
 
 
 def _config_name(config: Any) -> str:
@@ -280,6 +356,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         progress=True,
     )
     print(result.to_markdown())
+    endings = ", ".join(f"{n} {e}" for e, n in result.ending_counts().items() if n)
+    print(f"\nendings: {endings}")
     print(f"\n{result.episodes} episodes (seeds {args.seed}..{args.seed + result.episodes - 1}) in {result.wall_seconds:.1f} s")
     if args.csv:
         result.to_csv(args.csv)

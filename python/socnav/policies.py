@@ -11,8 +11,10 @@ for ``"discrete"``. The built-ins:
   moving group and obstacle (the simulator of the shadow robot behind STL/SPL), mapped to the
   robot's drive. It reads the batch state: on the GPU backend that is a download per step.
 - :class:`RandomPolicy`: uniform random actions from its own seeded generator.
+- :class:`StopPolicy`: the robot never moves (continuous zeros, or the discrete stop): what
+  people alone do to a robot, the floor of the analysis of avoidable failures.
 
-``get("goal")`` (or ``"orca"``, ``"random"``) builds one by name.
+``get("goal")`` (or ``"orca"``, ``"random"``, ``"stop"``) builds one by name.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from typing import Any, Callable, Protocol
 
 import numpy as np
 
-__all__ = ["BUILTIN", "GoalPolicy", "OrcaPolicy", "Policy", "RandomPolicy", "get"]
+__all__ = ["BUILTIN", "GoalPolicy", "OrcaPolicy", "Policy", "RandomPolicy", "StopPolicy", "batch_of", "get"]
 
 
 class Policy(Protocol):
@@ -30,7 +32,7 @@ class Policy(Protocol):
     def __call__(self, obs: Any, env: Any) -> np.ndarray: ...
 
 
-def _batch_of(env: Any) -> Any:
+def batch_of(env: Any) -> Any:
     """The Rust batch under a ``make_vec`` environment (through gymnasium wrappers)."""
     inner = getattr(env, "unwrapped", env)
     batch = getattr(inner, "_batch", None)
@@ -57,7 +59,7 @@ class GoalPolicy:
 
     def __call__(self, obs: Any, env: Any) -> np.ndarray:
         _continuous_only(env, self.name)
-        return _batch_of(env).policy_actions("goal")
+        return batch_of(env).policy_actions("goal")
 
 
 class OrcaPolicy:
@@ -67,7 +69,7 @@ class OrcaPolicy:
 
     def __call__(self, obs: Any, env: Any) -> np.ndarray:
         _continuous_only(env, self.name)
-        return _batch_of(env).policy_actions("orca")
+        return batch_of(env).policy_actions("orca")
 
 
 class RandomPolicy:
@@ -81,25 +83,39 @@ class RandomPolicy:
 
     def __call__(self, obs: Any, env: Any) -> np.ndarray:
         inner = getattr(env, "unwrapped", env)
-        n = _batch_of(env).num_envs  # as the other built-ins, any socnav environment (one or a batch)
+        n = batch_of(env).num_envs  # as the other built-ins, any socnav environment (one or a batch)
         if getattr(inner, "action_type", "continuous") == "discrete":
             return self._rng.integers(0, 7, size=n, dtype=np.uint32)
         a = self._rng.uniform(-1.0, 1.0, size=(n, 3)).astype(np.float32)
-        if not _batch_of(env).holonomic:
+        if not batch_of(env).holonomic:
             a[:, 1] = 0.0
         return a
+
+
+class StopPolicy:
+    """The robot never moves: zeros (continuous), or action 6, stop (discrete)."""
+
+    name = "stop"
+
+    def __call__(self, obs: Any, env: Any) -> np.ndarray:
+        inner = getattr(env, "unwrapped", env)
+        n = batch_of(env).num_envs
+        if getattr(inner, "action_type", "continuous") == "discrete":
+            return np.full(n, 6, dtype=np.uint32)
+        return np.zeros((n, 3), dtype=np.float32)
 
 
 BUILTIN: dict[str, Callable[..., Policy]] = {
     "goal": GoalPolicy,
     "orca": OrcaPolicy,
     "random": RandomPolicy,
+    "stop": StopPolicy,
 }
 
 
 def get(name: str, seed: int | None = 0) -> Policy:
-    """The built-in policy ``name`` (``"goal"``, ``"orca"`` or ``"random"``; ``seed`` seeds the
-    random one)."""
+    """The built-in policy ``name`` (``"goal"``, ``"orca"``, ``"random"`` or ``"stop"``; ``seed``
+    seeds the random one)."""
     if name not in BUILTIN:
         raise ValueError(f"unknown policy {name!r}: the built-ins are {', '.join(map(repr, BUILTIN))}")
     return RandomPolicy(seed) if name == "random" else BUILTIN[name]()

@@ -56,3 +56,52 @@ def test_policy_errors_name_the_problem():
     obs, _ = discrete.reset(seed=0)
     with pytest.raises(ValueError, match="action_type='continuous'"):
         socnav.policies.GoalPolicy()(obs, discrete)
+
+
+def _ending_state(robot_vel, robot_theta, human_speed, human_theta, gap=0.0):
+    """A terminal state document: the robot (radius 0.25 m) at the origin, one person (radius
+    0.36 m) on the +x axis at contact distance plus ``gap``."""
+    return {
+        "state": {
+            "robot": {"x": 0.0, "y": 0.0, "theta": robot_theta, "vel": list(robot_vel), "radius": 0.25},
+            "humans": [
+                {"x": 0.61 + gap, "y": 0.0, "radius": 0.36, "speed": human_speed, "theta": human_theta},
+                {"x": -5.0, "y": 0.0, "radius": 0.36, "speed": 1.0, "theta": 0.0},
+            ],
+        }
+    }
+
+
+def test_a_collisions_cause_is_who_approached_faster():
+    """Hand-computed: the robot drives at 0.1 m/s toward a person who walks at 0.05 m/s toward it
+    (robot-caused); the robot at 0.02 m/s (person-caused); a robot facing away but driving in
+    reverse into the person, whose heading turns the command (robot-caused); a person walking
+    past, perpendicular, into a still robot (0 against 0: robot-caused, nobody approached
+    faster); the person 4 m away walking into the robot is not the contact."""
+    human = {k: 0.0 for k in EPISODE_KEYS} | {"collision": 1.0, "collision_human": 1.0}
+    classify = socnav.evaluation.classify_ending
+    pi = float(np.pi)
+    assert classify(human, lambda: _ending_state([0.1, 0, 0], 0.0, 0.05, pi)) == "robot-caused"
+    assert classify(human, lambda: _ending_state([0.02, 0, 0], 0.0, 0.05, pi)) == "person-caused"
+    assert classify(human, lambda: _ending_state([-0.1, 0, 0], pi, 0.05, pi)) == "robot-caused"
+    assert classify(human, lambda: _ending_state([0.0, 0, 0], 0.0, 0.1, pi / 2)) == "robot-caused"
+    # Equal speeds: the robot caused it (it was not slower).
+    assert classify(human, lambda: _ending_state([0.05, 0, 0], 0.0, 0.05, pi)) == "robot-caused"
+    # Objects and walls do not move: always the robot; no state is read for them.
+    objects = human | {"collision_object": 1.0}
+    assert classify(objects, lambda: pytest.fail("not read")) == "robot-caused"
+    timeout = {k: 0.0 for k in EPISODE_KEYS} | {"timeout": 1.0}
+    assert classify(timeout, lambda: pytest.fail("not read")) == "timeout"
+    assert classify({k: 0.0 for k in EPISODE_KEYS} | {"success": 1.0}, lambda: None) == "success"
+
+
+def test_a_still_robot_causes_no_collision():
+    """The stop policy's collisions are all people walking into it; every episode is classified."""
+    result = socnav.evaluate("stop", "exp2", episodes=120, seed=700_000)
+    counts = result.ending_counts()
+    assert sum(counts.values()) == 120 and counts["robot-caused"] == 0 and counts["success"] == 0
+    assert counts["person-caused"] > 10, counts
+    rows = result.episode_rows()
+    np.testing.assert_array_equal(result.endings == "person-caused", rows["collision"] == 1)
+    goal = socnav.evaluate("goal", "exp2", episodes=120, seed=700_000)
+    assert goal.ending_counts()["robot-caused"] > 0
