@@ -249,3 +249,29 @@ def test_plot_draws_learning_curves_by_world(tmp_path):
     assert main(["plot", str(a), "--metric", "nope", "--out", str(tmp_path / "y.png")]) == 2
     assert main(["plot", str(a), str(b), "--metric", "success", "--out", str(tmp_path / "z.svg")]) == 0
     assert (tmp_path / "z.svg").read_text().lstrip().startswith("<?xml")
+
+
+def test_paper_mode_takes_sb3s_schedule_per_environment_step(tmp_path):
+    """`--mode paper`: one gradient step of 32 every 4 environment steps whatever the batch size,
+    the deep ReLU Q-network of stable_dqn.py; flags given after the preset still win."""
+    paper = dqn.Args.for_mode("paper")
+    assert (paper.network, paper.learning_rate, paper.batch_size, paper.train_freq) == ("sb3-deep", 1e-4, 32, 4)
+    assert (paper.buffer_size, paper.learning_starts, paper.target_update) == (1_000_000, 50_000, 10_000)
+    assert dqn.Args.for_mode("paper-text").network == "dueling"
+    # 64 environments: 16 a batch step; 6 environments: 1 or 2, 3 every 2 batch steps.
+    assert dqn.gradient_steps(paper, 0, 64) == 16
+    assert [dqn.gradient_steps(paper, s, s + 6) for s in range(0, 24, 6)] == [1, 2, 1, 2]
+    assert dqn.gradient_steps(dqn.Args(), 0, 64) == 1
+    out = tmp_path / "paper"
+    args = dqn.Args.for_mode("paper", config=SHORT, steps=512, out=str(out), num_envs=16, threads=1,
+                             learning_starts=128, buffer_size=2048, log_every=256)
+    dqn.train(args)
+    rows = _rows(out / "progress.csv")
+    # Learning from step 128 (the batch step that reaches it updates too): (512 - 112) / 4.
+    assert int(rows[-1]["gradient_steps"]) == (512 - 112) // 4
+    agent = load(export(out / "checkpoint.pt", tmp_path / "paper.pt"))
+    assert agent.network == "sb3-deep" and isinstance(agent.net, dqn.PlainQ)
+    with pytest.raises(ValueError, match="--network must be one of dueling, sb3-deep, got 'wide'"):
+        dqn.Args(network="wide").check()
+    with pytest.raises(ValueError, match="unknown --mode 'fast'"):
+        dqn.Args.for_mode("fast")

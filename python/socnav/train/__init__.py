@@ -57,9 +57,10 @@ class Agent:
         self.action_type: str = saved.get("action_type", "discrete")
         state = {k: v.float() for k, v in saved["state_dict"].items()}
         if self.kind == "dqn":
-            from socnav.train.dqn import DuelingQ
+            from socnav.train.dqn import make_q
 
-            self.net: torch.nn.Module = DuelingQ(self.obs_dim)
+            self.network: str = saved.get("network", "dueling")
+            self.net: torch.nn.Module = make_q(self.network, self.obs_dim)
             self.net.load_state_dict(state)
         elif self.kind == "ppo":
             from socnav.train.ppo import _mlp

@@ -23,7 +23,17 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     parser = argparse.ArgumentParser(prog="python -m socnav.train", description="Train baseline agents over a socnav batch.")
     sub = parser.add_subparsers(dest="command", required=True)
-    _add_args(sub.add_parser("dqn", help="the paper's Dueling DQN (socnav.train.dqn)"), dqn.Args())
+    # A DQN preset gives the flags' defaults, so that an explicit flag still overrides it.
+    mode = argparse.ArgumentParser(add_help=False)
+    mode.add_argument("--mode", default="batched")
+    known, _ = mode.parse_known_args(argv)
+    try:
+        dqn_defaults = dqn.Args.for_mode(known.mode)
+    except ValueError as e:
+        print(f"python -m socnav.train dqn: {e}", file=sys.stderr)
+        return 2
+    _add_args(sub.add_parser("dqn", help="the paper's DQN (socnav.train.dqn; --mode batched, paper or paper-text)"),
+              dqn_defaults)
     _add_args(sub.add_parser("ppo", help="PPO, discrete or continuous actions (socnav.train.ppo)"), ppo.Args())
     ex = sub.add_parser("export", help="write the agent of a checkpoint alone (float16)")
     ex.add_argument("checkpoint")

@@ -12,6 +12,20 @@ copied every 10,000 environment steps. Vectorised: each step of the batch (``num
 environment steps) is followed by one gradient step on ``batch_size`` transitions, i.e.
 ``batch_size / num_envs`` replayed samples per environment step (SB3: 32 / 4 = 8).
 
+``--mode`` picks a preset (explicit flags still override it):
+
+- ``batched`` (default): the above, with one gradient step of ``batch_size`` (256) transitions
+  per batch step, a 300,000-transition buffer.
+- ``paper``: the paper's run as its repository's ``stable_dqn.py`` trained it, SB3 DQN's
+  semantics per environment step whatever the batch size: one gradient step of 32 transitions
+  every 4 environment steps (``train_freq``; ``num_envs / 4`` per batch step), learning from
+  50,000 steps, the target copied every 10,000 environment steps, a 1,000,000-transition
+  buffer, epsilon 1 to 0.05 over the first 10 %, Huber loss, gradient norm 10, Adam at 1e-4, and
+  the network its README commands build: a plain Q-network, ReLU MLP
+  ``obs -> 512 -> 256 -> 256 -> 256 -> 128 -> 128 -> 64 -> 7`` (``network = "sb3-deep"``).
+- ``paper-text``: the same schedule with the network the paper's text describes: the dueling
+  head, LeakyReLU, ``[512, 256, 128, 64]``, Adam at 1e-3.
+
 The replay buffer is preallocated arrays (observations in float16, to halve the memory of
 hundreds of thousands of 695-float observations) and is saved with the checkpoint, with the
 network, the optimiser, the random states and every environment's state, so a run resumes
@@ -34,7 +48,19 @@ from torch import nn
 from socnav.train import _common as common
 
 HIDDEN = (512, 256, 128, 64)
+#: The hidden widths of ``stable_dqn.py``'s deep variant, which its README commands train.
+SB3_DEEP_HIDDEN = (512, 256, 256, 256, 128, 128, 64)
 N_ACTIONS = 7
+#: The Q-networks ``--network`` names.
+NETWORKS = ("dueling", "sb3-deep")
+#: ``--mode`` presets: each a set of argument values (module docs).
+MODES: dict[str, dict[str, Any]] = {
+    "batched": {},
+    "paper": dict(network="sb3-deep", learning_rate=1e-4, buffer_size=1_000_000, batch_size=32, train_freq=4,
+                  learning_starts=50_000, target_update=10_000),
+    "paper-text": dict(network="dueling", learning_rate=1e-3, buffer_size=1_000_000, batch_size=32, train_freq=4,
+                       learning_starts=50_000, target_update=10_000),
+}
 
 
 class DuelingQ(nn.Module):
@@ -56,6 +82,33 @@ class DuelingQ(nn.Module):
         h = self.body(obs)
         a = self.advantage(h)
         return self.value(h) + a - a.mean(dim=1, keepdim=True)
+
+
+class PlainQ(nn.Module):
+    """Q(s, ·) from a ReLU MLP over ``hidden`` widths (SB3's ``QNetwork`` with a ``net_arch``)."""
+
+    def __init__(self, obs_dim: int, hidden: tuple[int, ...] = SB3_DEEP_HIDDEN, n_actions: int = N_ACTIONS) -> None:
+        super().__init__()
+        layers: list[nn.Module] = []
+        width = obs_dim
+        for h in hidden:
+            layers += [nn.Linear(width, h), nn.ReLU()]
+            width = h
+        layers.append(nn.Linear(width, n_actions))
+        self.q = nn.Sequential(*layers)
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        out: torch.Tensor = self.q(obs)
+        return out
+
+
+def make_q(network: str, obs_dim: int) -> nn.Module:
+    """The Q-network ``network`` (:data:`NETWORKS`) for observations of ``obs_dim`` floats."""
+    if network == "dueling":
+        return DuelingQ(obs_dim)
+    if network == "sb3-deep":
+        return PlainQ(obs_dim)
+    raise ValueError(f"unknown network {network!r}: one of {', '.join(NETWORKS)}")
 
 
 class Replay:
@@ -127,18 +180,34 @@ class Args(common.RunArgs):
     exploration_fraction: float = 0.1
     final_epsilon: float = 0.05
     max_grad_norm: float = 10.0
+    mode: str = "batched"
+    network: str = "dueling"
+    #: Environment steps per gradient step (SB3's ``train_freq``); ``None``: one gradient step
+    #: per batch step.
+    train_freq: int | None = None
+
+    @classmethod
+    def for_mode(cls, mode: str, **overrides: Any) -> "Args":
+        """The arguments of preset ``mode`` (:data:`MODES`), then ``overrides``."""
+        if mode not in MODES:
+            raise ValueError(f"unknown --mode {mode!r}: one of {', '.join(MODES)}")
+        return cls(**{**MODES[mode], "mode": mode, **overrides})
 
     def _counts(self) -> list[tuple[str, Any]]:
         return super()._counts() + [
             ("buffer_size", self.buffer_size),
             ("batch_size", self.batch_size),
             ("target_update", self.target_update),
-        ]
+        ] + ([("train_freq", self.train_freq)] if self.train_freq is not None else [])
 
     def problems(self) -> list[str]:
         out = super().problems()
         if not (common._is_int(self.learning_starts) and self.learning_starts >= 0):
             out.append(f"--learning-starts must be an integer >= 0, got {self.learning_starts!r}")
+        if self.mode not in MODES:
+            out.append(f"--mode must be one of {', '.join(MODES)}, got {self.mode!r}")
+        if self.network not in NETWORKS:
+            out.append(f"--network must be one of {', '.join(NETWORKS)}, got {self.network!r}")
         out += common.fraction_problems(
             gamma=self.gamma, exploration_fraction=self.exploration_fraction, final_epsilon=self.final_epsilon
         )
@@ -148,6 +217,15 @@ class Args(common.RunArgs):
 def epsilon(args: Args, step: int) -> float:
     span = max(1.0, args.exploration_fraction * args.steps)
     return max(args.final_epsilon, 1.0 - (1.0 - args.final_epsilon) * step / span)
+
+
+def gradient_steps(args: Args, before: int, after: int) -> int:
+    """Gradient steps due when the environment step count goes from ``before`` to ``after``:
+    one per batch step, or with ``train_freq`` one per ``train_freq`` environment steps counted
+    over the whole run (SB3's rule for a single environment, whatever the batch size)."""
+    if args.train_freq is None:
+        return 1
+    return after // args.train_freq - before // args.train_freq
 
 
 def train(args: Args) -> dict[str, Any]:
@@ -160,11 +238,11 @@ def train(args: Args) -> dict[str, Any]:
     obs, _ = env.reset(seed=args.seed)
     obs = obs.copy()
     obs_dim = obs.shape[1]
-    q = DuelingQ(obs_dim)
+    q = make_q(args.network, obs_dim)
     target = copy.deepcopy(q)
     opt = torch.optim.Adam(q.parameters(), lr=args.learning_rate)
     replay = Replay(args.buffer_size, obs_dim)
-    step, last_target, last_log = 0, 0, 0
+    step, last_target, last_log, updates = 0, 0, 0, 0
     clock = common.Clock()
     wall_before = 0.0
     saved = run.load()
@@ -176,6 +254,7 @@ def train(args: Args) -> dict[str, Any]:
         wall_before = common.resume(saved, rng, env, clock)
         obs = saved["obs"]
         step, last_target, last_log = saved["step"], saved["last_target"], saved["last_log"]
+        updates = int(saved.get("updates", 0))
     stats = common.EpisodeStats()
     schedule = common.Schedule("dqn", args, step)
     start = time.perf_counter()
@@ -196,6 +275,7 @@ def train(args: Args) -> dict[str, Any]:
                 "step": step,
                 "last_target": last_target,
                 "last_log": last_log,
+                "updates": updates,
                 "clock": clock.parts,
                 "wall": wall_before + time.perf_counter() - start,
                 "obs_dim": obs_dim,
@@ -222,16 +302,18 @@ def train(args: Args) -> dict[str, Any]:
         obs = next_obs.copy()
         step += n
         if step >= args.learning_starts and len(replay) >= args.batch_size:
-            o, o2, a, r, term = replay.sample(rng, args.batch_size)
-            with torch.no_grad():
-                target_q = r + args.gamma * (1.0 - term) * target(o2).max(dim=1).values
-            current = q(o).gather(1, a.unsqueeze(1)).squeeze(1)
-            loss = F.smooth_l1_loss(current, target_q)
-            opt.zero_grad()
-            loss.backward()
-            nn.utils.clip_grad_norm_(q.parameters(), args.max_grad_norm)
-            opt.step()
-            losses.append(float(loss.detach()))
+            for _ in range(gradient_steps(args, step - n, step)):
+                o, o2, a, r, term = replay.sample(rng, args.batch_size)
+                with torch.no_grad():
+                    target_q = r + args.gamma * (1.0 - term) * target(o2).max(dim=1).values
+                current = q(o).gather(1, a.unsqueeze(1)).squeeze(1)
+                loss = F.smooth_l1_loss(current, target_q)
+                opt.zero_grad()
+                loss.backward()
+                nn.utils.clip_grad_norm_(q.parameters(), args.max_grad_norm)
+                opt.step()
+                losses.append(float(loss.detach()))
+                updates += 1
             if step - last_target >= args.target_update:
                 target.load_state_dict(q.state_dict())
                 last_target = step
@@ -243,6 +325,7 @@ def train(args: Args) -> dict[str, Any]:
                 **common.progress(env, step, wall, stats, clock),
                 "epsilon": eps,
                 "loss": float(np.mean(losses)) if losses else float("nan"),
+                "gradient_steps": updates,
             }
             losses.clear()
             run.log(step, scalars)
@@ -258,4 +341,5 @@ def train(args: Args) -> dict[str, Any]:
 
 def policy_state(saved: dict[str, Any]) -> dict[str, Any]:
     """The shippable agent of a checkpoint (see ``socnav.train.export``)."""
-    return {"kind": "dqn", "obs_dim": saved["obs_dim"], "state_dict": saved["q"]}
+    network = saved["args"].get("network", "dueling")
+    return {"kind": "dqn", "network": network, "obs_dim": saved["obs_dim"], "state_dict": saved["q"]}
