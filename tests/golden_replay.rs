@@ -18,9 +18,8 @@
 mod common;
 mod golden;
 
-use golden::{Episode, Report, golden_dir_or_skip, load_episodes, replay_env};
-use socnav::Actions;
-use socnav::config::{ContactShape, RewardKind};
+use golden::{Report, golden_dir_or_skip, load_episodes, replay_episode};
+use socnav::config::ContactShape;
 
 /// Configs this build replays; the SNGNN-v2 ones need the weight file (skipped loudly without
 /// it unless `REQUIRE_SNGNN=1`).
@@ -62,7 +61,7 @@ fn golden_replay() {
             if config_name.ends_with("_with_sngnn") && common::sngnn::real_weights().is_none() {
                 continue;
             }
-            let report = replay(name, ep, shape);
+            let report = replay_episode(name, ep, shape);
             println!("{name} ({shape:?} contacts): {}", report.summary());
             total.merge(&report);
             replayed += 1;
@@ -80,31 +79,4 @@ fn golden_replay() {
     for total in &totals {
         total.assert_ok();
     }
-}
-
-/// Replay one episode step by step.
-fn replay(name: &str, ep: &Episode, shape: ContactShape) -> Report {
-    let (mut env, mut report) = replay_env(ep, name, shape);
-    env.set_state(0, &ep.document(ep.initial_state()))
-        .unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
-    report.compare_obs(&env, ep.initial_obs(), &[], &[], "initial");
-    let mut prev = ep.initial_state();
-    // SNGNN-v2 episodes: 0.1.1's frames of the earlier steps, newest first.
-    let mut frames: Vec<serde_json::Value> = Vec::new();
-    for step in ep.steps() {
-        let mut doc = ep.step_document(prev, &step);
-        if env.config().reward.kind == RewardKind::Sngnn {
-            doc["state"]["sngnn_frames"] = serde_json::Value::Array(frames.clone());
-        }
-        env.set_state(0, &doc)
-            .unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
-        env.step(Actions::Continuous(&step.action()))
-            .unwrap_or_else(|e| panic!("{name}: step: {e}"));
-        report.compare_step(&env, ep, step, prev);
-        if let Some(frame) = step.sngnn_frame() {
-            frames.insert(0, frame);
-        }
-        prev = step.state();
-    }
-    report
 }

@@ -13,6 +13,7 @@ use std::f64::consts::{PI, SQRT_2};
 use serde_json::Value;
 
 use super::contact::rectangle_distance;
+use super::rvo2::{Problem, Who, problems};
 use super::{Step, num};
 
 /// Unit roundoff of f32 (2⁻²⁴): an f32 operation has a relative error of at most this.
@@ -65,17 +66,6 @@ pub fn extent(header: &Value, states: &[&Value], human_radius: f64) -> f64 {
     x
 }
 
-/// The shortest time scale (s) by which RVO2 divides relative positions: its agent and obstacle
-/// lines are offset by (relative position)/τ and /τ_obst, and by (relative position)/dt in the
-/// collision branch (agents overlapping). socnav clamps the horizons to ≥ 0.1 s, as RVO2 would
-/// otherwise divide by zero.
-pub fn rvo2_time_scale(header: &Value, dt: f64) -> f64 {
-    let hp = &header["human_params"];
-    let horizon = num(&hp["orca_timeHorizon"]).max(0.1);
-    let obstacles = num(&hp["orca_timeHorizonObst"]).max(0.1);
-    dt.min(horizon).min(obstacles)
-}
-
 /// Bound (m/s) on the difference, as a vector, between 0.1.1's and socnav's preferred velocity
 /// `speed`·unit(goal − position) of an agent `distance` metres from its goal.
 ///
@@ -95,7 +85,9 @@ pub fn preferred_velocity_error(extent: f64, speed: f64, distance: f64) -> f64 {
 }
 
 /// Bound (m/s) on the difference, as a vector, between 0.1.1's and socnav's RVO2 velocity of one
-/// agent (a lone ORCA walker, a moving group, the shadow robot).
+/// agent (a lone ORCA walker, a moving group, the shadow robot), from the agent's own RVO2
+/// problem `p` ([`super::rvo2::problem`]: 0.1.1's ORCA lines and solution, rebuilt from the
+/// recorded state).
 ///
 /// socnav's ORCA is bit-exact with RVO2 on equal f32 inputs (`tests/suite/orca/reference.rs`), so
 /// the two velocities differ only through their inputs:
@@ -103,18 +95,315 @@ pub fn preferred_velocity_error(extent: f64, speed: f64, distance: f64) -> f64 {
 ///   of its exact value on 0.1.1's side (rounded from f64) and within 1.5 ulp on socnav's (its
 ///   own rounding, plus the f32 motion of a walker moved earlier in the step, or the f32
 ///   arithmetic of a vertex); a relative position therefore differs by ≤ 2 ulp per component,
-///   2√2·ulp(`extent`) as a vector. Every ORCA line (agents start at zero velocity, so the
-///   line is v·p̂ ≤ (|p| − R)/(2τ), or its collision and obstacle analogues) moves by at most
-///   that over `time_scale` ([`rvo2_time_scale`]);
-/// * the preferred velocity ([`preferred_velocity_error`]).
+///   δ = 2√2·ulp(`extent`) as a vector. Each ORCA line moves accordingly ([`line_errors`]);
+/// * the preferred velocity ([`preferred_velocity_error`]), which moves the solution by at most
+///   its own error (the solution is a projection of it, or, at a vertex or in LP3, independent
+///   of it).
 ///
-/// The new velocity is the point of the feasible region (half-planes and the speed disc)
-/// nearest the preferred velocity, a projection, which moves by at most as much as the
-/// preferred velocity and a single binding line together. (Two binding lines meeting at a
-/// small angle φ amplify a line's shift by 1/sin φ; the published replay shows errors 10 times
-/// below this bound.)
-pub fn rvo2_velocity_error(extent: f64, time_scale: f64, pref_speed: f64, goal: f64) -> f64 {
-    2.0 * SQRT_2 * ulp(extent) / time_scale + preferred_velocity_error(extent, pref_speed, goal)
+/// How far the lines' shifts move the solution depends on which constraints bind there
+/// ([`binding_error`]): one line moves it by its shift, but two lines that meet at a small angle
+/// φ move their intersection by (s₁ + s₂)/sin φ. A walker pressed against a wall by a moving
+/// group that stands between it and the wall's far side (exp2, `tests/data/fixtures/`, t = 130:
+/// sin φ = 0.0118) moves 85 times as far as the lines.
+pub fn rvo2_velocity_error(extent: f64, p: &Problem, pref_speed: f64, goal: f64) -> f64 {
+    let delta = 2.0 * SQRT_2 * ulp(extent);
+    let lines = line_errors(p, delta);
+    binding_error(p, &lines) + preferred_velocity_error(extent, pref_speed, goal)
+}
+
+/// [`rvo2_velocity_error`] of the problems an agent may have solved (with and without the robot
+/// for a walker whose avoidance draw is not recorded): the largest.
+pub fn rvo2_velocity_errors(extent: f64, ps: &[Problem], pref_speed: f64, goal: f64) -> f64 {
+    ps.iter()
+        .map(|p| rvo2_velocity_error(extent, p, pref_speed, goal))
+        .fold(0.0, f64::max)
+}
+
+/// How one ORCA line of a problem may differ between 0.1.1 and socnav, to first order in δ.
+#[derive(Clone, Copy, Debug)]
+pub struct LineError {
+    /// Bound (m/s) on the line's displacement, along its normal, at the solution v*.
+    pub shift: f64,
+    /// Bound (rad) on the rotation of its direction.
+    pub turn: f64,
+}
+
+/// [`LineError`] of each line of `p`, the relative positions being known to `delta` (m).
+///
+/// Agents all start at zero velocity (0.1.1's fresh simulator), so every line is n·v ≤ c with n
+/// a unit vector from the agent towards what it avoids, and RVO2's branches reduce to:
+/// * agent neighbour at distance ρ, radii sum R: c = (ρ − R)/(2τ), or (ρ − R)/(2·dt) once they
+///   overlap (the cut-off circle of the time step): c moves by δ/(2τ) (δ/(2dt)), n by δ/ρ, which
+///   moves the line at v* by |v*|·δ/ρ: shift δ/(2τ) + |v*|·δ/ρ, turn δ/ρ;
+/// * obstacle vertex at distance ρ (the cut-off circle of a vertex seen end-on): c = (ρ − R)/τ_o,
+///   so ρ = R + τ_o·|point|: shift δ/τ_o + |v*|·δ/ρ, turn δ/ρ; a vertex already inside the disc
+///   (RVO2's vertex "collision" line, through the origin, ρ ≤ R): shift |v*|·δ/ρ, turn δ/ρ;
+/// * obstacle edge A→B of length L (its cut-off segment, direction −(B − A)/L): the line is
+///   the edge's line, offset by R and scaled by 1/τ_o; A and B each move by δ relative to the
+///   agent, so the edge's line moves by (|1 − t| + |t|)·δ at the point of parameter t, where
+///   t* = ((pos + τ_o·v*) − A)·(B − A)/L² is the point v* stands for: shift (|1 − t*| + |t*|)·δ/τ_o,
+///   turn 2δ/L; an edge already inside the disc (the line through the origin along the edge):
+///   shift |v*|·2δ/L, turn 2δ/L. A split edge keeps the direction of its polygon's edge, whose
+///   ends A, B are taken.
+///
+/// Within δ of the branch boundary (distance ≈ R) the two sides may take different branches.
+/// The lines agree in the limit (c → 0; the normal is the same), and the other side's line is
+/// offset by at most what its distance, within δ of R, gives: δ/τ_o for an obstacle (the line
+/// through the origin then shifts by δ/τ_o, not 0: a walker 5e-7 m into a wall face is, on the
+/// other side, up to 4.5e-7 m outside it), δ/(2·min(τ, dt)) for an agent. A vertex seen at the
+/// edge's end has the edge's normal, so that boundary costs nothing.
+pub fn line_errors(p: &Problem, delta: f64) -> Vec<LineError> {
+    let a = &p.agent;
+    let pos = (f64::from(a.pos[0]), f64::from(a.pos[1]));
+    let v = (f64::from(p.velocity[0]), f64::from(p.velocity[1]));
+    let speed = v.0.hypot(v.1);
+    let r = f64::from(a.radius);
+    let (tau, tau_o, dt) = (
+        f64::from(a.time_horizon),
+        f64::from(a.time_horizon_obst),
+        f64::from(p.dt),
+    );
+    // The offset of the other side's line where this side's, through the origin, stands for a
+    // distance `rho` ≤ R to the obstacle: 0 unless the other side's may exceed R.
+    let boundary = |rho: f64| if r - rho > delta { 0.0 } else { delta / tau_o };
+    let view = p.obstacles.as_view();
+    let edges: Vec<((f64, f64), (f64, f64))> = p
+        .polygons
+        .iter()
+        .flat_map(|poly| {
+            (0..poly.len()).map(move |i| {
+                let (s, e) = (poly[i], poly[(i + 1) % poly.len()]);
+                (
+                    (f64::from(s[0]), f64::from(s[1])),
+                    (f64::from(e[0]), f64::from(e[1])),
+                )
+            })
+        })
+        .collect();
+    p.lines
+        .iter()
+        .enumerate()
+        .map(|(k, line)| {
+            let d = (f64::from(line.direction.x), f64::from(line.direction.y));
+            let point = (f64::from(line.point.x), f64::from(line.point.y));
+            let through_origin = line.point.x == 0.0 && line.point.y == 0.0;
+            if k >= p.num_obstacle_lines {
+                let nb = &p.neighbors[k - p.num_obstacle_lines];
+                let rel = (f64::from(nb.pos[0]) - pos.0, f64::from(nb.pos[1]) - pos.1);
+                let rho = rel.0.hypot(rel.1);
+                let sum = r + f64::from(nb.radius);
+                let horizon = if rho - sum > delta {
+                    tau
+                } else if sum - rho > delta {
+                    dt
+                } else {
+                    tau.min(dt)
+                };
+                let turn = delta / rho;
+                return LineError {
+                    shift: delta / (2.0 * horizon) + speed * turn,
+                    turn,
+                };
+            }
+            // An edge line carries the (negated) direction RVO2 stored for the edge, bit for bit.
+            let edge_line = (0..view.len()).any(|o| {
+                let e = view.dir(o);
+                -e.x == line.direction.x && -e.y == line.direction.y
+            });
+            if edge_line {
+                // The polygon edge along −d whose line lies where this line says: at R (inside
+                // the disc: at most R) plus τ_o·c from the agent.
+                let offset = (d.0 * point.1 - d.1 * point.0).abs();
+                let ((ax, ay), (bx, by)) = edges
+                    .iter()
+                    .copied()
+                    .filter(|((ax, ay), (bx, by))| {
+                        let l = (bx - ax).hypot(by - ay);
+                        ((bx - ax) / l + d.0).abs() < 1e-6 && ((by - ay) / l + d.1).abs() < 1e-6
+                    })
+                    .min_by(|x, y| {
+                        let miss = |((ax, ay), (bx, by)): ((f64, f64), (f64, f64))| {
+                            let l = (bx - ax).hypot(by - ay);
+                            let gap =
+                                ((bx - ax) * (pos.1 - ay) - (by - ay) * (pos.0 - ax)).abs() / l;
+                            (gap - r - tau_o * offset).abs()
+                        };
+                        miss(*x).total_cmp(&miss(*y))
+                    })
+                    .expect("an edge line comes from a polygon edge");
+                let (ex, ey) = (bx - ax, by - ay);
+                let l2 = ex * ex + ey * ey;
+                let turn = 2.0 * delta / l2.sqrt();
+                if through_origin {
+                    let gap = (ex * (pos.1 - ay) - ey * (pos.0 - ax)).abs() / l2.sqrt();
+                    return LineError {
+                        shift: speed * turn + boundary(gap),
+                        turn,
+                    };
+                }
+                let t = ((pos.0 + tau_o * v.0 - ax) * ex + (pos.1 + tau_o * v.1 - ay) * ey) / l2;
+                return LineError {
+                    shift: ((1.0 - t).abs() + t.abs()) * delta / tau_o,
+                    turn,
+                };
+            }
+            if through_origin {
+                // The vertex inside the disc whose direction is the line's normal.
+                let rho = (0..view.len())
+                    .map(|o| {
+                        let q = view.point(o);
+                        (f64::from(q.x) - pos.0, f64::from(q.y) - pos.1)
+                    })
+                    .filter(|rel| rel.0.hypot(rel.1) <= r * (1.0 + 1e-5))
+                    .min_by(|x, y| {
+                        let along = |rel: (f64, f64)| {
+                            (rel.0 * d.0 + rel.1 * d.1).abs() / rel.0.hypot(rel.1)
+                        };
+                        along(*x).total_cmp(&along(*y))
+                    })
+                    .map(|rel| rel.0.hypot(rel.1))
+                    .expect("a vertex collision line comes from a vertex inside the disc");
+                let turn = delta / rho;
+                return LineError {
+                    shift: speed * turn + boundary(rho),
+                    turn,
+                };
+            }
+            let rho = r + tau_o * point.0.hypot(point.1);
+            let turn = delta / rho;
+            LineError {
+                shift: delta / tau_o + speed * turn,
+                turn,
+            }
+        })
+        .collect()
+}
+
+/// Bound (m/s) on how far the lines' errors `lines` (first order) move the solution v* of `p`.
+///
+/// v* is the optimum of a linear program over the lines and the speed disc |v| ≤ v_max (LP2:
+/// the point nearest the preferred velocity; LP3, when the lines leave nothing feasible: the
+/// point of least largest violation of the agent lines, the obstacle lines kept). Under small
+/// changes the optimum moves linearly with the constraints that bind at it, so its movement is
+/// bounded by the largest over the structures those constraints can form:
+/// * one line k, v* the projection onto it: a line turned by α about v* and moved by s moves
+///   the projection by s + α·|pref − v*|;
+/// * two lines i, j meeting at v* at angle φ (sin φ = |det(dᵢ, dⱼ)|): moving line i by sᵢ slides
+///   the intersection along line j by sᵢ/sin φ (turns about v* do not move it): (sᵢ + sⱼ)/sin φ.
+///   RVO2's LP1 takes |det| ≤ RVO_EPSILON (1e-5) for parallel and never intersects such lines;
+/// * a line meeting the speed circle at v*, at angle ψ to its tangent (sin ψ = |d·v̂*|): s/sin ψ,
+///   and at most √(2·v_max·s + s²) + s (a chord's end as its line moves by s);
+/// * in LP3 the binding agent lines have equal violation t*: two of them, i and j, bind along
+///   the line where their violations are equal, of normal nⱼ − nᵢ (length |dᵢ − dⱼ|), which
+///   moves by (sᵢ + sⱼ)/|dᵢ − dⱼ|; these lines and the binding obstacle lines form the vertices
+///   and circle crossings above. One binding agent line alone: v* = v_max·(−nᵢ) turns with it
+///   (v_max·α).
+///
+/// A constraint binds if its distance from v* is within what the perturbation can close: its
+/// own shift, the bound itself (found by iterating from the constraints that pass through v*
+/// to a fixed point), in LP3 also the largest shift (which moves t*), and the f32 rounding of the
+/// solve (4 ulp of the line's point and of v_max). Neighbour selection, the obstacle range and
+/// RVO2's "already covered" test are discrete choices this first-order bound leaves aside.
+pub fn binding_error(p: &Problem, lines: &[LineError]) -> f64 {
+    let v = (f64::from(p.velocity[0]), f64::from(p.velocity[1]));
+    let speed = v.0.hypot(v.1);
+    let r = f64::from(p.agent.max_speed);
+    let pref = (
+        f64::from(p.agent.pref_vel[0]),
+        f64::from(p.agent.pref_vel[1]),
+    );
+    let to_pref = (pref.0 - v.0).hypot(pref.1 - v.1);
+    let dir = |k: usize| {
+        let d = p.lines[k].direction;
+        (f64::from(d.x), f64::from(d.y))
+    };
+    // det(d, point − v): > 0 violates the line.
+    let violation = |k: usize| {
+        let (l, d) = (&p.lines[k], dir(k));
+        d.0 * (f64::from(l.point.y) - v.1) - d.1 * (f64::from(l.point.x) - v.0)
+    };
+    let rounding = |k: usize| {
+        let l = &p.lines[k];
+        4.0 * (ulp(f64::from(l.point.x).hypot(f64::from(l.point.y))) + ulp(r))
+    };
+    let det = |a: (f64, f64), b: (f64, f64)| a.0 * b.1 - a.1 * b.0;
+    let tangent = if speed > 0.0 {
+        (v.0 / speed, v.1 / speed)
+    } else {
+        (0.0, 0.0)
+    };
+    // A line along unit direction u whose offset is known to w, crossing the speed circle at v*.
+    let on_circle = |u: (f64, f64), w: f64| {
+        let sin = (u.0 * tangent.0 + u.1 * tangent.1).abs();
+        (w / sin).min((2.0 * r * w + w * w).sqrt() + w)
+    };
+    let n = p.lines.len();
+    let agent_lines = p.num_obstacle_lines..n;
+    let t_star = agent_lines.clone().map(violation).fold(0.0, f64::max);
+    let s_max = agent_lines
+        .clone()
+        .map(|k| lines[k].shift)
+        .fold(0.0, f64::max);
+    let mut bound: f64 = 0.0;
+    loop {
+        let disc = (r - speed).abs() <= 4.0 * ulp(r) + bound;
+        let mut worst: f64 = 0.0;
+        // Effective lines: (unit direction, offset error).
+        let mut effective: Vec<((f64, f64), f64)> = Vec::new();
+        if p.lp3 {
+            let binding: Vec<usize> = agent_lines
+                .clone()
+                .filter(|&k| {
+                    (violation(k) - t_star).abs()
+                        <= rounding(k) + lines[k].shift + s_max + 2.0 * bound
+                })
+                .collect();
+            for (x, &i) in binding.iter().enumerate() {
+                if disc {
+                    worst = worst.max(r * lines[i].turn);
+                }
+                for &j in &binding[x + 1..] {
+                    let (di, dj) = (dir(i), dir(j));
+                    let m = (dj.0 - di.0, dj.1 - di.1);
+                    let len = m.0.hypot(m.1);
+                    if len > 0.0 {
+                        effective.push((
+                            (m.0 / len, m.1 / len),
+                            (lines[i].shift + lines[j].shift) / len,
+                        ));
+                    }
+                }
+            }
+            for (k, line) in lines.iter().enumerate().take(p.num_obstacle_lines) {
+                if violation(k).abs() <= rounding(k) + line.shift + bound {
+                    effective.push((dir(k), line.shift));
+                }
+            }
+        } else {
+            for (k, line) in lines.iter().enumerate() {
+                if violation(k).abs() <= rounding(k) + line.shift + bound {
+                    worst = worst.max(line.shift + line.turn * to_pref);
+                    effective.push((dir(k), line.shift));
+                }
+            }
+        }
+        for (x, &(a, wa)) in effective.iter().enumerate() {
+            worst = worst.max(wa);
+            if disc {
+                worst = worst.max(on_circle(a, wa));
+            }
+            for &(b, wb) in &effective[x + 1..] {
+                let sin = det(a, b).abs();
+                if sin > f64::from(socnav::orca::RVO_EPSILON) {
+                    worst = worst.max((wa + wb) / sin);
+                }
+            }
+        }
+        if worst <= bound {
+            return bound;
+        }
+        bound = worst;
+    }
 }
 
 /// Bound (rad) on the difference of the directions of two velocities whose vector difference is
@@ -286,13 +575,17 @@ pub fn widening(
     let post = step.state_after_motion();
     let diag = &step.v["diag"];
     let x = extent(header, &[prev, post], k.human_radius);
-    let tau = rvo2_time_scale(header, k.dt);
     let distance = |p: &Value, g: &Value| (num(&g[0]) - num(&p[0])).hypot(num(&g[1]) - num(&p[1]));
     let pose = |v: &Value| serde_json::json!([v["x"], v["y"]]);
     let shadow_v = &diag["shadow_orca_vel"];
     let shadow = if shadow_v.is_array() {
         let goal = distance(&pose(&prev["shadow_robot"]), &prev["robot"]["goal"]);
-        let e = rvo2_velocity_error(x, tau, k.robot_max_speed, goal);
+        let e = rvo2_velocity_errors(
+            x,
+            &problems(header, prev, step, Who::Shadow),
+            k.robot_max_speed,
+            goal,
+        );
         Widen::of(num(&shadow_v[0]).hypot(num(&shadow_v[1])), e)
     } else {
         Widen::default()
@@ -320,19 +613,24 @@ pub fn widening(
                 sfm_velocity_error(header, prev, b, k, x)
             } else {
                 let goal = distance(&pose(b), &b["goal"]);
-                rvo2_velocity_error(x, tau, k.human_max_speed, goal)
+                let rvo2 = problems(header, prev, step, Who::Walker(b));
+                rvo2_velocity_errors(x, &rvo2, k.human_max_speed, goal)
             };
             return Widen::of(num(&v[1]).hypot(num(&v[2])), e);
         }
         if h["role"] != "moving_group" {
             return Widen::default();
         }
-        let Some(g) = h["group"].as_u64().and_then(|g| groups.get(g as usize)) else {
+        let Some((index, g)) = h["group"]
+            .as_u64()
+            .and_then(|g| Some((g as usize, groups.get(g as usize)?)))
+        else {
             return Widen::default();
         };
-        let e = rvo2_velocity_error(
+        let rvo2 = problems(header, prev, step, Who::Group(index));
+        let e = rvo2_velocity_errors(
             x,
-            tau,
+            &rvo2,
             k.human_max_speed,
             distance(&g["centre"], &g["goal"]),
         );

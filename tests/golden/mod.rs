@@ -10,20 +10,22 @@ mod compare;
 mod conditioning;
 mod contact;
 mod corrected;
+mod rvo2;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use serde_json::{Value, json};
-use socnav::config::ContactShape;
-use socnav::{BatchEnv, Config, EnvOptions};
+use socnav::config::{ContactShape, RewardKind};
+use socnav::{Actions, BatchEnv, Config, EnvOptions};
 
 pub use compare::{Report, minimum_distance_to_human, with_flipped_from};
-pub use conditioning::direction_error;
+pub use conditioning::{direction_error, extent, rvo2_velocity_error, ulp};
 pub use corrected::{
     Outcome, Perturbation, time_to_collision, time_to_collision_outcomes,
     time_to_collision_possible,
 };
+pub use rvo2::{Problem, Who, problem, problems};
 
 /// The published golden episodes, in the repository (`tests/data/golden/socnavgym`): tests that
 /// check specific published files (SNGNN graph dumps, hand-built scenes) read these.
@@ -248,6 +250,41 @@ pub fn replay_env(ep: &Episode, name: &str, shape: ContactShape) -> (BatchEnv, R
     env.set_replay(true);
     let report = Report::new(name).with_contact_shape(shape, env.params().human_radius as f64);
     (env, report)
+}
+
+/// Replay episode `ep` (`name` in messages) step by step, as the golden replay does: load the
+/// recorded state before each step with `set_state`, take the recorded action, compare the step
+/// with the recording (contacts decided as `shape` says).
+pub fn replay_episode(name: &str, ep: &Episode, shape: ContactShape) -> Report {
+    let (mut env, mut report) = replay_env(ep, name, shape);
+    env.set_state(0, &ep.document(ep.initial_state()))
+        .unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
+    report.compare_obs(&env, ep.initial_obs(), &[], &[], "initial");
+    let mut prev = ep.initial_state();
+    // SNGNN-v2 episodes: 0.1.1's frames of the earlier steps, newest first.
+    let mut frames: Vec<Value> = Vec::new();
+    for step in ep.steps() {
+        let mut doc = ep.step_document(prev, &step);
+        if env.config().reward.kind == RewardKind::Sngnn {
+            doc["state"]["sngnn_frames"] = Value::Array(frames.clone());
+        }
+        env.set_state(0, &doc)
+            .unwrap_or_else(|e| panic!("{name}: set_state: {e}"));
+        env.step(Actions::Continuous(&step.action()))
+            .unwrap_or_else(|e| panic!("{name}: step: {e}"));
+        report.compare_step(&env, ep, step, prev);
+        if let Some(frame) = step.sngnn_frame() {
+            frames.insert(0, frame);
+        }
+        prev = step.state();
+    }
+    report
+}
+
+/// The single reference episodes kept beside the golden ones (`tests/data/fixtures`, its
+/// `README.md`).
+pub fn fixtures_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fixtures")
 }
 
 /// A golden number: JSON number, "inf"/"-inf"/"nan", null (None → NaN) or bool.

@@ -1,7 +1,8 @@
 //! Regression tests of decisions socnav once took differently from SocNavGym 0.1.1 on episodes
-//! the golden replay had not seen (docs/fidelity.md, "Replay on unseen episodes"). Each builds
-//! the situation from a published golden state with `set_state` and checks the rule 0.1.1
-//! applies, so the class stays fixed without the unpublished episodes.
+//! the golden replay had not seen (docs/fidelity.md, "Replay on episodes beyond the published
+//! set"). Each builds the situation from a published golden state with `set_state` and checks
+//! the rule 0.1.1 applies, so the class stays fixed without the unpublished episodes, or replays
+//! an episode kept in the repository for it (`tests/data/fixtures/`).
 
 use crate::common;
 use crate::golden;
@@ -198,4 +199,71 @@ fn a_human_held_at_an_objects_surface_within_f32_rounding_is_not_pushed() {
             assert!(speed > 0.069, "overlap {overlap} m: push speed {speed}");
         }
     }
+}
+
+/// The fixture `tests/data/fixtures/exp2_walker_at_wall.json.gz` (its `README.md`): an exp2
+/// episode beyond the published set whose lone ORCA walker (id 1) is wedged between the room's
+/// east wall and the moving group beside it from t = 115 on. The wall's ORCA line and the
+/// group's meet at an angle that closes to sin φ = 0.0118 at t = 130, and their intersection,
+/// the walker's velocity, moves 1/sin φ times as far as the lines do: socnav's speed there is
+/// 4.08e-6 m/s from 0.1.1's, more than a single line's shift allows (2√2·ulp(X)/dt = 1.4e-6 m/s,
+/// the bound before) and well within the bound derived from the two binding lines
+/// (`conditioning::rvo2_velocity_error`). The whole episode replays clean with both contact
+/// shapes, t = 130's speed among the values the derived widening admitted.
+#[test]
+fn walker_wedged_between_a_wall_and_a_moving_group_replays_clean() {
+    use socnav::config::ContactShape;
+    let name = "exp2_walker_at_wall";
+    let ep = Episode::load(&golden::fixtures_dir().join(format!("{name}.json.gz")));
+    for shape in [ContactShape::Exact, ContactShape::Polygon64] {
+        let report = golden::replay_episode(name, &ep, shape);
+        println!("{name} ({shape:?} contacts): {}", report.summary());
+        assert_eq!(report.failure_count(), 0, "{:?}", report.failures());
+        report.assert_ok();
+        assert!(report.ill_conditioned() >= 1, "t = 130's speed was widened");
+    }
+
+    // The geometry of t = 130, from 0.1.1's ORCA problem rebuilt from the recorded state.
+    let steps: Vec<_> = ep.steps().collect();
+    let k = steps.iter().position(|s| s.t() == 130).expect("step 130");
+    let (prev, step) = (steps[k - 1].state(), steps[k]);
+    let walker = prev["humans"]
+        .as_array()
+        .expect("humans")
+        .iter()
+        .find(|h| h["id"] == 1)
+        .expect("walker 1");
+    let p = golden::problem(ep.header(), prev, &step, golden::Who::Walker(walker), false);
+    let recorded = &step.v["diag"]["human_vel"]["1"];
+    let (vx, vy) = (f64::from(p.velocity[0]), f64::from(p.velocity[1]));
+    assert!(
+        (vx - num(&recorded[1])).hypot(vy - num(&recorded[2])) < 1e-9,
+        "the rebuilt problem gives 0.1.1's velocity: {:?} vs {recorded}",
+        p.velocity
+    );
+    // Exactly two lines pass through the solution: the wall's (an obstacle line) and the group's.
+    let through: Vec<usize> = (0..p.lines.len())
+        .filter(|&i| {
+            let l = &p.lines[i];
+            let (d, q) = (l.direction, l.point);
+            (f64::from(d.x) * (f64::from(q.y) - vy) - f64::from(d.y) * (f64::from(q.x) - vx)).abs()
+                < 1e-9
+        })
+        .collect();
+    assert_eq!(through, [0, 1], "{:?}", p.lines);
+    assert_eq!(p.num_obstacle_lines, 1);
+    let (a, b) = (p.lines[0].direction, p.lines[1].direction);
+    let sin = (f64::from(a.x) * f64::from(b.y) - f64::from(a.y) * f64::from(b.x)).abs();
+    assert!((0.0117..0.0118).contains(&sin), "sin φ = {sin}");
+    let post = step.state_after_motion();
+    let x = golden::extent(ep.header(), &[prev, post], 0.36);
+    let goal = (num(&walker["goal"][0]) - num(&walker["x"]))
+        .hypot(num(&walker["goal"][1]) - num(&walker["y"]));
+    let bound = golden::rvo2_velocity_error(x, &p, 0.1, goal);
+    let single_line = 2.0 * std::f64::consts::SQRT_2 * golden::ulp(x) / 1.0;
+    let error = (0.035_054_218_557_844_05_f64 - 0.035_050_138_831_138_61).abs();
+    assert!(
+        single_line < error && error < bound,
+        "{single_line} < {error} < {bound}"
+    );
 }
