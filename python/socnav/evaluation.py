@@ -40,9 +40,10 @@ __all__ = ["ENDINGS", "Evaluation", "classify_ending", "evaluate", "resolve_poli
 #: The statistics of the table besides the paper's metrics: outcome rates and the return.
 _LEADING = ("success", "collision", "collision_human", "collision_object", "collision_wall", "timeout", "return", "length")
 #: How an episode ends, for the analysis of what any agent could avoid (``Evaluation.endings``):
-#: a collision the robot caused (it approached what it touched at least as fast as that approached
+#: a collision the robot caused (it approached what it touched, at least as fast as that approached
 #: it; every contact with a table, laptop, plant or wall), one a person caused (a person walked
-#: into a robot that was still or slower: 0.1.1's humans ignore the robot in the paper's configs),
+#: into a robot that was still, receding or slower: 0.1.1's humans ignore the robot in the paper's
+#: configs),
 #: a timeout, leaving the map.
 ENDINGS = ("success", "robot-caused", "person-caused", "timeout", "out-of-map")
 #: Slack (m) on "in contact" between the robot's and a person's discs: the state is f32 at about
@@ -280,10 +281,10 @@ def classify_ending(stats: Mapping[str, float], state: Callable[[], Mapping[str,
     for a collision, ``state()``: the state document it ended in (``Batch.get_state``).
 
     A collision is robot-caused when the robot touches a table, laptop, plant or wall, or when,
-    for some person it touches, the robot's speed toward that person is at least the person's
-    speed toward the robot (both along the line between their centres, from the velocities of
-    the step that ended in contact); person-caused when every person it touches approached
-    faster than it did."""
+    for some person it touches, the robot moved toward that person, at least as fast as the
+    person moved toward the robot (both along the line between their centres, from the velocities
+    of the step that ended in contact); person-caused otherwise: every person it touches walked
+    into a robot that was still, receding or slower."""
     if stats["success"]:
         return "success"
     if stats["collision"]:
@@ -317,7 +318,9 @@ def _human_contact_cause(document: Mapping[str, Any]) -> str:
         v_human = float(h["speed"]) * np.array([math.cos(float(h["theta"])), math.sin(float(h["theta"]))])
         robot_toward = float(v_robot @ u)
         human_toward = float(v_human @ -u)
-        if robot_toward >= human_toward:
+        # A still or receding robot causes nothing (a person grazing it while walking past, whose
+        # own approach speed is 0 or less, walked into it all the same).
+        if robot_toward > 0.0 and robot_toward >= human_toward:
             return "robot-caused"
     return "person-caused"
 

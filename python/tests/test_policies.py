@@ -75,16 +75,18 @@ def _ending_state(robot_vel, robot_theta, human_speed, human_theta, gap=0.0):
 def test_a_collisions_cause_is_who_approached_faster():
     """Hand-computed: the robot drives at 0.1 m/s toward a person who walks at 0.05 m/s toward it
     (robot-caused); the robot at 0.02 m/s (person-caused); a robot facing away but driving in
-    reverse into the person, whose heading turns the command (robot-caused); a person walking
-    past, perpendicular, into a still robot (0 against 0: robot-caused, nobody approached
-    faster); the person 4 m away walking into the robot is not the contact."""
+    reverse into the person, whose heading turns the command (robot-caused); a person grazing a
+    still robot while walking past, perpendicular (0 against 0: person-caused, a still robot
+    causes nothing); the person 4 m away walking into the robot is not the contact."""
     human = {k: 0.0 for k in EPISODE_KEYS} | {"collision": 1.0, "collision_human": 1.0}
     classify = socnav.evaluation.classify_ending
     pi = float(np.pi)
     assert classify(human, lambda: _ending_state([0.1, 0, 0], 0.0, 0.05, pi)) == "robot-caused"
     assert classify(human, lambda: _ending_state([0.02, 0, 0], 0.0, 0.05, pi)) == "person-caused"
     assert classify(human, lambda: _ending_state([-0.1, 0, 0], pi, 0.05, pi)) == "robot-caused"
-    assert classify(human, lambda: _ending_state([0.0, 0, 0], 0.0, 0.1, pi / 2)) == "robot-caused"
+    assert classify(human, lambda: _ending_state([0.0, 0, 0], 0.0, 0.1, pi / 2)) == "person-caused"
+    # A robot backing away from a person who catches it up.
+    assert classify(human, lambda: _ending_state([-0.02, 0, 0], 0.0, 0.05, pi)) == "person-caused"
     # Equal speeds: the robot caused it (it was not slower).
     assert classify(human, lambda: _ending_state([0.05, 0, 0], 0.0, 0.05, pi)) == "robot-caused"
     # Objects and walls do not move: always the robot; no state is read for them.
@@ -96,8 +98,11 @@ def test_a_collisions_cause_is_who_approached_faster():
 
 
 def test_a_still_robot_causes_no_collision():
-    """The stop policy's collisions are all people walking into it; every episode is classified."""
+    """The stop policy's collisions are all people walking into it (the two test seeds where a
+    person grazes it while walking past included); every episode is classified."""
     result = socnav.evaluate("stop", "exp2", episodes=120, seed=700_000)
+    grazes = socnav.evaluate("stop", "exp2", episodes=40, seed=1_000_388 - 5)
+    assert grazes.ending_counts()["robot-caused"] == 0 and grazes.endings[5] == "person-caused"
     counts = result.ending_counts()
     assert sum(counts.values()) == 120 and counts["robot-caused"] == 0 and counts["success"] == 0
     assert counts["person-caused"] > 10, counts
