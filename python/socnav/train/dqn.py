@@ -63,20 +63,21 @@ MODES: dict[str, dict[str, Any]] = {
 }
 
 
+def _hidden_layers(obs_dim: int, hidden: tuple[int, ...], activation: type[nn.Module]) -> list[nn.Module]:
+    """Linear layers of widths ``hidden`` from ``obs_dim`` inputs, each followed by ``activation``."""
+    widths = (obs_dim, *hidden)
+    return [m for a, b in zip(widths, widths[1:]) for m in (nn.Linear(a, b), activation())]
+
+
 class DuelingQ(nn.Module):
     """Q(s, ·) = V(s) + A(s, ·) - mean A(s, ·) over the MLP ``obs -> 512 -> 256 -> 128 -> 64``
     (LeakyReLU)."""
 
     def __init__(self, obs_dim: int, n_actions: int = N_ACTIONS) -> None:
         super().__init__()
-        layers: list[nn.Module] = []
-        width = obs_dim
-        for h in HIDDEN:
-            layers += [nn.Linear(width, h), nn.LeakyReLU()]
-            width = h
-        self.body = nn.Sequential(*layers)
-        self.value = nn.Linear(width, 1)
-        self.advantage = nn.Linear(width, n_actions)
+        self.body = nn.Sequential(*_hidden_layers(obs_dim, HIDDEN, nn.LeakyReLU))
+        self.value = nn.Linear(HIDDEN[-1], 1)
+        self.advantage = nn.Linear(HIDDEN[-1], n_actions)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
         h = self.body(obs)
@@ -89,13 +90,7 @@ class PlainQ(nn.Module):
 
     def __init__(self, obs_dim: int, hidden: tuple[int, ...] = SB3_DEEP_HIDDEN, n_actions: int = N_ACTIONS) -> None:
         super().__init__()
-        layers: list[nn.Module] = []
-        width = obs_dim
-        for h in hidden:
-            layers += [nn.Linear(width, h), nn.ReLU()]
-            width = h
-        layers.append(nn.Linear(width, n_actions))
-        self.q = nn.Sequential(*layers)
+        self.q = nn.Sequential(*_hidden_layers(obs_dim, hidden, nn.ReLU), nn.Linear(hidden[-1], n_actions))
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
         out: torch.Tensor = self.q(obs)
