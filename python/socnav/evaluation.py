@@ -43,8 +43,7 @@ _LEADING = ("success", "collision", "collision_human", "collision_object", "coll
 #: a collision the robot caused (it approached what it touched, at least as fast as that approached
 #: it; every contact with a table, laptop, plant or wall), one a person caused (a person walked
 #: into a robot that was still, receding or slower: 0.1.1's humans ignore the robot in the paper's
-#: configs),
-#: a timeout, leaving the map.
+#: configs), a timeout, leaving the map.
 ENDINGS = ("success", "robot-caused", "person-caused", "timeout", "out-of-map")
 #: Slack (m) on "in contact" between the robot's and a person's discs: the state is f32 at about
 #: 10 m (ulp ~1e-6 m), and the polygon64 contact shape touches at 0.9988 times the radii's sum.
