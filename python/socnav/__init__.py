@@ -27,7 +27,7 @@ from socnav._socnav import (
     config_toml,
     shipped_configs,
 )
-from socnav._batch import RewardInputs
+from socnav._batch import RewardInputs, with_overrides
 from socnav.env import SocNavEnv, make
 from socnav.vector import SocNavVectorEnv, make_vec
 from socnav.evaluation import Evaluation, evaluate
@@ -61,4 +61,5 @@ __all__ = [
     "make_vec",
     "record",
     "shipped_configs",
+    "with_overrides",
 ]

@@ -43,6 +43,26 @@ def build_batch(
     )
 
 
+def with_overrides(config: str | Mapping[str, Any], overrides: Mapping[str, Any]) -> dict[str, Any]:
+    """``config`` (a name, a path, or a dict of overrides with ``"base"``) with ``overrides`` (the
+    TOML layout) applied on top, tables merged key by key:
+    ``with_overrides("exp2", {"observation": {"robot_velocity": True}})``."""
+    if isinstance(config, str):
+        merged: dict[str, Any] = {"base": config}
+    elif isinstance(config, Mapping):
+        merged = dict(config)
+    else:
+        raise TypeError(f"config must be a name, a path or a dict, got {type(config).__name__}")
+    return _merge(merged, overrides)
+
+
+def _merge(into: dict[str, Any], top: Mapping[str, Any]) -> dict[str, Any]:
+    for key, value in top.items():
+        below = into.get(key)
+        into[key] = _merge(dict(below), value) if isinstance(below, Mapping) and isinstance(value, Mapping) else value
+    return into
+
+
 def config_error(problems: list[tuple[str | None, str]], prefix: str = "") -> ConfigError:
     """A ``ConfigError`` raised in Python, with ``problems`` as the core's carry them: ``(key or
     None, message)`` pairs; ``prefix`` (a file, say) leads each message."""

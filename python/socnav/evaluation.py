@@ -14,8 +14,9 @@ From the shell: ``python -m socnav.evaluate goal --config exp2 --episodes 500 --
 --csv table.csv``. A policy is a built-in name (``"goal"``, ``"orca"``, ``"random"``,
 :mod:`socnav.policies`), a shipped or saved checkpoint (``socnav.train.load``; needs the
 ``train`` extra), or any callable ``policy(obs, env) -> actions``; an object may say how it wants
-the environment made with the attributes ``obs_mode`` (default ``"dict"``) and ``action_type``
-(default ``"continuous"``).
+the environment made with the attributes ``obs_mode`` (default ``"dict"``), ``action_type``
+(default ``"continuous"``) and ``config_overrides`` (applied to the config, e.g. the robot's
+velocity in its record; default none).
 """
 
 from __future__ import annotations
@@ -209,8 +210,9 @@ def evaluate(
     seed = check_seed(seed)
     act, name = resolve_policy(policy, seed=seed)
     n = min(episodes, check_count("num_envs", num_envs) if num_envs is not None else 64)
+    overrides = getattr(act, "config_overrides", None)
     env = socnav.make_vec(
-        config,
+        socnav.with_overrides(config, overrides) if overrides else config,
         num_envs=n,
         obs_mode=getattr(act, "obs_mode", "dict"),
         action_type=getattr(act, "action_type", "continuous"),

@@ -101,6 +101,11 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self._reward = np.zeros(self.num_envs, dtype=np.float32)
         self._returns = np.zeros(self.num_envs, dtype=np.float64)
         self._finished = np.zeros(self.num_envs, dtype=bool)
+        #: Steps each environment's current episode has taken: 0 at its first observation (an
+        #: agent with memory reads it to forget the previous episode).
+        self.episode_steps = np.zeros(self.num_envs, dtype=np.int64)
+        # Environments whose episode ended and has not restarted yet.
+        self._over = np.zeros(self.num_envs, dtype=bool)
         # The actions of a step sent and not yet received.
         self._sent: Any = None
         self._pinned = None
@@ -168,6 +173,8 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             self._batch.reset_envs(np.ascontiguousarray(mask))
             self._finished[mask] = False
             self._returns[mask] = 0.0
+            self.episode_steps[mask] = 0
+            self._over[mask] = False
             self._track(restart=mask)
         else:
             if seeds is not None:
@@ -175,6 +182,8 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             self._batch.reset(None)
             self._finished[:] = False
             self._returns[:] = 0.0
+            self.episode_steps[:] = 0
+            self._over[:] = False
             self._track(restart=self._all)
             self._steps = 0
         if self.render_mode == "human":
@@ -219,6 +228,7 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             else:
                 self._track(restart=self._restart_trail)
                 self._restart_trail = ended & (self.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP)
+        self._count_steps(terminated | truncated)
         info = self._info(final=True)
         if self._reward_fn is None:
             reward = b["reward"].copy() if self.copy else b["reward"]
@@ -228,6 +238,19 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         if self.render_mode == "human":
             self._show(reward)
         return self._obs(b["obs"], self.copy), reward, terminated, truncated, info
+
+    def _count_steps(self, ended: np.ndarray) -> None:
+        """``episode_steps`` after a step that ended the episodes ``ended``."""
+        mode = self.metadata["autoreset_mode"]
+        if mode == AutoresetMode.SAME_STEP:
+            self.episode_steps += 1
+            self.episode_steps[ended] = 0
+        elif mode == AutoresetMode.NEXT_STEP:
+            self.episode_steps = np.where(self._over, 0, self.episode_steps + 1)
+            self._over = ended.copy()
+        else:  # DISABLED: an ended environment waits for a masked reset
+            self.episode_steps += ~self._over
+            self._over |= ended
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         """Frames of the environments ``render_envs`` (uint8 ``(H, W, 3)`` each, with the robot's

@@ -112,6 +112,47 @@ def test_autoreset_modes():
         disabled.reset(options={"reset_mask": np.array([1, 0])})
 
 
+@pytest.mark.parametrize("mode", ["same_step", "next_step", "disabled"])
+def test_episode_steps_count_what_the_episode_statistics_say(mode):
+    """``episode_steps``: 0 at every episode's first observation, and at an episode's end the
+    length the core reports for it (``info["episode"]["length"]``), in each autoreset mode."""
+    env = socnav.make_vec({"base": "exp1", "episode": {"length": 3}}, num_envs=4, autoreset_mode=mode, obs_mode="flat")
+    env.reset(seed=0)
+    np.testing.assert_array_equal(env.episode_steps, 0)
+    ends = 0
+    restarted = np.zeros(4, dtype=bool)
+    for _ in range(10):
+        before = env.episode_steps.copy()
+        _, _, terminated, truncated, info = env.step(np.zeros((4, 3), dtype=np.float32))
+        ended = terminated | truncated
+        if mode == "next_step":
+            np.testing.assert_array_equal(env.episode_steps[restarted], 0)
+            restarted = ended & ~restarted
+        if ended.any() and "episode" in info:
+            done = info["_episode"]
+            length = info["episode"]["length"][done]
+            counted = before[done] + 1 if mode == "same_step" else env.episode_steps[done]
+            np.testing.assert_array_equal(counted, length)
+            ends += int(done.sum())
+        if mode == "same_step":
+            np.testing.assert_array_equal(env.episode_steps[ended], 0)
+    assert ends >= 4
+    if mode == "disabled":
+        assert (env.episode_steps > 0).all()
+        env.reset(options={"reset_mask": np.array([True, False, True, False])})
+        np.testing.assert_array_equal(env.episode_steps == 0, [True, False, True, False])
+
+
+def test_with_overrides_merges_tables():
+    merged = socnav.with_overrides({"base": "exp2", "observation": {"frame": "robot"}}, {"observation": {"robot_velocity": True}})
+    assert merged == {"base": "exp2", "observation": {"frame": "robot", "robot_velocity": True}}
+    assert socnav.with_overrides("exp1", {"episode": {"length": 5}}) == {"base": "exp1", "episode": {"length": 5}}
+    env = socnav.make_vec(socnav.with_overrides("exp2", {"observation": {"robot_velocity": True}}), num_envs=2)
+    assert env.single_observation_space["robot"].shape == (12,)
+    with pytest.raises(TypeError, match="config must be"):
+        socnav.with_overrides(3, {})
+
+
 @pytest.mark.parametrize(
     "actions, message",
     [

@@ -295,3 +295,94 @@ def test_shipped_agents_score_as_recorded():
         result = socnav.evaluate(load(name), record["config"], episodes=len(record["endings"]), seed=record["seed"])
         flips = [k for k, (a, b) in enumerate(zip(result.endings.tolist(), record["endings"])) if a != b]
         assert len(flips) <= OUTCOME_FLIPS, f"{name}: episodes {flips} end otherwise than recorded"
+
+
+def _entity_batch(config="exp2", n=4):
+    from socnav.train import entity
+
+    env = socnav.make_vec(socnav.with_overrides(config, entity.CONFIG_OVERRIDES), num_envs=n, obs_mode="flat")
+    obs, _ = env.reset(seed=3)
+    return env, obs.copy(), entity.Layout.of(env.unwrapped._batch.layout())
+
+
+def test_the_entity_encoder_ignores_the_order_and_the_padding_of_records():
+    """Permutation invariance over the human records, and absent (all-zero) records change
+    nothing: the input of a crowd of any size and order is read as a set."""
+    from socnav.train import entity
+
+    env, obs, layout = _entity_batch()
+    torch.manual_seed(0)
+    encoder = entity.EntityEncoder(layout)
+    memory = entity.FrameMemory()
+    x = torch.from_numpy(memory.features(obs))
+    base = encoder(x)
+    humans = env.unwrapped._batch.layout()["entities"]["humans"]
+    start, count = humans
+    assert count >= 3
+    shuffled = x.clone()
+    for half in (0, layout.dim):  # the observation and its change, in the same order
+        block = shuffled[:, half + start : half + start + count * entity.RECORD].reshape(-1, count, entity.RECORD)
+        block[:] = block[:, torch.tensor([2, 0, 1, *range(3, count)])].clone()
+    torch.testing.assert_close(encoder(shuffled), base, rtol=1e-5, atol=1e-6)
+    # One more record, absent (all zeros, as padding is): the same output from the same weights.
+    wider = entity.Layout(dim=layout.dim + entity.RECORD, robot=layout.robot, entities=layout.entities, count=layout.count + 1)
+    padded_encoder = entity.EntityEncoder(wider)
+    padded_encoder.load_state_dict(encoder.state_dict())
+    pad = torch.zeros(x.shape[0], entity.RECORD)
+    padded_x = torch.cat([x[:, : layout.dim], pad, x[:, layout.dim :], pad], dim=1)
+    torch.testing.assert_close(padded_encoder(padded_x), base, rtol=1e-5, atol=1e-6)
+    # ... whatever its change half holds.
+    padded_x[:, -entity.RECORD :] = 7.0
+    torch.testing.assert_close(padded_encoder(padded_x), base, rtol=1e-5, atol=1e-6)
+
+
+def test_frame_memory_forgets_at_an_episode_start():
+    from socnav.train import entity
+
+    memory = entity.FrameMemory()
+    a = np.arange(6, dtype=np.float32).reshape(2, 3)
+    np.testing.assert_array_equal(memory.features(a), np.concatenate([a, np.zeros_like(a)], axis=1))
+    memory.remember(a)
+    b = a + 1.0
+    np.testing.assert_array_equal(memory.features(b)[:, 3:], np.ones_like(a))
+    np.testing.assert_array_equal(memory.features(b[1:], rows=np.array([False, True]))[:, 3:], [[1.0, 1.0, 1.0]])
+    memory.restart(np.array([True, False]), b)
+    np.testing.assert_array_equal(memory.features(b)[:, 3:], [[0, 0, 0], [1, 1, 1]])
+
+
+def test_the_entity_layout_needs_the_robot_velocity():
+    from socnav.train import entity
+
+    env = socnav.make_vec("exp2", num_envs=1, obs_mode="flat")
+    with pytest.raises(ValueError, match="robot_velocity"):
+        entity.Layout.of(env.unwrapped._batch.layout())
+
+
+@pytest.mark.parametrize("action_type", ["discrete", "continuous"])
+def test_entity_ppo_trains_resumes_exports_and_evaluates(tmp_path, action_type):
+    """The entity network end to end: a run in two chunks, its agent exported and evaluated on
+    a config without the robot's velocity (the agent's ``config_overrides`` add it), and its
+    greedy actions equal to the exported network's on the same inputs."""
+    out = tmp_path / "entity"
+    args = dict(config="exp2", steps=1024, out=str(out), num_envs=8, threads=1, rollout_steps=32,
+                action_type=action_type, network="entity", log_every=256)
+    ppo.train(ppo.Args(**args, chunk_steps=512))
+    ppo.train(ppo.Args(**args))
+    assert [int(r["step"]) for r in _rows(out / "progress.csv")] == [256, 512, 768, 1024]
+    saved = torch.load(out / "checkpoint.pt", weights_only=False)
+    assert saved["network"] == "entity" and saved["reward_scale"] is not None
+    agent = load(export(out / "checkpoint.pt", tmp_path / "entity.pt"))
+    assert agent.network == "entity" and agent.config_overrides == {"observation": {"robot_velocity": True}}
+    result = socnav.evaluate(agent, "exp2", episodes=6, seed=50, num_envs=3)
+    assert len(result.seeds) == 6 and np.isfinite(result.summary()["success"])
+    env, obs, layout = _entity_batch(n=2)
+    agent.reset_memory()
+    a = agent(obs, env)
+    with torch.no_grad():
+        out_net = agent.net(torch.from_numpy(np.concatenate([obs, np.zeros_like(obs)], axis=1))).numpy()
+    expected = out_net.argmax(1) if action_type == "discrete" else np.clip(out_net, -1, 1)
+    if action_type == "continuous" and not env.unwrapped._batch.holonomic:
+        expected[:, 1] = 0.0
+    np.testing.assert_array_equal(a, expected)
+    with pytest.raises(ValueError, match="--network must be"):
+        ppo.train(ppo.Args(out=str(tmp_path / "x"), network="transformer", steps=10))

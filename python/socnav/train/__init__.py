@@ -5,7 +5,8 @@ socnav`` never imports this module.
 
 - ``python -m socnav.train dqn --config exp2_sngnn --steps 2000000 --out runs/dqn-exp2-sngnn``
   trains the paper's Dueling DQN (:mod:`socnav.train.dqn`); ``ppo`` trains PPO
-  (:mod:`socnav.train.ppo`, ``--action-type discrete|continuous``). A run logs to
+  (:mod:`socnav.train.ppo`, ``--action-type discrete|continuous``, ``--network mlp|entity``: the
+  entity network of :mod:`socnav.train.entity` reads the records as a set with attention). A run logs to
   ``progress.csv`` (and TensorBoard when installed), checkpoints every ``--checkpoint-minutes``
   and resumes when run again with the same ``--out``; ``--max-minutes`` ends a chunk in time.
 - ``python -m socnav.train export runs/dqn-exp2-sngnn/checkpoint.pt agents/dqn-exp2-sngnn.pt``
@@ -44,6 +45,9 @@ class Agent:
     ``action_type`` says which actions it gives; ``config`` names what it was trained on."""
 
     obs_mode = "flat"
+    #: What the agent needs of the config it plays (the TOML layout; ``socnav.evaluate`` applies
+    #: it): the entity agents read the robot's velocity.
+    config_overrides: dict[str, Any] | None = None
 
     def __init__(self, saved: dict[str, Any], name: str) -> None:
         if not isinstance(saved, dict):
@@ -62,15 +66,28 @@ class Agent:
             self.network: str = saved.get("network", "dueling")
             self.net: torch.nn.Module = make_q(self.network, self.obs_dim)
             self.net.load_state_dict(state)
+        elif self.kind == "ppo" and saved.get("network") == "entity":
+            from socnav.train import entity
+
+            self.network = "entity"
+            self.layout = dict(saved["layout"])
+            self.config_overrides = saved.get("config_overrides", entity.CONFIG_OVERRIDES)
+            self.net = entity.EntityPolicy(entity.Layout.of(self.layout), self.action_type)
+            state.pop("log_std", None)
+            self.net.load_state_dict(state)
+            self.memory: Any = entity.FrameMemory()
         elif self.kind == "ppo":
             from socnav.train.ppo import _mlp
 
+            self.network = "mlp"
             self.net = _mlp(self.obs_dim, 7 if self.action_type == "discrete" else 3, 0.01)
             state.pop("log_std", None)
             self.net.load_state_dict(state)
         else:
             raise ValueError(f"{name}: unknown agent kind {self.kind!r}")
         self.net.eval()
+        if not hasattr(self, "memory"):
+            self.memory = None
         self.obs_mean = saved.get("obs_mean")
         self.obs_var = saved.get("obs_var")
 
@@ -80,7 +97,9 @@ class Agent:
             raise ValueError(
                 f"{self.name} takes flat observations of {self.obs_dim} floats (obs_mode='flat'), got shape {x.shape}"
             )
-        if self.obs_mean is not None and self.obs_var is not None:
+        if self.memory is not None:
+            x = self._remembering(x, env)
+        elif self.obs_mean is not None and self.obs_var is not None:
             x = np.clip((x - self.obs_mean.numpy()) / np.sqrt(self.obs_var.numpy() + 1e-8), -10.0, 10.0).astype(np.float32)
         with torch.no_grad():
             out = self.net(torch.from_numpy(x)).numpy()
@@ -91,6 +110,22 @@ class Agent:
         if not holonomic:
             a[:, 1] = 0.0
         return a
+
+    def _remembering(self, obs: np.ndarray, env: Any) -> np.ndarray:
+        """The entity network's input: ``obs`` with its change since this agent's last call,
+        forgotten where ``env.episode_steps`` says an episode starts (``socnav.make_vec``'s
+        environments count them). Without that count, call ``reset_memory()`` between episodes."""
+        steps = getattr(getattr(env, "unwrapped", env), "episode_steps", None)
+        if steps is not None and self.memory.prev is not None and self.memory.prev.shape == obs.shape:
+            self.memory.restart(np.asarray(steps) == 0, obs)
+        x = self.memory.features(obs)
+        self.memory.remember(obs)
+        return x
+
+    def reset_memory(self) -> None:
+        """Forget the observations seen (an agent with memory; nothing otherwise)."""
+        if self.memory is not None:
+            self.memory.prev = None
 
     def __repr__(self) -> str:
         return f"Agent({self.name!r}, {self.kind}, {self.action_type}, trained on {self.config!r})"

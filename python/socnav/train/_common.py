@@ -100,12 +100,15 @@ def seed_everything(seed: int, threads: int) -> np.random.Generator:
     return np.random.default_rng(seed)
 
 
-def make_train_env(config: str, num_envs: int, seed: int, threads: int, action_type: str) -> Any:
+def make_train_env(
+    config: str, num_envs: int, seed: int, threads: int, action_type: str, overrides: Mapping[str, Any] | None = None
+) -> Any:
     """The batch a run trains on: flat observations, SAME_STEP autoreset (a finished
     environment's last observation is in ``info["final_obs"]``), no per-step metrics (the
-    learners read the finished episodes' statistics alone), stage timing on."""
+    learners read the finished episodes' statistics alone), stage timing on; ``overrides``
+    (the TOML layout) applied to the config."""
     env = socnav.make_vec(
-        config,
+        socnav.with_overrides(config, overrides) if overrides else config,
         num_envs=num_envs,
         seed=seed,
         obs_mode="flat",

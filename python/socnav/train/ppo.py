@@ -24,6 +24,7 @@ from torch import nn
 from torch.distributions import Categorical, Normal
 
 from socnav.train import _common as common
+from socnav.train import entity
 
 HIDDEN = 256
 
@@ -77,22 +78,87 @@ class ActorCritic(nn.Module):
             self.actor = _mlp(obs_dim, 3, 0.01)
             self.log_std = nn.Parameter(torch.full((3,), -0.5))
 
-    def dist(self, obs: torch.Tensor) -> Categorical | Normal:
-        out = self.actor(obs)
-        if self.action_type == "discrete":
-            return Categorical(logits=out)
-        return Normal(out, self.log_std.exp().expand_as(out))
+    def actor_critic(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        return self.actor(obs), self.critic(obs).squeeze(-1)
 
-    def value(self, obs: torch.Tensor) -> torch.Tensor:
-        return self.critic(obs).squeeze(-1)
 
-    def log_prob(self, d: Categorical | Normal, a: torch.Tensor) -> torch.Tensor:
-        lp = d.log_prob(a)
-        return lp if self.action_type == "discrete" else lp.sum(-1)
+def dist_of(agent: nn.Module, out: torch.Tensor) -> Categorical | Normal:
+    """The action distribution of a policy head's output."""
+    if agent.action_type == "discrete":
+        return Categorical(logits=out)
+    return Normal(out, agent.log_std.exp().expand_as(out))
 
-    def entropy(self, d: Categorical | Normal) -> torch.Tensor:
-        e = d.entropy()
-        return e if self.action_type == "discrete" else e.sum(-1)
+
+def log_prob(agent: nn.Module, d: Categorical | Normal, a: torch.Tensor) -> torch.Tensor:
+    lp = d.log_prob(a)
+    return lp if agent.action_type == "discrete" else lp.sum(-1)
+
+
+def entropy(agent: nn.Module, d: Categorical | Normal) -> torch.Tensor:
+    e = d.entropy()
+    return e if agent.action_type == "discrete" else e.sum(-1)
+
+
+class NormInputs:
+    """The MLP's input: the observation normalised by running statistics (updated as it goes)."""
+
+    def __init__(self, obs_dim: int) -> None:
+        self.norm = RunningNorm(obs_dim)
+
+    def features(self, raw: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+        if rows is None:
+            self.norm.update(raw)
+        return self.norm(raw)
+
+    def remember(self, raw: np.ndarray) -> None:
+        pass
+
+    def restart(self, new: np.ndarray, raw: np.ndarray) -> None:
+        pass
+
+    def state(self) -> dict[str, Any]:
+        return {"norm": self.norm.state()}
+
+    def load(self, saved: dict[str, Any]) -> None:
+        self.norm.load(saved["norm"])
+
+
+class MemoryInputs:
+    """The entity network's input: the observation with its change since the last step."""
+
+    def __init__(self) -> None:
+        self.memory = entity.FrameMemory()
+        self.features, self.remember, self.restart = self.memory.features, self.memory.remember, self.memory.restart
+
+    def state(self) -> dict[str, Any]:
+        return {"memory": self.memory.prev}
+
+    def load(self, saved: dict[str, Any]) -> None:
+        self.memory.prev = saved["memory"]
+
+
+class ReturnScale:
+    """Rewards divided by the running standard deviation of the discounted return (as SB3's
+    ``VecNormalize`` and CleanRL's ``NormalizeReward`` do): the value targets stay near unit
+    scale whichever reward a cell uses."""
+
+    def __init__(self, n: int, gamma: float) -> None:
+        self.gamma = gamma
+        self.ret = np.zeros(n, np.float64)
+        self.stats = RunningNorm(1)
+
+    def __call__(self, reward: np.ndarray, ended: np.ndarray) -> np.ndarray:
+        self.ret = self.ret * self.gamma + reward
+        self.stats.update(self.ret[:, None])
+        self.ret[ended] = 0.0
+        return (reward / np.sqrt(self.stats.var[0] + 1e-8)).astype(np.float32)
+
+    def state(self) -> dict[str, Any]:
+        return {"ret": self.ret, **self.stats.state()}
+
+    def load(self, s: dict[str, Any]) -> None:
+        self.ret = np.asarray(s["ret"])
+        self.stats.load(s)
 
 
 @dataclass
@@ -100,6 +166,12 @@ class Args(common.RunArgs):
     steps: int = 5_000_000
     out: str = "runs/ppo"
     action_type: str = "discrete"
+    #: ``mlp`` (the observation row, normalised) or ``entity`` (socnav.train.entity: records,
+    #: attention, memory and the robot's velocity).
+    network: str = "mlp"
+    #: ``off`` or ``return`` (rewards over the running sd of the discounted return); default:
+    #: ``return`` for the entity network, ``off`` for the MLP (as its shipped agents trained).
+    reward_norm: str = "auto"
     rollout_steps: int = 128
     learning_rate: float = 3e-4
     gamma: float = 0.99
@@ -122,6 +194,10 @@ class Args(common.RunArgs):
         out = super().problems()
         if self.action_type not in ("discrete", "continuous"):
             out.append(f"--action-type must be 'discrete' or 'continuous', got {self.action_type!r}")
+        if self.network not in ("mlp", "entity"):
+            out.append(f"--network must be 'mlp' or 'entity', got {self.network!r}")
+        if self.reward_norm not in ("auto", "off", "return"):
+            out.append(f"--reward-norm must be 'auto', 'off' or 'return', got {self.reward_norm!r}")
         counts = (self.rollout_steps, self.num_envs, self.minibatches)
         if all(common._is_int(n) and n >= 1 for n in counts) and self.minibatches > self.rollout_steps * self.num_envs:
             out.append(
@@ -137,20 +213,31 @@ class Args(common.RunArgs):
         ]
 
 
+def _make_agent(args: Args, env: Any, obs_dim: int) -> tuple[nn.Module, Any]:
+    """The network and its input pipeline for ``args.network``."""
+    if args.network == "entity":
+        layout = entity.Layout.of(env.unwrapped._batch.layout())
+        return entity.EntityActorCritic(layout, args.action_type), MemoryInputs()
+    return ActorCritic(obs_dim, args.action_type), NormInputs(obs_dim)
+
+
 def train(args: Args) -> dict[str, Any]:
     """Train (or resume) a run; returns its last logged scalars."""
     args.check()
     rng = common.seed_everything(args.seed, args.threads)
-    env = common.make_train_env(args.config, args.num_envs, args.seed, args.threads, args.action_type)
+    overrides = entity.CONFIG_OVERRIDES if args.network == "entity" else None
+    env = common.make_train_env(args.config, args.num_envs, args.seed, args.threads, args.action_type, overrides)
     holonomic = env.unwrapped._batch.holonomic
     run = common.RunDir(args.out, vars(args))
     n, T = env.num_envs, args.rollout_steps
     raw, _ = env.reset(seed=args.seed)
     raw = raw.copy()
     obs_dim = raw.shape[1]
-    agent = ActorCritic(obs_dim, args.action_type)
+    agent, inputs = _make_agent(args, env, obs_dim)
+    in_dim = inputs.features(raw).shape[1]
     opt = torch.optim.Adam(agent.parameters(), lr=args.learning_rate, eps=1e-5)
-    norm = RunningNorm(obs_dim)
+    norm_reward = args.reward_norm == "return" or (args.reward_norm == "auto" and args.network == "entity")
+    scale = ReturnScale(n, args.gamma) if norm_reward else None
     step, last_log = 0, 0
     clock = common.Clock()
     wall_before = 0.0
@@ -158,12 +245,14 @@ def train(args: Args) -> dict[str, Any]:
     if saved is not None:
         agent.load_state_dict(saved["agent"])
         opt.load_state_dict(saved["optimizer"])
-        norm.load(saved["norm"])
+        inputs.load(saved["inputs"])
+        if scale is not None:
+            scale.load(saved["reward_scale"])
         wall_before = common.resume(saved, rng, env, clock)
         raw = saved["obs"]
         step, last_log = saved["step"], saved["last_log"]
     adim = () if args.action_type == "discrete" else (3,)
-    b_obs = np.zeros((T, n, obs_dim), np.float32)
+    b_obs = np.zeros((T, n, in_dim), np.float32)
     b_act = np.zeros((T, n, *adim), np.float32)
     b_logp = np.zeros((T, n), np.float32)
     b_rew = np.zeros((T, n), np.float32)
@@ -180,9 +269,13 @@ def train(args: Args) -> dict[str, Any]:
         run.save(
             {
                 "algo": "ppo",
+                "network": args.network,
                 "agent": agent.state_dict(),
                 "optimizer": opt.state_dict(),
-                "norm": norm.state(),
+                "inputs": inputs.state(),
+                "norm": inputs.state().get("norm"),
+                "reward_scale": None if scale is None else scale.state(),
+                "layout": env.unwrapped._batch.layout(),
                 "rng": common.rng_states(rng),
                 "envs": common.env_documents(env),
                 "obs": raw,
@@ -203,15 +296,14 @@ def train(args: Args) -> dict[str, Any]:
             g["lr"] = frac * args.learning_rate
         for t in range(T):
             clock.start()
-            norm.update(raw)
-            obs = norm(raw)
+            x = inputs.features(raw)
             with torch.no_grad():
-                o = torch.from_numpy(obs)
-                d = agent.dist(o)
+                out, value = agent.actor_critic(torch.from_numpy(x))
+                d = dist_of(agent, out)
                 a = d.sample()
-                b_logp[t] = agent.log_prob(d, a).numpy()
-                b_val[t] = agent.value(o).numpy()
-            b_obs[t] = obs
+                b_logp[t] = log_prob(agent, d, a).numpy()
+                b_val[t] = value.numpy()
+            b_obs[t] = x
             b_act[t] = a.numpy()
             if args.action_type == "discrete":
                 actions = a.numpy().astype(np.uint32)
@@ -219,24 +311,27 @@ def train(args: Args) -> dict[str, Any]:
                 actions = np.clip(a.numpy(), -1.0, 1.0).astype(np.float32)
                 if not holonomic:
                     actions[:, 1] = 0.0
+            inputs.remember(raw)
             clock.stop("act")
             next_raw, reward, terminated, truncated, info = env.step(actions)
             clock.stop("env")
-            b_rew[t] = reward
+            ended = terminated | truncated
+            b_rew[t] = reward if scale is None else scale(reward, ended)
             b_term[t] = terminated
             b_boot[t] = 0.0
             trunc = truncated & ~terminated
             b_trunc[t] = trunc
             if trunc.any() and "_final_obs" in info:
                 with torch.no_grad():
-                    last = torch.from_numpy(norm(info["final_obs"][trunc]))
-                    b_boot[t, trunc] = agent.value(last).numpy()
+                    last = inputs.features(info["final_obs"][trunc], rows=trunc)
+                    b_boot[t, trunc] = agent.actor_critic(torch.from_numpy(last))[1].numpy()
+            inputs.restart(ended, next_raw)
             stats.add(info)
             raw = next_raw.copy()
             step += n
         clock.start()
         with torch.no_grad():
-            next_value = agent.value(torch.from_numpy(norm(raw))).numpy()
+            next_value = agent.actor_critic(torch.from_numpy(inputs.features(raw, rows=np.ones(n, bool))))[1].numpy()
         # GAE: an episode end (terminated or truncated) cuts the recursion; a truncated one
         # bootstraps from its last observation's value instead of the next episode's.
         adv = np.zeros((T, n), np.float32)
@@ -249,7 +344,7 @@ def train(args: Args) -> dict[str, Any]:
             gae = delta + args.gamma * args.gae_lambda * np.where(ended, 0.0, gae)
             adv[t] = gae
         ret = adv + b_val
-        f_obs = torch.from_numpy(b_obs.reshape(T * n, obs_dim))
+        f_obs = torch.from_numpy(b_obs.reshape(T * n, in_dim))
         f_act = torch.from_numpy(b_act.reshape(T * n, *adim))
         if args.action_type == "discrete":
             f_act = f_act.long()
@@ -260,14 +355,15 @@ def train(args: Args) -> dict[str, Any]:
             order = torch.from_numpy(rng.permutation(size))
             for k in range(args.minibatches):
                 idx = order[k * mb : (k + 1) * mb]
-                d = agent.dist(f_obs[idx])
-                logp = agent.log_prob(d, f_act[idx])
+                out, value = agent.actor_critic(f_obs[idx])
+                d = dist_of(agent, out)
+                logp = log_prob(agent, d, f_act[idx])
                 ratio = (logp - f_logp[idx]).exp()
                 a_mb = f_adv[idx]
                 a_mb = (a_mb - a_mb.mean()) / (a_mb.std() + 1e-8)
                 pg = torch.max(-a_mb * ratio, -a_mb * ratio.clamp(1 - args.clip, 1 + args.clip)).mean()
-                v_loss = 0.5 * ((agent.value(f_obs[idx]) - f_ret[idx]) ** 2).mean()
-                ent = agent.entropy(d).mean()
+                v_loss = 0.5 * ((value - f_ret[idx]) ** 2).mean()
+                ent = entropy(agent, d).mean()
                 loss = pg - args.entropy_coef * ent + args.value_coef * v_loss
                 opt.zero_grad()
                 loss.backward()
@@ -301,9 +397,21 @@ def train(args: Args) -> dict[str, Any]:
 
 def policy_state(saved: dict[str, Any]) -> dict[str, Any]:
     """The shippable agent of a checkpoint (see ``socnav.train.export``)."""
-    actor = {k[len("actor.") :]: v for k, v in saved["agent"].items() if k.startswith("actor.")}
-    if "log_std" in saved["agent"]:
-        actor["log_std"] = saved["agent"]["log_std"]
+    weights = saved["agent"]
+    if saved.get("network", "mlp") == "entity":
+        policy = {k: v for k, v in weights.items() if k.startswith(("encoder.", "pi.")) or k == "log_std"}
+        return {
+            "kind": "ppo",
+            "network": "entity",
+            "layout": saved["layout"],
+            "config_overrides": entity.CONFIG_OVERRIDES,
+            "obs_dim": saved["obs_dim"],
+            "action_type": saved["action_type"],
+            "state_dict": policy,
+        }
+    actor = {k[len("actor.") :]: v for k, v in weights.items() if k.startswith("actor.")}
+    if "log_std" in weights:
+        actor["log_std"] = weights["log_std"]
     return {
         "kind": "ppo",
         "obs_dim": saved["obs_dim"],
