@@ -365,10 +365,22 @@ def test_entity_ppo_trains_resumes_exports_and_evaluates(tmp_path, action_type):
     greedy actions equal to the exported network's on the same inputs."""
     out = tmp_path / "entity"
     args = dict(config="exp2", steps=1024, out=str(out), num_envs=8, threads=1, rollout_steps=32,
-                action_type=action_type, network="entity", log_every=256)
+                action_type=action_type, network="entity", log_every=256, snapshot_every=512)
     ppo.train(ppo.Args(**args, chunk_steps=512))
     ppo.train(ppo.Args(**args))
     assert [int(r["step"]) for r in _rows(out / "progress.csv")] == [256, 512, 768, 1024]
+    snapshots = sorted(p.name for p in (out / "snapshots").iterdir())
+    assert snapshots == ["step-0000000512.pt", "step-0000001024.pt"]
+    snap = torch.load(out / "snapshots" / snapshots[1], weights_only=True)
+    assert all(v.dtype == torch.float32 for v in snap["state_dict"].values()) and snap["steps"] == 1024
+    from socnav.train.select import select
+
+    chosen, rows = select(out, episodes=4, num_envs=2)
+    assert [r["steps"] for r in rows] == [512, 1024]
+    best = max(rows, key=lambda r: (r["success"], -r["collision"], r["steps"]))
+    assert chosen.read_bytes() == (out / "snapshots" / best["snapshot"]).read_bytes()
+    table = _rows(out / "selection.csv")
+    assert [r["selected"] for r in table] == [str(r is best) for r in rows]
     saved = torch.load(out / "checkpoint.pt", weights_only=False)
     assert saved["network"] == "entity" and saved["reward_scale"] is not None
     agent = load(export(out / "checkpoint.pt", tmp_path / "entity.pt"))

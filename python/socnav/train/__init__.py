@@ -158,9 +158,27 @@ def load(name_or_path: str | Path) -> Agent:
     return Agent(saved, path.stem)
 
 
-def export(checkpoint: str | Path, out: str | Path) -> Path:
-    """Write the agent of a training checkpoint alone, float16, to ``out`` (never over the
-    checkpoint itself, nor over a run's checkpoint: the run could not resume)."""
+def agent_file(saved: dict[str, Any], dtype: str = "float16") -> dict[str, Any]:
+    """The agent file's contents (see :func:`export`) of a checkpoint's payload."""
+    if saved["algo"] == "dqn":
+        from socnav.train.dqn import policy_state
+    else:
+        from socnav.train.ppo import policy_state
+    agent = policy_state(saved)
+    agent["state_dict"] = {k: v.detach().to(getattr(torch, dtype)) for k, v in agent["state_dict"].items()}
+    agent["format"] = FORMAT
+    agent["config"] = saved["args"]["config"]
+    agent["steps"] = int(saved["step"])
+    agent.setdefault("action_type", "discrete")
+    return agent
+
+
+def export(checkpoint: str | Path, out: str | Path, dtype: str = "float16") -> Path:
+    """Write the agent of a training checkpoint alone to ``out``, its weights ``float16`` (what
+    ships) or ``float32`` (what evaluations read: the weights as trained); never over the
+    checkpoint itself, nor over a run's checkpoint (the run could not resume)."""
+    if dtype not in ("float16", "float32"):
+        raise ValueError(f"dtype must be 'float16' or 'float32', got {dtype!r}")
     checkpoint, out = Path(checkpoint), Path(out)
     # realpath takes `a/missing/../b` to `a/b` as opening the file would.
     target = Path(os.path.realpath(out))
@@ -173,18 +191,9 @@ def export(checkpoint: str | Path, out: str | Path) -> Path:
     except Exception as e:  # torch raises what its reader or unpickler met
         raise ValueError(f"{checkpoint}: not a socnav.train checkpoint ({type(e).__name__}: {e})") from None
     algo = saved.get("algo") if isinstance(saved, dict) else None
-    if algo == "dqn":
-        from socnav.train.dqn import policy_state
-    elif algo == "ppo":
-        from socnav.train.ppo import policy_state
-    else:
+    if algo not in ("dqn", "ppo"):
         raise ValueError(f"{checkpoint}: not a socnav.train checkpoint (algo {algo!r})")
-    agent = policy_state(saved)
-    agent["state_dict"] = {k: v.detach().half() for k, v in agent["state_dict"].items()}
-    agent["format"] = FORMAT
-    agent["config"] = saved["args"]["config"]
-    agent["steps"] = int(saved["step"])
-    agent.setdefault("action_type", "discrete")
+    agent = agent_file(saved, dtype)
     out.parent.mkdir(parents=True, exist_ok=True)
     torch.save(agent, out)
     return out

@@ -1,4 +1,4 @@
-"""``python -m socnav.train {dqn,ppo,export,plot}``: see :mod:`socnav.train`."""
+"""``python -m socnav.train {dqn,ppo,export,select,plot}``: see :mod:`socnav.train`."""
 
 from __future__ import annotations
 
@@ -35,9 +35,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     _add_args(sub.add_parser("dqn", help="the paper's DQN (socnav.train.dqn; --mode batched, paper or paper-text)"),
               dqn_defaults)
     _add_args(sub.add_parser("ppo", help="PPO, discrete or continuous actions (socnav.train.ppo)"), ppo.Args())
-    ex = sub.add_parser("export", help="write the agent of a checkpoint alone (float16)")
+    ex = sub.add_parser("export", help="write the agent of a checkpoint alone (float16, or --float32)")
     ex.add_argument("checkpoint")
     ex.add_argument("out")
+    ex.add_argument("--float32", action="store_true", help="keep the weights as trained (for evaluation)")
+    se = sub.add_parser("select", help="choose a run's snapshot on validation episodes (socnav.train.select)")
+    se.add_argument("run")
+    se.add_argument("--episodes", type=int, default=300)
+    se.add_argument("--seed", type=int, default=None, help="first validation seed (default: select.VALIDATION_SEED)")
+    se.add_argument("--config", default=None, help="default: the config the run trained on")
     pl = sub.add_parser("plot", help="learning curves of runs (socnav.train.plot; needs matplotlib)")
     pl.add_argument("runs", nargs="+", help="run directories or NAME.progress.csv files")
     pl.add_argument("--out", required=True, help="image file (.png, .svg, .pdf)")
@@ -47,10 +53,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.command == "export":
         try:
-            print(export(args.checkpoint, args.out))
+            print(export(args.checkpoint, args.out, "float32" if args.float32 else "float16"))
         except (OSError, ValueError) as e:
             print(f"python -m socnav.train export: {e}", file=sys.stderr)
             return 2
+        return 0
+    if args.command == "select":
+        from socnav.train.select import VALIDATION_SEED, select
+
+        try:
+            chosen, _ = select(args.run, config=args.config, episodes=args.episodes,
+                               seed=VALIDATION_SEED if args.seed is None else args.seed)
+        except (OSError, ValueError) as e:
+            print(f"python -m socnav.train select: {e}", file=sys.stderr)
+            return 2
+        print(chosen)
         return 0
     if args.command == "plot":
         from socnav.train.plot import DEFAULT_METRICS, plot_runs

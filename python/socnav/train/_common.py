@@ -183,7 +183,7 @@ class EpisodeStats:
 
 #: Arguments that may change between the chunks of one run (``out`` too: a run's directory may
 #: be moved or copied and resumed there).
-_CHUNK_ARGS = ("steps", "max_minutes", "chunk_steps", "checkpoint_minutes", "log_every", "out")
+_CHUNK_ARGS = ("steps", "max_minutes", "chunk_steps", "checkpoint_minutes", "log_every", "snapshot_every", "out")
 
 
 class RunDir:
@@ -240,6 +240,15 @@ class RunDir:
         tmp = self.checkpoint.with_suffix(".tmp")
         torch.save(dict(payload), tmp)
         os.replace(tmp, self.checkpoint)
+
+    def snapshot(self, step: int, agent: Mapping[str, Any]) -> Path:
+        """Write an agent file (``socnav.train.agent_file``) as ``snapshots/step-<step>.pt``."""
+        path = self.path / "snapshots" / f"step-{step:010d}.pt"
+        path.parent.mkdir(exist_ok=True)
+        tmp = path.with_suffix(".tmp")
+        torch.save(dict(agent), tmp)
+        os.replace(tmp, path)
+        return path
 
     def load(self) -> dict[str, Any] | None:
         """The checkpoint to resume from, or None for a fresh run. The progress log is cut back to

@@ -169,6 +169,9 @@ class Args(common.RunArgs):
     #: ``mlp`` (the observation row, normalised) or ``entity`` (socnav.train.entity: records,
     #: attention, memory and the robot's velocity).
     network: str = "mlp"
+    #: Write the agent (float32) to ``snapshots/step-<N>.pt`` every this many steps, for choosing
+    #: a checkpoint on validation episodes afterwards (``socnav.train.select``); none when unset.
+    snapshot_every: int | None = None
     #: ``off`` or ``return`` (rewards over the running sd of the discounted return); default:
     #: ``return`` for the entity network, ``off`` for the MLP (as its shipped agents trained).
     reward_norm: str = "auto"
@@ -184,7 +187,8 @@ class Args(common.RunArgs):
     max_grad_norm: float = 0.5
 
     def _counts(self) -> list[tuple[str, Any]]:
-        return super()._counts() + [
+        snapshots = [("snapshot_every", self.snapshot_every)] if self.snapshot_every is not None else []
+        return super()._counts() + snapshots + [
             ("rollout_steps", self.rollout_steps),
             ("epochs", self.epochs),
             ("minibatches", self.minibatches),
@@ -265,9 +269,8 @@ def train(args: Args) -> dict[str, Any]:
     start = time.perf_counter()
     scalars: dict[str, Any] = {}
 
-    def checkpoint() -> None:
-        run.save(
-            {
+    def payload() -> dict[str, Any]:
+        return {
                 "algo": "ppo",
                 "network": args.network,
                 "agent": agent.state_dict(),
@@ -287,7 +290,12 @@ def train(args: Args) -> dict[str, Any]:
                 "action_type": args.action_type,
                 "args": vars(args),
             }
-        )
+
+    def checkpoint() -> None:
+        run.save(payload())
+
+    def snapshot_due(before: int) -> bool:
+        return args.snapshot_every is not None and step // args.snapshot_every > before // args.snapshot_every
 
     losses: dict[str, list[float]] = {"policy": [], "value": [], "entropy": []}
     while step < args.steps:
@@ -373,6 +381,10 @@ def train(args: Args) -> dict[str, Any]:
                 losses["value"].append(float(v_loss.detach()))
                 losses["entropy"].append(float(ent.detach()))
         clock.stop("learn")
+        if snapshot_due(step - n * T):
+            from socnav.train import agent_file
+
+            run.snapshot(step, agent_file(payload(), "float32"))
         if step - last_log >= args.log_every or step >= args.steps:
             last_log = step
             wall = wall_before + time.perf_counter() - start
