@@ -10,9 +10,14 @@
 // `#[expect(clippy::..., reason = "...")]` saying why it holds (clippy.toml lets unit tests).
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod aligned;
 mod orca;
 mod stepper;
 mod viewer;
+
+/// Large blocks 64-byte aligned, so that JAX takes the output buffers without a copy.
+#[global_allocator]
+static ALLOCATOR: aligned::CacheLineAligned = aligned::CacheLineAligned;
 
 use stepper::{Job, OwnedActions, SendState, Stepper};
 

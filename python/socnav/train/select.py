@@ -42,12 +42,12 @@ def select(
     snapshots = sorted((run / "snapshots").glob("step-*.pt"))
     if not snapshots:
         raise ValueError(f"{run}: no snapshots (train with --snapshot-every)")
-    rows = []
+    rows: list[dict[str, Any]] = []
     for path in snapshots:
         agent = load(path)
         summary = socnav.evaluate(agent, config or agent.config, episodes=episodes, seed=seed,
                                   num_envs=num_envs, threads=threads).summary()
-        row = {"snapshot": path.name, "steps": int(path.stem.split("-")[1]), **{k: float(summary[k]) for k in COLUMNS}}
+        row: dict[str, Any] = {"snapshot": path.name, "steps": int(path.stem.split("-")[1]), **{k: float(summary[k]) for k in COLUMNS}}
         rows.append(row)
         print(f"socnav.train select: {path.name}: success {row['success']:.3f} collision {row['collision']:.3f}", flush=True)
     best = max(rows, key=lambda r: (r["success"], -r["collision"], r["steps"]))
