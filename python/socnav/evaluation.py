@@ -210,9 +210,8 @@ def evaluate(
     seed = check_seed(seed)
     act, name = resolve_policy(policy, seed=seed)
     n = min(episodes, check_count("num_envs", num_envs) if num_envs is not None else 64)
-    overrides = getattr(act, "config_overrides", None)
     env = socnav.make_vec(
-        socnav.with_overrides(config, overrides) if overrides else config,
+        config_for(config, act),
         num_envs=n,
         obs_mode=getattr(act, "obs_mode", "dict"),
         action_type=getattr(act, "action_type", "continuous"),
@@ -270,6 +269,15 @@ def evaluate(
         wall_seconds=time.perf_counter() - start,
         endings=endings,
     )
+
+
+def config_for(config: Any, act: Any) -> Any:
+    """``config`` with what the policy ``act`` needs of it (its ``config_overrides``, e.g. the
+    robot's velocity in its record)."""
+    from socnav._batch import with_overrides
+
+    overrides = getattr(act, "config_overrides", None)
+    return with_overrides(config, overrides) if overrides else config
 
 
 def _state_of(batch: Any, env: int) -> dict[str, Any]:

@@ -157,7 +157,7 @@ def record(
     """
     import socnav
     from socnav._batch import check_count, check_seed
-    from socnav.evaluation import resolve_policy
+    from socnav.evaluation import config_for, resolve_policy
 
     episodes = check_count("episodes", episodes)
     size = check_count("size", size)
@@ -170,7 +170,7 @@ def record(
     for label, p in policies.items():
         act, _ = resolve_policy(p, seed=seed)
         env = socnav.make_vec(
-            config,
+            config_for(config, act),
             num_envs=1,
             obs_mode=getattr(act, "obs_mode", "dict"),
             action_type=getattr(act, "action_type", "continuous"),

@@ -387,6 +387,8 @@ def test_entity_ppo_trains_resumes_exports_and_evaluates(tmp_path, action_type):
     assert agent.network == "entity" and agent.config_overrides == {"observation": {"robot_velocity": True}}
     result = socnav.evaluate(agent, "exp2", episodes=6, seed=50, num_envs=3)
     assert len(result.seeds) == 6 and np.isfinite(result.summary()["success"])
+    gif = socnav.record({"agent": agent, "goal": "goal"}, "exp2", tmp_path / "side-by-side.gif", episodes=1, seed=50)
+    assert gif.stat().st_size > 0
     env, obs, layout = _entity_batch(n=2)
     agent.reset_memory()
     a = agent(obs, env)
