@@ -5,8 +5,10 @@ Rollouts of ``rollout_steps`` steps of every environment, generalised advantage 
 (gamma 0.99, lambda 0.95; truncated episodes bootstrap from the value of their last
 observation), ``epochs`` passes of clipped-objective updates over ``minibatches`` minibatches, a
 learning rate annealed linearly to 0, observations normalised by running statistics (kept in the
-checkpoint and shipped with the agent). Actor and critic are separate MLPs (256, 256, tanh);
-discrete actions are a categorical over the 7, continuous ones a Gaussian with a learned
+checkpoint and shipped with the agent). Actor and critic are separate MLPs (256, 256, tanh), or
+with ``--network entity`` the entity network of :mod:`socnav.train.entity` (one encoder, a policy
+and a value head; fixed input scales instead of running statistics; rewards over the running sd
+of the discounted return); discrete actions are a categorical over the 7, continuous ones a Gaussian with a learned
 state-independent standard deviation (the batch clips actions to [-1, 1]).
 
 Resumes from ``checkpoint.pt`` in ``--out`` like ``socnav.train.dqn``.
