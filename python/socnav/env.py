@@ -90,7 +90,9 @@ class SocNavEnv(gym.Env):
             self.render()
         return self._obs(), reward, terminated, truncated, self._info()
 
-    def render(self) -> np.ndarray | None:
+    # gymnasium 1.1 types the result as an unbound TypeVar (RenderFrame), which no concrete
+    # type matches; later releases accept this one.
+    def render(self) -> np.ndarray | None:  # type: ignore[override]
         """The environment from above, uint8 ``(H, W, 3)`` (``render_mode="rgb_array"``), with
         the robot's path since the reset; with ``"human"`` the same frame shown in a window
         (``socnav.render``), and None; None without a render mode."""

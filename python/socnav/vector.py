@@ -252,7 +252,9 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             self.episode_steps += ~self._over
             self._over |= ended
 
-    def render(self) -> tuple[np.ndarray, ...] | None:
+    # gymnasium 1.1 types the result as an unbound TypeVar (RenderFrame), which no concrete
+    # type matches; later releases accept this one.
+    def render(self) -> tuple[np.ndarray, ...] | None:  # type: ignore[override]
         """Frames of the environments ``render_envs`` (uint8 ``(H, W, 3)`` each, with the robot's
         path since its episode began) when ``render_mode="rgb_array"``; ``socnav.render.tile``
         puts them in one image. With ``"human"`` they are shown tiled in a window as the batch
