@@ -133,9 +133,10 @@ class EntityEncoder(nn.Module):
         goal = robot[:, 6:8] / LENGTH_SCALE
         goal_dist = goal.norm(dim=-1, keepdim=True)
         goal_dir = robot[:, 6:8] / robot[:, 6:8].norm(dim=-1, keepdim=True).clamp_min(1e-6)
-        robot_f = torch.cat(
-            [goal, goal_dist, goal_dir, robot[:, 8:9], robot[:, 9:12], delta[:, 6:8] / LENGTH_SCALE * 5.0], dim=-1
-        )
+        # The goal's change since the last step stays in metres (at most ~0.2 m a step); the
+        # division and product below cancel but are kept, as the shipped agents were trained so.
+        goal_change = delta[:, 6:8] / LENGTH_SCALE * 5.0
+        robot_f = torch.cat([goal, goal_dist, goal_dir, robot[:, 8:9], robot[:, 9:12], goal_change], dim=-1)
         xy = rec[:, :, 6:8]
         dist = xy.norm(dim=-1, keepdim=True)
         gap = dist - rec[:, :, 10:11] - robot[:, None, 8:9]
