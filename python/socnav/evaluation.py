@@ -33,7 +33,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from socnav import policies
-from socnav._batch import check_count, check_seed
+from socnav._batch import check_count, check_seed, with_overrides
 from socnav.metrics import EPISODE_KEYS, TABLE_KEYS, EpisodeLog, Summary, aggregate
 
 __all__ = ["ENDINGS", "Evaluation", "classify_ending", "evaluate", "resolve_policy"]
@@ -274,8 +274,6 @@ def evaluate(
 def config_for(config: Any, act: Any) -> Any:
     """``config`` with what the policy ``act`` needs of it (its ``config_overrides``, e.g. the
     robot's velocity in its record)."""
-    from socnav._batch import with_overrides
-
     overrides = getattr(act, "config_overrides", None)
     return with_overrides(config, overrides) if overrides else config
 

@@ -84,8 +84,6 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         if bad:
             raise ValueError(f"render_envs {bad} out of range 0..{self.num_envs}")
         self._trails = Trails(self.num_envs)
-        # Environments whose next step starts a new episode (NEXT_STEP autoreset).
-        self._restart_trail = np.zeros(self.num_envs, dtype=bool)
         self._layout = self._batch.layout()
         self._keys = Batch.keys()
         self.single_observation_space = _batch.observation_space(self._batch, obs_mode)
@@ -95,16 +93,14 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self._buf = self._batch.buffers()
         self._all = np.ones(self.num_envs, dtype=bool)
         self._reward_fn = reward_fn
-        # With a reward function: its rewards, their running episode returns, and which
-        # environments finished at the last step (their next step is a reset under NEXT_STEP,
-        # or nothing under DISABLED until `reset_mask` restarts them).
+        # With a reward function: its rewards and their running episode returns.
         self._reward = np.zeros(self.num_envs, dtype=np.float32)
         self._returns = np.zeros(self.num_envs, dtype=np.float64)
-        self._finished = np.zeros(self.num_envs, dtype=bool)
         #: Steps each environment's current episode has taken: 0 at its first observation (an
         #: agent with memory reads it to forget the previous episode).
         self.episode_steps = np.zeros(self.num_envs, dtype=np.int64)
-        # Environments whose episode ended and has not restarted yet.
+        # Environments whose episode ended and has not restarted yet: their next step is a reset
+        # under NEXT_STEP, nothing under DISABLED until `reset_mask` restarts them.
         self._over = np.zeros(self.num_envs, dtype=bool)
         # The actions of a step sent and not yet received.
         self._sent: Any = None
@@ -171,7 +167,6 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             if seeds is not None:
                 self._batch.set_next_seeds([s if m else None for s, m in zip(seeds, mask)])
             self._batch.reset_envs(np.ascontiguousarray(mask))
-            self._finished[mask] = False
             self._returns[mask] = 0.0
             self.episode_steps[mask] = 0
             self._over[mask] = False
@@ -180,7 +175,6 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             if seeds is not None:
                 self._batch.set_next_seeds(seeds)
             self._batch.reset(None)
-            self._finished[:] = False
             self._returns[:] = 0.0
             self.episode_steps[:] = 0
             self._over[:] = False
@@ -221,19 +215,20 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         b = self._buf
         terminated = b["terminated"].astype(bool)
         truncated = b["truncated"].astype(bool)
+        ended = terminated | truncated
+        same_step = self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+        # From the episodes' state before this step: which environments it stepped, and which it
+        # restarted instead (NEXT_STEP: those that had ended).
+        stepped = self._all if same_step else ~self._over
         if self.render_mode is not None:
-            ended = terminated | truncated
-            if self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP:
-                self._track(restart=ended)
-            else:
-                self._track(restart=self._restart_trail)
-                self._restart_trail = ended & (self.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP)
-        self._count_steps(terminated | truncated)
+            next_step = self.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+            self._track(restart=ended if same_step else self._over & next_step)
+        self._count_steps(ended)
         info = self._info(final=True)
         if self._reward_fn is None:
             reward = b["reward"].copy() if self.copy else b["reward"]
         else:
-            reward = self._custom_reward(self._reward_fn, actions, terminated, truncated, info)
+            reward = self._custom_reward(self._reward_fn, actions, stepped, terminated, truncated, info)
         self._steps += 1
         if self.render_mode == "human":
             self._show(reward)
@@ -292,14 +287,14 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
         self,
         reward_fn: _batch.RewardFn,
         actions: Any,
+        stepped: np.ndarray,
         terminated: np.ndarray,
         truncated: np.ndarray,
         info: dict[str, Any],
     ) -> np.ndarray:
-        """``reward_fn``'s rewards for this step; the episode returns in ``info`` become
-        theirs."""
+        """``reward_fn``'s rewards for this step (``stepped``: the environments it stepped); the
+        episode returns in ``info`` become theirs."""
         b = self._buf
-        stepped = self._all if self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP else ~self._finished
         flat = b["obs"]
         has_final = b["has_final"].astype(bool)
         if has_final.any():
@@ -320,7 +315,6 @@ class SocNavVectorEnv(gym.vector.VectorEnv):
             done = info["_episode"]
             info["episode"]["return"] = np.where(done, self._returns, info["episode"]["return"]).astype(np.float32)
             self._returns[done] = 0.0
-        self._finished = terminated | truncated
         return reward.copy() if self.copy else reward
 
     def _obs(self, flat: np.ndarray, copy: bool) -> Any:
