@@ -60,6 +60,8 @@ class Agent:
         self.obs_dim = int(saved["obs_dim"])
         self.action_type: str = saved.get("action_type", "discrete")
         state = {k: v.float() for k, v in saved["state_dict"].items()}
+        # The entity agents' memory of the last observations (none for the others).
+        self.memory: Any = None
         if self.kind == "dqn":
             from socnav.train.dqn import make_q
 
@@ -75,7 +77,7 @@ class Agent:
             self.net = entity.EntityPolicy(entity.Layout.of(self.layout), self.action_type)
             state.pop("log_std", None)
             self.net.load_state_dict(state)
-            self.memory: Any = entity.FrameMemory()
+            self.memory = entity.FrameMemory()
         elif self.kind == "ppo":
             from socnav.train.ppo import _mlp
 
@@ -86,8 +88,6 @@ class Agent:
         else:
             raise ValueError(f"{name}: unknown agent kind {self.kind!r}")
         self.net.eval()
-        if not hasattr(self, "memory"):
-            self.memory = None
         self.obs_mean = saved.get("obs_mean")
         self.obs_var = saved.get("obs_var")
 

@@ -237,17 +237,13 @@ class RunDir:
 
     def save(self, payload: Mapping[str, Any]) -> None:
         """Write ``checkpoint.pt`` atomically (a crash mid-write keeps the previous one)."""
-        tmp = self.checkpoint.with_suffix(".tmp")
-        torch.save(dict(payload), tmp)
-        os.replace(tmp, self.checkpoint)
+        _save_atomically(payload, self.checkpoint)
 
     def snapshot(self, step: int, agent: Mapping[str, Any]) -> Path:
         """Write an agent file (``socnav.train.agent_file``) as ``snapshots/step-<step>.pt``."""
         path = self.path / "snapshots" / f"step-{step:010d}.pt"
         path.parent.mkdir(exist_ok=True)
-        tmp = path.with_suffix(".tmp")
-        torch.save(dict(agent), tmp)
-        os.replace(tmp, path)
+        _save_atomically(agent, path)
         return path
 
     def load(self) -> dict[str, Any] | None:
@@ -294,6 +290,13 @@ class RunDir:
     def close(self) -> None:
         if self._tb is not None:
             self._tb.close()
+
+
+def _save_atomically(payload: Mapping[str, Any], path: Path) -> None:
+    """``torch.save`` to ``path`` through a temporary file, so a crash mid-write keeps the old one."""
+    tmp = path.with_suffix(".tmp")
+    torch.save(dict(payload), tmp)
+    os.replace(tmp, path)
 
 
 def _fmt(v: Any) -> Any:
