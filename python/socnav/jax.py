@@ -80,10 +80,8 @@ class JaxVectorEnv(gym.vector.VectorWrapper):
         return self._one(obs)
 
     def _one(self, x: np.ndarray) -> jax.Array:
-        # Strided (the dict's blocks) or small (JAX copies unaligned buffers) arrays are copied.
-        if not self.view or not x.flags.c_contiguous:
-            return jnp.array(x, copy=True)
-        return jax.dlpack.from_dlpack(x)
+        # Strided arrays (the dict's blocks) are copied; JAX copies small (unaligned) ones itself.
+        return asarray(x, view=self.view and x.flags.c_contiguous)
 
 
 def wrap(env: gym.vector.VectorEnv, *, view: bool = False) -> JaxVectorEnv:
