@@ -20,7 +20,9 @@
 
 use std::sync::{Arc, Mutex};
 
-use super::spirv::Contraction;
+use super::pipelines::{Compiler, DiskCache, PipelineCache};
+use super::spirv::{BufferBounds, Contraction};
+use super::vulkan;
 use crate::error::SimError;
 
 /// Which adapters may be used.
@@ -128,162 +130,6 @@ pub fn list_adapters() -> Vec<AdapterSummary> {
 /// should a driver refuse the first, and the other half of a comparison of the two on hardware
 /// (`scripts/bench-gpu`).
 pub const SHADERS_VAR: &str = "SOCNAV_SHADERS";
-
-/// What this module asks a Vulkan device's driver itself, through the handles wgpu-hal exposes
-/// (wgpu's `vulkan` feature covers Windows, Linux, Android and FreeBSD).
-#[cfg(any(
-    windows,
-    target_os = "linux",
-    target_os = "android",
-    target_os = "freebsd"
-))]
-#[expect(
-    unsafe_code,
-    reason = "wgpu exposes the Vulkan handles only through the unsafe `as_hal`; sound, see each use"
-)]
-mod vulkan {
-    /// Whether `device` is a Vulkan device that wgpu opened with `robustBufferAccess2` enabled:
-    /// wgpu-hal enables `VK_EXT_robustness2` wherever the driver offers it, with that feature
-    /// where the physical device has it (its adapter's `naga_options` then leave buffer bounds
-    /// unchecked), but does not say so; this asks the driver the same question.
-    pub(super) fn robust_buffer_access2(device: &wgpu::Device) -> bool {
-        use ash::vk;
-        // SAFETY: the handles are only read, to query features of the physical device, while the
-        // guard keeps the device alive; nothing is created or destroyed.
-        let Some(hal) = (unsafe { device.as_hal::<wgpu::hal::api::Vulkan>() }) else {
-            return false;
-        };
-        if !hal
-            .enabled_device_extensions()
-            .contains(&ash::ext::robustness2::NAME)
-        {
-            return false;
-        }
-        let shared = hal.shared_instance();
-        let mut robustness2 = vk::PhysicalDeviceRobustness2FeaturesEXT::default();
-        let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut robustness2);
-        if shared.instance_api_version() >= vk::API_VERSION_1_1 {
-            // SAFETY: a Vulkan 1.1 instance has the entry point; the physical device is its own.
-            unsafe {
-                shared
-                    .raw_instance()
-                    .get_physical_device_features2(hal.raw_physical_device(), &mut features);
-            }
-        } else if shared
-            .extensions()
-            .contains(&ash::khr::get_physical_device_properties2::NAME)
-        {
-            let loader = ash::khr::get_physical_device_properties2::Instance::new(
-                shared.entry(),
-                shared.raw_instance(),
-            );
-            // SAFETY: the instance enabled the extension; the physical device is its own.
-            unsafe {
-                loader.get_physical_device_features2(hal.raw_physical_device(), &mut features)
-            };
-        } else {
-            return false;
-        }
-        robustness2.robust_buffer_access2 == vk::TRUE
-    }
-
-    /// The memory a mapped readback buffer of `device` lives in (`MAP_READ | COPY_DST`, every
-    /// step readback piece), as wgpu's allocator (gpu-allocator, `MemoryLocation::GpuToCpu`)
-    /// picks it: the first memory type the buffer allows that is host-visible, coherent and
-    /// cached, else the first host-visible and coherent one. The copy out of the step's readback
-    /// is one of the delivered step's longest parts on hardware, and reads from uncached memory
-    /// would explain its speed (docs/performance.md), so the bench's device line says which it
-    /// is.
-    pub(super) fn readback_memory(device: &wgpu::Device) -> Option<String> {
-        mapped_memory(
-            device,
-            ash::vk::BufferUsageFlags::TRANSFER_DST,
-            ash::vk::MemoryPropertyFlags::HOST_CACHED,
-        )
-    }
-
-    /// The memory wgpu's staging buffers of `device` live in (`MAP_WRITE | COPY_SRC`: every
-    /// queue write's, the step's actions and pool rows among them), as its allocator
-    /// (`MemoryLocation::CpuToGpu`) picks it: host-visible, coherent and device-local first (on
-    /// a discrete GPU, device memory the host writes across the bus, uncached), else host-visible
-    /// and coherent. The large writes are split over the host's threads for the first
-    /// (`kit::write_buffer_split`), and the bench's device line says which it is.
-    pub(super) fn staging_memory(device: &wgpu::Device) -> Option<String> {
-        mapped_memory(
-            device,
-            ash::vk::BufferUsageFlags::TRANSFER_SRC,
-            ash::vk::MemoryPropertyFlags::DEVICE_LOCAL,
-        )
-    }
-
-    /// The memory type gpu-allocator picks for a mapped buffer of `usage` on `device`: the first
-    /// the buffer allows that is host-visible, coherent and `preferred`, else the first
-    /// host-visible and coherent one; with its flags and its heap's.
-    fn mapped_memory(
-        device: &wgpu::Device,
-        usage: ash::vk::BufferUsageFlags,
-        preferred: ash::vk::MemoryPropertyFlags,
-    ) -> Option<String> {
-        use ash::vk;
-        // SAFETY: a probe buffer is created on the device and destroyed before the guard is
-        // dropped, never bound or used; everything else is a query of the physical device.
-        let hal = unsafe { device.as_hal::<wgpu::hal::api::Vulkan>() }?;
-        let raw = hal.raw_device();
-        let probe = vk::BufferCreateInfo::default()
-            .size(1 << 16)
-            .usage(usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
-        // SAFETY: see above.
-        let buffer = unsafe { raw.create_buffer(&probe, None) }.ok()?;
-        // SAFETY: the buffer is this device's and alive.
-        let allowed = unsafe { raw.get_buffer_memory_requirements(buffer) }.memory_type_bits;
-        // SAFETY: the buffer is this device's, unbound and unused.
-        unsafe { raw.destroy_buffer(buffer, None) };
-        // SAFETY: the physical device is the instance's own.
-        let memory = unsafe {
-            hal.shared_instance()
-                .raw_instance()
-                .get_physical_device_memory_properties(hal.raw_physical_device())
-        };
-        let types = &memory.memory_types[..memory.memory_type_count as usize];
-        let visible =
-            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
-        let pick = |wanted: vk::MemoryPropertyFlags| {
-            (0..types.len())
-                .find(|&i| allowed & (1 << i) != 0 && types[i].property_flags.contains(wanted))
-        };
-        let i = pick(visible | preferred).or_else(|| pick(visible))?;
-        let heap = memory.memory_heaps[types[i].heap_index as usize];
-        Some(format!(
-            "memory type {i} ({:?}) of heap {} ({} MiB, {:?})",
-            types[i].property_flags,
-            types[i].heap_index,
-            heap.size >> 20,
-            heap.flags
-        ))
-    }
-}
-
-/// No Vulkan backend on this platform: nothing to ask.
-#[cfg(not(any(
-    windows,
-    target_os = "linux",
-    target_os = "android",
-    target_os = "freebsd"
-)))]
-mod vulkan {
-    pub(super) fn robust_buffer_access2(_: &wgpu::Device) -> bool {
-        false
-    }
-
-    pub(super) fn readback_memory(_: &wgpu::Device) -> Option<String> {
-        None
-    }
-
-    pub(super) fn staging_memory(_: &wgpu::Device) -> Option<String> {
-        None
-    }
-}
 
 /// The environment variable that chooses the paths of the devices this process opens: `device`
 /// (the default) takes the adapter's (on a hardware GPU the observation staged through workgroup
@@ -476,8 +322,8 @@ pub struct GpuDevice {
     errors: Arc<Mutex<Vec<String>>>,
     /// Why the device was lost, once it has been.
     lost: Arc<Mutex<Option<String>>>,
-    /// The pipelines compiled on this device ([`super::kit::PipelineCache`]).
-    pub(crate) pipelines: Arc<super::kit::PipelineCache>,
+    /// The pipelines compiled on this device ([`PipelineCache`]).
+    pub(crate) pipelines: Arc<PipelineCache>,
 }
 
 impl std::fmt::Debug for GpuDevice {
@@ -558,7 +404,7 @@ impl GpuDevice {
         let info = adapter.get_info();
         // The adapter's own limits: large batches need storage bindings beyond WebGPU's defaults.
         let limits = adapter.limits();
-        // wgpu's pipeline cache, where the backend has one (`kit::DiskCache`), and timestamp
+        // wgpu's pipeline cache, where the backend has one (`pipelines::DiskCache`), and timestamp
         // queries, which time the passes for `socnav bench` (`GpuStages::time_passes`) and,
         // written between commands, a delivered step's readback copies (`timeline`).
         // Shader passthrough, for the backend's own SPIR-V (`super::spirv`): on Vulkan only, and
@@ -595,7 +441,7 @@ impl GpuDevice {
                 .unwrap_or_else(std::sync::PoisonError::into_inner) =
                 Some(format!("{message} ({reason:?})"));
         });
-        let disk = super::kit::DiskCache::open(&device, features, &info);
+        let disk = DiskCache::open(&device, features, &info);
         let adapter = AdapterSummary::of(&info);
         let own_spirv = features.contains(wgpu::Features::PASSTHROUGH_SHADERS);
         let dev = Self {
@@ -622,7 +468,7 @@ impl GpuDevice {
             limits,
             errors,
             lost,
-            pipelines: Arc::new(super::kit::PipelineCache::new(disk)),
+            pipelines: Arc::new(PipelineCache::new(disk)),
         };
         Ok(if lane_paths {
             dev.with_lane_paths()
@@ -662,7 +508,7 @@ impl GpuDevice {
         source: &str,
         entry: &str,
     ) -> Result<wgpu::ShaderModule, SimError> {
-        super::kit::shader_module(self, label, source, entry)
+        super::pipelines::shader_module(self, label, source, entry)
     }
 
     /// Compute pipelines compiled on this device so far, by every batch that shares it.
@@ -703,6 +549,35 @@ impl GpuDevice {
         let msg = errors.join("; ");
         errors.clear();
         Err(SimError::Device(format!("the GPU device reported: {msg}")))
+    }
+}
+
+impl Compiler for GpuDevice {
+    fn wgpu(&self) -> &wgpu::Device {
+        &self.device
+    }
+
+    fn own_spirv(&self) -> Option<(BufferBounds, Contraction)> {
+        let bounds = if self.driver_checks_buffers {
+            BufferBounds::Driver
+        } else {
+            BufferBounds::Clamped
+        };
+        self.own_spirv.then_some((bounds, self.contraction))
+    }
+
+    fn pipeline_errors(&self, label: &str) -> Result<(), SimError> {
+        self.take_errors().map_err(|e| match e {
+            SimError::Device(msg) if self.own_spirv => SimError::Device(format!(
+                "{msg} (pipeline {label} built from socnav's SPIR-V; {SHADERS_VAR}=wgsl builds it \
+                 from the WGSL through wgpu instead, and {PATHS_VAR}=lane takes a software \
+                 adapter's paths)"
+            )),
+            SimError::Device(msg) => SimError::Device(format!(
+                "{msg} (pipeline {label}; {PATHS_VAR}=lane takes a software adapter's paths)"
+            )),
+            e => e,
+        })
     }
 }
 

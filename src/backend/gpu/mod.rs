@@ -3,7 +3,7 @@
 //!
 //! - [`device`]: finding and opening an adapter under the policy of DESIGN.md section 8.
 //! - `kit`: buffers, bind group layouts, readback, and the device's pipeline cache
-//!   (`kit::PipelineCache`: each pipeline compiled once per device and source, whatever the
+//!   (`pipelines::PipelineCache`: each pipeline compiled once per device and source, whatever the
 //!   batch size or config).
 //! - [`GpuStages`]: the state and the outputs each packed into two storage buffers (every f32
 //!   column back to back, every u32 column likewise, in declaration order; offsets and strides
@@ -23,11 +23,13 @@
 pub mod backend;
 pub mod device;
 pub(crate) mod kit;
+pub(crate) mod pipelines;
 pub(crate) mod pool_rows;
 pub(crate) mod readback;
 pub mod sngnn_net;
 pub(crate) mod spirv;
 mod timeline;
+mod vulkan;
 
 pub use backend::GpuBackend;
 pub use device::{
@@ -50,9 +52,10 @@ use crate::sngnn::pieces::Tables;
 use crate::state::BatchState;
 use crate::systems::reset::ObstacleBuild;
 use kit::{
-    Binding, CreationScope, Groups, bind_buffers, bind_kinds, bytes_of, check_binding,
-    map_and_read, map_and_read_after, storage_buffer, uniform_buffer, write_buffer_split,
+    CreationScope, bind_buffers, bind_kinds, bytes_of, check_binding, map_and_read,
+    map_and_read_after, storage_buffer, uniform_buffer, write_buffer_split,
 };
+use pipelines::{Binding, Groups};
 use readback::{StepReadback, words_to_bytes};
 use sngnn_net::StepBuffers;
 use timeline::Timeline;
@@ -1255,7 +1258,7 @@ impl GpuStages {
         if !on {
             self.timeline = None;
         } else if self.timeline.is_none() {
-            self.timeline = Timeline::new(&self.dev);
+            self.timeline = Timeline::new(&self.dev, readback::MOST_PIECES);
         }
     }
 
@@ -1678,7 +1681,7 @@ fn member_mask_table(dev: &GpuDevice) -> (wgpu::Buffer, u32) {
         .device
         .limits()
         .min_uniform_buffer_offset_alignment
-        .max(kit::DYNAMIC_UNIFORM_BYTES as u32);
+        .max(pipelines::DYNAMIC_UNIFORM_BYTES as u32);
     let words_per = (stride / 4) as usize;
     let mut words = vec![0u32; wgsl::MEMBER_MASKS * words_per];
     for m in 0..wgsl::MEMBER_MASKS {

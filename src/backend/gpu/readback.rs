@@ -40,7 +40,8 @@ use crate::spec::ObsLayout;
 use crate::state::columns::Elem;
 
 use super::GpuDevice;
-use super::kit::{Binding, bind_buffers, bytes_of, check_binding, map_and_read_after};
+use super::kit::{bind_buffers, bytes_of, check_binding, map_and_read_after};
+use super::pipelines::Binding;
 use super::timeline::Timeline;
 
 /// Most pieces the per-step columns are read back in, each a buffer and a submit of its own: the

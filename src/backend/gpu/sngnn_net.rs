@@ -19,9 +19,9 @@
 //! pass (`GpuNet::record`).
 
 use super::kit::{
-    Binding, CreationScope, bind_buffers, bytes_of, check_binding, map_and_read, storage_bindings,
-    storage_buffer,
+    CreationScope, bind_buffers, bytes_of, check_binding, map_and_read, storage_buffer,
 };
+use super::pipelines::{Binding, storage_bindings};
 use super::{AdapterSummary, GpuDevice};
 use crate::backend::wgsl;
 use crate::backend::wgsl::sngnn_status::{

@@ -14,14 +14,12 @@ use crate::error::SimError;
 
 use super::GpuDevice;
 use super::kit::map_and_read;
-use super::readback::MOST_PIECES;
 
 /// Timestamp slots: the step's commands start, its compute pass begins, it ends; readback copy
-/// `k` is done at `AFTER_PASSES + 1 + k`.
+/// `k` is done at `AFTER_PASSES + 1 + k` (of the timeline's `copies`).
 const START: u32 = 0;
 const PASSES: u32 = 1;
 const AFTER_PASSES: u32 = 2;
-const SLOTS: u32 = AFTER_PASSES + 1 + MOST_PIECES as u32;
 
 /// The query set and buffers of the step timeline.
 pub(crate) struct Timeline {
@@ -34,21 +32,25 @@ pub(crate) struct Timeline {
     copies_timed: bool,
     /// Nanoseconds per timestamp tick.
     period_ns: f64,
+    /// Readback copies a step may time (the readback's most pieces).
+    copies: usize,
 }
 
 impl Timeline {
-    /// The timeline on `dev`, or `None` where the adapter has no timestamp queries.
-    pub(crate) fn new(dev: &GpuDevice) -> Option<Self> {
+    /// The timeline on `dev` of a step with at most `copies` readback copies, or `None` where the
+    /// adapter has no timestamp queries.
+    pub(crate) fn new(dev: &GpuDevice, copies: usize) -> Option<Self> {
         let features = dev.device.features();
         if !features.contains(wgpu::Features::TIMESTAMP_QUERY) {
             return None;
         }
+        let slots = AFTER_PASSES + 1 + copies as u32;
         let set = dev.device.create_query_set(&wgpu::QuerySetDescriptor {
             label: Some("step timeline"),
             ty: wgpu::QueryType::Timestamp,
-            count: SLOTS,
+            count: slots,
         });
-        let bytes = 8 * u64::from(SLOTS);
+        let bytes = 8 * u64::from(slots);
         let buffer = |label, usage| {
             dev.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -69,6 +71,7 @@ impl Timeline {
             ),
             copies_timed: features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS),
             period_ns: f64::from(dev.queue.get_timestamp_period()),
+            copies,
         })
     }
 
@@ -89,10 +92,10 @@ impl Timeline {
         }
     }
 
-    /// After readback copy `k` (`k < MOST_PIECES`) in `enc`: its timestamp, where copies are
+    /// After readback copy `k` (`k` below the timeline's `copies`) in `enc`: its timestamp, where copies are
     /// timed.
     pub(crate) fn after_copy(&self, enc: &mut wgpu::CommandEncoder, k: usize) {
-        if self.copies_timed && k < MOST_PIECES {
+        if self.copies_timed && k < self.copies {
             enc.write_timestamp(&self.set, AFTER_PASSES + 1 + k as u32);
         }
     }
@@ -100,7 +103,8 @@ impl Timeline {
     /// At the end of the step's last submit, after its last copy: resolve the timestamps and
     /// copy them where [`Self::read`] maps them.
     pub(crate) fn resolve(&self, enc: &mut wgpu::CommandEncoder) {
-        enc.resolve_query_set(&self.set, 0..SLOTS, &self.resolved, 0);
+        let slots = AFTER_PASSES + 1 + self.copies as u32;
+        enc.resolve_query_set(&self.set, 0..slots, &self.resolved, 0);
         enc.copy_buffer_to_buffer(&self.resolved, 0, &self.read, 0, self.read.size());
     }
 
@@ -121,7 +125,7 @@ impl Timeline {
             let seconds = |from: u32, to: u32| {
                 tick(to).saturating_sub(tick(from)) as f64 * self.period_ns * 1e-9
             };
-            let last_copy = AFTER_PASSES + copies.min(MOST_PIECES) as u32;
+            let last_copy = AFTER_PASSES + copies.min(self.copies) as u32;
             let copied = (self.copies_timed && copies > 0)
                 .then(|| (seconds(START, PASSES), seconds(AFTER_PASSES, last_copy)));
             times = Some((seconds(PASSES, AFTER_PASSES), copied));

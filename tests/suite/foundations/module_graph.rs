@@ -17,10 +17,11 @@
 //! on the module that defines it (`sngnn::scorer`). A module's uses of its own submodules
 //! (declaring, re-exporting, calling them) are not dependencies; its submodules' uses of it are.
 //!
-//! Two graphs are checked: the top-level modules (`state` ↔ `systems` is a cycle even when only
-//! `state::document` names `systems`), and a finer one in which the submodules of [`SPLIT`] are
-//! nodes of their own (`scenario` ↔ `systems::reset`, `systems::metrics` ↔ `systems::reward`;
-//! deeper modules belong to their depth-2 ancestor, and each parent's own file is a node too).
+//! Three graphs are checked: the top-level modules (`state` ↔ `systems` is a cycle even when only
+//! `state::document` names `systems`), a finer one in which the submodules of [`SPLIT`] are nodes
+//! of their own (`scenario` ↔ `systems::reset`, `systems::metrics` ↔ `systems::reward`; deeper
+//! modules belong to their depth-2 ancestor, and each parent's own file is a node too), and the
+//! files: every module file a node (`backend::gpu::device` ↔ `backend::gpu::kit` is a cycle).
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::fmt::Write as _;
@@ -632,7 +633,7 @@ impl ModuleGraph {
         ModuleGraph { edges }
     }
 
-    /// The cycles of the top-level graph and of the fine one: for each strongly connected
+    /// The cycles of the top-level graph, of the fine one and of the files': for each strongly connected
     /// component its modules and a shortest cycle through each of them, every dependency with the
     /// place that makes it. Empty when there are none.
     fn cycles(&self, split: &[&str]) -> String {
@@ -646,6 +647,7 @@ impl ModuleGraph {
         for (name, node) in [
             ("top-level modules", &top as &dyn Fn(&str) -> String),
             ("submodules", &fine),
+            ("files", &|m: &str| m.to_string()),
         ] {
             let mut graph: BTreeMap<String, BTreeMap<String, &str>> = BTreeMap::new();
             for ((from, to), place) in &self.edges {
@@ -861,4 +863,38 @@ fn resolves_groups_self_and_inline_modules() {
     ]);
     let edges: Vec<_> = g.edges.keys().cloned().collect();
     assert_eq!(edges, [("a".into(), "b".into()), ("a".into(), "c".into())]);
+}
+
+#[test]
+fn finds_a_cycle_between_files_below_depth_two() {
+    // `backend::gpu::device` and `backend::gpu::kit` fold into `backend::gpu` in the fine graph,
+    // so only the graph of files sees them name each other; the parent's uses of its children
+    // (declaring, re-exporting) are no dependency, so `gpu` ↔ `gpu::kit` is no cycle.
+    let g = graph_of(&[
+        ("lib.rs", "pub mod backend;"),
+        ("backend/mod.rs", "pub mod gpu;"),
+        (
+            "backend/gpu/mod.rs",
+            "pub mod device; pub mod kit;\npub use device::GpuDevice;",
+        ),
+        (
+            "backend/gpu/device.rs",
+            "pub struct GpuDevice { cache: super::kit::Cache }",
+        ),
+        (
+            "backend/gpu/kit.rs",
+            "use super::GpuDevice;\npub struct Cache;",
+        ),
+    ]);
+    let report = g.cycles(&["backend"]);
+    let files = "[files] modules on a cycle: backend::gpu::device, backend::gpu::kit\n";
+    assert!(report.contains(files), "{report}");
+    assert!(
+        report.contains(
+            "backend::gpu::kit -> backend::gpu::device: src/backend/gpu/kit.rs:1 super::GpuDevice"
+        ),
+        "{report}"
+    );
+    assert!(!report.contains("[submodules]"), "{report}");
+    assert!(!report.contains("[top-level modules]"), "{report}");
 }
