@@ -6,6 +6,7 @@ pub mod cpu;
 pub mod gpu;
 pub mod obs_payload;
 pub mod reset_pool;
+pub mod schedule;
 pub mod wgsl;
 
 use crate::error::SimError;

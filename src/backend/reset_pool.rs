@@ -14,7 +14,7 @@
 //! [`RowScratch`]): dirty and left out of the row ([`wgsl::POOL_OBSTACLE_COLUMNS`]), they cost
 //! the host nothing (their build is about two thirds of a row's instructions, their columns two
 //! fifths of its words), and the device rebuilds them after the copy
-//! (`backend::wgsl::RESET_REBUILD_PASSES`), which gives the bits an in-place reset builds.
+//! (`backend::schedule::rebuilds_resets`), which gives the bits an in-place reset builds.
 
 use rayon::prelude::*;
 

@@ -8,13 +8,17 @@
 //! before its first non-comment line; requirements are prepended recursively, each once,
 //! dependencies first. Stage files are `shaders/<stage>.wgsl`, named after their Rust twin in
 //! `src/systems/`, with one environment per invocation. What the device compiles is a pass
-//! ([`passes`]): a stage's file with its entry point `main`, or a fused pass ([`FUSED_PASSES`]),
-//! whose members' files each define `fn stage_<name>(e: u32)` and whose `main` is generated
-//! ([`assemble_pass`]).
+//! (`schedule::passes`): a stage's file with its entry point `main`, or a fused pass
+//! (`schedule::fused_passes`), whose members' files each define `fn stage_<name>(e: u32)` and whose
+//! `main` is generated ([`assemble_pass`]).
 //!
 //! This module is plain text work (no wgpu), so the naga tests can assemble and validate the
 //! shaders without the `gpu` feature or a device.
 
+use super::schedule::{
+    RARE_QUEUES, REBUILD_QUEUE, RESET_PASS, pass_files, rebuilds_resets, regroups,
+};
+use crate::pipeline::FusedPass;
 use crate::state::columns::{Elem, ElementOrder};
 use crate::systems::reset::ObstacleBuild;
 
@@ -147,55 +151,7 @@ pub const FILES: &[(&str, &str)] = &[
     ),
 ];
 
-/// The one shader at the top of `shaders/` that is not a stage of [`crate::pipeline::STAGES`]:
-/// the masked reset of `Backend::reset`, a pass the GPU backend runs alone.
-pub const RESET_PASS: &str = "reset";
-
-/// The stages whose rare work runs out of the hot pass (issue 19, item 4: the resets of
-/// `begin_step` and `autoreset`, the regroupings and obstacle rebuilds of `formation` and
-/// `social_events`), in the order of their queues: each shader has a second entry point,
-/// [`QUEUE_ENTRY`], dispatched before `main` over every environment, which queues the
-/// environments that have something to do this step
-/// (`rare_push(RARE_<STAGE>, e)`); `main` then runs with one lane per queued environment
-/// (`rare_env(RARE_<STAGE>, lane)`), so a warp's lanes all do the rare work instead of waiting
-/// for the one lane in 32 that does. The queues are the `rare` binding: a counter per stage, then
-/// a list of `n_envs` environments per stage; the counters are cleared before every submit.
-pub const RARE_WORK_STAGES: [&str; 4] = ["begin_step", "formation", "social_events", "autoreset"];
-
-/// The entry point of a [`RARE_WORK_STAGES`] shader that queues its environments.
-pub const QUEUE_ENTRY: &str = "queue_work";
-
-/// The passes whose `main` regroups environments (`regroup_canonicalize` in
-/// `shaders/common/regroup.wgsl`), leaving their ORCA obstacles to rebuild: each regrouped
-/// environment is queued once a submit (`RARE_REBUILD`, [`REBUILD_QUEUE`]), and one dispatch of a
-/// third entry point, generated (`rebuild_entries`), rebuilds them all after the submit's last
-/// stage, with the resets' ([`QUEUED_REBUILD_PASSES`]; the GPU backend's
-/// `record_queued_rebuild`, after the step's readback copies where a step is read back), before
-/// anything reads the `ov_*` columns (only the ORCA velocities of the
-/// next step's `motion` and `crowd` do). One rebuild per environment, after its last regrouping,
-/// gives the columns the CPU's stages leave, since a rebuild depends on the obstacles alone: the
-/// CPU rebuilds inside each regrouping, and the second of two in a step replaces the first's.
-pub const REBUILD_PASSES: [&str; 2] = ["formation", "social_events"];
-
-/// The rare-work queue of the environments whose obstacles the [`QUEUED_REBUILD_PASSES`] left to
-/// rebuild (`RARE_REBUILD`), after the [`RARE_WORK_STAGES`]' queues: an environment is pushed when
-/// its `obstacles_dirty` becomes 1, so at most once a submit (no environment ends a submit dirty).
-pub const REBUILD_QUEUE: usize = RARE_WORK_STAGES.len();
-
-/// The passes whose rebuilds wait in the [`REBUILD_QUEUE`] for the submit's one rebuild dispatch:
-/// the [`REBUILD_PASSES`], and the step's [`RESET_REBUILD_PASSES`] where the pool's rows leave
-/// their obstacles to the device. A reset of `begin_step` (NEXT_STEP) takes no dynamics in its
-/// step and one of `autoreset` (SAME_STEP) ends it, so neither environment's obstacles are read
-/// before the next step's ORCA velocities, as after a regrouping; a SAME_STEP reset of an
-/// environment regrouped in the same step is queued once (`pool_reset_queue_rebuild`). The reset
-/// pass, a submit of its own, rebuilds after its `main`.
-pub const QUEUED_REBUILD_PASSES: [&str; 4] =
-    ["begin_step", "formation", "social_events", "autoreset"];
-
-/// Queues of the `rare` binding: one per [`RARE_WORK_STAGES`] stage and [`REBUILD_QUEUE`].
-pub const RARE_QUEUES: usize = RARE_WORK_STAGES.len() + 1;
-
-/// The rebuild entry point ([`REBUILD_PASSES`], [`RESET_REBUILD_PASSES`]) that takes one queued
+/// The rebuild entry point ([`regroups`], [`rebuilds_resets`]) that takes one queued
 /// environment per lane, its working memory in the environment's region of `scratch`.
 pub const REBUILD_ENTRY: &str = "rebuild";
 
@@ -212,18 +168,6 @@ pub const REBUILD_ENTRY: &str = "rebuild";
 /// there a workgroup must not take several large rebuilds; lavapipe rebuilds per lane, and tests
 /// that force this path keep to small batches.)
 pub const REBUILD_IN_WORKGROUPS_ENTRY: &str = "rebuild_in_workgroups";
-
-/// The passes that reset environments from the reset pool: where the pool's rows leave their ORCA
-/// obstacles to the device (`GpuDevice::obstacles_after_resets`,
-/// `systems::reset::ObstacleBuild::Deferred`), each is assembled with the obstacle library and
-/// the two rebuild entry points ([`REBUILD_ENTRY`], [`REBUILD_IN_WORKGROUPS_ENTRY`];
-/// [`assemble_pass_rebuilding_resets`]): `begin_step` and `autoreset` queue the environments they
-/// reset with the regroupings' for the submit's one rebuild after its stages
-/// ([`QUEUED_REBUILD_PASSES`], [`REBUILD_QUEUE`]); the reset pass rebuilds its masked
-/// environments after its `main`. Nothing reads the `ov_*` columns or their count between a
-/// reset and the rebuild after it (the copy leaves the old ones in place:
-/// [`POOL_OBSTACLE_COLUMNS`]; a reset environment takes no dynamics until the next step).
-pub const RESET_REBUILD_PASSES: [&str; 3] = ["begin_step", "autoreset", RESET_PASS];
 
 /// A pass's two rebuild entry points over `target`, a WGSL function of `k`, the entry's index,
 /// saying what its `k`th entry rebuilds: an environment, `ORCA_OBSTACLES_SKIP` (nothing, but
@@ -250,7 +194,7 @@ fn rebuild_entries(what: &str, target: &str) -> String {
     )
 }
 
-/// A [`QUEUED_REBUILD_PASSES`] pass's two rebuild entry points, over the environments the
+/// The two rebuild entry points of a pass that [`queues_rebuilds`], over the environments the
 /// submit's regroupings and resets queued ([`REBUILD_QUEUE`]): the same in each such pass.
 fn queued_rebuild_entries() -> String {
     format!(
@@ -262,8 +206,8 @@ fn queued_rebuild_entries() -> String {
     )
 }
 
-/// The [`RESET_REBUILD_PASSES`] pass `pass`'s two rebuild entry points: over the
-/// [`REBUILD_QUEUE`] for the step's ([`QUEUED_REBUILD_PASSES`]), over the reset pass's mask (the
+/// The two rebuild entry points of pass `pass`, which [`rebuilds_resets`]: over the
+/// [`REBUILD_QUEUE`] for the step's ([`queues_rebuilds`]), over the reset pass's mask (the
 /// first action float non-zero) for it.
 fn reset_rebuild_entries(pass: &str) -> String {
     if pass != RESET_PASS {
@@ -311,7 +255,7 @@ const _: () = assert!(
 const OBSTACLE_REGION_IN_SCRATCH: &str =
     "fn orca_obstacles_region(e: u32) -> u32 {\n    return e * batch.s_scratch;\n}\n";
 
-/// `src`, a [`REBUILD_PASSES`] pass assembled by [`assemble_pass`], with the obstacle library's
+/// `src`, a pass that [`regroups`] assembled by [`assemble_pass`], with the obstacle library's
 /// working memory (the polygon list, the processed set, the tree build's stack) in a workgroup
 /// array of [`OBSTACLES_IN_WORKGROUP_WORDS`] words instead of the environment's region of
 /// `scratch`: one dependent chain of accesses at the latency of workgroup memory rather than of
@@ -339,97 +283,7 @@ pub fn with_obstacles_in_workgroup(src: &str) -> Option<String> {
     ))
 }
 
-/// Words of the `rare` binding for `n_envs` environments: the counters, then the lists.
-pub fn rare_work_words(n_envs: usize) -> usize {
-    RARE_QUEUES * (1 + n_envs)
-}
-
-/// Passes that run consecutive stages of [`crate::pipeline::STAGES`] in one dispatch (issue 19:
-/// the light stages cost a dispatch each, about 25 µs on an H100, for a few microseconds of
-/// work). Every member works on its own environment only (lane `e` reads and writes environment
-/// `e`, no queue, no workgroup memory), so one lane can run the members in order, as the CPU
-/// backend runs every stage over a chunk before the next. A member's file defines
-/// `fn stage_<name>(e: u32)` for an environment that steps, and no `main`; the pass's `main`
-/// (generated: [`assemble_pass`]) skips the lanes past the batch and the environments that do
-/// not step, then calls each member whose bit (its index here) is set in the dispatch's member
-/// mask, `pass_members` (binding 10: the mask `m` is the entry at dynamic offset `m` times the
-/// table's stride, [`MEMBER_MASKS`] entries). So a step runs a pass's members in one dispatch
-/// where no other stage comes between them (SNGNN-v2's graph and network come between
-/// `termination` and `reward`), and a test or a timing runs one member alone, with the same
-/// pipeline.
-///
-/// A pass holds at most [`MAX_ORCA_STAGES_PER_PASS`] stages that run ORCA.
-pub const FUSED_PASSES: [(&str, &[&str]); 3] = [
-    (
-        "motion",
-        &["robot_motion", "shadow_robot", "group_velocities"],
-    ),
-    ("crowd", &["human_motion", "group_motion", "goals"]),
-    (
-        "outcome",
-        &[
-            "contacts",
-            "termination",
-            "reward",
-            "metrics",
-            "observation",
-        ],
-    ),
-];
-
-/// The most stages that run ORCA (`orca_world_velocity`: `shadow_robot`, `group_velocities`,
-/// `human_motion`) in one fused pass. NVIDIA's driver (580.159, H100) fails to compile a pipeline
-/// with all three, from naga's SPIR-V as from the backend's own (`VK_ERROR_UNKNOWN`, which loses
-/// the wgpu device); each alone, and the first two together, compile. Each ORCA call inlines its
-/// own neighbour and line lists, about 8 KB of private memory per lane.
-pub const MAX_ORCA_STAGES_PER_PASS: usize = 2;
-
-/// The most members a fused pass has ([`FUSED_PASSES`]): a member mask has this many bits.
-pub const MAX_FUSED_MEMBERS: usize = 5;
-
-/// Entries of the member-mask table (binding 10): one per mask of [`MAX_FUSED_MEMBERS`] bits.
-pub const MEMBER_MASKS: usize = 1 << MAX_FUSED_MEMBERS;
-
-/// The fused pass stage `stage` runs in, and its member index there (its bit in a member mask).
-pub fn fused_pass_of(stage: &str) -> Option<(&'static str, u32)> {
-    FUSED_PASSES.iter().find_map(|&(pass, members)| {
-        members
-            .iter()
-            .position(|m| *m == stage)
-            .map(|i| (pass, i as u32))
-    })
-}
-
-/// The pass that runs stage `stage` (or the reset pass): its fused pass, or itself.
-pub fn pass_of(stage: &str) -> &str {
-    fused_pass_of(stage).map_or(stage, |(pass, _)| pass)
-}
-
-/// The files of pass `pass` under `shaders/`: its members' for a fused pass, else `<pass>.wgsl`.
-pub fn pass_files(pass: &str) -> Vec<String> {
-    match FUSED_PASSES.iter().find(|(p, _)| *p == pass) {
-        Some((_, members)) => members.iter().map(|m| format!("{m}.wgsl")).collect(),
-        None => vec![format!("{pass}.wgsl")],
-    }
-}
-
-/// Every pass the GPU backend compiles from `shaders/` with the batch prelude: the fused passes,
-/// then each stage of a batch shader that is in none, then the reset pass.
-pub fn passes() -> Vec<&'static str> {
-    let mut out: Vec<&'static str> = FUSED_PASSES.iter().map(|(p, _)| *p).collect();
-    out.extend(
-        crate::pipeline::STAGES
-            .iter()
-            .filter(|s| {
-                s.shader == crate::pipeline::Shader::Batch && fused_pass_of(s.name).is_none()
-            })
-            .map(|s| s.name),
-    );
-    out.push(RESET_PASS);
-    out
-}
-
-/// The entry point `main` of a fused pass with `members` ([`FUSED_PASSES`]).
+/// The entry point `main` of a fused pass with `members` ([`fused_passes`]).
 fn fused_entry(pass: &str, members: &[&str]) -> String {
     let mut out = format!(
         "// ---- generated by src/backend/wgsl.rs: the entry point of fused pass `{pass}`\n\
@@ -976,11 +830,12 @@ fn size_class(n: usize, floor: usize) -> usize {
     n.max(floor).next_power_of_two()
 }
 
-/// The part of every shader's head that depends on neither the config nor the batch: the
-/// constants [`prelude`] lists before the size classes (`WORKGROUP_SIZE`, `INFO_*`, `EP_*`,
-/// `EV_*`, the shared codes and f32 constants, `OBS_RECORD`, `OBS_ONE_HOT`, `OBS_TILE`, [`geometry_constants`]).
-/// A kernel built from the shader library outside the step (tests/suite/orca/gpu.rs) starts with
-/// it, so the library's files see the same definitions there as in the step.
+/// The part of every shader's head that depends on neither the config nor the batch: the constants
+/// [`prelude`] lists before the size classes (`WORKGROUP_SIZE`, `INFO_*`, `EP_*`, `EV_*`, the
+/// shared codes and f32 constants, `OBS_RECORD`, `OBS_ONE_HOT`, `OBS_TILE`,
+/// [`geometry_constants`]). A kernel built from the shader library outside the step
+/// (tests/suite/orca/gpu.rs) starts with it, so the library's files see the same definitions there
+/// as in the step.
 pub fn shared_head() -> String {
     let mut out = format!("const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n");
     for (keys, prefix) in [
@@ -1107,8 +962,8 @@ pub fn with_functions_returning_at_once<'a>(
 /// the struct of [`BatchLayout`] (the uniform `batch`), the bindings every shader shares, the
 /// element index of each slot kind (`at_<kind>`, `slot_<kind>`: the only place that knows the
 /// [`DEVICE_ORDER`]), the slot permutations of the social events (`state_permute_*`, generated by
-/// `permute_functions`), the queues of the rare work ([`RARE_WORK_STAGES`]) and the reset pool's
-/// copies (`pool_copy_*`). Only `classes` depends on the config; nothing on the batch size.
+/// `permute_functions`), the queues of the rare work (`schedule::has_rare_work`) and the reset
+/// pool's copies (`pool_copy_*`). Only `classes` depends on the config; nothing on the batch size.
 pub fn prelude(state: Columns<'_>, outputs: Columns<'_>, classes: &SizeClasses) -> String {
     let mut out = String::from("// Generated by src/backend/wgsl.rs.\n");
     out.push_str(&shared_head());
@@ -1225,7 +1080,7 @@ pub const POOL_OUTPUT_COLUMNS: [&str; 5] =
 /// leaves them to the device ([`ObstacleBuild::Deferred`]) does not hold: two fifths of an exp2
 /// row, which the host would write, the device's pool keep and every reset copy, only for the
 /// rebuild to replace. Such a row's copy leaves the environment's old obstacles in place, their
-/// count included, and the rebuild after it ([`RESET_REBUILD_PASSES`]: the submit's one rebuild
+/// count included, and the rebuild after it ([`rebuilds_resets`]: the submit's one rebuild
 /// of the [`REBUILD_QUEUE`], or the reset pass's own) replaces them, zeroing the old tail past
 /// the new count as every rebuild does: the bits of a build on the host.
 pub const POOL_OBSTACLE_COLUMNS: [&str; 8] = [
@@ -1400,15 +1255,17 @@ pub fn finished_rows_shader(state: Columns<'_>, outputs: Columns<'_>) -> String 
     out
 }
 
-/// The queues of [`RARE_WORK_STAGES`] and the [`REBUILD_QUEUE`]: their indices `RARE_<STAGE>`
+/// The queues of the stages with rare work and the [`REBUILD_QUEUE`]: their indices `RARE_<STAGE>`
 /// and `RARE_REBUILD`, the binding `rare` (9), and `rare_push` (queue an environment) and
 /// `rare_env` (lane `k`'s environment, or `NONE` past the queue's end).
 fn rare_work_functions() -> String {
     let mut out = String::new();
-    for (k, stage) in RARE_WORK_STAGES.iter().enumerate() {
+    // The queues in `pipeline::rare_queue`'s order: the stages with rare work, in step order.
+    let rare = crate::pipeline::STAGES.iter().filter(|s| s.gpu.rare_work);
+    for (k, stage) in rare.enumerate() {
         out.push_str(&format!(
             "const RARE_{}: u32 = {k}u;\n",
-            stage.to_uppercase()
+            stage.name.to_uppercase()
         ));
     }
     out.push_str(&format!("const RARE_REBUILD: u32 = {REBUILD_QUEUE}u;\n"));
@@ -1651,29 +1508,30 @@ pub fn assemble(path: &str, prelude: &str) -> Result<String, String> {
     Ok(format!("{}{body}", used_size_classes_only(prelude, &body)))
 }
 
-/// The complete source of pass `pass` ([`passes`]) for a batch: for a fused pass
-/// ([`FUSED_PASSES`]), the prelude, every member's requirements and file (each file once), then
-/// the generated entry point; for any other, [`assemble`] of `<pass>.wgsl`, with the generated
-/// rebuild entry points of a [`REBUILD_PASSES`] pass ([`REBUILD_ENTRY`],
+/// The complete source of pass `pass` (`schedule::passes`) for a batch: for a fused pass
+/// (`schedule::fused_passes`), the prelude, every member's requirements and file (each file once),
+/// then the generated entry point; for any other, [`assemble`] of `<pass>.wgsl`, with the generated
+/// rebuild entry points of a pass that [`regroups`] ([`REBUILD_ENTRY`],
 /// [`REBUILD_IN_WORKGROUPS_ENTRY`]).
 pub fn assemble_pass(pass: &str, prelude: &str) -> Result<String, String> {
-    let Some((_, members)) = FUSED_PASSES.iter().find(|(p, _)| *p == pass) else {
+    let Some(fused) = FusedPass::named(pass) else {
         let src = assemble(&format!("{pass}.wgsl"), prelude)?;
-        if REBUILD_PASSES.contains(&pass) {
+        if regroups(pass) {
             return Ok(src + &queued_rebuild_entries());
         }
         return Ok(src);
     };
     let order = resolve_each(&pass_files(pass))?;
-    let body = concatenate(String::new(), &order) + &fused_entry(pass, members);
+    let members: Vec<&str> = fused.members().map(|s| s.name).collect();
+    let body = concatenate(String::new(), &order) + &fused_entry(pass, &members);
     Ok(format!("{}{body}", used_size_classes_only(prelude, &body)))
 }
 
-/// [`assemble_pass`] of a [`RESET_REBUILD_PASSES`] pass for a batch whose reset-pool rows leave
+/// [`assemble_pass`] of a pass that [`rebuilds_resets`] for a batch whose reset-pool rows leave
 /// their ORCA obstacles to the device: the pass's files after the obstacle library's, then the
 /// rebuild entry points over the environments it reset. An error for any other pass.
 pub fn assemble_pass_rebuilding_resets(pass: &str, prelude: &str) -> Result<String, String> {
-    if !RESET_REBUILD_PASSES.contains(&pass) {
+    if !rebuilds_resets(pass) {
         return Err(format!("pass {pass:?} resets no environment from the pool"));
     }
     let files = [
@@ -1708,8 +1566,8 @@ fn used_size_classes_only(prelude: &str, body: &str) -> String {
     out
 }
 
-/// The complete source of a standalone shader ([`is_standalone`]): [`standalone_head`], its requirements, then
-/// the file.
+/// The complete source of a standalone shader ([`is_standalone`]): [`standalone_head`], its
+/// requirements, then the file.
 pub fn assemble_standalone(path: &str) -> Result<String, String> {
     Ok(concatenate(standalone_head(), &resolve(path)?))
 }

@@ -2,7 +2,7 @@
 //!
 //! Per step the host uploads the actions, records one compute pass with the dispatches of the
 //! stages of [`STAGES`] in order (one per stage, or one for consecutive members of a fused pass,
-//! `wgsl::FUSED_PASSES`; wgpu orders the dispatches through their storage-buffer barriers), copies the
+//! `pipeline::FusedPass`; wgpu orders the dispatches through their storage-buffer barriers), copies the
 //! outputs and the episode counters into a mapped readback buffer in the same submit, and reads
 //! them into the host outputs it keeps ([`Backend::outputs`]) without allocating.
 //!
@@ -102,7 +102,7 @@ impl GpuBackend {
     ) -> Result<Self, SimError> {
         let step_stages = step_stages(sngnn.is_some());
         let mut stages = step_stages.clone();
-        stages.push(crate::backend::wgsl::RESET_PASS);
+        stages.push(crate::backend::schedule::RESET_PASS);
         let mut gpu = match sngnn {
             None => GpuStages::new(dev, &params, &state, &out, &stages)?,
             Some(r) => {
@@ -194,7 +194,7 @@ impl GpuBackend {
         let stages: &[&'static str] = if step {
             &self.step_stages
         } else {
-            &[crate::backend::wgsl::RESET_PASS]
+            &[crate::backend::schedule::RESET_PASS]
         };
         let read = StepRead {
             out: &mut self.out,

@@ -233,7 +233,7 @@ pub struct GpuDevice {
     /// [`Self::resets_in_workgroups`]. Both give the same bits; a clone with the other setting is
     /// how a caller (or a test) chooses.
     pub regroups_in_workgroups: bool,
-    /// Whether the passes that regroup (`backend::wgsl::REBUILD_PASSES`) rebuild the ORCA
+    /// Whether the passes that regroup (`backend::schedule::regroups`) rebuild the ORCA
     /// obstacles of each regrouped environment in a workgroup of its own, the rebuild's working
     /// memory in workgroup memory (`backend::wgsl::REBUILD_IN_WORKGROUPS_ENTRY`), instead of one
     /// per lane over the `scratch` buffer, a chain of dependent storage-buffer accesses (2.4 of
@@ -252,7 +252,7 @@ pub struct GpuDevice {
     /// Whether the reset pool's rows leave their ORCA obstacles to the device
     /// (`systems::reset::ObstacleBuild::Deferred`), which rebuilds them after each reset's copy
     /// (a step's in the one rebuild after its stages, the reset pass's after its `main`:
-    /// `backend::wgsl::RESET_REBUILD_PASSES`; in workgroup memory where
+    /// `backend::schedule::rebuilds_resets`; in workgroup memory where
     /// [`GpuDevice::obstacles_in_workgroups`] says so), instead of building them
     /// on the host into each row: the build is about two thirds of a row's instructions, and the
     /// host's rows made ahead are what the delivered step waits on once the device's step is

@@ -40,7 +40,7 @@ pub use sngnn_net::GpuNet;
 
 use std::sync::Arc;
 
-use crate::backend::{obs_payload, wgsl};
+use crate::backend::{obs_payload, schedule, wgsl};
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
@@ -122,8 +122,8 @@ pub struct GpuStages {
     pool_scatter: PoolScatter,
     /// The stages' working memory (`wgsl::ObstacleScratch`).
     scratch: wgpu::Buffer,
-    /// The queues of the rare work (`wgsl::RARE_WORK_STAGES`) and of the queued rebuilds
-    /// (`wgsl::REBUILD_QUEUE`): counters cleared before every submit of stages, then the lists.
+    /// The queues of the rare work (`schedule::has_rare_work`) and of the queued rebuilds
+    /// (`schedule::REBUILD_QUEUE`): counters cleared before every submit of stages, then the lists.
     rare: wgpu::Buffer,
     pool_row_words: usize,
     readback: wgpu::Buffer,
@@ -136,12 +136,12 @@ pub struct GpuStages {
     episode_offset: usize,
     /// Group 0 (the prelude's bindings), and group 1 (the SNGNN graphs) when the batch has them.
     bind_groups: Vec<wgpu::BindGroup>,
-    /// The member masks of the fused passes (`wgsl::FUSED_PASSES`), mask `m` at byte
+    /// The member masks of the fused passes (`schedule::fused_passes`), mask `m` at byte
     /// `m * mask_stride`: binding 10 of group 0, at a dynamic offset per dispatch.
     #[expect(dead_code, reason = "kept alive for the bind group that binds it")]
     member_masks: wgpu::Buffer,
     mask_stride: u32,
-    /// The passes built, by name (`wgsl::pass_of`): their pipelines, or `None` for the network
+    /// The passes built, by name (`schedule::pass_of`): their pipelines, or `None` for the network
     /// stage ([`Shader::Network`], recorded by [`GpuNet`]).
     pipelines: Vec<(&'static str, Option<PassPipelines>)>,
     /// How many pipelines building this batch compiled rather than found on its device.
@@ -364,7 +364,7 @@ impl DeviceTable {
 
 impl GpuStages {
     /// Upload `state`, `outputs` and `params` and build the pipelines of `stages` (stages of
-    /// [`crate::pipeline::STAGES`], or [`wgsl::RESET_PASS`]). The reset pool starts zeroed.
+    /// [`crate::pipeline::STAGES`], or [`schedule::RESET_PASS`]). The reset pool starts zeroed.
     pub fn new(
         dev: GpuDevice,
         params: &StepParams,
@@ -483,7 +483,7 @@ impl GpuStages {
         let rare = storage_buffer(
             &dev,
             "rare work queues",
-            bytes_of::<u32>(wgsl::rare_work_words(n_envs)),
+            bytes_of::<u32>(schedule::rare_work_words(n_envs)),
         );
         let layout = wgsl::BatchLayout::new(
             n_envs,
@@ -630,7 +630,7 @@ impl GpuStages {
         let mut compiled = usize::from(read_compiled) + usize::from(scatter_compiled);
         let mut left_out = Vec::new();
         for &stage in stages {
-            let pass = wgsl::pass_of(stage);
+            let pass = schedule::pass_of(stage);
             if pipelines.iter().any(|(p, _)| *p == pass) {
                 continue;
             }
@@ -1297,7 +1297,7 @@ impl GpuStages {
         pass.dispatch_workgroups(workgroups, 1, 1);
         // A queueing pass's rebuild waits for the submit's end (`record_queued_rebuild`).
         if let Some(rebuild) = &pipeline.rebuild
-            && !wgsl::QUEUED_REBUILD_PASSES.contains(&dispatch.pass)
+            && !schedule::queues_rebuilds(dispatch.pass)
         {
             self.dispatch_rebuild(pass, rebuild);
         }
@@ -1341,12 +1341,12 @@ impl GpuStages {
         }
     }
 
-    /// The last of `stages` whose rebuilds wait in the queue (`wgsl::QUEUED_REBUILD_PASSES`, with
+    /// The last of `stages` whose rebuilds wait in the queue (`schedule::queues_rebuilds`, with
     /// a rebuild pipeline on this batch: `begin_step` and `autoreset` only where the pool's rows
     /// leave their obstacles to the device), whose pipeline then rebuilds the queue.
     fn last_queueing<'a>(&self, stages: &[&'a str]) -> Option<&'a str> {
         stages.iter().rev().copied().find(|stage| {
-            wgsl::QUEUED_REBUILD_PASSES.contains(stage)
+            schedule::queues_rebuilds(stage)
                 && self.pipelines.iter().any(|(pass, pipelines)| {
                     pass == stage && pipelines.as_ref().is_some_and(|p| p.rebuild.is_some())
                 })
@@ -1354,10 +1354,10 @@ impl GpuStages {
     }
 
     /// Record into `pass` the one rebuild of the ORCA obstacles of every environment that the
-    /// submit's regroupings and resets queued (`wgsl::REBUILD_QUEUE`), with queueing pass `of`'s
+    /// submit's regroupings and resets queued (`schedule::REBUILD_QUEUE`), with queueing pass `of`'s
     /// rebuild pipeline (the same entry point in each). It follows the submit's last stage:
     /// nothing in a step reads the obstacles of an environment after it regrouped or reset
-    /// (`wgsl::QUEUED_REBUILD_PASSES`), so the rebuild costs the step's latency nothing where it
+    /// (`schedule::queues_rebuilds`), so the rebuild costs the step's latency nothing where it
     /// follows the readback ([`Self::run_stages`]).
     fn record_queued_rebuild(
         &self,
@@ -1436,7 +1436,7 @@ impl GpuStages {
     /// into their places, and the rare work's queues emptied.
     fn begin_submit(&mut self, enc: &mut wgpu::CommandEncoder) {
         self.flush_pool_copies(enc);
-        let counters = bytes_of::<u32>(wgsl::RARE_QUEUES);
+        let counters = bytes_of::<u32>(schedule::RARE_QUEUES);
         enc.clear_buffer(&self.rare, 0, Some(counters));
     }
 
@@ -1553,17 +1553,17 @@ impl GpuStages {
     }
 
     /// The environments the last submit's regroupings and resets queued for their one obstacle
-    /// rebuild (`wgsl::REBUILD_QUEUE`), in the order they were queued: each at most once.
+    /// rebuild (`schedule::REBUILD_QUEUE`), in the order they were queued: each at most once.
     pub fn queued_rebuilds(&self) -> Result<Vec<u32>, SimError> {
-        let counters = self.read_words(&self.rare, wgsl::RARE_QUEUES)?;
-        let count = counters[wgsl::REBUILD_QUEUE] as usize;
+        let counters = self.read_words(&self.rare, schedule::RARE_QUEUES)?;
+        let count = counters[schedule::REBUILD_QUEUE] as usize;
         if count > self.n_envs {
             return Err(SimError::Internal(format!(
                 "the rebuild queue holds {count} environments of {}",
                 self.n_envs
             )));
         }
-        let first = wgsl::RARE_QUEUES + wgsl::REBUILD_QUEUE * self.n_envs;
+        let first = schedule::RARE_QUEUES + schedule::REBUILD_QUEUE * self.n_envs;
         self.read_words_at(&self.rare, words_to_bytes(first), count)
     }
 
@@ -1621,8 +1621,8 @@ impl GpuStages {
     }
 }
 
-/// One dispatch of a step: the pass that runs it (`wgsl::pass_of`), and for a fused pass the mask
-/// of the members it runs (`wgsl::FUSED_PASSES`); `first` names its first stage in errors.
+/// One dispatch of a step: the pass that runs it (`schedule::pass_of`), and for a fused pass the mask
+/// of the members it runs (`schedule::fused_passes`); `first` names its first stage in errors.
 #[derive(Debug, Clone, PartialEq, Eq)]
 struct Dispatch<'a> {
     pass: &'a str,
@@ -1633,7 +1633,7 @@ struct Dispatch<'a> {
 impl Dispatch<'_> {
     /// Whether this dispatch runs stage `stage`.
     fn runs(&self, stage: &str) -> bool {
-        match (self.members, wgsl::fused_pass_of(stage)) {
+        match (self.members, schedule::fused_pass_of(stage)) {
             (Some(members), Some((pass, bit))) => pass == self.pass && members & (1 << bit) != 0,
             (None, None) => self.pass == stage,
             _ => false,
@@ -1646,7 +1646,7 @@ impl Dispatch<'_> {
 fn plan<'a>(stages: &[&'a str]) -> Vec<Dispatch<'a>> {
     let mut out: Vec<Dispatch<'a>> = Vec::with_capacity(stages.len());
     for &stage in stages {
-        let Some((pass, bit)) = wgsl::fused_pass_of(stage) else {
+        let Some((pass, bit)) = schedule::fused_pass_of(stage) else {
             out.push(Dispatch {
                 pass: stage,
                 members: None,
@@ -1683,8 +1683,8 @@ fn member_mask_table(dev: &GpuDevice) -> (wgpu::Buffer, u32) {
         .min_uniform_buffer_offset_alignment
         .max(pipelines::DYNAMIC_UNIFORM_BYTES as u32);
     let words_per = (stride / 4) as usize;
-    let mut words = vec![0u32; wgsl::MEMBER_MASKS * words_per];
-    for m in 0..wgsl::MEMBER_MASKS {
+    let mut words = vec![0u32; schedule::MEMBER_MASKS * words_per];
+    for m in 0..schedule::MEMBER_MASKS {
         words[m * words_per] = m as u32;
     }
     (
@@ -1693,8 +1693,8 @@ fn member_mask_table(dev: &GpuDevice) -> (wgpu::Buffer, u32) {
     )
 }
 
-/// The pipelines of a pass: `main` and, for a stage of [`wgsl::RARE_WORK_STAGES`], `queue_work`
-/// (dispatched before it, over every environment, to queue those `main` runs for); for
+/// The pipelines of a pass: `main` and, for a stage with rare work ([`schedule::has_rare_work`]),
+/// `queue_work` (dispatched before it, over every environment, to queue those `main` runs for); for
 /// [`wgsl::OBS_ROWS_STAGE`], on a batch whose entity records are written apart, `records`
 /// (dispatched after it: [`wgsl::OBS_RECORDS_ENTRY`]) and, on a device that stages observations,
 /// `rows` (dispatched after those: the staged observation into its rows).
@@ -1703,9 +1703,9 @@ struct PassPipelines {
     main: wgpu::ComputePipeline,
     records: Option<wgpu::ComputePipeline>,
     rows: Option<wgpu::ComputePipeline>,
-    /// A [`wgsl::REBUILD_PASSES`] pass's rebuild after `main`, and how it runs; a
-    /// [`wgsl::RESET_REBUILD_PASSES`] pass's where the batch's pool rows leave their obstacles to
-    /// the device.
+    /// The rebuild after `main` of a pass that regroups ([`schedule::regroups`]), and how it runs;
+    /// that of a pass that resets ([`schedule::rebuilds_resets`]) where the batch's pool rows leave
+    /// their obstacles to the device.
     rebuild: Option<(wgpu::ComputePipeline, Rebuild)>,
 }
 
@@ -1723,7 +1723,7 @@ enum Rebuild {
 /// The ways a batch's passes run that choose their pipelines: how they rebuild obstacles,
 /// whether the entity records of the observation are written apart ([`wgsl::OBS_RECORDS_ENTRY`]),
 /// and whether the passes that reset rebuild the obstacles the pool's rows leave to the device
-/// ([`wgsl::RESET_REBUILD_PASSES`]).
+/// ([`schedule::rebuilds_resets`]).
 #[derive(Debug, Clone, Copy)]
 struct Ways {
     rebuild: Rebuild,
@@ -1742,7 +1742,7 @@ fn workgroup_grid(n: usize, per_dimension: u32) -> (u32, u32) {
 /// A pass's pipelines, and how many of them getting them compiled.
 type Built = Option<(PassPipelines, usize)>;
 
-/// The pipelines of pass `pass` (`wgsl::pass_of(stage)`) over the batch (`prelude`, bind `groups`) and how many of them
+/// The pipelines of pass `pass` (`schedule::pass_of(stage)`) over the batch (`prelude`, bind `groups`) and how many of them
 /// were compiled now: `None` for a network stage, whose pipelines [`GpuStages::attach_sngnn_net`]
 /// adds. A shader that needs the SNGNN graphs ([`wgsl::needs_sngnn`]) gets
 /// [`wgsl::sngnn_prelude`] and group 1; any other, group 0 alone, whether the batch has the
@@ -1763,7 +1763,7 @@ fn build_pass(
             "stage {stage:?} needs the SNGNN graph buffers (GpuStages::with_sngnn_graphs)"
         ))
     };
-    if stage != wgsl::RESET_PASS {
+    if stage != schedule::RESET_PASS {
         let Some(s) = crate::pipeline::stage(stage) else {
             return Err(SimError::Usage(format!(
                 "{stage:?} is neither a stage of the step nor the reset pass"
@@ -1777,7 +1777,7 @@ fn build_pass(
         }
     }
     let mut needs_sngnn = false;
-    for file in wgsl::pass_files(pass) {
+    for file in schedule::pass_files(pass) {
         let files = wgsl::resolve(&file).map_err(SimError::Usage)?;
         needs_sngnn |= files.iter().any(|f| wgsl::needs_sngnn(f));
     }
@@ -1789,7 +1789,7 @@ fn build_pass(
     } else {
         (prelude.to_owned(), &groups[..1])
     };
-    let rebuilds_resets = ways.obstacles_after_resets && wgsl::RESET_REBUILD_PASSES.contains(&pass);
+    let rebuilds_resets = ways.obstacles_after_resets && schedule::rebuilds_resets(pass);
     let mut src = if rebuilds_resets {
         wgsl::assemble_pass_rebuilding_resets(pass, &prelude)
     } else {
@@ -1811,11 +1811,11 @@ fn build_pass(
         compiled += usize::from(new);
         Ok(Some(pipeline))
     };
-    let queue = entry(wgsl::RARE_WORK_STAGES.contains(&stage), wgsl::QUEUE_ENTRY)?;
-    let observes = pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE);
+    let queue = entry(schedule::has_rare_work(stage), schedule::QUEUE_ENTRY)?;
+    let observes = pass == schedule::pass_of(wgsl::OBS_ROWS_STAGE);
     let records = entry(observes && ways.records_apart, wgsl::OBS_RECORDS_ENTRY)?;
     let rows = entry(observes && dev.stage_observations, wgsl::OBS_ROWS_ENTRY)?;
-    let rebuilds = wgsl::REBUILD_PASSES.contains(&pass) || rebuilds_resets;
+    let rebuilds = schedule::regroups(pass) || rebuilds_resets;
     let rebuild = match (rebuilds, ways.rebuild) {
         (false, _) => None,
         (true, Rebuild::PerLane) => {
@@ -1845,7 +1845,7 @@ fn build_pass(
 mod tests {
     use super::backend::step_stages as step;
     use super::{Dispatch, plan};
-    use crate::backend::wgsl;
+    use crate::backend::schedule;
 
     fn passes<'a>(dispatches: &[Dispatch<'a>]) -> Vec<(&'a str, Option<u32>)> {
         dispatches.iter().map(|d| (d.pass, d.members)).collect()
@@ -1931,6 +1931,6 @@ mod tests {
         assert_eq!(passes(&plan(&["reset"])), [("reset", None)]);
         let alone = plan(&["observation"]);
         assert!(alone[0].runs("observation") && !alone[0].runs("metrics"));
-        assert_eq!(wgsl::pass_of("observation"), "outcome");
+        assert_eq!(schedule::pass_of("observation"), "outcome");
     }
 }

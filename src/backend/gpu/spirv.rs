@@ -421,17 +421,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         )
     }
 
-    /// Pass `pass` (`wgsl::passes`) as the GPU backend assembles it for a batch of experiment 2.
+    /// Pass `pass` (`schedule::passes`) as the GPU backend assembles it for a batch of experiment 2.
     fn exp2_pass(pass: &str) -> String {
         crate::backend::wgsl::assemble_pass(pass, &exp2_prelude()).unwrap()
     }
 
     #[test]
     fn the_orca_stages_hand_the_driver_their_lists_unzeroed() {
-        use crate::backend::wgsl;
+        use crate::backend::schedule;
         let mut orca_passes: Vec<&str> = ["group_velocities", "human_motion", "shadow_robot"]
             .into_iter()
-            .map(wgsl::pass_of)
+            .map(schedule::pass_of)
             .collect();
         orca_passes.dedup();
         for stage in orca_passes {
@@ -459,14 +459,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 
     #[test]
     fn every_entry_point_of_every_pass_is_written() {
-        use crate::backend::wgsl;
-        let passes = wgsl::passes()
+        use crate::backend::{schedule, wgsl};
+        let passes = schedule::passes()
             .into_iter()
-            .filter(|&p| !wgsl::pass_files(p).iter().any(|f| wgsl::needs_sngnn(f)))
+            .filter(|&p| !schedule::pass_files(p).iter().any(|f| wgsl::needs_sngnn(f)))
             .map(|p| (p.to_owned(), exp2_pass(p)));
         // The passes that reset, as a batch whose pool rows leave their obstacles to the device
         // assembles them.
-        let resets = wgsl::RESET_REBUILD_PASSES.iter().map(|&p| {
+        let resets = schedule::reset_passes().into_iter().map(|p| {
             let source = wgsl::assemble_pass_rebuilding_resets(p, &exp2_prelude()).unwrap();
             (format!("{p}+rebuild"), source)
         });
@@ -530,7 +530,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     /// (a decoration among the types, say), reads the decorated module.
     #[test]
     fn the_decorations_stand_where_spirv_puts_annotations() {
-        let source = exp2_pass(crate::backend::wgsl::pass_of("human_motion"));
+        let source = exp2_pass(crate::backend::schedule::pass_of("human_motion"));
         for words in [
             without_contraction(&spirv_of(SHADER)),
             compute_spirv(
@@ -558,7 +558,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 
     #[test]
     fn contraction_allowed_is_naga_s_module_as_written() {
-        let source = exp2_pass(crate::backend::wgsl::pass_of("human_motion"));
+        let source = exp2_pass(crate::backend::schedule::pass_of("human_motion"));
         let allowed =
             compute_spirv(&source, "main", BufferBounds::Clamped, Contraction::Allowed).unwrap();
         let forbidden = compute_spirv(

@@ -12,7 +12,7 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-use socnav::backend::wgsl;
+use socnav::backend::{schedule, wgsl};
 
 fn shaders_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders")
@@ -136,10 +136,12 @@ fn exp2_prelude() -> String {
     )
 }
 
-/// Pass `pass` (`wgsl::passes`) as the GPU backend assembles it for a batch of experiment 2,
+/// Pass `pass` (`schedule::passes`) as the GPU backend assembles it for a batch of experiment 2,
 /// with the SNGNN-v2 reward where the pass builds SNGNN graphs.
 fn validate_pass(pass: &str) -> Result<naga::Module, String> {
-    let sngnn = wgsl::pass_files(pass).iter().any(|f| wgsl::needs_sngnn(f));
+    let sngnn = schedule::pass_files(pass)
+        .iter()
+        .any(|f| wgsl::needs_sngnn(f));
     let prelude = if sngnn {
         sngnn_prelude()
     } else {
@@ -149,13 +151,13 @@ fn validate_pass(pass: &str) -> Result<naga::Module, String> {
     validate_source(&src, &format!("pass {pass} (assembled)"))
 }
 
-/// Each pass that resets from the pool (`wgsl::RESET_REBUILD_PASSES`) as the GPU backend
+/// Each pass that resets from the pool (`schedule::reset_passes`) as the GPU backend
 /// assembles it for a batch of experiment 2 whose pool rows leave their obstacles to the device
 /// (`wgsl::assemble_pass_rebuilding_resets`), named `<pass>+rebuild`.
 fn reset_rebuild_passes() -> Vec<(String, String)> {
-    wgsl::RESET_REBUILD_PASSES
-        .iter()
-        .map(|&pass| {
+    schedule::reset_passes()
+        .into_iter()
+        .map(|pass| {
             let src = wgsl::assemble_pass_rebuilding_resets(pass, &exp2_prelude())
                 .unwrap_or_else(|e| panic!("{pass}: {e}"));
             (format!("{pass}+rebuild"), src)
@@ -164,10 +166,10 @@ fn reset_rebuild_passes() -> Vec<(String, String)> {
 }
 
 /// Every module the GPU backend compiles from `shaders/`, by name: each pass
-/// (`wgsl::passes`), each pass that resets as a batch assembles it whose rows leave their
+/// (`schedule::passes`), each pass that resets as a batch assembles it whose rows leave their
 /// obstacles to the device, then each network shader (standalone).
 fn compiled_modules() -> Vec<(String, naga::Module)> {
-    let mut out: Vec<(String, naga::Module)> = wgsl::passes()
+    let mut out: Vec<(String, naga::Module)> = schedule::passes()
         .into_iter()
         .map(|p| {
             (
@@ -252,15 +254,18 @@ fn all_wgsl_shaders_validate() {
 }
 
 /// The top of `shaders/` is the step: one file per stage of `pipeline::STAGES` (named after it),
-/// plus the reset pass (`wgsl::RESET_PASS`), nothing else. A batch shader in a fused pass
-/// (`wgsl::FUSED_PASSES`) defines `stage_<name>` and no `main`, and its pass has `main`;
+/// plus the reset pass (`schedule::RESET_PASS`), nothing else. A batch shader in a fused pass
+/// (`schedule::fused_passes`) defines `stage_<name>` and no `main`, and its pass has `main`;
 /// any other batch shader has the entry point `main`; a network shader assembles on its own
-/// (`wgsl::is_standalone`).
+/// (`wgsl::is_standalone`). Each stage's file does what its GPU plan (`pipeline::GpuPlan`) says:
+/// an entry point `queue_work` exactly where its rare work is queued, a regrouping
+/// (`regroup_canonicalize`) exactly where it regroups, a reset from the pool
+/// (`common/pool_reset.wgsl`) exactly where it resets.
 #[test]
 fn top_level_shaders_are_the_stages_and_the_reset_pass() {
     use socnav::pipeline::{STAGES, Shader};
     let mut expected: Vec<String> = STAGES.iter().map(|s| s.shader_file()).collect();
-    expected.push(format!("{}.wgsl", wgsl::RESET_PASS));
+    expected.push(format!("{}.wgsl", schedule::RESET_PASS));
     expected.sort();
     let mut top: Vec<String> = wgsl::FILES
         .iter()
@@ -276,12 +281,33 @@ fn top_level_shaders_are_the_stages_and_the_reset_pass() {
                 assert!(!wgsl::is_standalone(&path), "{path} has the batch prelude");
                 let module = validate_assembled(&path).unwrap_or_else(|e| panic!("{e}"));
                 let pass =
-                    validate_pass(wgsl::pass_of(stage.name)).unwrap_or_else(|e| panic!("{e}"));
+                    validate_pass(schedule::pass_of(stage.name)).unwrap_or_else(|e| panic!("{e}"));
                 assert!(
                     pass.entry_points.iter().any(|ep| ep.name == "main"),
                     "the pass of shaders/{path} has no entry point `main`"
                 );
-                if wgsl::fused_pass_of(stage.name).is_some() {
+                let file = wgsl::source(&path).expect("a stage shader");
+                let queues = module
+                    .entry_points
+                    .iter()
+                    .any(|ep| ep.name == schedule::QUEUE_ENTRY);
+                assert_eq!(
+                    queues,
+                    stage.gpu.rare_work,
+                    "shaders/{path}: `{}` against the plan's rare work",
+                    schedule::QUEUE_ENTRY
+                );
+                let regroups = file.contains("regroup_canonicalize(");
+                assert_eq!(
+                    regroups, stage.gpu.regroups,
+                    "shaders/{path}: regroupings against the plan"
+                );
+                let resets = file.contains("common/pool_reset.wgsl");
+                assert_eq!(
+                    resets, stage.gpu.resets,
+                    "shaders/{path}: resets from the pool against the plan"
+                );
+                if schedule::fused_pass_of(stage.name).is_some() {
                     let function = format!("stage_{}", stage.name);
                     assert!(
                         module.entry_points.iter().all(|ep| ep.name != "main")
@@ -819,7 +845,7 @@ fn holds_array(module: &naga::Module, ty: naga::Handle<naga::Type>) -> bool {
 /// every shipped config shares so that each stage shader compiles once (issue 14).
 #[test]
 fn zeroed_function_scope_arrays_do_not_grow() {
-    // Pass::function, bytes zeroed per call (exp2's assembly; `wgsl::passes`).
+    // Pass::function, bytes zeroed per call (exp2's assembly; `schedule::passes`).
     const BUDGET: &[(&str, u32)] = &[
         ("motion::state_permute_humans", 512),
         ("motion::state_permute_groups", 512),
@@ -1069,16 +1095,16 @@ fn main() {
     );
 }
 
-/// The passes of the stages whose rare work runs out of the hot pass (`wgsl::RARE_WORK_STAGES`)
+/// The passes of the stages whose rare work runs out of the hot pass (`schedule::has_rare_work`)
 /// have the entry point that queues their environments besides `main`, the pass of the
 /// observation has the one that writes its entity records a lane each (`wgsl::OBS_RECORDS_ENTRY`)
 /// and the one that moves its staged values into rows (`wgsl::OBS_ROWS_ENTRY`), the
-/// passes that regroup the two that rebuild ORCA obstacles (`wgsl::REBUILD_PASSES`), as do the
+/// passes that regroup the two that rebuild ORCA obstacles (`schedule::regroups`), as do the
 /// passes that reset where the pool's rows leave their obstacles to the device
-/// (`wgsl::RESET_REBUILD_PASSES`), and no other pass has another; only those reset.
+/// (`schedule::rebuilds_resets`), and no other pass has another; only those reset.
 #[test]
 fn passes_have_their_second_entry_points() {
-    let passes = wgsl::passes()
+    let passes = schedule::passes()
         .into_iter()
         .map(|p| (p.to_owned(), validate_pass(p).expect("validates")));
     let resets = reset_rebuild_passes().into_iter().map(|(name, src)| {
@@ -1096,13 +1122,13 @@ fn passes_have_their_second_entry_points() {
             .collect();
         entries.sort_unstable();
         let mut expected = vec!["main"];
-        if wgsl::RARE_WORK_STAGES.contains(&pass) {
-            expected.push(wgsl::QUEUE_ENTRY);
+        if schedule::has_rare_work(pass) {
+            expected.push(schedule::QUEUE_ENTRY);
         }
-        if pass == wgsl::pass_of(wgsl::OBS_ROWS_STAGE) {
+        if pass == schedule::pass_of(wgsl::OBS_ROWS_STAGE) {
             expected.extend([wgsl::OBS_RECORDS_ENTRY, wgsl::OBS_ROWS_ENTRY]);
         }
-        if wgsl::REBUILD_PASSES.contains(&pass) || name.ends_with("+rebuild") {
+        if schedule::regroups(pass) || name.ends_with("+rebuild") {
             expected.extend([wgsl::REBUILD_ENTRY, wgsl::REBUILD_IN_WORKGROUPS_ENTRY]);
         }
         expected.sort_unstable();
@@ -1111,7 +1137,7 @@ fn passes_have_their_second_entry_points() {
     assert!(wgsl::assemble_pass_rebuilding_resets("formation", &exp2_prelude()).is_err());
 }
 
-/// The passes that regroup (`wgsl::REBUILD_PASSES`) validate with their environments taken a
+/// The passes that regroup (`schedule::regroups`) validate with their environments taken a
 /// workgroup each (`wgsl::with_regroups_in_workgroups`, the hardware adapters' way: every barrier
 /// of the regrouping on lanes in uniform control flow), and their `main` then uses the
 /// regrouping's workgroup variables, `wgsl::regroup_workgroup_bytes` of them (what the GPU
@@ -1130,7 +1156,10 @@ fn regroup_passes_validate_with_their_regroupings_on_lanes() {
         lanes, prelude,
         "the prelude says how many lanes a regrouping takes"
     );
-    for pass in wgsl::REBUILD_PASSES {
+    for pass in schedule::passes()
+        .into_iter()
+        .filter(|p| schedule::regroups(p))
+    {
         let src = wgsl::assemble_pass(pass, &lanes).expect("assembled");
         let (module, info) = validate_with_info(&src, &format!("pass {pass} (regroupings)"))
             .unwrap_or_else(|e| panic!("{e}"));
@@ -1160,7 +1189,7 @@ fn regroup_passes_validate_with_their_regroupings_on_lanes() {
     }
 }
 
-/// The passes that rebuild ORCA obstacles (`wgsl::REBUILD_PASSES`) validate with the obstacle
+/// The passes that rebuild ORCA obstacles (`schedule::regroups`) validate with the obstacle
 /// library's working memory in a workgroup array (`wgsl::with_obstacles_in_workgroup`), as the
 /// GPU backend builds their `wgsl::REBUILD_IN_WORKGROUPS_ENTRY` on hardware adapters: no access
 /// to `scratch` left, one workgroup variable of `OBSTACLES_IN_WORKGROUP_WORDS` words, which every
@@ -1172,9 +1201,9 @@ fn regroup_passes_validate_with_their_regroupings_on_lanes() {
 /// assembles them.
 #[test]
 fn rebuild_passes_keep_their_obstacles_in_workgroup_memory() {
-    let passes = wgsl::passes().into_iter().map(|pass| {
+    let passes = schedule::passes().into_iter().map(|pass| {
         let src = wgsl::assemble_pass(pass, &exp2_prelude()).expect("assembled");
-        (pass.to_owned(), src, wgsl::REBUILD_PASSES.contains(&pass))
+        (pass.to_owned(), src, schedule::regroups(pass))
     });
     let resets = reset_rebuild_passes()
         .into_iter()
@@ -1239,11 +1268,11 @@ fn rebuild_passes_keep_their_obstacles_in_workgroup_memory() {
     }
 }
 
-/// A fused pass (`wgsl::FUSED_PASSES`) holds stages of the step that one lane can run in a row:
+/// A fused pass (`schedule::fused_passes`) holds stages of the step that one lane can run in a row:
 /// batch shaders in the order of `pipeline::STAGES` with nothing between them but the stages only
 /// the SNGNN-v2 reward runs (so a step without it runs the pass in one dispatch), none with rare
 /// work queued across environments, none that builds SNGNN graphs, each in one pass, at most
-/// `wgsl::MAX_FUSED_MEMBERS` of them, at most `wgsl::MAX_ORCA_STAGES_PER_PASS` that run ORCA;
+/// `schedule::MAX_FUSED_MEMBERS` of them, at most `schedule::MAX_ORCA_STAGES_PER_PASS` that run ORCA;
 /// and each member's bit selects it alone.
 #[test]
 fn fused_passes_hold_consecutive_stages_of_one_environment() {
@@ -1262,25 +1291,22 @@ fn fused_passes_hold_consecutive_stages_of_one_environment() {
         "the stages that run ORCA: shadow_robot, group_velocities, human_motion"
     );
     let mut seen = Vec::new();
-    for (pass, members) in wgsl::FUSED_PASSES {
-        assert!(members.len() <= wgsl::MAX_FUSED_MEMBERS, "{pass}");
+    for (pass, members) in schedule::fused_passes() {
+        assert!(members.len() <= schedule::MAX_FUSED_MEMBERS, "{pass}");
         assert!(!members.is_empty(), "{pass}");
         let orca = members.iter().filter(|m| runs_orca(m)).count();
         assert!(
-            orca <= wgsl::MAX_ORCA_STAGES_PER_PASS,
+            orca <= schedule::MAX_ORCA_STAGES_PER_PASS,
             "{pass}: {orca} stages run ORCA"
         );
         for (bit, m) in members.iter().enumerate() {
             let s = &STAGES[index(m)];
             assert_eq!(s.shader, Shader::Batch, "{pass}: {m}");
-            assert!(
-                !s.sngnn_reward_only && !wgsl::RARE_WORK_STAGES.contains(m),
-                "{pass}: {m}"
-            );
+            assert!(!s.sngnn_reward_only && !s.gpu.rare_work, "{pass}: {m}");
             assert!(!seen.contains(m), "{m} is in two fused passes");
             seen.push(*m);
-            assert_eq!(wgsl::fused_pass_of(m), Some((pass, bit as u32)));
-            assert_eq!(wgsl::pass_of(m), pass);
+            assert_eq!(schedule::fused_pass_of(m), Some((pass, bit as u32)));
+            assert_eq!(schedule::pass_of(m), pass);
         }
         for pair in members.windows(2) {
             let (a, b) = (index(pair[0]), index(pair[1]));
@@ -1293,6 +1319,9 @@ fn fused_passes_hold_consecutive_stages_of_one_environment() {
             );
         }
     }
-    assert_eq!(wgsl::pass_of("begin_step"), "begin_step");
-    assert_eq!(wgsl::pass_of(wgsl::RESET_PASS), wgsl::RESET_PASS);
+    assert_eq!(schedule::pass_of("begin_step"), "begin_step");
+    assert_eq!(
+        schedule::pass_of(schedule::RESET_PASS),
+        schedule::RESET_PASS
+    );
 }

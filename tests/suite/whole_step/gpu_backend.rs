@@ -545,7 +545,7 @@ fn reset_from_rows(
     dev: &socnav::backend::gpu::GpuDevice,
     stage: impl Fn(&mut GpuStages, &HalfRows),
 ) -> ((BatchState, Outputs), BatchState, Outputs) {
-    use socnav::backend::wgsl::RESET_PASS;
+    use socnav::backend::schedule::RESET_PASS;
     let env = rolled_out(config("exp1"), 100, 30);
     let (p, state, out) = (*env.params(), env.state().unwrap().clone(), env.outputs());
     let mut gpu = GpuStages::new(dev.clone(), &p, &state, out, &[RESET_PASS]).expect("GPU stages");

@@ -440,7 +440,7 @@ fn zero_unused_obstacle_slots(s: &mut BatchState) {
 /// Contract: `formation`, `social_events` and `autoreset` (SAME_STEP) in one submit, as a step
 /// runs them, leave the CPU's columns, though the device rebuilds the obstacles of each
 /// environment that regrouped or reset from a row that leaves them to it once, after all three
-/// (`wgsl::QUEUED_REBUILD_PASSES`, `wgsl::REBUILD_QUEUE`): its queue holds exactly the
+/// (`schedule::queues_rebuilds`, `schedule::REBUILD_QUEUE`): its queue holds exactly the
 /// environments whose obstacles the CPU's three stages rebuilt, each once, some regrouped by both
 /// regrouping stages and some regrouped and then reset. Rebuilt in workgroup memory (the hardware
 /// adapters' way, where an environment queued twice would be rebuilt by two workgroups at once),
