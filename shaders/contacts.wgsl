@@ -1,11 +1,11 @@
 // requires: common/world.wgsl
 //
-// Twin of src/systems/contacts.rs (stage `contacts`, spec 4.6): after all motion, a human that
-// touches a plant, wall, table or free laptop is pushed out by an MPE-style soft contact force: it
-// turns to the force direction, takes speed min(|F|·dt, max speed) and moves once more. A lone
-// static human only takes the speed (0.1.1 neither moves nor turns it). Whether a human touches
-// an object is decided with discs shaped as `params.contact_shape` says, an overlap of at most
-// CONTACT_SLOP not counting. Change both files in the same commit.
+// Twin of src/systems/contacts.rs (stage `contacts`, docs/spec.md 4.6): after all motion, a human
+// that touches a plant, wall, table or free laptop is pushed out by an MPE-style soft contact
+// force: it turns to the force direction, takes speed min(|F|·dt, max speed) and moves once more. A
+// lone static human only takes the speed (0.1.1 neither moves nor turns it). Whether a human
+// touches an object is decided with discs shaped as `params.contact_shape` says, an overlap of at
+// most CONTACT_SLOP not counting. Change both files in the same commit.
 //
 // The prelude defines, from the Rust constants: CONTACT_MARGIN (softness of the contact, m, MPE's
 // `contact_margin`), CONTACT_STIFFNESS (MPE's `contact_force`) and CONTACT_SLOP (the overlap, m,

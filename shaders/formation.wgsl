@@ -1,11 +1,11 @@
 // requires: common/regroup.wgsl
 //
-// Twin of src/systems/formation.rs (stage `formation`, spec 4.1 step 9, 4.5): the bookkeeping of
-// formations in progress after the motion and goal re-sampling of the step. A forming crowd:
-// walkers at their slots take the slot's heading; when all are there the crowd forms (standing,
-// or moving to a new goal); if they stayed together for FORMATION_APPROXIMATE_AFTER steps an
-// approximate standing group forms where they are. A walker at its laptop seat sits down. Same
-// operations and draws in the same order as the Rust file; change both in the same commit. The
+// Twin of src/systems/formation.rs (stage `formation`, docs/spec.md 4.1 step 9, 4.5): the
+// bookkeeping of formations in progress after the motion and goal re-sampling of the step. A
+// forming crowd: walkers at their slots take the slot's heading; when all are there the crowd forms
+// (standing, or moving to a new goal); if they stayed together for FORMATION_APPROXIMATE_AFTER
+// steps an approximate standing group forms where they are. A walker at its laptop seat sits down.
+// Same operations and draws in the same order as the Rust file; change both in the same commit. The
 // regrouping that ends a completed formation (`regroup_canonicalize`, at the end of the Rust
 // `end_crowd_formation` and `sit_down`) is called by `main` right after them, from one place
 // (Mesa inlines every call, and each copy of the regrouping costs llvmpipe

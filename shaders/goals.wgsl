@@ -1,8 +1,8 @@
 // requires: common/rng.wgsl
 // requires: common/goal_sampling.wgsl
 //
-// Twin of src/systems/goals.rs (stage `goals`, spec 4.1 step 8): a lone walker within reach of
-// its goal (human radius + goal radius) gets a new goal; a moving group whose members are all
+// Twin of src/systems/goals.rs (stage `goals`, docs/spec.md 4.1 step 8): a lone walker within reach
+// of its goal (human radius + goal radius) gets a new goal; a moving group whose members are all
 // within reach of the group goal (human radius + the members' own goal radius,
 // `g_member_goal_radius`) gets a new group goal (and so do its members). New goals are
 // rejection-sampled in the margin box by `goals_sample_goal` (common/goal_sampling.wgsl, shared with the

@@ -1,7 +1,7 @@
 // requires: common/rng.wgsl
 //
-// Twin of src/systems/group_motion.rs (stage `group_motion`, spec 4.4): the members of a moving
-// group walk with the group's ORCA velocity (divided by the member count as in 0.1.1) plus
+// Twin of src/systems/group_motion.rs (stage `group_motion`, docs/spec.md 4.4): the members of a
+// moving group walk with the group's ORCA velocity (divided by the member count as in 0.1.1) plus
 // Gaussian noise per member and axis; the stored centre then becomes the members' centroid.
 // Standing groups never move. Change both files in the same commit.
 

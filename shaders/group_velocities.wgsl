@@ -1,10 +1,10 @@
 // requires: common/orca_world.wgsl
 //
-// Twin of src/systems/group_velocities.rs (stage `group_velocities`, spec 4.4): every moving
-// group is one ORCA super-agent (radius: member circle plus a human diameter, neighbour distance
-// twice that) heading for the group goal at the human speed, in a simulator with the lone humans
-// and the other moving groups (never the robot; groups see everything: `view: None`). All groups
-// are solved from the positions at the start of the step; with `orca_actual_velocity` the
+// Twin of src/systems/group_velocities.rs (stage `group_velocities`, docs/spec.md 4.4): every
+// moving group is one ORCA super-agent (radius: member circle plus a human diameter, neighbour
+// distance twice that) heading for the group goal at the human speed, in a simulator with the lone
+// humans and the other moving groups (never the robot; groups see everything: `view: None`). All
+// groups are solved from the positions at the start of the step; with `orca_actual_velocity` the
 // others' velocities are read as the loop leaves them (groups before this one already updated),
 // exactly as the Rust loop does. Same operations in the same order as the Rust file; change
 // both in the same commit.

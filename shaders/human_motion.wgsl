@@ -2,14 +2,15 @@
 // requires: common/orca_world.wgsl
 // requires: common/sfm.wgsl
 //
-// Twin of src/systems/human_motion.rs (stage `human_motion`, spec 4.1 step 6, 4.2-4.3): each lone
-// walker, in slot order, chooses a velocity with its policy (ORCA, common/orca_world.wgsl, or SFM,
-// common/sfm.wgsl) and moves at once, so later walkers see it where it now is. Speeds below the
-// threshold become 0 (except for walkers heading to a forming crowd); the heading always follows
-// the velocity. Whether a walker takes the robot into account is drawn every step with
-// `prob_to_avoid_robot` from the step's STREAM_AVOID_ROBOT stream (nothing drawn when it is 0).
-// Both policies see only what lies in the walker's field of view (common/perception.wgsl).
-// Same operations in the same order as the Rust file; change both files in the same commit.
+// Twin of src/systems/human_motion.rs (stage `human_motion`, docs/spec.md 4.1 step 6, 4.2-4.3):
+// each lone walker, in slot order, chooses a velocity with its policy (ORCA,
+// common/orca_world.wgsl, or SFM, common/sfm.wgsl) and moves at once, so later walkers see it where
+// it now is. Speeds below the threshold become 0 (except for walkers heading to a forming crowd);
+// the heading always follows the velocity. Whether a walker takes the robot into account is drawn
+// every step with `prob_to_avoid_robot` from the step's STREAM_AVOID_ROBOT stream (nothing drawn
+// when it is 0). Both policies see only what lies in the walker's field of view
+// (common/perception.wgsl). Same operations in the same order as the Rust file; change both files
+// in the same commit.
 //
 // If the ORCA lists overflow (common/orca_world.wgsl), the walker's velocity is NaN and so
 // become its speed, heading and position: never a silently different value.

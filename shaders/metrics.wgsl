@@ -1,7 +1,7 @@
 // requires: common/measures.wgsl
 //
-// Twin of src/systems/metrics.rs (stage `metrics`, spec 8.2 and 8.3): every info metric of the
-// step, the running accumulators behind them, and, when the episode ends, its statistics as the
+// Twin of src/systems/metrics.rs (stage `metrics`, docs/spec.md 8.2 and 8.3): every info metric of
+// the step, the running accumulators behind them, and, when the episode ends, its statistics as the
 // paper's table aggregates them. Change both files in the same commit. PERSONAL_SPACE (m,
 // between the robot's surface and a human's centre) comes from the prelude (Rust
 // `metrics::PERSONAL_SPACE`).
@@ -71,7 +71,7 @@ fn motion_statistics(e: u32, tick: f32) {
 }
 
 // Steps until the robot and a human touch at constant velocities, the smallest over the humans;
-// 0 when already touching, -1 when none approaches (spec 8.2).
+// 0 when already touching, -1 when none approaches (docs/spec.md 8.2).
 fn time_to_collision(e: u32) -> f32 {
     let vrx = sf[batch.c_robot_wvx + e];
     let vry = sf[batch.c_robot_wvy + e];
@@ -129,7 +129,7 @@ fn shadow_ratios(e: u32) {
     outf[row + INFO_SPL] = spl;
 }
 
-// Per-episode sums and minima over the steps (spec 8.3).
+// Per-episode sums and minima over the steps (docs/spec.md 8.3).
 fn accumulate_episode(e: u32, reward: f32) {
     let row = info_row(e);
     sf[batch.c_ep_return + e] += reward;

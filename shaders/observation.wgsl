@@ -1,7 +1,7 @@
 // requires: common/rng.wgsl
 //
-// Twin of src/systems/observation/ (stage `observation`, spec 5 and 9.1): the robot record, one
-// 14-float record per entity (walls split into segments), the per-type counts, the interaction
+// Twin of src/systems/observation/ (stage `observation`, docs/spec.md 5 and 9.1): the robot record,
+// one 14-float record per entity (walls split into segments), the per-type counts, the interaction
 // pairs, and the humans' relative-heading cache; with every option of the observation wrappers:
 // the world frame, the robot's command in its record, a limited field of view and range (visible
 // records compacted to the front of each block, pairs indexing them), and Gaussian noise from the

@@ -1,8 +1,8 @@
 // requires: common/measures.wgsl
 //
-// Twin of src/systems/reward.rs (stage `reward`, spec 6.2 and 6.3): the DSRNN-style reward or
-// SNGNN-v2's. Terminal steps get the outcome's constant; other steps the distance, discomfort and
-// alive terms plus the weighted terms beyond 0.1.1 (skipped at weight 0). The reward's info
+// Twin of src/systems/reward.rs (stage `reward`, docs/spec.md 6.2 and 6.3): the DSRNN-style reward
+// or SNGNN-v2's. Terminal steps get the outcome's constant; other steps the distance, discomfort
+// and alive terms plus the weighted terms beyond 0.1.1 (skipped at weight 0). The reward's info
 // values persist: a terminal step reports those of the previous step. Change both files in the
 // same commit.
 //

@@ -1,6 +1,6 @@
 // requires: common/motion.wgsl
 //
-// Twin of src/systems/robot_motion.rs (stage `robot_motion`, spec 4.1 steps 2-3): scale the
+// Twin of src/systems/robot_motion.rs (stage `robot_motion`, docs/spec.md 4.1 steps 2-3): scale the
 // action to a physical command and move the robot by semi-implicit Euler (rotate first, then
 // translate along the new heading). Same operations in the same order as the Rust file; change
 // both in the same commit.

@@ -2,10 +2,10 @@
 // requires: common/motion.wgsl
 //
 // Twin of `shadow_robot` and `command_from_velocity` in src/systems/shadow_robot.rs (stage
-// `shadow_robot`, spec 8.2): the reference robot behind STL and SPL drives to the robot's goal,
-// every step until it collides or arrives, by the ORCA velocity of a fresh simulator that holds
-// every lone human and moving group (it sees everything: `view: None`), converted to the robot's
-// kinematics, then integrated like the robot (`integrate`, common/motion.wgsl). Its outcome
+// `shadow_robot`, docs/spec.md 8.2): the reference robot behind STL and SPL drives to the robot's
+// goal, every step until it collides or arrives, by the ORCA velocity of a fresh simulator that
+// holds every lone human and moving group (it sees everything: `view: None`), converted to the
+// robot's kinematics, then integrated like the robot (`integrate`, common/motion.wgsl). Its outcome
 // (`shadow_outcome`) is in termination.wgsl.
 // Same operations in the same order as the Rust file; change both in the same commit.
 //

@@ -1,11 +1,12 @@
 // requires: common/sngnn_graph_build.wgsl
 //
-// Pass `sngnn_graph` (not a stage of the step): what the reward stage does for SNGNN-v2 before
-// the network scores, on the device. For every stepping environment whose step is not terminal
-// (none of the outcome flags the termination stage raised): record the frame into the history
-// (src/sngnn/frame.rs `record`), then build the graph into the packed regions (`graph::build`
-// then `PackedLayout::pack`). Every other environment's packed graph gets no nodes (the rest of
-// it is left as it was), so that the network of the step (`sngnn_score`) skips it.
+// Twin of src/systems/sngnn_graph.rs (stage `sngnn_graph`, run only with the SNGNN-v2 reward;
+// docs/spec.md 7.2-7.4). For every stepping environment whose step is not terminal (none of the
+// outcome flags the termination stage raised): record the frame into the history
+// (src/sngnn/frame.rs `record`, what the CPU stage does), then build the graph into the packed
+// regions (`graph::build` then `PackedLayout::pack`; on the CPU, stage `sngnn_score` builds it
+// into its scorer's scratch). Every other environment's packed graph gets no nodes (the rest of
+// it is left as it was), so that the next stage's network (`sngnn_score`) skips it.
 // Needs the SNGNN prelude and bindings (`GpuStages::with_sngnn_graphs`).
 
 @compute @workgroup_size(WORKGROUP_SIZE)

@@ -1,12 +1,13 @@
 // requires: common/math.wgsl
 // requires: common/geometry.wgsl
 //
-// SNGNN-v2 inference on the device (twin of `Tables::forward`, src/sngnn/pieces.rs and
-// src/sngnn/model.rs): graphs packed per environment (src/sngnn/packed.rs), edge weights W(e)
-// from the flat piecewise-linear tables (`Tables::flat_layer`), one layer per dispatch.
+// Stage `sngnn_score` (twin of src/systems/sngnn_score.rs; SNGNN-v2 inference, `Tables::forward`,
+// src/sngnn/pieces.rs and src/sngnn/model.rs): graphs packed per environment
+// (src/sngnn/packed.rs), edge weights W(e) from the flat piecewise-linear tables
+// (`Tables::flat_layer`), one layer per dispatch.
 //
-// Not a batch stage: it has its own bindings (src/backend/gpu/sngnn_net.rs builds them) and no
-// prelude, only the standalone head (below).
+// A stage, but not a batch shader (`pipeline::Shader::Network`): it has its own bindings
+// (src/backend/gpu/sngnn_net.rs builds them) and no prelude, only the standalone head (below).
 // Entry points:
 // - `sort`: one invocation per environment groups its edges by destination with a stable
 //   counting sort (CSR), so that each node can sum its messages alone, in build order.
@@ -23,7 +24,7 @@
 // sets STATUS_UNSUPPORTED, and the host reports an error. `sngnn::table_range` covers every
 // distance of the config's rooms.
 //
-// llvmpipe stops every loop of an invocation after 65535 iterations in all (docs/ARCHITECTURE.md):
+// llvmpipe stops every loop of an invocation after 65535 iterations in all (docs/gpu-backend.md):
 // `sort` runs about 3 nodes + 3 edges iterations, `layer` about (inputs + 14) per incoming edge,
 // far below it for SNGNN's graphs.
 //

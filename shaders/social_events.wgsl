@@ -1,7 +1,7 @@
 // requires: common/regroup.wgsl
 //
-// Twin of src/systems/social_events.rs (stage `social_events`, spec 4.1 step 12, 4.5): the random
-// social events, in 0.1.1's order: crowd dispersal, laptop-use dispersal, crowd formation,
+// Twin of src/systems/social_events.rs (stage `social_events`, docs/spec.md 4.1 step 12, 4.5): the
+// random social events, in 0.1.1's order: crowd dispersal, laptop-use dispersal, crowd formation,
 // laptop-use formation, each counted in the `events` output when it happens. Nothing is drawn in
 // replay mode. Same operations and draws in the same order as the Rust file; change both in the
 // same commit. Local slot lists (`free_walkers`, the dispersable groups and users, the free

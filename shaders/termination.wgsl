@@ -1,8 +1,8 @@
 // requires: common/world.wgsl
 //
-// Twin of src/systems/termination.rs (stage `termination`, spec 8.1): the episode's outcome in
-// 0.1.1's priority order (out of map, goal reached, collision, timeout), exactly one outcome flag,
-// COLLISION_WALL whenever the robot touches a wall; then the shadow robot's outcome (twin of
+// Twin of src/systems/termination.rs (stage `termination`, docs/spec.md 8.1): the episode's outcome
+// in 0.1.1's priority order (out of map, goal reached, collision, timeout), exactly one outcome
+// flag, COLLISION_WALL whenever the robot touches a wall; then the shadow robot's outcome (twin of
 // `shadow_robot::shadow_outcome`); touching as `params.contact_shape` says (common/world.wgsl).
 // Change both files in the same commit.
 

@@ -25,8 +25,8 @@ pub const MAX_THREADS: usize = 1024;
 pub struct EnvOptions {
     /// Number of environments.
     pub n_envs: usize,
-    /// Seed of the batch: environment i's first episode has the episode seed `seed + i` (DESIGN.md
-    /// section 4); with the same config, seed and actions, every run is identical.
+    /// Seed of the batch: environment i's first episode has the episode seed `seed + i`
+    /// (docs/spec.md, determinism); with the same config, seed and actions, every run is identical.
     pub seed: u64,
     /// What happens to finished environments.
     pub autoreset: AutoresetMode,
@@ -458,7 +458,7 @@ impl BatchEnv {
         self.backend.set_params(self.params);
     }
 
-    /// Environment `env` as a self-contained JSON document (DESIGN.md section 5).
+    /// Environment `env` as a self-contained JSON document (docs/spec.md, fidelity).
     pub fn get_state(&self, env: usize) -> Result<serde_json::Value, SimError> {
         self.check_env(env)?;
         Ok(document::export(&self.params, self.backend.state()?, env))

@@ -1,10 +1,11 @@
-//! Aggregation of finished episodes as the paper's table does it (spec 8.3): every statistic of
+//! Aggregation of finished episodes as the paper's table does it (docs/spec.md 8.3): every
+//! statistic of
 //! [`crate::spec::EPISODE_KEYS`] averaged over episodes, plus outcome rates.
 
 use crate::spec::{EPISODE_KEYS, N_EPISODE};
 
-/// The statistics of the paper's table (spec 8.3) in the order `socnav run` reports them: the
-/// info metrics of spec 8.2 as episode statistics, then the table's own columns.
+/// The statistics of the paper's table (docs/spec.md 8.3) in the order `socnav run` reports them:
+/// the info metrics of docs/spec.md 8.2 as episode statistics, then the table's own columns.
 pub const TABLE_KEYS: [&str; 24] = [
     "STL",
     "SPL",

@@ -1,6 +1,7 @@
 //! Discomfort heatmaps (the SocNavGym paper's figure of discomfort around people): one scene,
 //! the robot placed at every point of an N × N grid over the room, and for each placement the
-//! two discomfort terms of the reward: SNGNN-v2's score (spec 6.3) and the DSRNN term (spec 6.2).
+//! two discomfort terms of the reward: SNGNN-v2's score (docs/spec.md 6.3) and the DSRNN term
+//! (docs/spec.md 6.2).
 //!
 //! The scene and what each placement sees:
 //!

@@ -2,15 +2,18 @@
 //!
 //! One [`BatchEnv`] steps thousands of environments at once. A step runs the stages of
 //! [`pipeline::STAGES`] in the reference's order: actions and robot motion, the ORCA shadow
-//! robot, group and human motion (ORCA, social force), goal re-sampling, contacts, termination,
-//! reward, metrics, observation, autoreset. The state is a structure of arrays
+//! robot, group and human motion (ORCA, social force), goal re-sampling, formations, contacts,
+//! termination, SNGNN-v2's frame and score (with that reward), reward, metrics, observation, the
+//! social events, autoreset. The state is a structure of arrays
 //! ([`state::BatchState`]) with fixed capacities taken from the config; randomness comes only
 //! from a counter-based generator keyed by (episode seed, stream, draw), so the same seed and
 //! actions give the same trajectory on any machine and thread count, and every episode replays
 //! alone from its 64-bit episode seed.
 //!
 //! See `docs/ARCHITECTURE.md` for the code map and the invariants, `configs/README.md` for
-//! every configuration key and `docs/fidelity.md` for every deviation from SocNavGym 0.1.1.
+//! every configuration key, `docs/fidelity.md` for every deviation from SocNavGym 0.1.1,
+//! `docs/spec.md` for the specification the code cites and `docs/gpu-backend.md` for the GPU
+//! backend's mechanisms.
 //!
 //! ```
 //! use socnav::{Actions, BatchEnv, Config, EnvOptions};

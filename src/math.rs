@@ -1,10 +1,10 @@
 //! The only home of transcendental maths in the simulation (f32).
 //!
 //! Why our own maths: the CPU backend and the WGSL shaders must produce bit-identical state on
-//! lavapipe (DESIGN.md section 4). Builtin transcendentals differ between Rust's libm and the
+//! lavapipe (docs/spec.md, determinism). Builtin transcendentals differ between Rust's libm and the
 //! shader compiler by up to hundreds of ULP, while `+ - * /`, `sqrt`, `abs`, `floor`, `min`/`max`,
-//! comparisons, integer operations and bit casts are exact on both sides (spec/wgpu-on-cpu.md
-//! section 3). So every function here is built from those operations only, and
+//! comparisons, integer operations and bit casts are exact on both sides (docs/spec.md,
+//! bit parity). So every function here is built from those operations only, and
 //! `shaders/common/math.wgsl` is its line-by-line twin (`math::sin` there is `math_sin`, and so on).
 //!
 //! Invariants, which the twin must keep too:

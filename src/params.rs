@@ -13,7 +13,7 @@ use crate::config::{
 };
 use crate::geometry::contact_shape;
 
-/// How finished environments are reset (DESIGN.md section 3).
+/// How finished environments are reset (docs/spec.md, step and autoreset).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum AutoresetMode {
     /// The step after a finished one resets it and returns the first observation (gymnasium's default).

@@ -1,7 +1,7 @@
-//! SocNavGym 0.1.1's episode recordings (its `manual_control_js.py -r`, spec 9.2): one JSON file
-//! per episode, `NNNNNNNN.json` in a directory, numbered on from the largest file already there.
-//! A file is a dict from the step index (`"0"` for the observation the first step returned) to
-//! `{"robot": [...], "humans": [...], "laptops": [...], "tables": [...], "plants": [...],
+//! SocNavGym 0.1.1's episode recordings (its `manual_control_js.py -r`, docs/spec.md 9.2): one JSON
+//! file per episode, `NNNNNNNN.json` in a directory, numbered on from the largest file already
+//! there. A file is a dict from the step index (`"0"` for the observation the first step returned)
+//! to `{"robot": [...], "humans": [...], "laptops": [...], "tables": [...], "plants": [...],
 //! "walls": [...], "action": [a0, a1, a2], "reward": [r]}`: each observation key a flat list of
 //! the entities present (0.1.1's unpadded robot-frame observation: socnav's zero-padded records
 //! dropped), the action as three continuous values. `socnav play --record` and Python's

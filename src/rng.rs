@@ -2,8 +2,8 @@
 //! (episode seed, stream, draw).
 //!
 //! Why counter-based: the simulation must give the same trajectory for the same seed and actions
-//! on any machine, any thread count and on both backends, bit for bit (DESIGN.md section 4). A
-//! draw therefore depends only on its key, never on a global generator, on evaluation order or on
+//! on any machine, any thread count and on both backends, bit for bit (docs/spec.md, determinism).
+//! A draw therefore depends only on its key, never on a global generator, on evaluation order or on
 //! the wall clock, and it is computed with 32-bit integer operations only (wrapping multiply and
 //! add, xor, shifts), because WGSL has no u64 and no 32×32→64 multiply.
 //! `shaders/common/rng.wgsl` is the line-by-line twin of this file (`RngStream::next_u32` there

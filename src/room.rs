@@ -1,5 +1,5 @@
-//! Room layouts (spec 3.3): the walls of square, rectangular and L-shaped rooms, corridor walls
-//! with doors, and the invisible spawn blockers (the L room's removed block, the door gaps).
+//! Room layouts (docs/spec.md 3.3): the walls of square, rectangular and L-shaped rooms, corridor
+//! walls with doors, and the invisible spawn blockers (the L room's removed block, the door gaps).
 //!
 //! Walls are rectangles of the configured thickness whose outer face lies on the map border; the
 //! L room's two inner walls are centred on the removed block's edges. Wall order and headings

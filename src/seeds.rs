@@ -1,8 +1,8 @@
-//! Episode seeds (DESIGN.md section 4), host-side: every episode is named by one u64 seed, which
-//! keys all its draws ([`crate::rng::RngStream::new`]). A batch seeded with s gives environment
-//! i the seed s + i; each later episode of an environment takes [`next_episode_seed`] of the
-//! previous one, a Weyl sequence (add the odd 64-bit golden-ratio constant): environment i's k-th
-//! episode has the seed s + i + k·G, distinct for every (i, k) of any practical batch (k·G mod
+//! Episode seeds (docs/spec.md, determinism), host-side: every episode is named by one u64 seed,
+//! which keys all its draws ([`crate::rng::RngStream::new`]). A batch seeded with s gives
+//! environment i the seed s + i; each later episode of an environment takes [`next_episode_seed`]
+//! of the previous one, a Weyl sequence (add the odd 64-bit golden-ratio constant): environment i's
+//! k-th episode has the seed s + i + k·G, distinct for every (i, k) of any practical batch (k·G mod
 //! 2^64 is never a small number for small k ≠ 0). Resets run on the host (the GPU copies
 //! reset-pool rows), so the sequence has no WGSL twin; state columns and the GPU hold a seed as
 //! two u32 words.

@@ -2,19 +2,19 @@
 //! the per-episode statistics. The Python package builds its spaces from this module; no shape is
 //! written twice.
 //!
-//! Observation of one environment (robot frame unless stated; spec section 5), flat `f32`:
+//! Observation of one environment (robot frame unless stated; docs/spec.md 5), flat `f32`:
 //! `[robot record | humans × 14 | laptops × 14 | tables × 14 | plants × 14 | wall segments × 14]`.
 //! Each entity type is padded with all-zero records to its capacity; per-type counts say how many
 //! records are real. Without padding (`observation.padded = false`) the real records are exactly
 //! 0.1.1's observation vectors; with padding the walls are omitted as in 0.1.1.
 //!
-//! The options of 0.1.1's observation wrappers (spec 9.1) change the content, never the shape of
-//! the entity blocks: `observation.frame = "world"` writes world-frame records and a 16-float
-//! robot record ([`WORLD_ROBOT_RECORD`]); a limited field of view or range keeps the visible
-//! records only, compacted to the front of their block; sensor noise is added in place.
+//! The options of 0.1.1's observation wrappers (docs/spec.md 9.1) change the content, never the
+//! shape of the entity blocks: `observation.frame = "world"` writes world-frame records and a
+//! 16-float robot record ([`WORLD_ROBOT_RECORD`]); a limited field of view or range keeps the
+//! visible records only, compacted to the front of their block; sensor noise is added in place.
 //!
-//! Beside the observation, the interactions of 0.1.1's `info["interactions"]` (spec 5.2): index
-//! pairs into the `humans` and `laptops` records, padded to [`ObsLayout::pairs`] per kind
+//! Beside the observation, the interactions of 0.1.1's `info["interactions"]` (docs/spec.md 5.2):
+//! index pairs into the `humans` and `laptops` records, padded to [`ObsLayout::pairs`] per kind
 //! ([`INTERACTION_KEYS`]) with per-kind counts.
 
 use crate::config::{ObsFrame, Observation};
@@ -143,7 +143,7 @@ impl ObsLayout {
     }
 }
 
-/// The info keys of spec section 8.2, in output order. Flags are 0.0 or 1.0; `None` in 0.1.1
+/// The info keys of docs/spec.md 8.2, in output order. Flags are 0.0 or 1.0; `None` in 0.1.1
 /// (`TIME_TO_REACH_GOAL` before success, `AVERAGE_OBSTACLE_DISTANCE` without obstacles) is NaN;
 /// infinities stay infinite.
 pub const INFO_KEYS: [&str; 32] = [
@@ -225,7 +225,7 @@ pub mod info {
 pub const N_INFO: usize = INFO_KEYS.len();
 
 /// Per-episode statistics written when an episode ends, aggregated as the paper's table does
-/// (spec section 8.3): outcome flags; `time_taken` (steps, the episode length on collision);
+/// (docs/spec.md 8.3): outcome flags; `time_taken` (steps, the episode length on collision);
 /// the final step's cumulative metrics; STL, SPL and TIME_TO_REACH_GOAL of the success step (0
 /// and the episode length otherwise); minima over the steps; the mean obstacle distance and
 /// time to collision over the steps (-1 counted as the episode length); discomfort sums.

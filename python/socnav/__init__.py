@@ -9,6 +9,20 @@ datasets and SocNavGym JSON, ``socnav.orca`` RVO2's ORCA over numpy, and
 ``socnav.sngnn.install_weights()`` fetches the SNGNN-v2 weights the ``*_sngnn`` configs need. Configs are
 the shipped names (``"exp1"``, ``"exp2"``, ...), TOML or SocNavGym YAML paths, or either with a dict of overrides;
 the shipped ones are also gymnasium ids (``gymnasium.make("socnav/Exp2-v0")``, ``socnav.registration``).
+
+Modules: ``vector`` (``make_vec``, the reward callback, seeds and rendering), ``env`` (``make``),
+``_batch`` (spaces, action, seed and reward checks), ``socnavgym`` (0.1.1's observation dict and
+info), ``metrics`` (the paper's table), ``policies`` (goal, ORCA, random, stop), ``evaluation``
+(``socnav.evaluate``: fixed episode seeds, 95 % intervals, each episode's ending with a collision's
+cause read from the state it ended in; ``evaluate`` is its ``python -m`` entry), ``render``
+(trails, tiles, ``record``, ``HumanView``), ``datasets`` (episodes to Minari and 0.1.1 JSON,
+``collect``, ``RecordEpisodes``, ``played_episodes``), ``registration`` (the gymnasium ids),
+``sb3`` (the SB3 ``VecEnv``), ``pufferlib`` (a native ``PufferEnv`` over the batch's buffers),
+``torchrl`` (a TorchRL ``EnvBase``, resets through masks), ``jax`` (JAX arrays: copies, or DLPack
+views), ``rllib`` (Ray RLlib: one batch per env runner), ``pinned`` (``pin_memory``: the output
+buffers page-locked for CUDA through torch), ``orca``, ``sngnn`` (the weights' path,
+``install_weights``), ``train`` (the baseline agents; the ``train`` extra), and ``_socnav.pyi``
+(the extension's stubs).
 """
 
 from socnav._socnav import (

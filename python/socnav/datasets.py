@@ -258,7 +258,7 @@ def _episode_steps(toml_text: str) -> int:
 
 
 class JsonWriter:
-    """SocNavGym 0.1.1's ``manual_control_js.py -r`` recordings (spec section 9.2; written by
+    """SocNavGym 0.1.1's ``manual_control_js.py -r`` recordings (docs/spec.md 9.2; written by
     socnav's Rust writer, the one ``socnav play --record`` uses): one file
     ``NNNNNNNN.json`` per episode in ``directory``, numbered on from the largest file already
     there; each a dict from the step index (``"0"`` for the observation the first step returned)
@@ -306,7 +306,7 @@ class JsonWriter:
         pass
 
 
-# 0.1.1's DiscreteActions table (spec 9.1): the continuous action of each discrete one.
+# 0.1.1's DiscreteActions table (docs/spec.md 9.1): the continuous action of each discrete one.
 _DISCRETE_TO_CONTINUOUS = np.array(DISCRETE_ACTIONS, dtype=np.float32)
 
 

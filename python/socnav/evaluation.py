@@ -1,6 +1,6 @@
 """Evaluate a policy on a fixed set of episodes: the paper's table with 95 % confidence intervals.
 
-Episode k of an evaluation with seed s is the episode of seed ``s + k`` (DESIGN.md section 4),
+Episode k of an evaluation with seed s is the episode of seed ``s + k`` (docs/spec.md, determinism),
 whatever the number of environments stepping them: each environment plays one episode, then
 takes the next unplayed seed. So the table is a function of (policy, config, seed, episodes)
 alone for a deterministic policy, and any listed episode replays alone::

@@ -1,4 +1,4 @@
-"""Episode metrics aggregated over many episodes as the paper's table does (spec 8.3).
+"""Episode metrics aggregated over many episodes as the paper's table does (docs/spec.md 8.3).
 
 The per-episode statistics are computed in Rust when an episode ends and reach Python in the
 vector environment's ``info["episode"]`` (one ``(num_envs,)`` array per key) on the steps where
@@ -127,7 +127,7 @@ def aggregate(
     rows: np.ndarray | Mapping[str, Any] | Sequence[Sequence[float]],
     keys: Sequence[str] = EPISODE_KEYS,
 ) -> Summary:
-    """Average episode statistics over episodes as the paper's table (spec 8.3) does.
+    """Average episode statistics over episodes as the paper's table (docs/spec.md 8.3) does.
 
     The mean of each statistic skips the episodes in which it is not finite: e.g. the +inf
     ``MINIMUM_DISTANCE_TO_HUMAN`` of an episode without humans does not count towards that

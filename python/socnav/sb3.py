@@ -14,7 +14,8 @@ while the batch overwrites its buffers in place).
 
 Finished environments also report, as SB3's ``Monitor`` wrapper does, ``infos[i]["episode"] =
 {"r": return, "l": length, "t": seconds since the adapter was made}`` plus every per-episode
-statistic of spec 8.3 by name (``socnav.metrics.EPISODE_KEYS``), and ``infos[i]["is_success"]``;
+statistic of docs/spec.md 8.3 by name (``socnav.metrics.EPISODE_KEYS``), and
+``infos[i]["is_success"]``;
 SB3's logger therefore shows ``rollout/ep_rew_mean``, ``ep_len_mean`` and ``success_rate``, and
 ``socnav.metrics.EpisodeLog.add(infos)`` collects the statistics.
 
@@ -184,7 +185,7 @@ class SocNavSB3VecEnv(VecEnv):
         infos : list of dict
             Per environment: ``"TimeLimit.truncated"`` (True only for a time-limit end without
             termination); for finished environments also ``"terminal_observation"``,
-            ``"episode"`` (SB3 Monitor's ``r``/``l``/``t`` plus the spec 8.3 statistics) and
+            ``"episode"`` (SB3 Monitor's ``r``/``l``/``t`` plus the docs/spec.md 8.3 statistics) and
             ``"is_success"``.
         """
         if self._actions is None:
@@ -341,8 +342,8 @@ def evaluate(
     """Roll out ``model`` until every environment has finished ``episodes_per_env`` episodes,
     and return their statistics (``env.num_envs * episodes_per_env`` episodes).
 
-    Like ``sb3_eval.py`` of SocNavGym (spec 8.3) the policy is deterministic by default. Only
-    the first ``episodes_per_env`` episodes of each environment count, so that short episodes
+    Like ``sb3_eval.py`` of SocNavGym (docs/spec.md 8.3) the policy is deterministic by default.
+    Only the first ``episodes_per_env`` episodes of each environment count, so that short episodes
     (collisions) are not over-represented, as they would be by stopping after the first N
     episodes of the whole batch.
 

@@ -1,4 +1,4 @@
-//! ORCA half-planes in velocity space (spec orca-sfm §1.4 and §1.5): obstacle lines first (in
+//! ORCA half-planes in velocity space (docs/spec.md orca-sfm 1.4 and 1.5): obstacle lines first (in
 //! obstacle-neighbour order), then one line per agent neighbour (in neighbour order).
 //!
 //! A line is a point `p` and a unit direction `d` (m/s); the permitted side is

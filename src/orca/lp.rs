@@ -1,4 +1,4 @@
-//! RVO2's linear programs (spec orca-sfm §1.6), expression for expression.
+//! RVO2's linear programs (docs/spec.md orca-sfm 1.6), expression for expression.
 //!
 //! * [`lp1`]: optimise along one line inside the speed disc, subject to the earlier lines.
 //! * [`lp2`]: incremental 2-D LP over all lines (deterministic order, no shuffling). Returns the

@@ -1,6 +1,6 @@
 //! ORCA (optimal reciprocal collision avoidance) exactly as RVO2 2.0.3 computes it.
 //!
-//! The spec is `spec/orca-sfm.md` §1 in the shared project notes; the reference data
+//! The spec is docs/spec.md orca-sfm 1; the reference data
 //! (`rvo2_*` files) is reproduced bit for bit by `tests/suite/orca/reference.rs`.
 //!
 //! # Two layers

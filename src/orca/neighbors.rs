@@ -1,4 +1,4 @@
-//! Neighbour selection (spec orca-sfm §1.3): which agents and obstacle edges an agent reacts
+//! Neighbour selection (docs/spec.md orca-sfm 1.3): which agents and obstacle edges an agent reacts
 //! to, and in which order. The order sets the order of the ORCA lines, and so the float result.
 //!
 //! * Agents: the `<= max_neighbors` nearest others with squared centre distance strictly below

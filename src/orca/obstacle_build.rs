@@ -1,4 +1,4 @@
-//! RVO2's `addObstacle` + `processObstacles` (spec orca-sfm §1.3): polygons in, processed
+//! RVO2's `addObstacle` + `processObstacles` (docs/spec.md orca-sfm 1.3): polygons in, processed
 //! vertices and the static obstacle k-d tree out.
 //!
 //! Each tree node picks the edge that minimises `(max(L, R), min(L, R))` over the edges of its

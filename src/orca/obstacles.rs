@@ -1,4 +1,5 @@
-//! Processed obstacles as columns (spec orca-sfm §1.3), filled by [`super::process_obstacles`].
+//! Processed obstacles as columns (docs/spec.md orca-sfm 1.3), filled by
+//! [`super::process_obstacles`].
 //!
 //! Input polygons list their vertices counter-clockwise (agents stay outside); a 2-vertex polygon
 //! is a two-sided segment. Every vertex starts an edge to its `next` vertex and stores a unit

@@ -1,5 +1,5 @@
-//! Scenario generation (spec 3.3-3.4): a deterministic function of the episode seed that writes a
-//! fresh episode into one environment's slots of the batch state.
+//! Scenario generation (docs/spec.md 3.3-3.4): a deterministic function of the episode seed that
+//! writes a fresh episode into one environment's slots of the batch state.
 //!
 //! The spawn order is 0.1.1's (it fixes the entity ids): robot, walking humans, static humans,
 //! plants, tables, laptops, moving groups, standing groups, laptop users, then the walls' ids and
@@ -157,7 +157,7 @@ fn draw_room(p: &StepParams, rng: &mut RngStream) -> (u32, f32, f32, u32) {
     (shape, x, y, l_location)
 }
 
-/// Per-episode Gaussian crowd parameters (spec 4.3), shared by all humans of the episode.
+/// Per-episode Gaussian crowd parameters (docs/spec.md 4.3), shared by all humans of the episode.
 fn draw_human_params(p: &StepParams, s: &mut StateChunk, e: usize, rng: &mut RngStream) {
     s.orca_neighbor_dist[e] = 4.0 * p.human_radius + rng.normal();
     // 5 + N(0, 1) s; a non-positive horizon would make RVO2 divide by zero (NaN velocities), which
@@ -415,8 +415,8 @@ impl Gen<'_, '_> {
         })
     }
 
-    /// A group of `size` members on a circle around a free centre (spec 4.4); rejected if any
-    /// member touches something placed.
+    /// A group of `size` members on a circle around a free centre (docs/spec.md 4.4); rejected if
+    /// any member touches something placed.
     fn place_group(
         &mut self,
         s: &mut StateChunk,
@@ -550,7 +550,8 @@ impl Gen<'_, '_> {
         Ok(())
     }
 
-    /// Goals (spec 3.4 step 9): walkers, static humans (their own position), the robot, moving groups.
+    /// Goals (docs/spec.md 3.4 step 9): walkers, static humans (their own position), the robot,
+    /// moving groups.
     fn place_goals(&mut self, s: &mut StateChunk, n: &Counts) -> Attempt {
         let p = self.p;
         let hb = self.e * s.strides.humans;

@@ -1,6 +1,6 @@
-//! Rejection sampling of entity poses against the spawn list (spec 3.4). 0.1.1 retries until a
-//! 30 s wall-clock timeout; socnav bounds the number of attempts instead, so a scenario depends
-//! only on the episode seed.
+//! Rejection sampling of entity poses against the spawn list (docs/spec.md 3.4). 0.1.1 retries
+//! until a 30 s wall-clock timeout; socnav bounds the number of attempts instead, so a scenario
+//! depends only on the episode seed.
 
 use crate::fixed::Fixed;
 use crate::geometry::{Disc, Rect, Shape};
@@ -127,7 +127,7 @@ pub use crate::limits::MAX_GROUP;
 /// A pose (m, m, rad).
 pub type Pose = (f32, f32, f32);
 
-/// The member poses of a group of `n` around (cx, cy) (spec 4.4): member k at angle
+/// The member poses of a group of `n` around (cx, cy) (docs/spec.md 4.4): member k at angle
 /// φ_k = 2πk/n (wrapped) on the circle of radius `group_radius`, each coordinate's angle jittered
 /// by U(−π/14, π/14) independently; standing members face the centre (φ_k − π, jittered), moving
 /// members share one heading drawn first.
@@ -210,7 +210,7 @@ pub fn free_rect(
     })
 }
 
-/// Pose of a laptop on edge `edge` (0..4) of a table (spec 3.4 step 6): centred
+/// Pose of a laptop on edge `edge` (0..4) of a table (docs/spec.md 3.4 step 6): centred
 /// (table_width - laptop_width)/2 from the table centre along ±local y, or
 /// (table_length - laptop_length)/2 along ±local x, turned so that its −y axis points away from
 /// the table (where its user sits).
@@ -237,8 +237,8 @@ pub fn laptop_on_table(
     )
 }
 
-/// Seat of a laptop's user (spec 3.4 step 8): `laptop_width + human_laptop_distance` from the
-/// laptop centre along its −y axis, facing the laptop (heading = laptop heading + π/2).
+/// Seat of a laptop's user (docs/spec.md 3.4 step 8): `laptop_width + human_laptop_distance` from
+/// the laptop centre along its −y axis, facing the laptop (heading = laptop heading + π/2).
 pub fn seat(p: &StepParams, lx: f32, ly: f32, ltheta: f32) -> (f32, f32, f32) {
     let d = p.laptop_width + p.human_laptop_distance;
     let (s, c) = math::sin_cos(ltheta);

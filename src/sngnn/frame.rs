@@ -1,4 +1,4 @@
-//! The SNGNN input frame of one environment at the current step (spec 7.2), as 0.1.1's
+//! The SNGNN input frame of one environment at the current step (docs/spec.md 7.2), as 0.1.1's
 //! `RewardAPI.compute_sngnn_reward` builds it after the motion of a non-terminal step, quirks
 //! included (they define the model's input, docs/fidelity.md):
 //!
@@ -119,7 +119,7 @@ impl Seen {
 
 /// Push the current frame of local environment `e` into its history, then remember every
 /// entity's robot-frame pose for the next step's velocities. Call once per non-terminal step,
-/// after the motion (the reward stage); does nothing without a history (a config without the
+/// after the motion (stage `sngnn_graph`); does nothing without a history (a config without the
 /// SNGNN reward).
 pub fn record(p: &StepParams, s: &mut StateChunk, e: usize) {
     if s.strides.frames == 0 {
@@ -155,7 +155,7 @@ pub fn start_episode(s: &mut StateChunk, e: usize) {
     remember_poses(s, e);
 }
 
-/// The command of the step in SNGNN units (spec 7.2): advance, lateral advance (0 for a
+/// The command of the step in SNGNN units (docs/spec.md 7.2): advance, lateral advance (0 for a
 /// differential-drive robot), rotation.
 pub fn command(p: &StepParams, s: &StateChunk, e: usize) -> [f32; 3] {
     let advance = |v: f32| (ADVANCE_SCALE * v).min(MAX_ADVANCE);

@@ -1,5 +1,5 @@
-//! The graph SNGNN-v2 sees for one environment (spec 7.3-7.4): 0.1.1's `initializeAlt1` for each
-//! frame [`history::select`] picks, stacked as its `merge_graphs` does, nodes and edges in the
+//! The graph SNGNN-v2 sees for one environment (docs/spec.md 7.3-7.4): 0.1.1's `initializeAlt1` for
+//! each frame [`history::select`] picks, stacked as its `merge_graphs` does, nodes and edges in the
 //! original's order (checked against the golden dumps by `tests/suite/step/sngnn_graph/cpu.rs`).
 //!
 //! One frame of N nodes: the room (0), each person and object at its entity id, the goal

@@ -1,5 +1,5 @@
 //! The SNGNN frame history of each environment and the rule that picks a graph's frames from it
-//! (spec 7.4).
+//! (docs/spec.md 7.4).
 //!
 //! 0.1.1 prepends the frame of every non-terminal step to a list that grows for the whole
 //! episode; a graph takes the newest frame, then walks back and takes a frame whenever its
@@ -141,7 +141,7 @@ pub fn timestamp(dt: f32, tick: u32) -> f64 {
     f64::from(tick) * decimal_time_step(dt)
 }
 
-/// A person of a frame (spec 7.2): entity id, position (m) and angle (rad) in SNGNN's axes
+/// A person of a frame (docs/spec.md 7.2): entity id, position (m) and angle (rad) in SNGNN's axes
 /// (x right, y ahead of the robot; angle −(π/2 + relative heading)), and the backward
 /// differences of the robot-frame pose per 0.2 s (m, m, rad; robot-frame axes, not SNGNN's).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -191,11 +191,11 @@ pub struct FrameHead {
     pub robot: [f32; 3],
     /// Goal (m, SNGNN axes).
     pub goal: [f32; 2],
-    /// Command: advance, lateral advance, rotation (SNGNN units, spec 7.2).
+    /// Command: advance, lateral advance, rotation (SNGNN units, docs/spec.md 7.2).
     pub command: [f32; 3],
 }
 
-/// The ring slots of the frames one graph stacks, newest first (spec 7.4).
+/// The ring slots of the frames one graph stacks, newest first (docs/spec.md 7.4).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Selection {
     slots: [usize; MAX_GRAPH_FRAMES],

@@ -1,12 +1,12 @@
-//! SNGNN-v2, the learned social-compliance reward (spec sections 6.3 and 7): weight loading,
+//! SNGNN-v2, the learned social-compliance reward (docs/spec.md 6.3 and 7): weight loading,
 //! graph building and batched inference.
 //!
-//! - [`frame`]: the input frame of the current step (spec 7.2); [`frame::record`] pushes it into
-//!   the environment's history (call it on every non-terminal step, after the motion).
+//! - [`frame`]: the input frame of the current step (docs/spec.md 7.2); [`frame::record`] pushes it
+//!   into the environment's history (call it on every non-terminal step, after the motion).
 //! - [`history`]: the per-environment frame history in the state's columns and the choice of a
-//!   graph's frames (spec 7.4).
+//!   graph's frames (docs/spec.md 7.4).
 //! - [`graph`]: [`graph::build`] turns the chosen frames into the [`Graph`] the network sees
-//!   (spec 7.3), node for node and edge for edge as 0.1.1.
+//!   (docs/spec.md 7.3), node for node and edge for edge as 0.1.1.
 //! - [`model`]: the network and its reference forward pass; [`pieces`]: its edge weights as
 //!   exact piecewise-linear tables, the fast pass; [`Scorer`]: both, shared per process.
 //! - On a device, the tables' pass over a batch of [`packed`] graphs is the GPU backend's
@@ -47,7 +47,7 @@ pub struct Tensor {
     pub data: Vec<f32>,
 }
 
-/// The model's 42 named tensors (spec 7.1), names as in the PyTorch state dict
+/// The model's 42 named tensors (docs/spec.md 7.1), names as in the PyTorch state dict
 /// (`gnn_object.layers.0.edge_func.2.weight`, ...).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Weights {
@@ -69,15 +69,15 @@ impl Weights {
     }
 }
 
-/// Features per node (spec 7.3).
+/// Features per node (docs/spec.md 7.3).
 pub const NODE_FEATURES: usize = 42;
 /// Features per edge: the one-hot of the spatial relation (0-13) or the temporal one (14-17),
-/// and the distance at index 17 (spec 7.3-7.4).
+/// and the distance at index 17 (docs/spec.md 7.3-7.4).
 pub const EDGE_FEATURES: usize = 18;
 /// Relations, spatial and temporal.
 pub const RELATIONS: usize = 18;
 /// The relation whose one-hot is overwritten by its zero distance: its edge feature is all zero
-/// (spec 7.4's quirk, reproduced because it defines the model's input).
+/// (docs/spec.md 7.4's quirk, reproduced because it defines the model's input).
 pub const ZERO_FEATURE_RELATION: u8 = 17;
 const _: () = assert!(rel::TEMPORAL + 3 == ZERO_FEATURE_RELATION && RELATIONS == 18);
 
@@ -116,7 +116,7 @@ pub mod rel {
     pub const TEMPORAL: u8 = 14;
 }
 
-/// Node feature indices (spec 7.3's table, 0.1.1's `get_features` order).
+/// Node feature indices (docs/spec.md 7.3's table, 0.1.1's `get_features` order).
 pub mod feature {
     /// Node type one-hot: human.
     pub const HUMAN: usize = 0;
@@ -145,7 +145,7 @@ pub mod feature {
 }
 
 /// The graph the network sees for one environment and step: up to three frames stacked
-/// (spec 7.3-7.4). An edge's feature is a function of its relation and distance only
+/// (docs/spec.md 7.3-7.4). An edge's feature is a function of its relation and distance only
 /// ([`Graph::edge_feature`]), so edges carry those two instead of 18 floats.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Graph {

@@ -1,5 +1,5 @@
-//! SNGNN-v2's network (spec 7.1): six edge-conditioned convolutions (DGL `NNConv`, Gilmer et
-//! al.) with mean aggregation, ELU between them and ReLU at the end; only the room node's
+//! SNGNN-v2's network (docs/spec.md 7.1): six edge-conditioned convolutions (DGL `NNConv`, Gilmer
+//! et al.) with mean aggregation, ELU between them and ReLU at the end; only the room node's
 //! output is read.
 //!
 //! An `NNConv(in → out)` layer turns each edge's 18 features into an `in × out` matrix W(e) with
@@ -8,8 +8,8 @@
 //! self-loop, so no node is without messages.
 //!
 //! This file holds the weights in the shapes the computation wants and the reference forward
-//! pass ([`Model::forward_exact`]), which evaluates every edge network (with spec 7.5's exact
-//! first-layer column lookup). The fast pass of the reward, which never runs an edge network
+//! pass ([`Model::forward_exact`]), which evaluates every edge network (with docs/spec.md 7.5's
+//! exact first-layer column lookup). The fast pass of the reward, which never runs an edge network
 //! per edge, is [`super::pieces`]; both share the message passing here ([`Model::forward_with`]).
 
 use super::{Graph, LAYERS, Weights, ZERO_FEATURE_RELATION};
@@ -23,7 +23,7 @@ pub const MAX_WIDTH: usize = 42;
 /// The largest `in × out` of a layer (the first: 42 × 40).
 pub const MAX_MATRIX: usize = 42 * 40;
 
-/// The network's output for the room node: (q1, q2); the reward uses q1 (spec 6.3).
+/// The network's output for the room node: (q1, q2); the reward uses q1 (docs/spec.md 6.3).
 pub type Output = [f32; 2];
 
 /// One edge network: Linear(18 → a) → ReLU → Linear(a → b) → ReLU → Linear(b → in·out).
@@ -78,8 +78,8 @@ impl EdgeMlp {
 
     /// Pre-activation of the first hidden layer for an edge of relation `rel` and distance
     /// `dist`: the edge feature is a one-hot plus one scalar, so `W1·e + b1` is a column of W1,
-    /// plus the distance column times `dist`, plus the bias (spec 7.5). Relation 17's one-hot
-    /// was overwritten by its zero distance, so it contributes no column.
+    /// plus the distance column times `dist`, plus the bias (docs/spec.md 7.5). Relation 17's
+    /// one-hot was overwritten by its zero distance, so it contributes no column.
     pub fn first_layer(&self, rel: u8, dist: f32, u: usize) -> f32 {
         let row = &self.w1[u * super::EDGE_FEATURES..(u + 1) * super::EDGE_FEATURES];
         let one_hot = if rel == ZERO_FEATURE_RELATION {

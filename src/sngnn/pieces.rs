@@ -1,5 +1,5 @@
 //! SNGNN-v2's edge weights as piecewise-linear functions of the distance: the fast, exact
-//! restructuring that makes the reward cheap (DESIGN.md section 7).
+//! restructuring that makes the reward cheap (docs/spec.md, targets).
 //!
 //! An edge's feature is the one-hot of its relation plus one distance d, so for a fixed relation
 //! the edge network is a function of d alone: z1 = ReLU(c + g·d) is piecewise linear in d with a
@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use super::model::{EdgeInput, EdgeMlp, EdgeScratch, Model, Output, Scratch, add_message};
 use super::{Graph, RELATIONS};
 
-/// The self-loop relation: its distance is always 0 (spec 7.3).
+/// The self-loop relation: its distance is always 0 (docs/spec.md 7.3).
 const SELF_RELATION: u8 = 11;
 /// The spatial relations (one-hot positions 0-13); the temporal ones (14-17) have distance 0.
 const SPATIAL_RELATIONS: u8 = 14;

@@ -13,7 +13,7 @@ use crate::SimError;
 use crate::config::Config;
 
 /// Distances up to this are always in the tables: the wall-person edges exist below 1.5 m
-/// (spec 7.3), so their distance never exceeds it.
+/// (docs/spec.md 7.3), so their distance never exceeds it.
 const WALL_PERSON_RANGE: f32 = 1.5;
 /// Head room over the largest room's diagonal, so rounding never sends an edge of the config's
 /// rooms to the slow path.
@@ -114,8 +114,8 @@ impl Scorer {
 }
 
 /// The distance range of the tables for `config`: every distance feature is a distance
-/// between two points of a room (in units of 10 m, spec 7.3) or a wall-person distance below
-/// 1.5 m, so the diagonal of a square as large as the config's largest room side bounds it
+/// between two points of a room (in units of 10 m, docs/spec.md 7.3) or a wall-person distance
+/// below 1.5 m, so the diagonal of a square as large as the config's largest room side bounds it
 /// (whatever the room's shape).
 pub fn table_range(config: &Config) -> f32 {
     let side = config.room.size_x[1].max(config.room.size_y[1]).max(1) as f32;

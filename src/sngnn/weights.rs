@@ -4,8 +4,8 @@
 //! `OrderedDict` of tensor name → `torch._utils._rebuild_tensor_v2(storage, offset, size, stride,
 //! ...)`, each storage a persistent id `('storage', torch.FloatStorage, key, location, numel)`
 //! whose raw little-endian float32 values are the entry `<prefix>/data/<key>`. A strict pickle VM
-//! (`pickle.rs`) reads the dict; every name and shape is then checked against spec 7.1, and every
-//! problem found is reported at once. Values are copied bit for bit (denormals included).
+//! (`pickle.rs`) reads the dict; every name and shape is then checked against docs/spec.md 7.1, and
+//! every problem found is reported at once. Values are copied bit for bit (denormals included).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fs::File;
@@ -30,11 +30,11 @@ pub struct Layer {
     /// Node features out.
     pub outputs: usize,
     /// Widths of the edge network's two hidden layers: ⌊18·0.666 + in·out·0.334⌋ and
-    /// ⌊18·0.334 + in·out·0.666⌋ (spec 7.1).
+    /// ⌊18·0.334 + in·out·0.666⌋ (docs/spec.md 7.1).
     pub hidden: [usize; 2],
 }
 
-/// The six layers in order (spec 7.1: 42 → 40 → 30 → 21 → 12 → 3 → 2).
+/// The six layers in order (docs/spec.md 7.1: 42 → 40 → 30 → 21 → 12 → 3 → 2).
 pub const LAYERS: [Layer; 6] = [
     layer("gnn_object.NNconv_input", 42, 40, [573, 1124]),
     layer("gnn_object.layers.0", 40, 30, [412, 805]),
@@ -44,7 +44,7 @@ pub const LAYERS: [Layer; 6] = [
     layer("gnn_object.NNConv_output", 3, 2, [13, 10]),
 ];
 
-/// Parameters of the model, all tensors together (spec 7.1).
+/// Parameters of the model, all tensors together (docs/spec.md 7.1).
 pub const PARAMETERS: usize = 4_286_204;
 
 /// The state-dict file inside the socnavgym 0.1.1 wheel.
@@ -83,7 +83,7 @@ impl Layer {
     }
 }
 
-/// Every tensor of the model by name, with its shape (spec 7.1's table).
+/// Every tensor of the model by name, with its shape (docs/spec.md 7.1's table).
 pub fn expected_tensors() -> BTreeMap<String, Vec<usize>> {
     LAYERS.iter().flat_map(Layer::tensors).collect()
 }
@@ -216,8 +216,8 @@ fn state_dict_entries(root: Value) -> Result<Vec<(String, TensorRef)>, Vec<Strin
     }
 }
 
-/// The entries whose names and shapes are spec 7.1's, and every missing, unexpected, repeated
-/// or misshapen tensor.
+/// The entries whose names and shapes are docs/spec.md 7.1's, and every missing, unexpected,
+/// repeated or misshapen tensor.
 fn check_names_and_shapes(
     entries: &[(String, TensorRef)],
 ) -> (Vec<(&String, &TensorRef)>, Vec<String>) {

@@ -126,7 +126,7 @@ pub fn capacity_for(dt: f32) -> usize {
     (MAX_GRAPH_FRAMES - 1) * interval_steps + 1
 }
 
-/// Capacities of the SNGNN frame history and previous-pose cache (spec 7.2-7.4).
+/// Capacities of the SNGNN frame history and previous-pose cache (docs/spec.md 7.2-7.4).
 struct SngnnCaps {
     frames: usize,
     people: usize,
@@ -158,7 +158,7 @@ fn sngnn_caps(
         frames: capacity_for(c.episode.time_step),
         people: humans,
         objects,
-        // A group of n members gives n (n − 1) entries (each pair twice, spec 7.2): at most
+        // A group of n members gives n (n − 1) entries (each pair twice, docs/spec.md 7.2): at most
         // group size − 1 per grouped human.
         links: humans * group_size.saturating_sub(1) + laptop_users,
         entities: humans + objects,

@@ -2,7 +2,19 @@
 //! billions of steps with adversarial actions, by `set_state` on every loaded document, and
 //! usable by any test: positions finite and in the room (robot, laptop users, objects, walls;
 //! other humans finite only, see [`human_in_room`]), counts within the capacities, and every
-//! human in exactly the place its role says.
+//! human in exactly the place its role says: each human's role agreeing with its group or laptop,
+//! the groups' and laptop users' lists agreeing with the humans (and each laptop's user with the
+//! users), groups holding runs of slots in group order. `tests/suite/whole_step/invariants.rs`
+//! checks them under adversarial actions.
+//!
+//! `set_state` (`document::import`) refuses a document that breaks them, and besides numbers that
+//! are not finite or beyond 1e9, the robot's speeds beyond its limits, negative human speeds (a
+//! human's may exceed the walkers' limit: the step flings some), a social force range `sfm_r0` or
+//! interaction scale `sfm_gamma` that is not positive (each divides a distance in an exponential),
+//! and walls longer than the observation's rows for the config. Which info values of a step may
+//! be non-finite is `spec::info_outside_spec` (NaN for 0.1.1's `None`, +inf for its "inf if none",
+//! each only where docs/spec.md 8.2 gives it; in `spec`, beside the info keys, so that `state` does
+//! not depend on `spec`): `socnav soak` and the fuzz targets count the others.
 
 use super::{BatchState, NONE, group_kind, role};
 

@@ -9,7 +9,7 @@
 //!   permute slots to keep this order, so the observation is a plain walk over `0..n_humans`.
 //! - Laptop slots: free laptops first, then those in use, in laptop-user order.
 //! - Group `g`'s members are the `g_count[g]` consecutive human slots from `g_first[g]`.
-//! - Entity ids (`*_id`) persist for the episode: robot 0, then spawn order (spec 3.1).
+//! - Entity ids (`*_id`) persist for the episode: robot 0, then spawn order (docs/spec.md 3.1).
 //! - Unused slots hold zeros; `NONE` marks absent references.
 //! - The SNGNN frame history (`sngnn` to `sngnn_entity` kinds) has zero capacity unless the
 //!   config's reward is SNGNN-v2; its invariants are in [`crate::sngnn::history`].
@@ -74,7 +74,7 @@ soa! {
         /// Episodes started since the environment was last seeded (a count; keys nothing).
         env.episode: u32,
         /// Low word of the episode seed: every draw of the episode is keyed by it
-        /// (`crate::rng`, DESIGN.md section 4).
+        /// (`crate::rng`, docs/spec.md, determinism).
         env.seed_lo: u32,
         /// High word of the episode seed.
         env.seed_hi: u32,
@@ -166,7 +166,7 @@ soa! {
         env.shadow_reach_tick: u32,
         /// Distance the shadow robot was commanded to travel (m).
         env.shadow_path_length: f32,
-        // ---- per-episode human parameters (spec 4.3), shared by all humans ----
+        // ---- per-episode human parameters (docs/spec.md 4.3), shared by all humans ----
         /// RVO2 neighbour distance (m); may be negative, RVO2 only uses its square.
         env.orca_neighbor_dist: f32,
         /// RVO2 time horizon for agents (s).
@@ -185,7 +185,7 @@ soa! {
         env.sfm_n_prime: f32,
         /// SFM λ.
         env.sfm_lambda: f32,
-        // ---- metric accumulators (spec 8.2) ----
+        // ---- metric accumulators (docs/spec.md 8.2) ----
         /// Goal distance after the previous step (m).
         env.m_prev_goal_dist: f32,
         /// Steps that increased the goal distance.
@@ -222,7 +222,7 @@ soa! {
         env.m_j_avg: f32,
         /// Steps that complied with personal space.
         env.m_compliant: u32,
-        // ---- per-episode aggregates for the paper's table (spec 8.3) ----
+        // ---- per-episode aggregates for the paper's table (docs/spec.md 8.3) ----
         /// Sum of rewards this episode.
         env.ep_return: f32,
         /// Minimum over steps of the robot-human centre distance (m).
@@ -237,7 +237,7 @@ soa! {
         env.ep_sum_discomfort_dsrnn: f32,
         /// Sum of sngnn_reward.
         env.ep_sum_sngnn: f32,
-        // ---- reward memory (spec 6.1: its info values persist) ----
+        // ---- reward memory (docs/spec.md 6.1: its info values persist) ----
         /// Goal distance at the previous non-terminal step (m).
         env.r_prev_dist: f32,
         /// 1 once `r_prev_dist` holds a value.
@@ -252,7 +252,7 @@ soa! {
         env.r_alive: f32,
         /// sngnn_reward of the last non-terminal step.
         env.r_sngnn: f32,
-        // ---- crowd and laptop-use formation in progress (spec 4.5) ----
+        // ---- crowd and laptop-use formation in progress (docs/spec.md 4.5) ----
         /// 1 while humans walk to a forming crowd.
         env.cf_active: u32,
         /// Members of the forming crowd.
@@ -326,7 +326,8 @@ soa! {
         group.g_first: u32,
         /// Number of members.
         group.g_count: u32,
-        /// Stored centre x (m): the member centroid, except for approximate crowds (spec 14).
+        /// Stored centre x (m): the member centroid, except for approximate crowds (docs/spec.md
+        /// 14).
         group.g_x: f32,
         /// Stored centre y (m).
         group.g_y: f32,

@@ -1,12 +1,12 @@
-//! Stage `contacts` (spec 4.6): after all motion, a human that touches a plant, wall, table or
-//! free laptop is pushed out by an MPE-style soft contact force: it turns to the force direction,
-//! takes speed min(|F|·dt, max speed) and moves once more. Non-wall objects count as discs (tables
-//! and laptops by their circumradius); against a wall the obstacle is the human's mirror image
-//! across the wall face. A lone static human is never moved nor turned but takes the push's
-//! speed, as in 0.1.1, whose `Human.update` and `update_orientation` return early for a static
-//! human while the speed assignment does not. The robot is never pushed. Whether a human touches
-//! an object is decided with discs shaped as `[model] contact_shape` says (0.1.1: 64-gons), an
-//! overlap of at most [`CONTACT_SLOP`] not counting; the force formula stays the one of exact
+//! Stage `contacts` (docs/spec.md 4.6): after all motion, a human that touches a plant, wall, table
+//! or free laptop is pushed out by an MPE-style soft contact force: it turns to the force
+//! direction, takes speed min(|F|·dt, max speed) and moves once more. Non-wall objects count as
+//! discs (tables and laptops by their circumradius); against a wall the obstacle is the human's
+//! mirror image across the wall face. A lone static human is never moved nor turned but takes the
+//! push's speed, as in 0.1.1, whose `Human.update` and `update_orientation` return early for a
+//! static human while the speed assignment does not. The robot is never pushed. Whether a human
+//! touches an object is decided with discs shaped as `[model] contact_shape` says (0.1.1: 64-gons),
+//! an overlap of at most [`CONTACT_SLOP`] not counting; the force formula stays the one of exact
 //! discs.
 
 use crate::geometry::{Disc, Rect, disc_disc_as, disc_rect_as};

@@ -1,12 +1,12 @@
-//! Stage `formation` (spec 4.1 step 9, 4.5): the bookkeeping of formations in progress, after
-//! the motion and goal re-sampling of the step.
+//! Stage `formation` (docs/spec.md 4.1 step 9, 4.5): the bookkeeping of formations in progress,
+//! after the motion and goal re-sampling of the step.
 //!
 //! A forming crowd: a walker within its goal radius of its slot takes the slot's heading; when
 //! every walker is there the crowd forms (laid out anew around the formation centre, standing or,
 //! with probability 1/2, moving to a new goal). If instead the walkers have stayed within
 //! `group radius + human radius` of their centroid for 25 consecutive steps, an "approximate"
 //! standing group forms where they are, its members facing their centroid; its stored centre is
-//! that of placeholder members laid out around the centroid, as 0.1.1 keeps it (spec 14).
+//! that of placeholder members laid out around the centroid, as 0.1.1 keeps it (docs/spec.md 14).
 //!
 //! A walker heading for a laptop seat sits down when within its goal radius of the seat: it is
 //! snapped to the seat pose and becomes a laptop user (keeping its speed, as 0.1.1 does).

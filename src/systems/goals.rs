@@ -1,9 +1,10 @@
-//! Stage `goals` (spec 4.1 step 8): a lone walker within reach of its goal (human radius + goal
-//! radius) gets a new goal; a moving group whose members are all within reach of the group goal
-//! (human radius + the members' own goal radius: the interaction goal radius for groups spawned at
-//! reset, the human goal radius for crowds formed during the episode) gets a new group goal. New goals are sampled in the margin box, free of every entity where it
-//! is now and of every current goal; after a bounded number of tries the goal stays unchanged
-//! (0.1.1: a 30 s wall-clock timeout).
+//! Stage `goals` (docs/spec.md 4.1 step 8): a lone walker within reach of its goal (human radius +
+//! goal radius) gets a new goal; a moving group whose members are all within reach of the group
+//! goal (human radius + the members' own goal radius: the interaction goal radius for groups
+//! spawned at reset, the human goal radius for crowds formed during the episode) gets a new group
+//! goal. New goals are sampled in the margin box, free of every entity where it is now and of every
+//! current goal; after a bounded number of tries the goal stays unchanged (0.1.1: a 30 s wall-clock
+//! timeout).
 
 use crate::geometry::{Disc, Shape, disc_disc};
 use crate::params::StepParams;

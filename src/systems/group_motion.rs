@@ -1,5 +1,5 @@
-//! Stage `group_motion` (spec 4.4): the members of a moving group walk with the group's ORCA
-//! velocity, divided by the member count as in 0.1.1 (`model.group_velocity_divided`), plus
+//! Stage `group_motion` (docs/spec.md 4.4): the members of a moving group walk with the group's
+//! ORCA velocity, divided by the member count as in 0.1.1 (`model.group_velocity_divided`), plus
 //! Gaussian noise of standard deviation `group.velocity_noise_std` per member and axis, drawn
 //! every step. The stored centre then becomes the members' centroid. Standing groups never move.
 

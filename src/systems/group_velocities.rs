@@ -1,6 +1,6 @@
-//! Stage `group_velocities` (spec 4.4): every moving group is one ORCA super-agent (radius: member
-//! circle plus a human diameter, neighbour distance twice that) heading for the group goal at the
-//! human speed, in a simulator with the lone humans and the other moving groups (never the
+//! Stage `group_velocities` (docs/spec.md 4.4): every moving group is one ORCA super-agent (radius:
+//! member circle plus a human diameter, neighbour distance twice that) heading for the group goal
+//! at the human speed, in a simulator with the lone humans and the other moving groups (never the
 //! robot). All groups are solved from the positions at the start of the step.
 
 use crate::params::StepParams;

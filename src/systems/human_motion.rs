@@ -1,9 +1,10 @@
-//! Stage `human_motion` (spec 4.1 step 6, 4.2-4.3): each lone walker, in slot order, chooses a
-//! velocity with its policy (ORCA or SFM) and moves at once, so later walkers see it where it now
-//! is (0.1.1 updates them one after another). Speeds below the threshold become 0 (except for
-//! walkers heading to a forming crowd); the heading always follows the velocity. Whether a walker
-//! takes the robot into account is drawn every step with `prob_to_avoid_robot`. Both policies see
-//! only what lies in the walker's field of view (`perception.rs`; everything at 0.1.1's 2π).
+//! Stage `human_motion` (docs/spec.md 4.1 step 6, 4.2-4.3): each lone walker, in slot order,
+//! chooses a velocity with its policy (ORCA or SFM) and moves at once, so later walkers see it
+//! where it now is (0.1.1 updates them one after another). Speeds below the threshold become 0
+//! (except for walkers heading to a forming crowd); the heading always follows the velocity.
+//! Whether a walker takes the robot into account is drawn every step with `prob_to_avoid_robot`.
+//! Both policies see only what lies in the walker's field of view (`perception.rs`; everything at
+//! 0.1.1's 2π).
 
 use crate::math;
 use crate::params::StepParams;

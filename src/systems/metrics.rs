@@ -1,5 +1,6 @@
-//! Stage `metrics`: every info metric of spec 8.2 for this step, the running accumulators behind
-//! them, and, when the episode ends, its statistics as the paper's table aggregates them (spec 8.3).
+//! Stage `metrics`: every info metric of docs/spec.md 8.2 for this step, the running accumulators
+//! behind them, and, when the episode ends, its statistics as the paper's table aggregates them
+//! (docs/spec.md 8.3).
 //!
 //! Definitions are 0.1.1's (docs/fidelity.md): STALLED_TIME is in seconds, personal space does not
 //! subtract the human radius, laptops are not obstacles, accelerations and jerks are taken on the
@@ -146,7 +147,7 @@ pub fn min_human_distance(s: &StateChunk, e: usize) -> f32 {
 }
 
 /// Steps until the robot and a human touch at constant velocities, the smallest over the humans;
-/// 0 when already touching, -1 when none approaches (spec 8.2).
+/// 0 when already touching, -1 when none approaches (docs/spec.md 8.2).
 pub fn time_to_collision(p: &StepParams, s: &StateChunk, e: usize) -> f32 {
     let (vrx, vry) = super::robot_motion::robot_world_velocity(s, e);
     let (rx, ry) = (s.robot_x[e], s.robot_y[e]);
@@ -225,7 +226,7 @@ fn shadow_ratios(s: &StateChunk, e: usize, row: &mut [f32]) {
     row[info::SPL] = spl;
 }
 
-/// Per-episode sums and minima over the steps (spec 8.3).
+/// Per-episode sums and minima over the steps (docs/spec.md 8.3).
 fn accumulate_episode(p: &StepParams, s: &mut StateChunk, e: usize, reward: f32, row: &[f32]) {
     s.ep_return[e] += reward;
     s.ep_min_human_dist[e] = s.ep_min_human_dist[e].min(row[info::MINIMUM_DISTANCE_TO_HUMAN]);

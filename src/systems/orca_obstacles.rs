@@ -8,8 +8,8 @@
 //! and standing groups (squares of half-side the group radius around the stored centre).
 //!
 //! A walker whose field of view is narrower than 0.1.1's "sees everything" tolerance takes part
-//! only with the obstacles it sees (spec 4.2-4.3): [`with_visible`] processes that subset, in the
-//! same order, for its one solve. Both paths walk the one list of [`for_each_polygon`].
+//! only with the obstacles it sees (docs/spec.md 4.2-4.3): [`with_visible`] processes that subset,
+//! in the same order, for its one solve. Both paths walk the one list of [`for_each_polygon`].
 
 use std::cell::RefCell;
 

@@ -1,4 +1,4 @@
-//! How SocNavGym 0.1.1 puts one agent into RVO2 (spec 4.3, 4.4, 8.2): a fresh simulator per
+//! How SocNavGym 0.1.1 puts one agent into RVO2 (docs/spec.md 4.3, 4.4, 8.2): a fresh simulator per
 //! agent per step whose other agents are the lone humans, optionally the robot, and the moving
 //! groups as super-agents, over the environment's processed obstacles. Only the first agent's
 //! new velocity is read, so this module builds that agent, picks its neighbours as RVO2 would

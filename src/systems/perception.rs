@@ -1,7 +1,7 @@
-//! What a lone walker perceives (spec 4.2-4.3): the entities whose shape meets its view sector,
-//! used by its own ORCA simulation (`orca_world.rs`, `orca_obstacles.rs`) and its social forces
-//! (`sfm.rs`). Moving groups (`group_velocities.rs`) and the shadow robot see everything, as in
-//! 0.1.1, and do not come here.
+//! What a lone walker perceives (docs/spec.md 4.2-4.3): the entities whose shape meets its view
+//! sector, used by its own ORCA simulation (`orca_world.rs`, `orca_obstacles.rs`) and its social
+//! forces (`sfm.rs`). Moving groups (`group_velocities.rs`) and the shadow robot see everything, as
+//! in 0.1.1, and do not come here.
 //!
 //! 0.1.1's sector has its apex at the human's centre, is centred on its heading, opens
 //! `fov_angle` and reaches the farthest corner of the map, so everything inside the room within

@@ -82,7 +82,7 @@ pub fn init_episode(p: &StepParams, s: &mut StateChunk, e: usize, obstacles: Obs
     }
 }
 
-/// Metric accumulators of a new episode (spec 8.2): minima start at +inf, the rest at 0.
+/// Metric accumulators of a new episode (docs/spec.md 8.2): minima start at +inf, the rest at 0.
 fn init_metrics(s: &mut StateChunk, e: usize) {
     s.m_failure_to_progress[e] = 0;
     s.m_stalled_time[e] = 0.0;
@@ -104,7 +104,8 @@ fn init_metrics(s: &mut StateChunk, e: usize) {
     init_episode_sums(s, e);
 }
 
-/// The per-episode sums and minima behind the episode statistics (spec 8.3), at their start.
+/// The per-episode sums and minima behind the episode statistics (docs/spec.md 8.3), at their
+/// start.
 pub fn init_episode_sums(s: &mut StateChunk, e: usize) {
     s.ep_return[e] = 0.0;
     s.ep_min_human_dist[e] = f32::INFINITY;

@@ -1,7 +1,7 @@
-//! Stage `reward`: the DSRNN-style reward (spec 6.2) or SNGNN-v2's (spec 6.3). Terminal steps
-//! get the outcome's constant; other steps the potential-based distance term, the discomfort term
-//! (DSRNN's predicted clearance, or SNGNN-v2's score of the scene, which stages `sngnn_graph`
-//! and `sngnn_score` leave in `r_discomfort_sngnn`) and the alive term. The
+//! Stage `reward`: the DSRNN-style reward (docs/spec.md 6.2) or SNGNN-v2's (docs/spec.md 6.3).
+//! Terminal steps get the outcome's constant; other steps the potential-based distance term, the
+//! discomfort term (DSRNN's predicted clearance, or SNGNN-v2's score of the scene, which stages
+//! `sngnn_graph` and `sngnn_score` leave in `r_discomfort_sngnn`) and the alive term. The
 //! reward's info values persist: a terminal step reports those of the previous step (0.1.1).
 //!
 //! Fixed 0.1.1 bugs (docs/fidelity.md): the robot velocity uses the robot's heading once (0.1.1
@@ -89,7 +89,7 @@ fn step_reward(p: &StepParams, s: &mut StateChunk, e: usize) -> f32 {
     with_extra_terms(p, s, e, r)
 }
 
-/// The DSRNN discomfort term (spec 6.2) of a predicted clearance `d_min` (m):
+/// The DSRNN discomfort term (docs/spec.md 6.2) of a predicted clearance `d_min` (m):
 /// (d_min − 0.6)·0.5·dt below the discomfort distance, else 0.
 pub fn dsrnn_discomfort(p: &StepParams, d_min: f32) -> f32 {
     if d_min < p.reward_discomfort_distance {
@@ -104,7 +104,7 @@ pub const REWARD_SNGNN: u32 = 1;
 /// 0.1.1's weight of the SNGNN term (the shaders get it from the prelude).
 pub const SNGNN_WEIGHT: f32 = 1.0;
 
-/// SNGNN-v2's discomfort in [0, 1] from the network's raw output `q1` (spec 6.3).
+/// SNGNN-v2's discomfort in [0, 1] from the network's raw output `q1` (docs/spec.md 6.3).
 pub fn clip_sngnn(q1: f32) -> f32 {
     q1.clamp(0.0, 1.0)
 }

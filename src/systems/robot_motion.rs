@@ -1,6 +1,6 @@
-//! Stage `robot_motion` (spec 4.1 steps 2-3): scale the action to a physical command and move the
-//! robot by semi-implicit Euler (rotate first, then translate along the new heading). The robot
-//! is never pushed: a collision just ends the episode.
+//! Stage `robot_motion` (docs/spec.md 4.1 steps 2-3): scale the action to a physical command and
+//! move the robot by semi-implicit Euler (rotate first, then translate along the new heading). The
+//! robot is never pushed: a collision just ends the episode.
 
 use crate::math::{self, FRAC_PI_2};
 use crate::params::StepParams;

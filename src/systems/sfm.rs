@@ -1,8 +1,9 @@
-//! SocNavGym 0.1.1's one-shot social force model (spec 4.3, orca-sfm.md 3.5): the velocity of a
-//! lone walker is recomputed from scratch every step as (f/mass)·dt, capped at the human speed,
-//! with f = w·(desired + Σ obstacle + Σ pedestrian forces), w = 1/√3. There is no velocity state.
-//! Only the obstacles and humans in the walker's field of view push it (`perception.rs`); the
-//! robot, when the walker avoids it this step, pushes it seen or not (as in 0.1.1).
+//! SocNavGym 0.1.1's one-shot social force model (docs/spec.md 4.3, docs/spec.md orca-sfm 3.5): the
+//! velocity of a lone walker is recomputed from scratch every step as (f/mass)·dt, capped at the
+//! human speed, with f = w·(desired + Σ obstacle + Σ pedestrian forces), w = 1/√3. There is no
+//! velocity state. Only the obstacles and humans in the walker's field of view push it
+//! (`perception.rs`); the robot, when the walker avoids it this step, pushes it seen or not (as in
+//! 0.1.1).
 
 use crate::geometry::{Disc, Shape};
 use crate::math;

@@ -1,10 +1,10 @@
-//! Stage `shadow_robot` (spec 8.2): the reference robot behind STL and SPL. A copy of the robot
-//! made at reset drives to the same goal, every step (until it collides or arrives) by the ORCA
-//! velocity of a fresh simulator that holds every lone human and moving group, converted to the
-//! robot's kinematics. It "collides" when it touches a human or an object (0.1.1 tests groups and
-//! laptop users against the real robot instead; fixed, see docs/fidelity.md), with discs shaped as
-//! `[model] contact_shape` says. As in 0.1.1 it moves before the humans but is tested against them
-//! after they moved ([`shadow_outcome`]).
+//! Stage `shadow_robot` (docs/spec.md 8.2): the reference robot behind STL and SPL. A copy of the
+//! robot made at reset drives to the same goal, every step (until it collides or arrives) by the
+//! ORCA velocity of a fresh simulator that holds every lone human and moving group, converted to
+//! the robot's kinematics. It "collides" when it touches a human or an object (0.1.1 tests groups
+//! and laptop users against the real robot instead; fixed, see docs/fidelity.md), with discs shaped
+//! as `[model] contact_shape` says. As in 0.1.1 it moves before the humans but is tested against
+//! them after they moved ([`shadow_outcome`]).
 
 use crate::geometry::Disc;
 use crate::math;

@@ -1,4 +1,4 @@
-//! Stage `sngnn_graph`: the first half of SNGNN-v2's reward (spec 6.3, 7.2). For every
+//! Stage `sngnn_graph`: the first half of SNGNN-v2's reward (docs/spec.md 6.3, 7.2). For every
 //! environment the reward scores with its terms (it steps and the step is not terminal), the
 //! step's frame joins the environment's history ([`sngnn::frame::record`]). A no-op unless the
 //! reward is SNGNN-v2's.

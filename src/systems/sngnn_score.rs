@@ -1,4 +1,4 @@
-//! Stage `sngnn_score`: the second half of SNGNN-v2's reward (spec 6.3, 7.3-7.4). For every
+//! Stage `sngnn_score`: the second half of SNGNN-v2's reward (docs/spec.md 6.3, 7.3-7.4). For every
 //! environment the reward scores with its terms, the graph of the frames the history selects goes
 //! through the network, and the room node's first output, unclipped, goes into the
 //! `r_discomfort_sngnn` column, where the reward stage clips it to [0, 1]. A no-op unless the
@@ -31,7 +31,7 @@ pub fn sngnn_score(p: &StepParams, b: &mut Batch<'_>, e: usize) {
 }
 
 /// SNGNN-v2's raw score of environment `e`'s recorded history: the room node's first output for
-/// the graph of the selected frames (spec 7.3-7.4), before the reward's clipping.
+/// the graph of the selected frames (docs/spec.md 7.3-7.4), before the reward's clipping.
 pub fn raw_score(p: &StepParams, s: &StateChunk, scorer: &Scorer, e: usize) -> f32 {
     let [q1, _] = scorer.score_with(|graph| {
         sngnn::graph::build(p, s, e, graph);

@@ -1,4 +1,4 @@
-//! Stage `social_events` (spec 4.1 step 12, 4.5): the random social events, drawn after the
+//! Stage `social_events` (docs/spec.md 4.1 step 12, 4.5): the random social events, drawn after the
 //! observation so that they show up in the next step's, in 0.1.1's order: crowd dispersal,
 //! laptop-use dispersal, crowd formation, laptop-use formation.
 //!

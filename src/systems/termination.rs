@@ -1,4 +1,4 @@
-//! Stage `termination` (spec 8.1): decide the episode's outcome in 0.1.1's
+//! Stage `termination` (docs/spec.md 8.1): decide the episode's outcome in 0.1.1's
 //! priority order: out of map, goal reached, collision (with a human or an object), timeout.
 //! Exactly one outcome flag is raised; `COLLISION_WALL` is reported whenever the robot touches a
 //! wall. Every later stage reads the outcome from the info row. Touching is decided with discs

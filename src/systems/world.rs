@@ -112,7 +112,7 @@ pub fn touches(p: &StepParams, s: &StateChunk, e: usize, d: &Disc) -> Touches {
 }
 
 /// Does `shape` intersect anything that goal sampling avoids: every entity where it is now,
-/// walls and spawn blockers (spec 14: 0.1.1's spawn list holds live references)?
+/// walls and spawn blockers (docs/spec.md 14: 0.1.1's spawn list holds live references)?
 pub fn blocks_goal(p: &StepParams, s: &StateChunk, e: usize, shape: &Shape) -> bool {
     let robot = Shape::Disc(Disc {
         x: s.robot_x[e],

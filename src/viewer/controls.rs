@@ -4,11 +4,12 @@
 //! Keyboard (arrow keys or WASD; Q/E strafe a holonomic robot):
 //! - continuous: forward = up − down, lateral = Q − E (0 for a differential-drive robot),
 //!   rotation = left − right, each in {−1, 0, 1} of the action's range;
-//! - discrete (0.1.1's `DiscreteActions`, spec 9.1): left alone 0 (turn left), right alone 1 (turn
-//!   right), up + left 2, up + right 3, up 4 (forward), down 5 (backward), nothing 6 (stop).
+//! - discrete (0.1.1's `DiscreteActions`, docs/spec.md 9.1): left alone 0 (turn left), right alone
+//!   1 (turn right), up + left 2, up + right 3, up 4 (forward), down 5 (backward), nothing 6
+//!   (stop).
 //!
-//! Gamepad, as 0.1.1's `manual_control_js.py` reads a joystick (spec 9.2): forward from the left
-//! stick's vertical axis, lateral from its horizontal axis (0 for a differential-drive robot),
+//! Gamepad, as 0.1.1's `manual_control_js.py` reads a joystick (docs/spec.md 9.2): forward from the
+//! left stick's vertical axis, lateral from its horizontal axis (0 for a differential-drive robot),
 //! rotation from the right stick's horizontal axis, each pushed left or up meaning positive
 //! (counter-clockwise rotation, leftward strafe), after a dead zone. Its buttons command the
 //! viewer ([`gamepad_command`]): Start pauses, Select restarts, South (A / cross) steps once,

@@ -1,9 +1,11 @@
 //! socnav's integration tests, one crate (`cargo test --release --test suite`; a module's tests
-//! alone: `cargo test --release --test suite step::observation`). Three tests stay binaries of
-//! their own: `golden_replay` (the replay of the golden episodes, which other checks run by that
-//! name) and `step_no_alloc` / `orca_no_alloc` (each installs a global allocator that counts the
-//! allocations of every thread, which tests running beside them would move). The helpers shared
-//! with them are `tests/common/` and `tests/golden/`.
+//! alone: `cargo test --release --test suite step::observation`). Four tests stay binaries of
+//! their own (five test binaries in all): `golden_replay` (the replay of the golden episodes,
+//! which other checks run by that name), `step_no_alloc` / `orca_no_alloc` (each installs a
+//! global allocator that counts the allocations of every thread, which tests running beside them
+//! would move) and `gpu_device_lost` (it destroys the process's shared GPU device, which would
+//! fail every other GPU test). The helpers shared with them are `tests/common/` and
+//! `tests/golden/`.
 //!
 //! `step/`: one module per stage of `socnav::pipeline::STAGES`, named as the stage (as are
 //! `src/systems/<stage>.rs` and `shaders/<stage>.wgsl`): its hand-computed CPU cases (`cpu`, and

@@ -5,7 +5,7 @@ The agent of the paper (its section "Use Cases"): a Dueling DQN whose MLP has 5 
 (512, 256, 128 and 64 hidden units, LeakyReLU; the fifth layer is the dueling head: a value and
 7 advantages), Adam with a fixed learning rate of 0.001, the 7 discrete actions of a
 non-holonomic robot, flat observations. (The repository's ``stable_dqn.py`` trains plain SB3 DQN
-with ReLU and a learning rate of 1e-4 instead, spec section 9.3; this is the paper's agent.)
+with ReLU and a learning rate of 1e-4 instead, docs/spec.md 9.3; this is the paper's agent.)
 The rest follows SB3's DQN defaults, which the paper's run used: gamma 0.99, Huber loss, gradient
 norm clipped at 10, epsilon from 1 to 0.05 over the first 10 % of the steps, the target network
 copied every 10,000 environment steps. Vectorised: each step of the batch (``num_envs``

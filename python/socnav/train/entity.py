@@ -24,7 +24,7 @@ from torch import nn
 
 #: What an entity agent needs of the environment's config: the robot's command in its record.
 CONFIG_OVERRIDES: dict[str, Any] = {"observation": {"robot_velocity": True}}
-#: Floats of one entity record (SocNavGym's layout, spec section 5.2).
+#: Floats of one entity record (SocNavGym's layout, docs/spec.md 5.2).
 RECORD = 14
 #: Metres to network units.
 LENGTH_SCALE = 5.0

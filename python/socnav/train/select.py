@@ -6,8 +6,8 @@ row in ``selection.csv``.
     python -m socnav.train select runs/entity-exp2-dsrnn-s0 --episodes 300
 
 Validation seeds start at ``VALIDATION_SEED``; docs/results.md's test episodes at 1,000,000;
-training episodes have seeds ``seed + i + k * 0x9e3779b97f4a7c15`` (DESIGN.md section 4), which
-meet neither for any practical run.
+training episodes have seeds ``seed + i + k * 0x9e3779b97f4a7c15`` (docs/spec.md,
+determinism), which meet neither for any practical run.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 //! `socnav run`: a batched rollout. Prints the outcome rates, the paper's metric means over the
-//! finished episodes (spec 8.3) and the throughput of the stepping alone (the policy's time is
-//! not counted).
+//! finished episodes (docs/spec.md 8.3) and the throughput of the stepping alone (the policy's time
+//! is not counted).
 
 use std::time::{Duration, Instant};
 

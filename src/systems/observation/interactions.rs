@@ -1,4 +1,4 @@
-//! The interactions of 0.1.1's `info["interactions"]` (spec 5.2) as index pairs into the
+//! The interactions of 0.1.1's `info["interactions"]` (docs/spec.md 5.2) as index pairs into the
 //! observation's records: for every group, its members' ordered pairs, (i, j) then (j, i) for each
 //! i < j in member order (0.1.1's order); for the k-th laptop user, (its `humans` index, its
 //! laptop's `laptops` index).

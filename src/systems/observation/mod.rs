@@ -1,7 +1,7 @@
-//! Stage `observation` (spec section 5): the robot record and one 14-float record per entity,
+//! Stage `observation` (docs/spec.md 5): the robot record and one 14-float record per entity,
 //! laid out as [`crate::spec::ObsLayout`] says, plus the interaction pairs of
-//! `info["interactions"]`; with the options of 0.1.1's observation wrappers (spec 9.1) applied
-//! inside the step, for the whole batch.
+//! `info["interactions"]`; with the options of 0.1.1's observation wrappers (docs/spec.md 9.1)
+//! applied inside the step, for the whole batch.
 //!
 //! Conventions are 0.1.1's: in the robot frame (x forward, y left) sin/cos of the unwrapped
 //! relative heading; humans' relative speed is |v_h − v_r| (non-negative), every other entity
