@@ -5,7 +5,7 @@ episode per environment) and print the paper's metric table.
     python examples/sb3_ppo.py --config exp1 --envs 16 --total-timesteps 20000
 
 The defaults make a short demonstration (well under a minute on two cores), not a trained
-policy: the paper trains for millions of steps (spec 9.3).
+policy: the paper trains for millions of steps (docs/spec.md 9.3).
 """
 
 from __future__ import annotations

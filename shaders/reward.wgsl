@@ -108,7 +108,7 @@ fn step_reward(e: u32) -> f32 {
         let discomfort = clamp_unit(sf[batch.c_r_discomfort_sngnn + e]);
         sf[batch.c_r_discomfort_sngnn + e] = discomfort;
         sf[batch.c_r_sngnn + e] = discomfort - 1.0;
-        // Spec 6.3: the DSRNN discomfort is computed for the info only.
+        // docs/spec.md 6.3: the DSRNN discomfort is computed for the info only.
         r = (discomfort - 1.0) * SNGNN_WEIGHT + r_dist + params.reward_alive;
     } else {
         sf[batch.c_r_discomfort_sngnn + e] = 0.0;

@@ -1,4 +1,4 @@
-//! One environment's state as a self-contained JSON document (DESIGN.md section 5): the static
+//! One environment's state as a self-contained JSON document (docs/spec.md, fidelity): the static
 //! part of a golden episode header (`room`, `walls`, `spawn_blockers`, `human_params`, `counts`)
 //! plus a golden state snapshot (`state`, format in the golden README section 5), plus a
 //! `socnav` object with what 0.1.1 does not have (episode counter, done flag, per-episode sums).

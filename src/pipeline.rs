@@ -1,8 +1,8 @@
-//! The step, declared once: [`STAGES`] lists the stages in the reference's order (spec 4.1,
-//! DESIGN.md section 3), each with its CPU function and its GPU plan ([`GpuPlan`]: the pass it
-//! runs in, fused with its neighbours or alone; whether its rare work is queued out of the hot
-//! pass; whether it regroups or resets environments, leaving ORCA obstacles to rebuild). The CPU
-//! backend runs the stages in this order over chunks of environments; the GPU backend derives
+//! The step, declared once: [`STAGES`] lists the stages in the reference's order (docs/spec.md 4.1;
+//! docs/spec.md, step and autoreset), each with its CPU function and its GPU plan ([`GpuPlan`]: the
+//! pass it runs in, fused with its neighbours or alone; whether its rare work is queued out of the
+//! hot pass; whether it regroups or resets environments, leaving ORCA obstacles to rebuild). The
+//! CPU backend runs the stages in this order over chunks of environments; the GPU backend derives
 //! its passes, queues and rebuild entry points from the same list (`backend::wgsl`). Adding a
 //! stage means adding one entry here (and its `src/systems/<name>.rs` / `shaders/<name>.wgsl`
 //! pair); a test checks every plan against its shader file.

@@ -317,8 +317,8 @@ pub mod event {
 }
 
 /// The info keys of environment `e`'s `row` (its [`INFO_KEYS`] values this step)
-/// whose value is non-finite where the spec does not define it so (empty when none). Spec 8.2
-/// defines three: NaN where 0.1.1 has `None` (`TIME_TO_REACH_GOAL` before success,
+/// whose value is non-finite where the spec does not define it so (empty when none).
+/// docs/spec.md 8.2 defines three: NaN where 0.1.1 has `None` (`TIME_TO_REACH_GOAL` before success,
 /// `AVERAGE_OBSTACLE_DISTANCE` without obstacles) and +inf for "inf if none"
 /// (`MINIMUM_DISTANCE_TO_HUMAN` without humans, `MINIMUM_OBSTACLE_DISTANCE` without walls, tables
 /// and plants: a document may load a room without walls). `s` is the state the row describes.

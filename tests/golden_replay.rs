@@ -1,4 +1,4 @@
-//! Golden replay against SocNavGym 0.1.1 (DESIGN.md section 5, golden README section 8).
+//! Golden replay against SocNavGym 0.1.1 (docs/spec.md, fidelity; golden README section 8).
 //!
 //! For every recorded episode: load the reference state before each step into socnav through
 //! `set_state`, take the recorded action, and compare everything the step returns (observation,

@@ -1,5 +1,6 @@
-//! The ORCA core must not allocate once its buffers are warm (STYLE.md rule 4: `step` does not
-//! allocate). A counting global allocator checks a full per-agent pass and an obstacle rebuild.
+//! The ORCA core must not allocate once its buffers are warm (docs/spec.md, style rule 4: `step`
+//! does not allocate). A counting global allocator checks a full per-agent pass and an obstacle
+//! rebuild.
 
 mod common;
 

@@ -1,7 +1,7 @@
-//! `BatchEnv::step` does not allocate once warm (STYLE.md rule 4), resets inside the step included:
-//! scenario generation uses stack lists, the ORCA and obstacle buffers (a narrow field of view's
-//! obstacle subsets included) are thread-local and keep their capacity, outputs are overwritten
-//! in place. A counting global allocator checks it.
+//! `BatchEnv::step` does not allocate once warm (docs/spec.md, style rule 4), resets inside the
+//! step included: scenario generation uses stack lists, the ORCA and obstacle buffers (a narrow
+//! field of view's obstacle subsets included) are thread-local and keep their capacity, outputs are
+//! overwritten in place. A counting global allocator checks it.
 //!
 //! On more than one thread the pool's workers are handed one small job each per step (rayon's
 //! `spawn` boxes it), and a worker reserves its thread-local buffers the first time it meets a

@@ -320,7 +320,7 @@ def test_gpu_backend_steps_like_the_cpu_backend():
 
 def test_sngnn_reward_scores_steps():
     """The SNGNN-v2 reward from Python: `exp2_sngnn` steps and reports SNGNN-v2's discomfort in
-    [0, 1], and the reward of a non-terminal step is (s − 1) + distance + alive (spec 6.3).
+    [0, 1], and the reward of a non-terminal step is (s − 1) + distance + alive (docs/spec.md 6.3).
     Skips without the weights unless REQUIRE_SNGNN=1 (as the Rust tests)."""
     try:
         env = socnav.make_vec("exp2_sngnn", num_envs=8, seed=5, obs_mode="flat")

@@ -1,6 +1,6 @@
 """socnav.metrics against hand-computed means and against an aggregation written out here, on a
-real batched rollout: the table's rule (spec 8.3) is the Rust ``episodes::Aggregate`` one, means
-over episodes with non-finite values skipped per key."""
+real batched rollout: the table's rule (docs/spec.md 8.3) is the Rust ``episodes::Aggregate`` one,
+means over episodes with non-finite values skipped per key."""
 
 import math
 

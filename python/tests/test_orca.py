@@ -66,7 +66,7 @@ def test_lone_agent_gets_its_preferred_velocity_clipped_to_max_speed():
 
 def test_head_on_agents_turn_right_symmetrically():
     v = orca.compute_velocities(**head_on())
-    # By hand (spec 1.5): relP = (4, 0), relV = (2, 0), R = 0.6 m, 1/tau = 0.2 /s,
+    # By hand (docs/spec.md orca-sfm 1.5): relP = (4, 0), relV = (2, 0), R = 0.6 m, 1/tau = 0.2 /s,
     # w = relV - relP/tau = (1.2, 0) with w.relP > 0, so the velocity is projected onto a leg;
     # det(relP, w) = 0 picks the right leg, d = (-leg/4, 0.15) with leg = sqrt(16 - 0.36).
     # u = (relV.d) d - relV = (leg^2/8 - 2, -0.075 leg) is perpendicular to d, so the nearest
@@ -92,8 +92,9 @@ def test_max_neighbors_zero_and_strict_neighbor_dist_disable_avoidance():
 def test_wall_ahead_caps_the_speed_towards_it():
     # A two-sided wall (2 vertices) at x = 1 m, the agent (r = 0.5 m) at rest at the origin,
     # tau_obst = 1 s. Velocities with v_x > (1 - 0.5) / 1 = 0.5 m/s would reach the wall within
-    # tau_obst, so the obstacle line is x <= 0.5 (the cut-off of the truncated VO, spec 1.4), and
-    # the preferred (1, 0) projects onto it at (0.5, 0). Every intermediate is exact in float32.
+    # tau_obst, so the obstacle line is x <= 0.5 (the cut-off of the truncated VO,
+    # docs/spec.md orca-sfm 1.4), and the preferred (1, 0) projects onto it at (0.5, 0). Every
+    # intermediate is exact in float32.
     v = orca.compute_velocities(
         positions=[[0.0, 0.0]],
         velocities=[[0.0, 0.0]],

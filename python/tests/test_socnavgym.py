@@ -126,7 +126,8 @@ def _check_info(info: dict, expected: dict, where: str) -> None:
 
 @needs_golden
 def test_reset_observation_has_socnavgym_keys_and_sizes():
-    # Experiment 2: robot 9 + humans 7 x 14 + laptops 14 + tables 14 + walls 40 x 14 (spec 5.2).
+    # Experiment 2: robot 9 + humans 7 x 14 + laptops 14 + tables 14 + walls 40 x 14
+    # (docs/spec.md 5.2).
     env = SocNavGymEnv(GOLDEN / "configs" / "exp2_no_sngnn.yaml")
     obs, info = env.reset(seed=3)
     assert info == {}

@@ -3,7 +3,7 @@
 // Library file (no entry points), prepended to the stage shaders that use it. Every function
 // mirrors its Rust twin operation for operation (`math::sin` is `math_sin`, `math::PI` is
 // `MATH_PI`, and so on), so that lavapipe computes the same bits as the CPU backend
-// (DESIGN.md section 4, spec/wgpu-on-cpu.md section 3). Read the Rust file for the method,
+// (docs/spec.md, determinism and bit parity). Read the Rust file for the method,
 // domain and accuracy of each function; change both files in the same commit.
 //
 // Rules kept here: no `fma` and no builtin transcendentals (`sin`, `exp`, ...); `a * b + c` is

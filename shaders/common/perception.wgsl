@@ -1,11 +1,11 @@
 // requires: common/geometry.wgsl
 //
-// Twin of src/systems/perception.rs: what a lone walker perceives (spec 4.2-4.3), the entities
-// whose shape meets its view wedge (apex at the human's centre, centred on its heading, opening
-// `fov_angle`, unbounded, closed). Used by the walker's ORCA simulation (common/orca_world.wgsl)
-// and its social forces (common/sfm.wgsl). Library file (no entry point) over the prelude's
-// `sf`/`su`/`params`. Same operations in the same order as the Rust file (read it for why the
-// tests are exact); change both files in the same commit.
+// Twin of src/systems/perception.rs: what a lone walker perceives (docs/spec.md 4.2-4.3), the
+// entities whose shape meets its view wedge (apex at the human's centre, centred on its heading,
+// opening `fov_angle`, unbounded, closed). Used by the walker's ORCA simulation
+// (common/orca_world.wgsl) and its social forces (common/sfm.wgsl). Library file (no entry point)
+// over the prelude's `sf`/`su`/`params`. Same operations in the same order as the Rust file (read
+// it for why the tests are exact); change both files in the same commit.
 //
 // Rust `Option<View>` is `MaybeView` (`some == false`: everything is visible); Rust
 // `sees(view, shape)` is `perception_maybe_sees_disc` / `perception_maybe_sees_rect`.

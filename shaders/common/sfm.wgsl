@@ -1,9 +1,9 @@
 // requires: common/world.wgsl
 // requires: common/perception.wgsl
 //
-// Twin of src/systems/sfm.rs: SocNavGym 0.1.1's one-shot social force model (spec 4.3,
-// orca-sfm.md 3.5). The velocity of a lone walker is recomputed from scratch every step as
-// (f/mass)·dt, capped at the human speed, with f = w·(desired + Σ obstacle + Σ pedestrian
+// Twin of src/systems/sfm.rs: SocNavGym 0.1.1's one-shot social force model (docs/spec.md 4.3,
+// docs/spec.md orca-sfm 3.5). The velocity of a lone walker is recomputed from scratch every step
+// as (f/mass)·dt, capped at the human speed, with f = w·(desired + Σ obstacle + Σ pedestrian
 // forces), w = 1/√3. Only the obstacles and humans in the walker's field of view push it
 // (common/perception.wgsl); the robot, when the walker avoids it this step, pushes it seen or not.
 // Library file (no entry point) over the prelude's `sf`/`su`/`params`. Same operations in the

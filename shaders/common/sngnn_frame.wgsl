@@ -1,7 +1,7 @@
 // requires: common/math.wgsl
 //
 // Twin of src/sngnn/frame.rs and src/sngnn/history/write.rs: the SNGNN input frame of one
-// environment (spec 7.2) pushed into its frame history in the state's columns, and the
+// environment (docs/spec.md 7.2) pushed into its frame history in the state's columns, and the
 // robot-frame poses kept for the next step's velocities. Needs the SNGNN prelude
 // (`backend::wgsl::sngnn_prelude`) and the history's sizes in the batch layout (`batch.sn_frames`,
 // `batch.sn_frame_people`, ...). Same operations in the same order as the Rust, so that lavapipe computes the CPU's bits. Change both in the same commit.

@@ -1,7 +1,7 @@
 // requires: common/sngnn_frame.wgsl
 //
 // Twin of src/sngnn/graph.rs and history::select: the graph SNGNN-v2 sees for one environment
-// (spec 7.3-7.4), built into its packed regions (src/sngnn/packed.rs: `sn_gu` words nodes,
+// (docs/spec.md 7.3-7.4), built into its packed regions (src/sngnn/packed.rs: `sn_gu` words nodes,
 // edges, src[], dst[], rel[]; `sn_gf` features[batch.sn_max_nodes x SN_NODE_FEATURES], dist[]), nodes
 // and edges in the CPU's order with the CPU's float operations, so that lavapipe writes
 // exactly what `PackedLayout::pack` writes for `graph::build`'s graph. Unused words are zeroed.

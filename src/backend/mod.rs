@@ -15,7 +15,7 @@ use crate::params::StepParams;
 use crate::sngnn::SngnnReward;
 use crate::state::BatchState;
 
-/// Which backend runs a batch (DESIGN.md section 8).
+/// Which backend runs a batch (docs/spec.md, adapters).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum BackendChoice {
     /// The CPU backend.

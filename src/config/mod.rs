@@ -1,4 +1,4 @@
-//! Scenario configuration: every key of SocNavGym 0.1.1's YAML (spec section 2), grouped by
+//! Scenario configuration: every key of SocNavGym 0.1.1's YAML (docs/spec.md 2), grouped by
 //! concern, in SI units (m, s, rad, m/s, rad/s).
 //!
 //! Defaults live in one place: the `Default` impls below, which reproduce the paper's
@@ -400,7 +400,7 @@ pub(super) fn at_most(range: [i32; 2]) -> i64 {
     i64::from(range[1].max(0))
 }
 
-/// Per-step probabilities of the social events, evaluated after the observation (spec 4.5).
+/// Per-step probabilities of the social events, evaluated after the observation (docs/spec.md 4.5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(default)]
 pub struct Events {
@@ -418,13 +418,13 @@ pub struct Events {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RewardKind {
-    /// The DSRNN-style reward (spec 6.2).
+    /// The DSRNN-style reward (docs/spec.md 6.2).
     Dsrnn,
-    /// The SNGNN-v2 data-driven reward (spec 6.3).
+    /// The SNGNN-v2 data-driven reward (docs/spec.md 6.3).
     Sngnn,
 }
 
-/// The reward and its constants (spec 6.2; the defaults are 0.1.1's).
+/// The reward and its constants (docs/spec.md 6.2; the defaults are 0.1.1's).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Reward {
@@ -489,9 +489,9 @@ impl Default for Reward {
     }
 }
 
-/// What the observation contains (spec section 5) and the options of 0.1.1's observation
-/// wrappers (spec 9.1), applied inside the step. The defaults are the bare 0.1.1 environment:
-/// robot frame, everything visible, no noise.
+/// What the observation contains (docs/spec.md 5) and the options of 0.1.1's observation
+/// wrappers (docs/spec.md 9.1), applied inside the step. The defaults are the bare 0.1.1
+/// environment: robot frame, everything visible, no noise.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Observation {
@@ -622,7 +622,7 @@ pub enum ContactShape {
 }
 
 /// Modelling choices of 0.1.1 that socnav keeps by default under a named option
-/// (DESIGN.md section 5; every row is in `docs/fidelity.md`).
+/// (docs/spec.md, fidelity; every row is in `docs/fidelity.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Model {

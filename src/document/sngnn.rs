@@ -95,7 +95,7 @@ pub(super) fn check_entity_ids(s: &BatchState, e: usize) -> Result<(), SimError>
             "state",
             format!(
                 "numbers its humans and objects with id {id}, which {problem}: the SNGNN-v2 \
-                 reward needs the ids 1..={n} (they are its graph's node indices, spec 7.3)"
+                 reward needs the ids 1..={n} (they are its graph's node indices, docs/spec.md 7.3)"
             ),
         ));
     }

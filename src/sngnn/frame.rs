@@ -175,7 +175,7 @@ fn prev_index(s: &StateChunk, e: usize, id: u32) -> usize {
     assert!(
         id >= 1 && id as usize <= c,
         "entity id {id} outside 1..={c}: the SNGNN frame needs the ids of humans and objects to \
-         be 1..=N (spec 7.3; checked when a state document is loaded)"
+         be 1..=N (docs/spec.md 7.3; checked when a state document is loaded)"
     );
     e * c + id as usize - 1
 }

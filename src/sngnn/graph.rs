@@ -335,7 +335,7 @@ impl FrameGraph<'_> {
         assert!(
             (1..self.layout.goal).contains(&node),
             "SNGNN frame entity id {id} outside 1..{}: the graph needs the ids of humans and \
-             objects to be 1..=N (spec 7.3)",
+             objects to be 1..=N (docs/spec.md 7.3)",
             self.layout.goal
         );
         node

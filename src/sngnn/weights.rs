@@ -231,9 +231,11 @@ fn check_names_and_shapes(
             continue;
         }
         match expected.get(name) {
-            None => problems.push(format!("unexpected tensor `{name}` (not in spec 7.1)")),
+            None => problems.push(format!(
+                "unexpected tensor `{name}` (not in docs/spec.md 7.1)"
+            )),
             Some(shape) if !same_shape(shape, &t.size) => problems.push(format!(
-                "tensor `{name}` has shape {:?} where spec 7.1 has {shape:?}",
+                "tensor `{name}` has shape {:?} where docs/spec.md 7.1 has {shape:?}",
                 t.size
             )),
             Some(_) => wanted.push((name, t)),

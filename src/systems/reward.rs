@@ -80,7 +80,7 @@ fn step_reward(p: &StepParams, s: &mut StateChunk, e: usize) -> f32 {
         let discomfort = clip_sngnn(s.r_discomfort_sngnn[e]);
         s.r_discomfort_sngnn[e] = discomfort;
         s.r_sngnn[e] = discomfort - 1.0;
-        // Spec 6.3: the DSRNN discomfort is computed for the info only.
+        // docs/spec.md 6.3: the DSRNN discomfort is computed for the info only.
         (discomfort - 1.0) * SNGNN_WEIGHT + r_dist + p.reward_alive
     } else {
         s.r_discomfort_sngnn[e] = 0.0;

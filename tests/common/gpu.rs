@@ -1,4 +1,4 @@
-//! The CPU/GPU parity harness of the stage shaders (DESIGN.md section 4): a shared device,
+//! The CPU/GPU parity harness of the stage shaders (docs/spec.md, determinism): a shared device,
 //! states from real rollouts, a stage run on both backends from the same state, parameters and
 //! actions, and a comparison of every state and output column, bit for bit, that names the first
 //! differing element.

@@ -1,4 +1,4 @@
-//! The RVO2 2.0.3 reference data (spec orca-sfm section 4): where it lives and a small reader
+//! The RVO2 2.0.3 reference data (docs/spec.md orca-sfm 4): where it lives and a small reader
 //! for its CSV files, shared by the CPU and GPU ORCA tests.
 
 use std::collections::BTreeMap;

@@ -5,7 +5,7 @@
 use serde_json::{Value, json};
 use socnav::{BatchEnv, Config, EnvOptions};
 
-/// The four walls of a 10 m square room, as the generator builds them (spec 3.3).
+/// The four walls of a 10 m square room, as the generator builds them (docs/spec.md 3.3).
 pub fn room_walls() -> Value {
     use std::f64::consts::{FRAC_PI_2, PI};
     json!([

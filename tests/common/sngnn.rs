@@ -109,7 +109,7 @@ impl Rand {
     }
 }
 
-/// Random weights with the real names and shapes (spec 7.1), initialised like PyTorch's
+/// Random weights with the real names and shapes (docs/spec.md 7.1), initialised like PyTorch's
 /// `Linear` (uniform in ±1/√fan_in).
 pub fn random_weights(seed: u64) -> Weights {
     let mut r = Rand(seed);

@@ -435,7 +435,7 @@ pub struct Kinematics {
 }
 
 /// Bound (m/s) on the difference, as a vector, between 0.1.1's and socnav's social-force
-/// velocity of lone walker `h` (its pre-step record), spec 4.3:
+/// velocity of lone walker `h` (its pre-step record), docs/spec.md 4.3:
 /// v = dt·w·(f_d + Σ f_o + Σ f_ij), w = 1/√3, scaled down to the maximum speed if longer (a
 /// projection onto a disc, which does not increase differences). Relative positions differ by
 /// δ = 2√2·ulp(extent) (as in [`rvo2_velocity_error`]). Per term:
@@ -656,7 +656,7 @@ pub fn widening(
     (shadow, humans)
 }
 
-/// Contact push-out (spec 4.6, MPE's soft contact): stiffness and margin (m).
+/// Contact push-out (docs/spec.md 4.6, MPE's soft contact): stiffness and margin (m).
 const CONTACT_STIFFNESS: f64 = 100.0;
 const CONTACT_MARGIN: f64 = 1e-3;
 

@@ -1,5 +1,5 @@
-//! How the replay decides contacts (spec 4.6, 8.1, 8.2), and which decisions may differ from
-//! 0.1.1's within their conditioning.
+//! How the replay decides contacts (docs/spec.md 4.6, 8.1, 8.2), and which decisions may differ
+//! from 0.1.1's within their conditioning.
 //!
 //! 0.1.1 tests every contact on shapely polygons: a disc (robot, human, plant) is a 64-gon that
 //! sits up to 1 − cos(π/64) = 0.12 % of its radius inside the circle. socnav decides contacts
@@ -145,8 +145,8 @@ pub enum Near {
 /// times dt along its heading: the last push is undone exactly (the recorded speed and heading
 /// are the last push's). A human pushed n ≥ 2 times (wedged in a wall–table corner) was moved by
 /// the n − 1 earlier pushes too, whose speeds are not recorded; each push's speed is at most the
-/// human's maximum speed (spec 4.6: min(|F|·dt, max speed)), so the position where its first
-/// contact was decided lies within (n − 1)·`human_max_speed`·dt of the once-undone position.
+/// human's maximum speed (docs/spec.md 4.6: min(|F|·dt, max speed)), so the position where its
+/// first contact was decided lies within (n − 1)·`human_max_speed`·dt of the once-undone position.
 /// Every disc within that distance is covered by widening the bracket's radii by it: the
 /// decision is [`Near::Repeated`] if it changes within the widened bracket only.
 pub fn near_contact(
@@ -204,8 +204,8 @@ pub(super) fn rectangle_distance(r: &Value, across: &str, x: f64, y: f64) -> f64
 }
 
 /// Whether the ORCA shadow robot has collided by the end of a step that started from `prev` and
-/// whose post-motion snapshot is `post` (spec 8.2): it touches a lone human, plant, wall, table
-/// or free laptop, or a group member, laptop user or used laptop. `bug` tests the last three
+/// whose post-motion snapshot is `post` (docs/spec.md 8.2): it touches a lone human, plant, wall,
+/// table or free laptop, or a group member, laptop user or used laptop. `bug` tests the last three
 /// against the real robot, as 0.1.1 does; socnav tests them against the shadow robot. Contacts
 /// are decided by `rule` with every disc's radius multiplied by `scale` (see
 /// [`ContactRule::ambiguous`]).

@@ -6,7 +6,7 @@ use serde_json::Value;
 
 use super::num;
 
-/// DSRNN discomfort constants of the paper configs (spec 6.2).
+/// DSRNN discomfort constants of the paper configs (docs/spec.md 6.2).
 const DISCOMFORT_DISTANCE: f64 = 0.6;
 const DISCOMFORT_FACTOR: f64 = 0.5;
 
@@ -85,10 +85,10 @@ pub fn wrapped_angular_speed(recorded: f64, dt: f64) -> f64 {
     a.sin().atan2(a.cos()) / dt
 }
 
-/// TIME_TO_COLLISION of a post-motion snapshot (spec 8.2): the fewest steps until the robot and a
-/// human touch at constant velocities, −1 if none. `bug` reproduces 0.1.1's leaked loop variable,
-/// which re-evaluates an already counted human in place of each laptop user, so laptop users
-/// never count; socnav evaluates them (standing still).
+/// TIME_TO_COLLISION of a post-motion snapshot (docs/spec.md 8.2): the fewest steps until the robot
+/// and a human touch at constant velocities, −1 if none. `bug` reproduces 0.1.1's leaked loop
+/// variable, which re-evaluates an already counted human in place of each laptop user, so laptop
+/// users never count; socnav evaluates them (standing still).
 pub fn time_to_collision(
     state: &Value,
     dt: f64,
@@ -152,7 +152,7 @@ pub struct Perturbation {
 
 /// Every outcome per human (snapshot order; laptop users skipped with `bug`, as in
 /// [`time_to_collision`]) that inputs within `perturb(k)` of human k's, plus f32 rounding,
-/// can give: the time-to-collision decisions of spec 8.2 each flip where they are ill-
+/// can give: the time-to-collision decisions of docs/spec.md 8.2 each flip where they are ill-
 /// conditioned. 0.1.1 evaluates them in float32 (`compute_time_to_collision` rounds positions
 /// and velocities to f32) and socnav in f32 from its own state.
 ///

@@ -1,6 +1,6 @@
 //! The RVO2 problem SocNavGym 0.1.1 solved for one agent of a golden step, rebuilt from the
-//! recorded state as 0.1.1 builds it (spec 4.3, 4.4, 8.2): a fresh simulator (every agent at
-//! zero velocity) holding the agent, the other lone humans (walkers that moved earlier in the
+//! recorded state as 0.1.1 builds it (docs/spec.md 4.3, 4.4, 8.2): a fresh simulator (every agent
+//! at zero velocity) holding the agent, the other lone humans (walkers that moved earlier in the
 //! step where they now are), the moving groups as super-agents, and the obstacles (tables, free
 //! laptops, plants as squares, walls, laptop users as squares of half-side 2 × human diameter,
 //! standing groups as squares of half-side the interaction radius), every input computed in f64

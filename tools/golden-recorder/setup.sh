@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# A virtual environment with SocNavGym 0.1.1 as the golden episodes were recorded with it (the
-# project's spec, section 10.1), for the DSRNN configs: torch and DGL are not installed (record.py
+# A virtual environment with SocNavGym 0.1.1 as the golden episodes were recorded with it
+# (docs/spec.md 10.1), for the DSRNN configs: torch and DGL are not installed (record.py
 # stubs them; the DSRNN reward never calls the SNGNN model). Needs Python 3.11, a C++ compiler and
 # network access to the package index. Usage: tools/golden-recorder/setup.sh [VENV_DIR] (default .venv-socnavgym)
 set -euo pipefail

@@ -1,4 +1,4 @@
-//! Finding and opening a GPU for the GPU backend (DESIGN.md section 8).
+//! Finding and opening a GPU for the GPU backend (docs/spec.md, adapters).
 //!
 //! Policy:
 //! - [`AdapterPolicy::Hardware`] (`--backend auto`) takes a discrete or integrated GPU only: a

@@ -1,10 +1,10 @@
 //! The GPU backend: the batch state in device storage buffers and the stages of
 //! [`crate::pipeline::STAGES`] as WGSL compute shaders (`shaders/<stage>.wgsl`).
 //!
-//! - [`device`]: finding and opening an adapter under the policy of DESIGN.md section 8.
-//! - `kit`: buffers, bind group layouts, readback, and the device's pipeline cache
-//!   (`pipelines::PipelineCache`: each pipeline compiled once per device and source, whatever the
-//!   batch size or config).
+//! - [`device`]: finding and opening an adapter under the policy of docs/spec.md, adapters.
+//! - `kit`: buffers, their bindings, checks and readback; `pipelines`: bind group layouts and the
+//!   device's pipeline cache (`pipelines::PipelineCache`: each pipeline compiled once per device
+//!   and source, whatever the batch size or config).
 //! - [`GpuStages`]: the state and the outputs each packed into two storage buffers (every f32
 //!   column back to back, every u32 column likewise, in declaration order; offsets and strides
 //!   reach the shaders at run time in the uniform `batch`, [`crate::backend::wgsl::BatchLayout`]),

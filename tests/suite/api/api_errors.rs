@@ -1,5 +1,5 @@
-//! The API boundary (STYLE.md rules 7 and 8): `BatchEnv` rejects what a caller can get wrong
-//! with a typed error whose message names the environment and the value, and a rejected call
+//! The API boundary (docs/spec.md, style rules 7 and 8): `BatchEnv` rejects what a caller can get
+//! wrong with a typed error whose message names the environment and the value, and a rejected call
 //! changes nothing. And the state documents: `get_state` → `set_state` → `get_state` is exact,
 //! and a loaded environment steps exactly as the original does.
 

@@ -1,4 +1,4 @@
-//! Configuration loading and validation (DESIGN.md section 2, STYLE.md rule 8, spec section 2).
+//! Configuration loading and validation (docs/spec.md, layout and style rule 8; docs/spec.md 2).
 //!
 //! Contracts checked here:
 //! - every shipped `configs/*.toml` parses and validates, and `Config::default()` is exactly
@@ -77,8 +77,8 @@ fn default_config_is_exp1() {
     );
 }
 
-/// Contract (STYLE.md rule 8): every problem is reported at once, each naming its key and value.
-/// The file below has seven independent mistakes; each must appear in the one error.
+/// Contract (docs/spec.md, style rule 8): every problem is reported at once, each naming its key
+/// and value. The file below has seven independent mistakes; each must appear in the one error.
 #[test]
 fn every_problem_is_listed_at_once() {
     let text = r#"
@@ -359,7 +359,7 @@ fn malformed_toml_is_a_config_error() {
     );
 }
 
-/// SocNavGym 0.1.1's `exp1_no_sngnn.yaml` as a JSON dict (spec section 2.1), written out by hand
+/// SocNavGym 0.1.1's `exp1_no_sngnn.yaml` as a JSON dict (docs/spec.md 2.1), written out by hand
 /// so that the import is tested without the golden files.
 fn exp1_socnavgym_dict() -> Value {
     serde_json::from_str(
@@ -407,7 +407,7 @@ fn socnavgym_exp1_dict_imports_as_default() {
     );
 }
 
-/// Contract (spec section 2: every 0.1.1 key is mandatory): each missing key is reported, by its
+/// Contract (docs/spec.md 2: every 0.1.1 key is mandatory): each missing key is reported, by its
 /// `section.key` name, all in one error.
 #[test]
 fn socnavgym_missing_keys_are_reported() {
@@ -605,8 +605,8 @@ fn socnavgym_yaml_problems_are_reported_together() {
     }
 }
 
-/// Contract (DESIGN.md section 5, replay rules): the config a golden episode was recorded with,
-/// imported with `Config::from_socnavgym`, is exactly `configs/<stem>.toml`.
+/// Contract (docs/spec.md, fidelity: the replay rules): the config a golden episode was recorded
+/// with, imported with `Config::from_socnavgym`, is exactly `configs/<stem>.toml`.
 #[test]
 fn golden_socnavgym_configs_equal_shipped_tomls() {
     let Some(dir) =

@@ -1,5 +1,5 @@
 //! The discomfort heatmap (`socnav::heatmap`, `socnav heatmap`): the DSRNN field against a
-//! hand computation of spec 6.2 (no weights needed), the SNGNN-v2 field's range, masks,
+//! hand computation of docs/spec.md 6.2 (no weights needed), the SNGNN-v2 field's range, masks,
 //! determinism and its shape around people (needs the weights: skipped loudly without them
 //! unless `REQUIRE_SNGNN=1`), and the command's output and errors.
 
@@ -17,7 +17,7 @@ fn dist(dx: f32, dy: f32) -> f32 {
     (dx * dx + dy * dy).sqrt()
 }
 
-/// spec 6.2 by hand, in f64: each human's relative position p and velocity v (the robot at
+/// docs/spec.md 6.2 by hand, in f64: each human's relative position p and velocity v (the robot at
 /// rest), the closest point of p + v·t for t in [0, dt], minus both radii; the term of the
 /// smallest clearance.
 fn dsrnn_by_hand(scene: &Scene, x: f64, y: f64) -> f64 {

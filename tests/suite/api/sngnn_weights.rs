@@ -65,7 +65,7 @@ fn value(t: usize, i: usize) -> f32 {
     f32::from_bits((t as u32 + 1).wrapping_mul(0x9E37_79B9) ^ (i as u32).wrapping_mul(0x85EB_CA6B))
 }
 
-/// A synthetic state dict with every tensor of spec 7.1: its zip and its tensors' values.
+/// A synthetic state dict with every tensor of docs/spec.md 7.1: its zip and its tensors' values.
 fn synthetic_model(prefix: &str) -> (Vec<u8>, Vec<(String, Vec<f32>)>) {
     let mut entries = Vec::new();
     let mut blobs = Vec::new();
@@ -143,7 +143,7 @@ fn zip_with(entries: &[Entry]) -> Vec<u8> {
     torch_zip("archive", state_dict_pickle(entries), &blobs)
 }
 
-/// Spec 7.1's entries, each on its own storage.
+/// docs/spec.md 7.1's entries, each on its own storage.
 fn spec_entries() -> Vec<Entry> {
     let tensors = expected_tensors().into_iter().enumerate();
     tensors
@@ -161,7 +161,7 @@ fn every_name_and_shape_problem_is_reported_at_once() {
     let m = error_of(zip_with(&entries));
     assert!(m.starts_with("bad.tch: 4 problems:"), "{m}");
     for part in [
-        "tensor `gnn_object.NNConv_output.bias` has shape [41] where spec 7.1 has [2]",
+        "tensor `gnn_object.NNConv_output.bias` has shape [41] where docs/spec.md 7.1 has [2]",
         "has shape [7, 7] where",
         "unexpected tensor `gnn_object.extra.weight`",
         "tensor `gnn_object.layers.1.bias` is missing",

@@ -98,9 +98,10 @@ fn every_key_word_changes_the_stream() {
     assert_ne!(z.next_u32(), 0);
 }
 
-/// The episode-seed sequence (DESIGN.md section 4): environment i of a batch seeded with s plays
-/// seeds s + i + k·G in its k-th episode. Hand-computed steps, the wrap at 2^64, the words, and
-/// no seed repeated over a grid of 4096 environments × 4096 episodes of neighbouring batch seeds.
+/// The episode-seed sequence (docs/spec.md, determinism): environment i of a batch seeded with s
+/// plays seeds s + i + k·G in its k-th episode. Hand-computed steps, the wrap at 2^64, the words,
+/// and no seed repeated over a grid of 4096 environments × 4096 episodes of neighbouring batch
+/// seeds.
 #[test]
 fn episode_seed_sequence() {
     assert_eq!(EPISODE_SEED_STEP, 0x9e37_79b9_7f4a_7c15);

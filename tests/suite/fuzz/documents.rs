@@ -253,8 +253,8 @@ fn regression_a_laptop_naming_a_user_that_is_not_its_own_is_refused() {
 
 /// Found by the long run (seed 1465): a document of a room without obstacles (exp3's, its walls
 /// list emptied) loads, as a state may, and its `MINIMUM_OBSTACLE_DISTANCE` is then +inf, the
-/// value spec 8.2 defines for "none" (and `AVERAGE_OBSTACLE_DISTANCE` NaN, 0.1.1's `None`); the
-/// fuzz check took it for a non-finite output. The checks now take the spec's non-finite values
+/// value docs/spec.md 8.2 defines for "none" (and `AVERAGE_OBSTACLE_DISTANCE` NaN, 0.1.1's `None`);
+/// the fuzz check took it for a non-finite output. The checks now take the spec's non-finite values
 /// from `info_outside_spec`, which allows them only where there is no obstacle.
 #[test]
 fn regression_a_room_without_obstacles_reports_the_specs_infinite_distance() {

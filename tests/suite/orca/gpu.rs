@@ -16,7 +16,7 @@
 //!
 //! Needs a GPU adapter (lavapipe will do). Without one the tests print why and pass, unless
 //! `REQUIRE_GPU=1`. Bit-identity is the contract on lavapipe; on other adapters the shader may
-//! legally round differently (spec/wgpu-on-cpu.md section 3), so there
+//! legally round differently (docs/spec.md, bit parity), so there
 //! (`common::gpu::parity_mode`) an agent agrees when its velocity is within
 //! `common::gpu::TOLERANCE` and its overflow flag is the CPU's (the lines' bits and the decisions
 //! within rounding of a threshold may differ), and at most `common::gpu::MAX_DIVERGED` of the

@@ -1,4 +1,4 @@
-//! ORCA against RVO2 2.0.3 reference data (spec orca-sfm §4, levels L1-L4; data described in
+//! ORCA against RVO2 2.0.3 reference data (docs/spec.md orca-sfm 4, levels L1-L4; data described in
 //! the reference README of `orca_sfm`).
 //!
 //! Contract: the CPU path is **bit-exact** with RVO2 (0 ULP) for neighbour lists, every ORCA

@@ -1,7 +1,8 @@
 //! CPU/GPU parity of stage `begin_step` (`src/systems/begin_step.rs`, `shaders/begin_step.wgsl`;
-//! DESIGN.md section 4): from the same state, parameters and actions, the shader must leave the
-//! state and the outputs bit-identical to its Rust twin on lavapipe, on rolled-out states perturbed
-//! before each run (the harness: `tests/common/gpu.rs`). [`scatter_ends`] serves `autoreset` too.
+//! docs/spec.md, determinism): from the same state, parameters and actions, the shader must leave
+//! the state and the outputs bit-identical to its Rust twin on lavapipe, on rolled-out states
+//! perturbed before each run (the harness: `tests/common/gpu.rs`). [`scatter_ends`] serves
+//! `autoreset` too.
 
 use crate::common::gpu::*;
 use socnav::StepParams;

@@ -1,5 +1,5 @@
 //! CPU/GPU parity of stage `formation` (`src/systems/formation.rs`, `shaders/formation.wgsl`;
-//! DESIGN.md section 4), with the harness of the social-structure stages
+//! docs/spec.md, determinism), with the harness of the social-structure stages
 //! (`step/social_events/gpu.rs`: states rolled out with raised event probabilities, perturbed
 //! before every run, obstacle columns scrambled so that regrouping must rebuild them).
 

@@ -1,10 +1,10 @@
-//! CPU/GPU parity of stage `goals` (DESIGN.md section 4): its shader (`shaders/goals.wgsl`, over
-//! `common/world.wgsl` and `common/rng.wgsl`) must leave the state and the outputs bit-identical
-//! to the Rust twin on lavapipe: lone walkers and moving groups that reach their goals get new
-//! ones, rejection-sampled in the margin box against every entity, wall and spawn blocker and
-//! every current goal, from the step's goal stream in the Rust order. Walkers and groups are put
-//! onto their goals before most runs so that re-sampling happens often (counted on the CPU side),
-//! including walkers heading to a forming crowd (never re-sampled). The harness:
+//! CPU/GPU parity of stage `goals` (docs/spec.md, determinism): its shader (`shaders/goals.wgsl`,
+//! over `common/world.wgsl` and `common/rng.wgsl`) must leave the state and the outputs
+//! bit-identical to the Rust twin on lavapipe: lone walkers and moving groups that reach their
+//! goals get new ones, rejection-sampled in the margin box against every entity, wall and spawn
+//! blocker and every current goal, from the step's goal stream in the Rust order. Walkers and
+//! groups are put onto their goals before most runs so that re-sampling happens often (counted on
+//! the CPU side), including walkers heading to a forming crowd (never re-sampled). The harness:
 //! `tests/common/gpu.rs`.
 
 use crate::common;

@@ -1,7 +1,7 @@
 //! CPU/GPU parity of stage `group_motion` (`src/systems/group_motion.rs`,
-//! `shaders/group_motion.wgsl`; DESIGN.md section 4): from the same state, parameters and actions,
-//! the shader must leave the state and the outputs bit-identical to its Rust twin on lavapipe, over
-//! runs chained from rolled-out states (the harness: `tests/common/gpu.rs`).
+//! `shaders/group_motion.wgsl`; docs/spec.md, determinism): from the same state, parameters and
+//! actions, the shader must leave the state and the outputs bit-identical to its Rust twin on
+//! lavapipe, over runs chained from rolled-out states (the harness: `tests/common/gpu.rs`).
 
 use crate::common::gpu::*;
 

@@ -1,5 +1,5 @@
 //! CPU/GPU parity of stage `group_velocities` (`src/systems/group_velocities.rs`,
-//! `shaders/group_velocities.wgsl`; DESIGN.md section 4), with the harness of the ORCA stages
+//! `shaders/group_velocities.wgsl`; docs/spec.md, determinism), with the harness of the ORCA stages
 //! (`step/shadow_robot/gpu.rs`: rolled-out states, chained and perturbed runs).
 
 use crate::common::gpu::config;

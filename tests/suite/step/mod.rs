@@ -5,14 +5,14 @@
 //! `group_velocities`, `group_motion`, `goals`, `formation`); their CPU side is checked through
 //! whole steps (`whole_step/`, the golden replay).
 //!
-//! The hand-computed cases (spec 4-6, 8; most `cpu` modules) run on exact scenes loaded with
-//! `set_state` from small JSON documents written there (the format of `src/document.rs`), with the
-//! helpers below and those of `tests/common/scene.rs`. Every expected value is worked out by hand
-//! in the comments. Floats are compared with small tolerances because the simulator computes in
-//! f32 (ulp 6e-8 at 1, 5e-7 at 5 m) with its own sin/cos/atan2 (`src/math.rs`); the tolerance at
+//! The hand-computed cases (docs/spec.md 4-6, 8; most `cpu` modules) run on exact scenes loaded
+//! with `set_state` from small JSON documents written there (the format of `src/document.rs`), with
+//! the helpers below and those of `tests/common/scene.rs`. Every expected value is worked out by
+//! hand in the comments. Floats are compared with small tolerances because the simulator computes
+//! in f32 (ulp 6e-8 at 1, 5e-7 at 5 m) with its own sin/cos/atan2 (`src/math.rs`); the tolerance at
 //! each assert says what it covers.
 //!
-//! The CPU/GPU parity checks (`gpu` modules, DESIGN.md section 4): from the same state,
+//! The CPU/GPU parity checks (`gpu` modules; docs/spec.md, determinism): from the same state,
 //! parameters and actions, a stage's WGSL shader must leave the state and the outputs
 //! bit-identical to its Rust twin on lavapipe (and on any adapter that rounds like it). States
 //! come from real rollouts (random actions, resets and social events included); each stage then

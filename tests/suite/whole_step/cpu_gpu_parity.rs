@@ -1,4 +1,4 @@
-//! CPU/GPU parity of the whole step (DESIGN.md section 4, issues 4 and 6): for every shipped
+//! CPU/GPU parity of the whole step (docs/spec.md, determinism; issues 4 and 6): for every shipped
 //! config, the same batch stepped by both backends with the same actions gives bit-identical
 //! state, observation, reward, flags, info and episode statistics at every step, through
 //! autoresets in each mode, on lavapipe (and any adapter that rounds like it). The SNGNN-v2

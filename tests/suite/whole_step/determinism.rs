@@ -1,4 +1,4 @@
-//! The determinism contract (DESIGN.md section 4, STYLE.md rules 6 and 11): the same config,
+//! The determinism contract (docs/spec.md, determinism and style rules 6 and 11): the same config,
 //! seed and actions give the same trajectory, bit for bit, whatever the thread count and however
 //! the batch is split; an environment's trajectory does not depend on the batch it is in; a
 //! different seed gives a different trajectory; `reset(Some(seed))` restarts the same run.

@@ -1,8 +1,8 @@
-//! Episode seeds (DESIGN.md section 4): every episode is named by one 64-bit seed, environment i
-//! of a batch seeded with s starts with the episode of seed s + i, each later episode takes the
-//! next seed of its sequence (`seeds::next_episode_seed`), the outputs report the seed of every
-//! episode that ends, and the episode of seed e plays the same alone, in a batch of any size, at
-//! any index.
+//! Episode seeds (docs/spec.md, determinism): every episode is named by one 64-bit seed,
+//! environment i of a batch seeded with s starts with the episode of seed s + i, each later episode
+//! takes the next seed of its sequence (`seeds::next_episode_seed`), the outputs report the seed of
+//! every episode that ends, and the episode of seed e plays the same alone, in a batch of any size,
+//! at any index.
 
 use socnav::seeds::next_episode_seed;
 use socnav::{Actions, BatchEnv, Config, EnvOptions, SimError};

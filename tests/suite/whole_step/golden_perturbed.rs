@@ -1,4 +1,4 @@
-//! Property tests of the step on perturbed golden states (spec sections 4 and 8).
+//! Property tests of the step on perturbed golden states (docs/spec.md 4 and 8).
 //!
 //! The golden replay (`golden_replay.rs`) checks socnav on the states SocNavGym 0.1.1 recorded;
 //! this file checks it on states near them. A deterministic sample of published steps of the five
@@ -17,11 +17,11 @@
 //!   `AVERAGE_OBSTACLE_DISTANCE` without obstacles; see `socnav::spec::INFO_KEYS`) or state;
 //!   every human still inside the map (plus one contact push); objects unmoved; humans
 //!   conserved; ids unique; group, laptop-user and formation membership consistent both ways;
-//! * against the rules of spec 4 and 8, recomputed here from the perturbed input and socnav's
-//!   output state, never by calling socnav's own functions: the robot's command and kinematics
-//!   (4.1 steps 2-3); each lone walker's motion along its heading, its speed limit and threshold
-//!   (step 6; stepping the same state once more without its forming crowd shows that only the
-//!   crowd's walkers keep a speed below the threshold), its goal re-sampled iff it ends within
+//! * against the rules of docs/spec.md 4 and 8, recomputed here from the perturbed input and
+//!   socnav's output state, never by calling socnav's own functions: the robot's command and
+//!   kinematics (4.1 steps 2-3); each lone walker's motion along its heading, its speed limit and
+//!   threshold (step 6; stepping the same state once more without its forming crowd shows that only
+//!   the crowd's walkers keep a speed below the threshold), its goal re-sampled iff it ends within
 //!   human radius + its own goal radius of it, the new goal inside the margin box and clear of
 //!   objects, blockers, the robot and other goals (step 8); a moving group's members sharing one
 //!   velocity of at most orca_maxSpeed / n besides their recorded noise, its centre their
@@ -221,7 +221,7 @@ impl Consts {
         }
     }
 
-    /// The processed command (spec 4.1 step 2, in float32 as 0.1.1 computes it).
+    /// The processed command (docs/spec.md 4.1 step 2, in float32 as 0.1.1 computes it).
     fn command(&self, a: [f32; 3]) -> (f32, f32, f32) {
         let v = self.robot_speed;
         let w = self.robot_rotation;
@@ -382,7 +382,7 @@ impl World {
         }
     }
 
-    /// Smallest gap (m) between (x, y) and anything a human is pushed out of (spec 4.6).
+    /// Smallest gap (m) between (x, y) and anything a human is pushed out of (docs/spec.md 4.6).
     fn contact_clearance(&self, x: f64, y: f64) -> f64 {
         let rects = self
             .walls
@@ -416,8 +416,8 @@ impl World {
         plants.chain(walls).chain(boxes)
     }
 
-    /// Spec 4.6 for a human whose position after its motion is known: the pose and speed the
-    /// contact push-out leaves it with, and the number of pushes; `None` when a contact is
+    /// docs/spec.md 4.6 for a human whose position after its motion is known: the pose and speed
+    /// the contact push-out leaves it with, and the number of pushes; `None` when a contact is
     /// within the band of touching. `movable`: false for a lone static human, which 0.1.1 never
     /// moves nor turns (`Human.update` and `update_orientation` return early) but whose speed it
     /// does set.
@@ -450,7 +450,7 @@ impl World {
     }
 }
 
-/// An object a human can be pushed out of (spec 4.6).
+/// An object a human can be pushed out of (docs/spec.md 4.6).
 enum Contact<'a> {
     Plant((f64, f64, f64)),
     Wall(&'a Rect),
@@ -909,8 +909,8 @@ fn group_at_goal(
     )
 }
 
-/// A crowd formation of two or three lone walkers around a point near them (spec 4.5: slots on
-/// the group circle, facing its centre), in a config that forms crowds.
+/// A crowd formation of two or three lone walkers around a point near them (docs/spec.md 4.5: slots
+/// on the group circle, facing its centre), in a config that forms crowds.
 fn synthetic_crowd(st: &mut Value, c: &Consts, (mx, my): (f64, f64), rng: &mut Rng) -> String {
     let mut walkers = lone_walkers(st);
     let n = walkers.len().min(c.max_group).min(3);
@@ -1052,8 +1052,8 @@ fn crowd_together(
     )
 }
 
-/// A lone walker heading for the seat of a free laptop (spec 3.4 step 8: 0.7 m along the laptop's
-/// −y axis, facing it), in a config that seats walkers.
+/// A lone walker heading for the seat of a free laptop (docs/spec.md 3.4 step 8: 0.7 m along the
+/// laptop's −y axis, facing it), in a config that seats walkers.
 fn synthetic_seat(st: &mut Value, c: &Consts, rng: &mut Rng) -> String {
     let i = rng.pick(&lone_walkers(st));
     let free: Vec<usize> = list(&st["laptops"])
@@ -1107,7 +1107,7 @@ fn seat_reach(st: &mut Value, c: &Consts, orca: f64, rng: &mut Rng) -> String {
 }
 
 /// A human that does not walk moved against the object nearest to it, overlapping it by a small
-/// depth (or just clear of it), for the contact push-out (spec 4.6).
+/// depth (or just clear of it), for the contact push-out (docs/spec.md 4.6).
 fn still_into_object(st: &mut Value, world: &World, c: &Consts, rng: &mut Rng) -> Option<String> {
     let hs = humans(st);
     let still: Vec<usize> = (0..hs.len())
@@ -1524,7 +1524,7 @@ struct Input<'a> {
     approx_only: bool,
 }
 
-/// Might this human have been pushed out of an object after its motion (spec 4.6)? A push
+/// Might this human have been pushed out of an object after its motion (docs/spec.md 4.6)? A push
 /// moves it by at most the human speed, away from an object it touched; three at most.
 fn may_be_pushed(world: &World, c: &Consts, x: f64, y: f64) -> bool {
     world.contact_clearance(x, y) < c.human_radius + 3.0 * c.human_speed * c.dt + 1e-3
@@ -1600,8 +1600,8 @@ fn in_goal_box(g: (f64, f64), half: (f64, f64), c: &Consts) -> bool {
     g.0.abs() <= half.0 - c.margin + 1e-5 && g.1.abs() <= half.1 - c.margin + 1e-5
 }
 
-/// Goal discs as the goals stage sees them (spec 4.1 step 8): the robot's, every lone human's
-/// (a static human's is its own position) and every moving group's, named for the messages.
+/// Goal discs as the goals stage sees them (docs/spec.md 4.1 step 8): the robot's, every lone
+/// human's (a static human's is its own position) and every moving group's, named for the messages.
 fn goal_discs(inp: &Input<'_>, post: &Value) -> Vec<(String, (f64, f64), f64)> {
     let c = inp.c;
     let mut v = vec![(
@@ -1639,8 +1639,8 @@ fn goal_discs(inp: &Input<'_>, post: &Value) -> Vec<(String, (f64, f64), f64)> {
 }
 
 /// A re-sampled goal disc must be free of the walls, spawn blockers, objects, the robot and
-/// every other goal disc (spec 4.1 `sample_goal`; touching counts). `Ok(true)`: free, `Ok(false)`:
-/// within the band of touching something, `Err`: what it intersects.
+/// every other goal disc (docs/spec.md 4.1 `sample_goal`; touching counts). `Ok(true)`: free,
+/// `Ok(false)`: within the band of touching something, `Err`: what it intersects.
 fn goal_free(
     inp: &Input<'_>,
     world: &World,
@@ -1902,7 +1902,7 @@ fn check_robot(t: &mut Tally, inp: &Input<'_>, r: &Run) {
             )
         },
     );
-    // Spec 4.1 step 3: rotate, wrap to (−π, π], then translate along the new heading.
+    // docs/spec.md 4.1 step 3: rotate, wrap to (−π, π], then translate along the new heading.
     let (x, y, theta) = (fin(&before["x"]), fin(&before["y"]), fin(&before["theta"]));
     let th = theta + f64::from(w) * c.dt;
     let (v, vy) = (f64::from(v), f64::from(vy));
@@ -1953,8 +1953,8 @@ fn check_humans(t: &mut Tally, inp: &Input<'_>, r: &Run, world: &World, checks: 
         let Some(a) = out(h.id) else { continue };
         match h.role.as_str() {
             "static" | "standing_group" | "hl" => {
-                // Spec 4.6 from the known position (these humans do not walk): pushed out of
-                // each object touched, a lone static human only given the push's speed.
+                // docs/spec.md 4.6 from the known position (these humans do not walk): pushed out
+                // of each object touched, a lone static human only given the push's speed.
                 let movable = h.role != "static";
                 let prop = if movable {
                     "contacts.standing_and_seated"
@@ -1997,8 +1997,8 @@ fn check_humans(t: &mut Tally, inp: &Input<'_>, r: &Run, world: &World, checks: 
                 let arrived =
                     slot.map(|s| below(dist((a.x, a.y), (s.0, s.1)), c.human_goal_radius));
                 if let Some(Some(true)) = arrived {
-                    // Spec 4.5: a forming walker within its goal radius of its slot takes the
-                    // slot's heading.
+                    // docs/spec.md 4.5: a forming walker within its goal radius of its slot takes
+                    // the slot's heading.
                     let s = slot.expect("slot");
                     t.check("formation.slot_heading", at, a.theta == s.2, || {
                         format!(
@@ -2010,7 +2010,7 @@ fn check_humans(t: &mut Tally, inp: &Input<'_>, r: &Run, world: &World, checks: 
                 } else if arrived == Some(None) {
                     t.skip("formation.slot_heading");
                 } else {
-                    // Spec 4.1 step 6: position += speed·dt along the new heading.
+                    // docs/spec.md 4.1 step 6: position += speed·dt along the new heading.
                     let ex = h.x + a.speed * c.dt * a.theta.cos();
                     let ey = h.y + a.speed * c.dt * a.theta.sin();
                     let ok = (a.x - ex).abs() <= POS_TOL && (a.y - ey).abs() <= POS_TOL;
@@ -2071,8 +2071,8 @@ fn check_humans(t: &mut Tally, inp: &Input<'_>, r: &Run, world: &World, checks: 
                         t.saw("walker speed just above the threshold");
                     }
                 }
-                // Goal reach (spec 4.1 step 8; 0.1.1's `has_reached_goal`: human radius + the
-                // human's own goal radius). Walkers heading for a crowd or a seat keep theirs.
+                // Goal reach (docs/spec.md 4.1 step 8; 0.1.1's `has_reached_goal`: human radius +
+                // the human's own goal radius). Walkers heading for a crowd or a seat keep theirs.
                 let (Some(goal), Some(new)) = (h.goal, a.goal) else {
                     continue;
                 };
@@ -2118,9 +2118,9 @@ fn check_humans(t: &mut Tally, inp: &Input<'_>, r: &Run, world: &World, checks: 
             _ => {}
         }
     }
-    // Moving groups (spec 4.4): members share the group velocity besides their own noise, move
-    // along it, the centre is their centroid; the goal is re-sampled iff every member is within
-    // human radius + its own goal radius of the group goal.
+    // Moving groups (docs/spec.md 4.4): members share the group velocity besides their own noise,
+    // move along it, the centre is their centroid; the goal is re-sampled iff every member is
+    // within human radius + its own goal radius of the group goal.
     let noise = noise_of(st);
     for (g, group) in list(&st["groups"]).iter().enumerate() {
         if group["kind"] != "moving" {
@@ -2262,7 +2262,7 @@ fn check_humans(t: &mut Tally, inp: &Input<'_>, r: &Run, world: &World, checks: 
 
 /// Stepping the same crowd-forming state without the formation: a walker's velocity does not
 /// depend on it, so each walker's speed must be the same, zeroed below the threshold only
-/// without the formation (spec 4.1 step 6).
+/// without the formation (docs/spec.md 4.1 step 6).
 fn check_threshold_metamorphic(t: &mut Tally, inp: &Input<'_>, a: &Run, b: &Run, world: &World) {
     let (at, c) = (inp.at, inp.c);
     let before = humans(inp.st);
@@ -2414,7 +2414,7 @@ fn check_formations(t: &mut Tally, inp: &Input<'_>, r: &Run, world: &World) {
                 );
             } else if count_in < 24 {
                 // Exact crowd: every walker was within reach of its slot; laid out anew around
-                // the formation centre (spec 4.4's layout: within √2 of the group radius).
+                // the formation centre (docs/spec.md 4.4's layout: within √2 of the group radius).
                 t.saw("crowd formed at its slots");
                 let centre = pair(&cf_in["centre"]);
                 let near_slots = walkers.iter().all(|(id, s)| {
@@ -2514,7 +2514,7 @@ fn check_formations(t: &mut Tally, inp: &Input<'_>, r: &Run, world: &World) {
     }
 }
 
-/// Spec 8.1: out of map, success, collision, timeout, in this order; COLLISION_WALL apart.
+/// docs/spec.md 8.1: out of map, success, collision, timeout, in this order; COLLISION_WALL apart.
 fn check_termination(t: &mut Tally, inp: &Input<'_>, r: &Run, world_after: &World) {
     let (at, c, post) = (inp.at, inp.c, &r.post);
     let tick_in = inp.st["tick"].as_u64().expect("tick");
@@ -2659,7 +2659,7 @@ fn check_termination(t: &mut Tally, inp: &Input<'_>, r: &Run, world_after: &Worl
     }
 }
 
-/// Spec 8.2: FAILURE_TO_PROGRESS, STALLED_TIME, PATH_LENGTH.
+/// docs/spec.md 8.2: FAILURE_TO_PROGRESS, STALLED_TIME, PATH_LENGTH.
 fn check_metrics(t: &mut Tally, inp: &Input<'_>, r: &Run) {
     let (at, c) = (inp.at, inp.c);
     let (m0, m1) = (&inp.st["metrics"], &r.post["metrics"]);

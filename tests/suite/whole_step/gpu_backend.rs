@@ -1,5 +1,5 @@
-//! The GPU backend outside the stages (DESIGN.md section 4): the state's and the outputs' trip to
-//! the device and back, and the masked reset pass (`shaders/reset.wgsl`, the twin of
+//! The GPU backend outside the stages (docs/spec.md, determinism): the state's and the outputs'
+//! trip to the device and back, and the masked reset pass (`shaders/reset.wgsl`, the twin of
 //! `CpuBackend::reset`) against the CPU's, bit for bit on lavapipe (the harness:
 //! `tests/common/gpu.rs`), episode seeds through the reset pool, and two batches stepped at once
 //! on one device.

@@ -1,18 +1,18 @@
-//! Properties of generated scenarios (spec 3.3-3.4), checked on the state right after `reset`
-//! for every shipped config over many environments and seeds:
+//! Properties of generated scenarios (docs/spec.md 3.3-3.4), checked on the state right after
+//! `reset` for every shipped config over many environments and seeds:
 //!
 //! - counts lie within the configured ranges; the room has the configured size and shape;
 //! - entity ids are 0 (robot), then 1.. consecutive in spawn order (walking humans, static
 //!   humans, plants, tables, free laptops, group members, laptop then user of each laptop use),
-//!   walls last (spec 3.1);
+//!   walls last (docs/spec.md 3.1);
 //! - human slots follow the observation order (static, walking, group members group by group,
 //!   laptop users) and every group's members are contiguous;
-//! - nothing overlaps what it was checked against at spawn, pair by pair as spec 3.4 says
+//! - nothing overlaps what it was checked against at spawn, pair by pair as docs/spec.md 3.4 says
 //!   (robot, humans, plants, tables, free laptops against everything placed before them; group
 //!   members against everything placed before the group; a laptop on a table against laptops
 //!   and laptop users only; a laptop user against everything);
 //! - positions and goals lie in the sampling box (`room.margin`), and outside the L room's
-//!   removed block; goals are free of every entity and of each other (spec 3.4 step 9);
+//!   removed block; goals are free of every entity and of each other (docs/spec.md 3.4 step 9);
 //! - laptops lie on a table edge; laptop users sit `laptop_width + human_distance` from their
 //!   laptop, facing it;
 //! - the processed ORCA obstacles fit the state's capacity (the largest split count is printed).
@@ -146,7 +146,7 @@ enum Kind {
     Solid,
     /// Laptops, and the L room's removed block (0.1.1 adds it as a laptop-typed rectangle).
     Laptop,
-    /// Humans seated at a laptop (part of a laptop use, spec 3.4 step 8).
+    /// Humans seated at a laptop (part of a laptop use, docs/spec.md 3.4 step 8).
     LaptopUser,
 }
 
@@ -276,7 +276,7 @@ fn in_range(ctx: &str, what: &str, n: u32, range: [i32; 2]) {
     );
 }
 
-/// Expected pose (x, y, θ) of a laptop on edge `edge` of a table (spec 3.4 step 6).
+/// Expected pose (x, y, θ) of a laptop on edge `edge` of a table (docs/spec.md 3.4 step 6).
 fn laptop_on_edge(config: &Config, t: (f64, f64, f64), edge: usize) -> (f64, f64, f64) {
     let o = &config.objects;
     let across = 0.5 * f64::from(o.table_width - o.laptop_width);
@@ -678,7 +678,7 @@ fn check_scene(
                 everything,
             );
         } else {
-            // Spec 3.4 step 6: a laptop on a table is checked against other laptops only.
+            // docs/spec.md 3.4 step 6: a laptop on a table is checked against other laptops only.
             on_a_table(&format!("free laptop {k}"), l);
             stats.laptops_on_tables += 1;
             spawn.place(ctx, format!("free laptop {k}"), Kind::Laptop, shape, |k| {
@@ -715,7 +715,7 @@ fn check_scene(
         let l = lb + s.lu_laptop[u] as usize;
         let i = hb + s.lu_human[u] as usize;
         on_a_table(&format!("laptop of user {k}"), l);
-        // Spec 3.4 step 8: the laptop must not touch existing laptops or laptop uses.
+        // docs/spec.md 3.4 step 8: the laptop must not touch existing laptops or laptop uses.
         let laptop = rect(
             s.l_x[l],
             s.l_y[l],
@@ -753,7 +753,7 @@ fn check_scene(
         );
     }
 
-    // ---- goals (spec 3.4 step 9) ----
+    // ---- goals (docs/spec.md 3.4 step 9) ----
     for k in n_static..n_static + n_dynamic {
         let i = hb + k as usize;
         let what = format!("goal of walking human slot {k}");
@@ -850,8 +850,8 @@ fn corridor_config(size_y: i32, plant_radius: f32, plants: i32, tables: i32) -> 
 /// The scenes: an 8 m room split by the two corridor walls into strips. At 3 m the strips are
 /// 0.7, 0.8 and 0.7 m wide (inside the walls), so a 0.9 m plant fits nowhere; at 5 m they are
 /// at most 1.47 m wide, so a 1.5 m wide table fits nowhere. The door gaps are blocked for
-/// spawning (spec 3.3), so nothing can straddle a corridor wall. Validation does not model the
-/// corridor walls, so it lets both through.
+/// spawning (docs/spec.md 3.3), so nothing can straddle a corridor wall. Validation does not model
+/// the corridor walls, so it lets both through.
 #[test]
 fn unsatisfiable_scenario_is_an_error_naming_the_entity() {
     let cases = [

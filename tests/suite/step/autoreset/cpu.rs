@@ -1,4 +1,5 @@
-//! The three autoreset modes of the core (DESIGN.md section 3; `EnvOptions.autoreset`):
+//! The three autoreset modes of the core (docs/spec.md, step and autoreset;
+//! `EnvOptions.autoreset`):
 //!
 //! - NEXT_STEP: the step after a terminal step returns the new episode's first observation with
 //!   reward 0 and no flags, and ignores that step's action;

@@ -1,7 +1,7 @@
-//! CPU/GPU parity of stage `autoreset` (DESIGN.md section 4): from the same state, parameters and
-//! actions, `shaders/autoreset.wgsl` must leave the state and the outputs bit-identical to the Rust
-//! stage on lavapipe, in each autoreset mode, on rolled-out states perturbed before each run (the
-//! harness: `tests/common/gpu.rs`).
+//! CPU/GPU parity of stage `autoreset` (docs/spec.md, determinism): from the same state, parameters
+//! and actions, `shaders/autoreset.wgsl` must leave the state and the outputs bit-identical to the
+//! Rust stage on lavapipe, in each autoreset mode, on rolled-out states perturbed before each run
+//! (the harness: `tests/common/gpu.rs`).
 
 use crate::common::gpu::*;
 use crate::step::begin_step::scatter_ends;

@@ -1,12 +1,12 @@
-//! Contacts (spec 4.6): the push-out of humans from objects, hand-computed on exact scenes (the
-//! scene helpers and the tolerances: `step/mod.rs`).
+//! Contacts (docs/spec.md 4.6): the push-out of humans from objects, hand-computed on exact scenes
+//! (the scene helpers and the tolerances: `step/mod.rs`).
 
 use crate::common::scene::{load, push, scene, static_human};
 use crate::step::{close, scene_config, step};
 use serde_json::json;
 use socnav::spec::entity;
 
-/// Contract: a human overlapping a plant is pushed out (spec 4.6): penetration
+/// Contract: a human overlapping a plant is pushed out (docs/spec.md 4.6): penetration
 /// k·ln(1 + exp(-(d - r_sum)/k)) with k = 1e-3, force 100·penetration away from the plant; the
 /// human turns to the force, takes speed min(|F|·dt, max speed) and moves once more. Lone static
 /// humans are never moved; a member of a standing group is.

@@ -1,6 +1,6 @@
-//! CPU/GPU parity of stage `contacts` (DESIGN.md section 4): from the same state, parameters and
-//! actions, `shaders/contacts.wgsl` must leave the state and the outputs bit-identical to the Rust
-//! stage on lavapipe, on rolled-out states perturbed before each run (the harness:
+//! CPU/GPU parity of stage `contacts` (docs/spec.md, determinism): from the same state, parameters
+//! and actions, `shaders/contacts.wgsl` must leave the state and the outputs bit-identical to the
+//! Rust stage on lavapipe, on rolled-out states perturbed before each run (the harness:
 //! `tests/common/gpu.rs`); with `contact_shape = "polygon64"` also the collisions `termination`
 //! decides with that shape.
 

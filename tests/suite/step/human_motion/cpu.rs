@@ -1,5 +1,5 @@
-//! Human motion (spec 4.1 step 6): the speed threshold, hand-computed on an exact scene (the
-//! scene helpers and the tolerances: `step/mod.rs`).
+//! Human motion (docs/spec.md 4.1 step 6): the speed threshold, hand-computed on an exact scene
+//! (the scene helpers and the tolerances: `step/mod.rs`).
 
 use crate::common::scene::{load, push, scene, walker};
 use crate::step::{close, scene_config, step};

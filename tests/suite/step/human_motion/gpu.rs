@@ -1,4 +1,4 @@
-//! CPU/GPU parity of stage `human_motion` (DESIGN.md section 4): its shader
+//! CPU/GPU parity of stage `human_motion` (docs/spec.md, determinism): its shader
 //! (`shaders/human_motion.wgsl`, over `common/perception.wgsl`, `common/sfm.wgsl`,
 //! `common/orca_world.wgsl` and `common/orca.wgsl`) must leave the state and the outputs
 //! bit-identical to the Rust twin on lavapipe: lone walkers in slot order, ORCA (zero and actual

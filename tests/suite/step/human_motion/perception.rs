@@ -1,7 +1,7 @@
-//! The humans' field of view (spec 4.2-4.3, `src/systems/perception.rs`): the exact wedge test on
-//! discs and rectangles, walkers that ignore what is behind them (ORCA humans, ORCA walls, SFM
-//! plants) on hand-built scenes loaded with `set_state`, and 0.1.1's "sees everything" short-cut
-//! leaving every output unchanged.
+//! The humans' field of view (docs/spec.md 4.2-4.3, `src/systems/perception.rs`): the exact wedge
+//! test on discs and rectangles, walkers that ignore what is behind them (ORCA humans, ORCA walls,
+//! SFM plants) on hand-built scenes loaded with `set_state`, and 0.1.1's "sees everything"
+//! short-cut leaving every output unchanged.
 //!
 //! The walker scenes compare a walker's velocity after one step with the same scene with the
 //! unseen entity removed: equal bits mean the entity took no part, whatever ORCA or SFM made of

@@ -1,4 +1,4 @@
-//! Metrics (spec 8.2): hand-computed cases on exact scenes (the scene helpers and the
+//! Metrics (docs/spec.md 8.2): hand-computed cases on exact scenes (the scene helpers and the
 //! tolerances: `step/mod.rs`), and a 0.1.1 bug that socnav fixes (docs/fidelity.md).
 
 use crate::common::scene::{load, push, scene, static_human, walker};
@@ -39,7 +39,7 @@ fn motion_metrics_on_a_known_command_sequence() {
     close("JERK_MIN", m(info::JERK_MIN), 0.0, tol);
     close("JERK_AVG", m(info::JERK_AVG), 0.24, tol);
     close("JERK_MAX", m(info::JERK_MAX), 0.4, tol);
-    // Without humans or obstacles: None (NaN), inf and -1 (spec 8.2).
+    // Without humans or obstacles: None (NaN), inf and -1 (docs/spec.md 8.2).
     assert!(m(info::TIME_TO_REACH_GOAL).is_nan());
     assert_eq!(m(info::MINIMUM_DISTANCE_TO_HUMAN), f32::INFINITY);
     assert_eq!(m(info::TIME_TO_COLLISION), -1.0);

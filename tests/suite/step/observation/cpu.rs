@@ -1,14 +1,14 @@
-//! Observation (spec 5): the records in the robot frame, hand-computed on exact scenes (the scene
-//! helpers and the tolerances: `step/mod.rs`).
+//! Observation (docs/spec.md 5): the records in the robot frame, hand-computed on exact scenes (the
+//! scene helpers and the tolerances: `step/mod.rs`).
 
 use crate::common::scene::{load, push, records_scene, scene, static_human};
 use crate::step::{W, close, scene_config, step};
 use serde_json::json;
 use socnav::spec::{RECORD, entity};
 
-/// Contract: the 14-float records (spec 5.2) in the robot frame: one-hot, position, sin/cos of
-/// the relative heading, radius, |v_h - v_r| for humans and (-|v|, -ω) for everything else,
-/// the gaze flag; walls cut into segments of 1 m from their left end plus a remainder.
+/// Contract: the 14-float records (docs/spec.md 5.2) in the robot frame: one-hot, position, sin/cos
+/// of the relative heading, radius, |v_h - v_r| for humans and (-|v|, -ω) for everything else, the
+/// gaze flag; walls cut into segments of 1 m from their left end plus a remainder.
 #[test]
 fn observation_records() {
     let half_pi = std::f64::consts::FRAC_PI_2;

@@ -1,4 +1,4 @@
-//! CPU/GPU parity of stage `observation` (DESIGN.md section 4): from the same state and
+//! CPU/GPU parity of stage `observation` (docs/spec.md, determinism): from the same state and
 //! parameters, `shaders/observation.wgsl` must leave the observation, the counts, the interaction
 //! pairs and the humans' relative-heading cache bit-identical to the Rust stage on lavapipe, in
 //! every shipped config and with every observation option (world frame, the robot's command,

@@ -1,6 +1,7 @@
-//! The observation options of 0.1.1's wrappers (spec 9.1), executed inside the step: world-frame
-//! records, the robot's field of view and sensor range, Gaussian sensor noise, and the interaction
-//! pairs of `info["interactions"]` (spec 5.2), with their recomputation for what is visible.
+//! The observation options of 0.1.1's wrappers (docs/spec.md 9.1), executed inside the step:
+//! world-frame records, the robot's field of view and sensor range, Gaussian sensor noise, and the
+//! interaction pairs of `info["interactions"]` (docs/spec.md 5.2), with their recomputation for
+//! what is visible.
 //!
 //! Scenes are written by hand as state documents (the format of `src/document.rs`) and
 //! loaded with `set_state`, which rewrites the observation; every expected value is worked out in
@@ -361,9 +362,9 @@ fn pairs(o: &Outputs, e: usize) -> (Vec<[u32; 2]>, Vec<[u32; 2]>) {
     (list(&o.hh_pairs, hh, n[0]), list(&o.hl_pairs, hl, n[1]))
 }
 
-/// Contract (spec 5.2): every ordered pair of a group's members, (i, j) then (j, i) for i < j in
-/// member order, as indices into the `humans` records; each laptop user's (human index, laptop
-/// index). The group of 3 gives 6 pairs, the laptop user 1.
+/// Contract (docs/spec.md 5.2): every ordered pair of a group's members, (i, j) then (j, i) for
+/// i < j in member order, as indices into the `humans` records; each laptop user's (human index,
+/// laptop index). The group of 3 gives 6 pairs, the laptop user 1.
 #[test]
 fn interactions_of_a_group_and_a_laptop_user() {
     let doc = interaction_scene(
@@ -784,7 +785,8 @@ fn noise_is_deterministic() {
 // Configuration
 // ---------------------------------------------------------------------------------------------
 
-/// Contract (STYLE.md rule 8): every new key is validated, each problem naming its key and value.
+/// Contract (docs/spec.md, style rule 8): every new key is validated, each problem naming its key
+/// and value.
 #[test]
 fn observation_keys_are_validated() {
     let text = r#"

@@ -1,5 +1,5 @@
-//! The DSRNN reward (spec 6.2) and the weighted terms beyond 0.1.1: hand-computed cases on exact
-//! scenes (the scene helpers and the tolerances: `step/mod.rs`).
+//! The DSRNN reward (docs/spec.md 6.2) and the weighted terms beyond 0.1.1: hand-computed cases on
+//! exact scenes (the scene helpers and the tolerances: `step/mod.rs`).
 
 use crate::common::scene::{load, push, scene, static_human};
 use crate::step::{close, info_of, scene_config, step};
@@ -7,7 +7,7 @@ use serde_json::json;
 use socnav::BatchEnv;
 use socnav::spec::info;
 
-/// Contract: the DSRNN reward's terms on hand-computed scenes (spec 6.2; dt = 1 s).
+/// Contract: the DSRNN reward's terms on hand-computed scenes (docs/spec.md 6.2; dt = 1 s).
 #[test]
 fn dsrnn_reward_terms() {
     let c = scene_config();

@@ -1,6 +1,6 @@
-//! CPU/GPU parity of stage `reward` (DESIGN.md section 4): from the same state, parameters and
-//! actions, `shaders/reward.wgsl` must leave the state and the outputs bit-identical to the Rust
-//! stage on lavapipe, on rolled-out states perturbed before each run (the harness:
+//! CPU/GPU parity of stage `reward` (docs/spec.md, determinism): from the same state, parameters
+//! and actions, `shaders/reward.wgsl` must leave the state and the outputs bit-identical to the
+//! Rust stage on lavapipe, on rolled-out states perturbed before each run (the harness:
 //! `tests/common/gpu.rs`). [`scatter_for_reward`] is also the start of the perturbation of
 //! `metrics`.
 

@@ -1,5 +1,5 @@
-//! Robot motion (spec 4.1 steps 2-3): hand-computed cases on exact scenes (the scene helpers
-//! and the tolerances: `step/mod.rs`).
+//! Robot motion (docs/spec.md 4.1 steps 2-3): hand-computed cases on exact scenes (the scene
+//! helpers and the tolerances: `step/mod.rs`).
 
 use crate::common::scene::{load, scene};
 use crate::step::{V, W, close, robot, scene_config, step};
@@ -105,7 +105,7 @@ fn heading_wraps() {
     }
 }
 
-/// Contract: the 7 discrete actions of 0.1.1's `DiscreteActions` wrapper (spec 9.1).
+/// Contract: the 7 discrete actions of 0.1.1's `DiscreteActions` wrapper (docs/spec.md 9.1).
 #[test]
 fn discrete_actions_map() {
     // (forward, rotation) of each action: turn left, turn right, forward + left, forward + right,

@@ -1,7 +1,7 @@
-//! CPU/GPU parity of stage `robot_motion` (DESIGN.md section 4): from the same state, parameters
-//! and actions, `shaders/robot_motion.wgsl` must leave the state and the outputs bit-identical to
-//! the Rust stage on lavapipe, over runs chained from rolled-out states (the harness:
-//! `tests/common/gpu.rs`).
+//! CPU/GPU parity of stage `robot_motion` (docs/spec.md, determinism): from the same state,
+//! parameters and actions, `shaders/robot_motion.wgsl` must leave the state and the outputs
+//! bit-identical to the Rust stage on lavapipe, over runs chained from rolled-out states (the
+//! harness: `tests/common/gpu.rs`).
 
 use crate::common::gpu::*;
 use socnav::config::Kinematics;

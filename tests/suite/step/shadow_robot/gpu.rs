@@ -1,5 +1,5 @@
-//! CPU/GPU parity of the ORCA stages `shadow_robot` and `group_velocities` (DESIGN.md section 4):
-//! their shaders (`shaders/shadow_robot.wgsl`, `shaders/group_velocities.wgsl`, over
+//! CPU/GPU parity of the ORCA stages `shadow_robot` and `group_velocities` (docs/spec.md,
+//! determinism): their shaders (`shaders/shadow_robot.wgsl`, `shaders/group_velocities.wgsl`, over
 //! `shaders/common/orca_world.wgsl` and `shaders/common/orca.wgsl`) must leave the state and the
 //! outputs bit-identical to the Rust twins on lavapipe, from rolled-out states run many times,
 //! chained and perturbed (shadow robots, lone humans and groups scattered, shadow outcomes

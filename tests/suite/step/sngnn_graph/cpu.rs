@@ -1,6 +1,6 @@
-//! SNGNN-v2 input against SocNavGym 0.1.1: the frames socnav records (spec 7.2) and the graphs
-//! it builds from them (spec 7.3-7.4), on the golden `exp1_with_sngnn` and `exp2_with_sngnn`
-//! episodes (golden README section 7).
+//! SNGNN-v2 input against SocNavGym 0.1.1: the frames socnav records (docs/spec.md 7.2) and the
+//! graphs it builds from them (docs/spec.md 7.3-7.4), on the golden `exp1_with_sngnn` and
+//! `exp2_with_sngnn` episodes (golden README section 7).
 //!
 //! Every episode is replayed as the golden README (section 8) says: before each step the
 //! reference state is loaded through a state document whose `sngnn_frames` are socnav's own
@@ -372,7 +372,7 @@ fn compare_entity(check: &mut Check, at: &str, ours: &history::Person, g: &Value
     }
 }
 
-/// The node feature names (spec 7.3), for messages.
+/// The node feature names (docs/spec.md 7.3), for messages.
 const FEATURE_NAMES: [&str; NODE_FEATURES] = [
     "human",
     "object",
@@ -830,7 +830,7 @@ fn sngnn_documents_need_the_entity_ids_1_to_n() {
     );
 }
 
-/// 0.1.1 counts the segments of each wall once per process (spec 14); socnav counts them on
+/// 0.1.1 counts the segments of each wall once per process (docs/spec.md 14); socnav counts them on
 /// every graph's newest frame, so the same batch gives a 7 m room its 8 segments per wall
 /// (⌊700 / 97⌋ + 1) after a 10 m room's 11, and back.
 #[test]
@@ -949,8 +949,8 @@ fn sngnn_stages_record_exactly_the_scored_steps() {
 }
 
 /// Contract: the reward clips the raw score stage `sngnn_score` leaves in `r_discomfort_sngnn`
-/// to [0, 1] (spec 6.3): discomfort = clip(q1), the SNGNN term discomfort − 1, and the reward
-/// (discomfort − 1)·1 + distance + alive.
+/// to [0, 1] (docs/spec.md 6.3): discomfort = clip(q1), the SNGNN term discomfort − 1, and the
+/// reward (discomfort − 1)·1 + distance + alive.
 #[test]
 fn reward_clips_the_raw_sngnn_score() {
     let config = Config::from_name_or_path("exp2_sngnn").expect("exp2_sngnn");

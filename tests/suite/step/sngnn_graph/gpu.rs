@@ -1,4 +1,4 @@
-//! The device's SNGNN-v2 input against the CPU's, bit for bit (DESIGN.md section 4): the pass
+//! The device's SNGNN-v2 input against the CPU's, bit for bit (docs/spec.md, determinism): the pass
 //! `sngnn_graph` (shaders/common/sngnn_frame.wgsl and sngnn_graph.wgsl) records the frame into
 //! the history columns and builds the packed graph of every stepping, non-terminal environment;
 //! the CPU does the same with `sngnn::frame::record`, `sngnn::graph::build` and

@@ -1,5 +1,5 @@
-//! SNGNN-v2 inference (spec 7.1, 7.5): the piecewise-linear edge-weight tables against the edge
-//! networks they replace, and both forward passes against each other, on random weights of the
+//! SNGNN-v2 inference (docs/spec.md 7.1, 7.5): the piecewise-linear edge-weight tables against the
+//! edge networks they replace, and both forward passes against each other, on random weights of the
 //! real shapes (these tests need no weight file).
 //!
 //! Tolerances: the tables hold W(e) computed in float64 at the edge network's kinks and

@@ -1,4 +1,4 @@
-//! The social events (spec 4.5) against SocNavGym 0.1.1 and against their configured rates.
+//! The social events (docs/spec.md 4.5) against SocNavGym 0.1.1 and against their configured rates.
 //!
 //! * Regrouping: every dispersal and formation start that the golden episodes recorded is
 //!   applied, with the recorded decisions (which group, who stays, which walkers, which laptop,

@@ -1,5 +1,5 @@
-//! Termination (spec 8.1): the outcome flags and their priority, hand-computed on exact scenes
-//! (the scene helpers and the tolerances: `step/mod.rs`).
+//! Termination (docs/spec.md 8.1): the outcome flags and their priority, hand-computed on exact
+//! scenes (the scene helpers and the tolerances: `step/mod.rs`).
 
 use crate::common::scene::{load, push, scene, static_human};
 use crate::step::{info_of, scene_config, step};

@@ -1,8 +1,8 @@
-//! CPU/GPU parity of stage `termination` (DESIGN.md section 4): from the same state, parameters and
-//! actions, `shaders/termination.wgsl` must leave the state and the outputs bit-identical to the
-//! Rust stage on lavapipe, on rolled-out states perturbed before each run (the harness:
-//! `tests/common/gpu.rs`). [`scatter_robots`] is also the start of the perturbations of `reward`
-//! and `metrics`.
+//! CPU/GPU parity of stage `termination` (docs/spec.md, determinism): from the same state,
+//! parameters and actions, `shaders/termination.wgsl` must leave the state and the outputs
+//! bit-identical to the Rust stage on lavapipe, on rolled-out states perturbed before each run (the
+//! harness: `tests/common/gpu.rs`). [`scatter_robots`] is also the start of the perturbations of
+//! `reward` and `metrics`.
 
 use crate::common::gpu::*;
 use socnav::StepParams;
