@@ -6,7 +6,7 @@
 // both files in the same commit. Lengths in metres.
 //
 // The 64-gon's constants come from the Rust definitions through the generated head of every
-// shader (src/backend/wgsl.rs, `geometry_constants`): GEO_POLY64_COS (`POLY64_COS`),
+// shader (src/backend/wgsl/prelude.rs, `geometry_constants`): GEO_POLY64_COS (`POLY64_COS`),
 // GEO_POLY64_OUTER, GEO_POLY64_INNER, and the contact-shape codes GEO_CONTACT_EXACT and
 // GEO_CONTACT_POLYGON64.
 

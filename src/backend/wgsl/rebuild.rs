@@ -31,7 +31,7 @@ pub const REBUILD_IN_WORKGROUPS_ENTRY: &str = "rebuild_in_workgroups";
 /// per workgroup, on all its lanes (`orca_obstacles_rebuild_on_lanes`).
 pub(super) fn rebuild_entries(what: &str, target: &str) -> String {
     format!(
-        "\n// The ORCA obstacle rebuilds of {what} (generated: src/backend/wgsl.rs, \
+        "\n// The ORCA obstacle rebuilds of {what} (generated: src/backend/wgsl/rebuild.rs, \
          `rebuild_entries`).\n\
          @compute @workgroup_size(WORKGROUP_SIZE)\n\
          fn {REBUILD_ENTRY}(@builtin(global_invocation_id) gid: vec3<u32>) {{\n\
@@ -86,7 +86,7 @@ pub(super) fn reset_rebuild_entries(pass: &str) -> String {
 pub const REBUILD_WORKGROUP_WORDS: usize = 4096;
 
 /// Words of each side's mask of a tree node's edges in a rebuild on a workgroup's lanes (the
-/// shader's `ORCA_OBSTACLES_MASK_WORDS`): a bit an edge, so a node of at most 32 times as many
+/// shader's `ORCA_OBSTACLES_MASK_WORDS`, which the prelude declares from this): a bit an edge, so a node of at most 32 times as many
 /// edges. No obstacle region that fits [`OBSTACLES_IN_WORKGROUP_WORDS`] has that many vertices
 /// (asserted below), and the split keys' fields of 10 bits hold every count and position below it.
 pub const REBUILD_MASK_WORDS: usize = 12;
@@ -132,7 +132,7 @@ pub fn with_obstacles_in_workgroup(src: &str) -> Option<String> {
         )
         .replace("scratch[", "obstacle_wg[");
     Some(format!(
-        "{out}\n// The obstacle library's working memory (src/backend/wgsl.rs, \
+        "{out}\n// The obstacle library's working memory (src/backend/wgsl/rebuild.rs, \
          `with_obstacles_in_workgroup`).\nvar<workgroup> obstacle_wg: array<u32, \
          {OBSTACLES_IN_WORKGROUP_WORDS}>;\n"
     ))
