@@ -224,6 +224,23 @@ pub mod info {
 /// Number of info keys.
 pub const N_INFO: usize = INFO_KEYS.len();
 
+/// The info keys 0.1.1 reports as booleans: the step's outcome flags.
+pub const BOOL_INFO_KEYS: [&str; 7] = [
+    INFO_KEYS[info::OUT_OF_MAP],
+    INFO_KEYS[info::SUCCESS],
+    INFO_KEYS[info::COLLISION],
+    INFO_KEYS[info::COLLISION_HUMAN],
+    INFO_KEYS[info::COLLISION_OBJECT],
+    INFO_KEYS[info::COLLISION_WALL],
+    INFO_KEYS[info::TIMEOUT],
+];
+
+/// The info keys 0.1.1 reports as integers (steps).
+pub const INT_INFO_KEYS: [&str; 2] = [
+    INFO_KEYS[info::FAILURE_TO_PROGRESS],
+    INFO_KEYS[info::TIME_TO_COLLISION],
+];
+
 /// Per-episode statistics written when an episode ends, aggregated as the paper's table does
 /// (docs/spec.md 8.3): outcome flags; `time_taken` (steps, the episode length on collision);
 /// the final step's cumulative metrics; STL, SPL and TIME_TO_REACH_GOAL of the success step (0
@@ -266,6 +283,18 @@ pub const EPISODE_KEYS: [&str; 32] = [
 
 /// Number of per-episode statistics.
 pub const N_EPISODE: usize = EPISODE_KEYS.len();
+
+/// The per-episode outcome flags (1 or 0), whose means over episodes are the outcome rates:
+/// [`EPISODE_KEYS`] from `success` to `out_of_map`.
+pub const OUTCOME_KEYS: [&str; 7] = [
+    EPISODE_KEYS[2],
+    EPISODE_KEYS[3],
+    EPISODE_KEYS[4],
+    EPISODE_KEYS[5],
+    EPISODE_KEYS[6],
+    EPISODE_KEYS[7],
+    EPISODE_KEYS[8],
+];
 
 /// The 7 discrete actions of 0.1.1's `DiscreteActions` wrapper, as continuous actions
 /// (forward, lateral, rotation): turn left, turn right, forward + left, forward + right, forward,

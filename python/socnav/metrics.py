@@ -54,15 +54,9 @@ EPISODE_KEYS: tuple[str, ...] = tuple(Batch.keys()["episode"])
 #: The statistics the ``socnav run`` command prints as the paper's metrics, in its order.
 TABLE_KEYS: tuple[str, ...] = tuple(Batch.keys()["table"])
 
-_OUTCOMES = (
-    "success",
-    "collision",
-    "collision_human",
-    "collision_object",
-    "collision_wall",
-    "timeout",
-    "out_of_map",
-)
+#: The episode statistics that are outcome flags, whose means are the outcome rates (the Rust
+#: ``spec::OUTCOME_KEYS``).
+_OUTCOMES: tuple[str, ...] = tuple(Batch.keys()["outcomes"])
 
 
 def _keys(keys: Sequence[str]) -> tuple[str, ...]:

@@ -32,12 +32,10 @@ from gymnasium import spaces
 from socnav import _batch
 from socnav._socnav import DISCRETE_ACTIONS, Batch, ShapeError, config_toml
 
-#: 0.1.1's boolean info keys.
-BOOL_INFO = frozenset(
-    ["OUT_OF_MAP", "SUCCESS", "COLLISION", "COLLISION_HUMAN", "COLLISION_OBJECT", "COLLISION_WALL", "TIMEOUT"]
-)
-#: 0.1.1's integer info keys.
-INT_INFO = frozenset(["FAILURE_TO_PROGRESS", "TIME_TO_COLLISION"])
+#: 0.1.1's boolean info keys (the Rust ``spec::BOOL_INFO_KEYS``).
+BOOL_INFO = frozenset(Batch.keys()["bool_info"])
+#: 0.1.1's integer info keys (the Rust ``spec::INT_INFO_KEYS``).
+INT_INFO = frozenset(Batch.keys()["int_info"])
 
 
 def load_socnavgym_yaml(path: str | os.PathLike[str]) -> str:

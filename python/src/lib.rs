@@ -34,7 +34,8 @@ use pyo3::types::{PyDict, PyTuple, PyType};
 use socnav::config::Kinematics;
 use socnav::episodes::TABLE_KEYS;
 use socnav::spec::{
-    DISCRETE_ACTIONS, ENTITY_KEYS, EPISODE_KEYS, EVENT_KEYS, INFO_KEYS, INTERACTION_KEYS, RECORD,
+    BOOL_INFO_KEYS, DISCRETE_ACTIONS, ENTITY_KEYS, EPISODE_KEYS, EVENT_KEYS, INFO_KEYS,
+    INT_INFO_KEYS, INTERACTION_KEYS, OUTCOME_KEYS, RECORD,
 };
 use socnav::state::BatchState;
 use socnav::{Actions, AutoresetMode, BatchEnv, Config, EnvOptions, SimError};
@@ -606,7 +607,9 @@ impl Batch {
     }
 
     /// Key names: `info`, `episode`, `events`, `entities`, `interactions` (the orders of the
-    /// output columns), and `table` (the paper's metrics in the order `socnav run` reports them).
+    /// output columns), `table` (the paper's metrics in the order `socnav run` reports them),
+    /// `bool_info` and `int_info` (the info keys 0.1.1 reports as booleans and integers) and
+    /// `outcomes` (the episode statistics that are outcome flags).
     #[staticmethod]
     fn keys<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -616,6 +619,9 @@ impl Batch {
         d.set_item("entities", ENTITY_KEYS.to_vec())?;
         d.set_item("interactions", INTERACTION_KEYS.to_vec())?;
         d.set_item("table", TABLE_KEYS.to_vec())?;
+        d.set_item("bool_info", BOOL_INFO_KEYS.to_vec())?;
+        d.set_item("int_info", INT_INFO_KEYS.to_vec())?;
+        d.set_item("outcomes", OUTCOME_KEYS.to_vec())?;
         Ok(d)
     }
 

@@ -196,3 +196,16 @@ def test_log_of_a_batched_rollout_matches_an_independent_aggregation():
     # Rows come back in the order they ended.
     np.testing.assert_array_equal(log.table()["return"], np.float32([r[RETURN] for r in rows]))
     assert log.table()["length"].max() <= 201
+
+
+def test_the_key_subsets_come_from_the_extension_and_agree():
+    # The outcome rates are the means of the episode outcome flags, which are 0.1.1's boolean
+    # info keys in lower case; the integer info keys are info keys too.
+    keys = socnav._socnav.Batch.keys()
+    assert set(keys["outcomes"]) <= set(keys["episode"])
+    assert set(keys["bool_info"]) | set(keys["int_info"]) <= set(keys["info"])
+    assert {k.lower() for k in keys["bool_info"]} == set(keys["outcomes"])
+    assert socnav.metrics._OUTCOMES == tuple(keys["outcomes"])
+    from socnav.socnavgym import BOOL_INFO, INT_INFO
+
+    assert BOOL_INFO == frozenset(keys["bool_info"]) and INT_INFO == {"FAILURE_TO_PROGRESS", "TIME_TO_COLLISION"}

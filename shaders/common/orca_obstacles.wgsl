@@ -814,14 +814,15 @@ fn orca_obstacles_clear_flag(e: u32) {
 
 // ---- a rebuild on a workgroup's lanes -----------------------------------------------------------
 
-// What a rebuild entry's target says besides an environment (src/backend/wgsl.rs,
+// What a rebuild entry's target says besides an environment (src/backend/wgsl/rebuild.rs,
 // `rebuild_entries`): this entry has nothing to rebuild, but later ones may (NONE: no later one).
 const ORCA_OBSTACLES_SKIP: u32 = 0xfffffffeu;
-// Words of each side's mask of a node's edges (`orca_obstacles_left`, `orca_obstacles_right`):
-// a bit an edge, for lists of up to 32 times as many edges. An obstacle region that fits
-// workgroup memory (src/backend/wgsl.rs, `OBSTACLES_IN_WORKGROUP_WORDS`) has fewer vertices than
-// that; a longer list would stop its rebuild as an overflow.
-const ORCA_OBSTACLES_MASK_WORDS: u32 = 12u;
+// ORCA_OBSTACLES_MASK_WORDS, words of each side's mask of a node's edges (`orca_obstacles_left`,
+// `orca_obstacles_right`): a bit an edge, for lists of up to 32 times as many edges. The prelude
+// declares it from Rust's `REBUILD_MASK_WORDS` (src/backend/wgsl/rebuild.rs), which sizes the
+// workgroup memory a rebuild takes; an obstacle region that fits workgroup memory
+// (`OBSTACLES_IN_WORKGROUP_WORDS`) has fewer vertices than that, and a longer list would stop its
+// rebuild as an overflow.
 // Most lanes that share the edges one split candidate counts (`orca_obstacles_choose_on_lanes`).
 const ORCA_OBSTACLES_LANES_PER_CANDIDATE: u32 = 8u;
 
