@@ -11,7 +11,7 @@
 // `src/backend/obs_payload.rs`): they follow from the per-type counts, and the host writes them
 // as it reads the row back. The robot record is kept whole.
 //
-// On a device that stages observations (`batch.obs_staged`, `GpuDevice::stage_observations`),
+// On a device that stages observations (`batch.obs_staged`, `GpuPaths::stage_observations`),
 // `stage_observation` writes the observation into `scratch`, slot-major (value i of environment e at
 // `batch.x_obs_staged + i * n_envs + e`: `obs_put`), so that the 32 lanes of a warp storing the
 // same value of their environments store 128 consecutive bytes; `rows` then moves it into the
@@ -20,7 +20,7 @@
 // an entry point of the fused pass that holds the observation (`backend::wgsl::FUSED_PASSES`).
 //
 // On a device that writes the entity records apart (`batch.obs_records_apart`,
-// `GpuDevice::records_in_lanes`), in a whole view, `stage_observation` writes the robot record,
+// `GpuPaths::records_in_lanes`), in a whole view, `stage_observation` writes the robot record,
 // the counts and the pairs, and `records`, dispatched after `main` and before `rows`, writes the
 // entity records a lane each (noise included). A limited sensor compacts the records it sees, so
 // there the observing lane writes them in order, as on a device that does not take that path.
@@ -605,7 +605,7 @@ fn obs_zero_record(at: u32) {
 }
 
 // Whether `records` writes the entity records, a lane each, rather than the observing lane: on
-// a device that takes that path (`batch.obs_records_apart`, `GpuDevice::records_in_lanes`) in a
+// a device that takes that path (`batch.obs_records_apart`, `GpuPaths::records_in_lanes`) in a
 // whole view, where entity k of a type (segment k of the walls) is its record k (a limited sensor
 // compacts the records it sees, so there one lane writes them in order).
 fn obs_records_apart() -> bool {

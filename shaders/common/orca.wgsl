@@ -336,7 +336,7 @@ fn orca_obstacle_neighbor_candidate(
 // The lists' entries are left as they were (on Vulkan the backend's SPIR-V does not zero them:
 // backend::gpu::spirv); no entry at or past `len` is ever read. With ORCA_POISON_LISTS (a
 // generated constant, true only in the builds of the test that checks this:
-// `GpuDevice::poison_orca_lists`) a clear fills every entry with NaN and an index no list
+// `GpuPaths::poison_orca_lists`) a clear fills every entry with NaN and an index no list
 // holds, so an entry read before it is written shows in the results.
 const ORCA_POISON_INDEX: u32 = 0xfffffffeu;
 

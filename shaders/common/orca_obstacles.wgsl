@@ -771,7 +771,7 @@ fn orca_obstacles_store_part(e: u32, old: u32, first: u32, step: u32) {
     }
 }
 
-// With ORCA_POISON_LISTS (a test's: `GpuDevice::poison_orca_lists`), every word of environment
+// With ORCA_POISON_LISTS (a test's: `GpuPaths::poison_orca_lists`), every word of environment
 // e's working memory made one no list, set or stack holds, so that a word read before it is
 // written shows in the results (the working memory is not zeroed: backend::gpu::spirv).
 fn orca_obstacles_poison_region(e: u32) {

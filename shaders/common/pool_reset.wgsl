@@ -10,7 +10,7 @@
 // reads back with the outputs, and writes the row two episodes ahead into the freed place while
 // the device runs the following step. `pool_row_of`, `pool_env_of`, `pool_copy_state` and
 // `pool_copy_observation` are generated with the prelude. Where the device asks for it
-// (`GpuDevice::obstacles_after_resets`), a row leaves the ORCA obstacles dirty and out of the row
+// (`GpuPaths::obstacles_after_resets`), a row leaves the ORCA obstacles dirty and out of the row
 // (`batch.pool_obstacles` 0, `backend::wgsl::POOL_OBSTACLE_COLUMNS`: the copy leaves the old ones
 // and their count in place), and they are rebuilt in entry points generated with the obstacle
 // library (`backend::wgsl::assemble_pass_rebuilding_resets`), which zero the old tail past the
@@ -31,7 +31,7 @@ fn pool_reset_queue_rebuild(e: u32) {
 // Resets by many lanes. A reset is about 1,500 words (exp2) copied from the pool, a chain of
 // loads and stores that one lane runs at memory latency. The queued resets of a step
 // (`begin_step`, `autoreset`) run on teams of RESET_LANES lanes (generated: 1, or
-// WORKGROUP_SIZE on a GPU, `GpuDevice::resets_in_workgroups`): a team takes the queue's entries
+// WORKGROUP_SIZE on a GPU, `GpuPaths::resets_in_workgroups`): a team takes the queue's entries
 // `team, team + reset_teams(...), ...` and its lanes share each reset (`first` = the lane in the
 // team, `stride` = RESET_LANES), each lane reading and writing the same slots `first,
 // first + stride, ...` of every column. No lane reads a word another lane writes, so they need

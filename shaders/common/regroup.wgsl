@@ -298,7 +298,7 @@ fn regroup_canonicalize(e: u32) {
 // ---- a regrouping on a workgroup's lanes --------------------------------------------------------
 //
 // The environments `formation` and `social_events` work on run one a lane (REGROUP_LANES 1,
-// generated) or, on a GPU (`GpuDevice::regroups_in_workgroups`: REGROUP_LANES = WORKGROUP_SIZE),
+// generated) or, on a GPU (`GpuPaths::regroups_in_workgroups`: REGROUP_LANES = WORKGROUP_SIZE),
 // one a workgroup: its lane 0 runs the pass's logic, and a regrouping is shared out among every
 // lane (`regroup_canonicalize_on_lanes`), each taking slots of the sorts, the permutations, the
 // remaps and the list positions. A regrouping in one lane is a chain of dependent memory round

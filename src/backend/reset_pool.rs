@@ -46,7 +46,7 @@ impl RowScratch {
     /// whose ORCA obstacles are built as `obstacles` says: [`ObstacleBuild::Now`], the state
     /// exactly as the CPU backend's reset leaves it, or [`ObstacleBuild::Deferred`], its
     /// obstacles dirty and their columns left out of the row, for the device to rebuild after it
-    /// copies the row (`GpuDevice::obstacles_after_resets`).
+    /// copies the row (`GpuPaths::obstacles_after_resets`).
     pub fn new(caps: Caps, layout: ObsLayout, obstacles: ObstacleBuild) -> Self {
         let columns = BatchState::new(0, caps).columns();
         Self {

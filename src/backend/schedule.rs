@@ -68,7 +68,7 @@ pub const RARE_QUEUES: usize = crate::pipeline::RARE_WORK_STAGES + 1;
 
 /// Whether pass `pass` resets environments from the reset pool (`pipeline::GpuPlan::resets`, and
 /// the reset pass): where the pool's rows leave their ORCA obstacles to the device
-/// (`GpuDevice::obstacles_after_resets`, `systems::reset::ObstacleBuild::Deferred`), each is
+/// (`GpuPaths::obstacles_after_resets`, `systems::reset::ObstacleBuild::Deferred`), each is
 /// assembled with the obstacle library and the two rebuild entry points (`wgsl::REBUILD_ENTRY`,
 /// `wgsl::REBUILD_IN_WORKGROUPS_ENTRY`; `wgsl::assemble_pass_rebuilding_resets`): `begin_step` and
 /// `autoreset` queue the environments they reset with the regroupings' for the submit's one rebuild

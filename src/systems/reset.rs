@@ -19,7 +19,7 @@ pub enum ObstacleBuild {
     /// obstacles empty (`n_obstacle_vertices` 0, every `ov_*` slot zero), so that a rebuild
     /// ([`super::orca_obstacles::rebuild_if_dirty`], or its WGSL twin after the GPU backend copies
     /// a reset-pool row) gives the bits [`ObstacleBuild::Now`] gives. The GPU backend's rows
-    /// leave the build to the device where it asks for it (`GpuDevice::obstacles_after_resets`):
+    /// leave the build to the device where it asks for it (`GpuPaths::obstacles_after_resets`):
     /// the build is about two thirds of a row's instructions on the host (and those rows leave
     /// the obstacles' columns out altogether: `backend::wgsl::POOL_OBSTACLE_COLUMNS`).
     Deferred,

@@ -206,40 +206,40 @@ pub fn check_parity_mode(
 }
 
 /// The shared device with the other observation paths than its defaults
-/// (`GpuDevice::stage_observations`, `GpuDevice::records_in_lanes`), the other ways of
-/// running the step's resets (`GpuDevice::resets_in_workgroups`), its regroupings
-/// (`GpuDevice::regroups_in_workgroups`) and its obstacle rebuilds
-/// (`GpuDevice::obstacles_in_workgroups`), the other place a reset's obstacles are built (the
-/// host or the device: `GpuDevice::obstacles_after_resets`), and every step's readback in the
-/// most pieces (`GpuDevice::readback_piece_bytes` of 1 KiB), submitted at the other time
-/// (`GpuDevice::readback_before_host_work`), and the reset pool's staged rows copied last first
-/// (`GpuDevice::scatter_last_first`), so that tests cover the paths a test-sized batch on this
+/// (`GpuPaths::stage_observations`, `GpuPaths::records_in_lanes`), the other ways of
+/// running the step's resets (`GpuPaths::resets_in_workgroups`), its regroupings
+/// (`GpuPaths::regroups_in_workgroups`) and its obstacle rebuilds
+/// (`GpuPaths::obstacles_in_workgroups`), the other place a reset's obstacles are built (the
+/// host or the device: `GpuPaths::obstacles_after_resets`), and every step's readback in the
+/// most pieces (`GpuPaths::readback_piece_bytes` of 1 KiB), submitted at the other time
+/// (`GpuPaths::readback_before_host_work`), and the reset pool's staged rows copied last first
+/// (`GpuPaths::scatter_last_first`), so that tests cover the paths a test-sized batch on this
 /// device would not take.
 pub fn device_other_paths() -> Option<GpuDevice> {
     let mut dev = device()?;
-    dev.stage_observations = !dev.stage_observations;
-    dev.resets_in_workgroups = !dev.resets_in_workgroups;
-    dev.regroups_in_workgroups = !dev.regroups_in_workgroups;
-    dev.obstacles_in_workgroups = !dev.obstacles_in_workgroups;
-    dev.records_in_lanes = !dev.records_in_lanes;
-    dev.obstacles_after_resets = !dev.obstacles_after_resets;
-    dev.readback_before_host_work = !dev.readback_before_host_work;
-    dev.readback_piece_bytes = 1 << 10;
-    dev.scatter_last_first = !dev.scatter_last_first;
+    dev.paths.stage_observations = !dev.paths.stage_observations;
+    dev.paths.resets_in_workgroups = !dev.paths.resets_in_workgroups;
+    dev.paths.regroups_in_workgroups = !dev.paths.regroups_in_workgroups;
+    dev.paths.obstacles_in_workgroups = !dev.paths.obstacles_in_workgroups;
+    dev.paths.records_in_lanes = !dev.paths.records_in_lanes;
+    dev.paths.obstacles_after_resets = !dev.paths.obstacles_after_resets;
+    dev.paths.readback_before_host_work = !dev.paths.readback_before_host_work;
+    dev.paths.readback_piece_bytes = 1 << 10;
+    dev.paths.scatter_last_first = !dev.paths.scatter_last_first;
     Some(dev)
 }
 
 /// The shared device twice: as it is, and with the other way of running the step's resets
-/// (`GpuDevice::resets_in_workgroups`: one lane each, or a workgroup's lanes) and the other place
-/// their obstacles are built (`GpuDevice::obstacles_after_resets`: the host, or the device after
+/// (`GpuPaths::resets_in_workgroups`: one lane each, or a workgroup's lanes) and the other place
+/// their obstacles are built (`GpuPaths::obstacles_after_resets`: the host, or the device after
 /// the reset); empty without a device.
 pub fn devices_both_reset_ways() -> Vec<GpuDevice> {
     let Some(dev) = device() else {
         return Vec::new();
     };
     let mut other = dev.clone();
-    other.resets_in_workgroups = !dev.resets_in_workgroups;
-    other.obstacles_after_resets = !dev.obstacles_after_resets;
+    other.paths.resets_in_workgroups = !dev.paths.resets_in_workgroups;
+    other.paths.obstacles_after_resets = !dev.paths.obstacles_after_resets;
     vec![dev, other]
 }
 

@@ -170,7 +170,7 @@ impl GpuStages {
         dev.queue
             .write_buffer(&params_buf, 0, bytemuck::bytes_of(params));
         let actions = storage_buffer(&dev, "actions", bytes_of::<f32>(3 * n_envs));
-        let pool_obstacles = obstacle_build(dev.obstacles_after_resets);
+        let pool_obstacles = obstacle_build(dev.paths.obstacles_after_resets);
         let pool_row_words = wgsl::pool_row_words(&state.columns(), &out_columns, pool_obstacles);
         // Two rows per environment: its next episode's and the one after it.
         let pool_bytes = bytes_of::<u32>(2 * n_envs * pool_row_words);
@@ -180,8 +180,8 @@ impl GpuStages {
             pool_bytes,
         )?;
         let pool = storage_buffer(&dev, "reset pool", pool_bytes);
-        let obs_staged = dev.stage_observations;
-        let entity_records = if dev.records_in_lanes {
+        let obs_staged = dev.paths.stage_observations;
+        let entity_records = if dev.paths.records_in_lanes {
             obs_layout.entity_records()
         } else {
             0
@@ -313,15 +313,15 @@ impl GpuStages {
         let columns = state.columns();
         let classes = wgsl::SizeClasses::of(&columns);
         let mut prelude = wgsl::prelude(&columns, &out_columns, &classes);
-        if dev.poison_orca_lists {
+        if dev.paths.poison_orca_lists {
             prelude = wgsl::with_poisoned_orca_lists(&prelude);
         }
-        if dev.resets_in_workgroups {
+        if dev.paths.resets_in_workgroups {
             prelude = wgsl::with_resets_in_workgroups(&prelude);
         }
         // The regroupings on a workgroup's lanes where the device asks for it and their
         // workgroup memory fits.
-        let regroups_in_workgroups = dev.regroups_in_workgroups
+        let regroups_in_workgroups = dev.paths.regroups_in_workgroups
             && wgsl::regroup_workgroup_bytes(&classes)
                 <= dev.limits.max_compute_workgroup_storage_size as usize;
         if regroups_in_workgroups {
@@ -332,7 +332,7 @@ impl GpuStages {
         let fits = wgsl::ObstacleScratch::of(&columns).words <= wgsl::OBSTACLES_IN_WORKGROUP_WORDS
             && dev.limits.max_compute_workgroup_storage_size as usize
                 >= 4 * wgsl::REBUILD_WORKGROUP_WORDS;
-        let rebuild = if dev.obstacles_in_workgroups && fits {
+        let rebuild = if dev.paths.obstacles_in_workgroups && fits {
             Rebuild::InWorkgroups
         } else {
             Rebuild::PerLane
@@ -350,13 +350,14 @@ impl GpuStages {
             let ways = Ways {
                 rebuild,
                 records_apart,
-                obstacles_after_resets: dev.obstacles_after_resets,
+                obstacles_after_resets: dev.paths.obstacles_after_resets,
             };
             let built = build_pass(&dev, stage, pass, &groups, &prelude, ways, &mut left_out)?;
             compiled += built.as_ref().map_or(0, |b| b.1);
             pipelines.push((pass, built.map(|b| b.0)));
         }
         let unknown: Vec<&str> = dev
+            .paths
             .leave_out
             .iter()
             .filter(|name| !left_out.contains(name))

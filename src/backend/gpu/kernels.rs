@@ -52,7 +52,7 @@ pub(super) enum Rebuild {
     /// [`wgsl::REBUILD_ENTRY`]: one queued environment per lane, over `scratch`.
     PerLane,
     /// [`wgsl::REBUILD_IN_WORKGROUPS_ENTRY`]: one per workgroup, in workgroup memory; dispatched
-    /// with a workgroup per environment of the batch, `GpuDevice::rebuild_workgroups` at most
+    /// with a workgroup per environment of the batch, `GpuPaths::rebuild_workgroups` at most
     /// (the host does not know how many are queued), each taking every so-many-th queued one.
     InWorkgroups,
 }
@@ -83,7 +83,7 @@ pub(super) type Built = Option<(PassPipelines, usize)>;
 /// were compiled now: `None` for a network stage, whose pipelines [`GpuStages::attach_sngnn_net`]
 /// adds. A shader that needs the SNGNN graphs ([`wgsl::needs_sngnn`]) gets
 /// [`wgsl::sngnn_prelude`] and group 1; any other, group 0 alone, whether the batch has the
-/// graphs or not. The functions of [`GpuDevice::leave_out`] that the pass defines return at once;
+/// graphs or not. The functions of [`GpuPaths::leave_out`] that the pass defines return at once;
 /// their names go into `left_out`.
 pub(super) fn build_pass(
     dev: &GpuDevice,
@@ -133,8 +133,8 @@ pub(super) fn build_pass(
         wgsl::assemble_pass(pass, &prelude)
     }
     .map_err(SimError::Usage)?;
-    if !dev.leave_out.is_empty() {
-        let (out, found) = wgsl::with_functions_returning_at_once(&src, &dev.leave_out);
+    if !dev.paths.leave_out.is_empty() {
+        let (out, found) = wgsl::with_functions_returning_at_once(&src, &dev.paths.leave_out);
         src = out;
         left_out.extend(found.into_iter().map(String::from));
     }
@@ -151,7 +151,10 @@ pub(super) fn build_pass(
     let queue = entry(schedule::has_rare_work(stage), schedule::QUEUE_ENTRY)?;
     let observes = pass == schedule::pass_of(wgsl::OBS_ROWS_STAGE);
     let records = entry(observes && ways.records_apart, wgsl::OBS_RECORDS_ENTRY)?;
-    let rows = entry(observes && dev.stage_observations, wgsl::OBS_ROWS_ENTRY)?;
+    let rows = entry(
+        observes && dev.paths.stage_observations,
+        wgsl::OBS_ROWS_ENTRY,
+    )?;
     let rebuilds = schedule::regroups(pass) || rebuilds_resets;
     let rebuild = match (rebuilds, ways.rebuild) {
         (false, _) => None,

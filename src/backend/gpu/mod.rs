@@ -30,6 +30,7 @@ mod build;
 pub mod device;
 mod kernels;
 pub(crate) mod kit;
+pub mod paths;
 pub(crate) mod pipelines;
 pub(crate) mod pool_rows;
 mod pool_writes;
@@ -41,10 +42,8 @@ mod timeline;
 mod vulkan;
 
 pub use backend::GpuBackend;
-pub use device::{
-    AdapterPolicy, AdapterSummary, DEFAULT_READBACK_PIECE_BYTES, GpuDevice, PATHS_VAR, SHADERS_VAR,
-    list_adapters,
-};
+pub use device::{AdapterPolicy, AdapterSummary, GpuDevice, PATHS_VAR, SHADERS_VAR, list_adapters};
+pub use paths::{DEFAULT_READBACK_PIECE_BYTES, DEFAULT_REBUILD_WORKGROUPS, GpuPaths};
 pub use pool_writes::POOL_STAGING_ROWS;
 pub use sngnn_net::GpuNet;
 
@@ -84,14 +83,14 @@ pub struct GpuStages {
     /// Workgroups along an observation row of the observation pass's `rows` dispatch
     /// (`OBS_ROWS_TILE` floats each), made where the observation is staged.
     obs_row_tiles: u32,
-    /// Entity records of a row, where they are written apart (`GpuDevice::records_in_lanes`),
+    /// Entity records of a row, where they are written apart (`GpuPaths::records_in_lanes`),
     /// else 0: the rows of the observation pass's `records` dispatch.
     entity_records: u32,
     /// Whether the step's parameters ask for a whole view, which `records` needs to write
     /// anything (a limited sensor's records are the observing lane's).
     whole_view: bool,
     /// Whether `formation` and `social_events` take an environment a workgroup
-    /// (`GpuDevice::regroups_in_workgroups`, where the workgroup memory fits).
+    /// (`GpuPaths::regroups_in_workgroups`, where the workgroup memory fits).
     regroups_in_workgroups: bool,
     state: DeviceTable,
     outputs: DeviceTable,
@@ -235,11 +234,11 @@ impl GpuStages {
     /// The adapter, and the ways taken: whether the pipelines run the backend's own SPIR-V
     /// (`spirv`: the ORCA lists not zeroed), with its storage-buffer bounds checked by the driver
     /// or clamped in the shaders (`spirv::BufferBounds`), or the WGSL as wgpu compiles it; how
-    /// the observations are written (`GpuDevice::stage_observations`) and their entity records
-    /// (`GpuDevice::records_in_lanes`, where the batch's rows have any), the resets run
-    /// (`GpuDevice::resets_in_workgroups`), the obstacles are rebuilt
-    /// (`GpuDevice::obstacles_in_workgroups`, where the batch's passes rebuild any) and a reset's
-    /// obstacles are built (`GpuDevice::obstacles_after_resets`) and the memory the readback is
+    /// the observations are written (`GpuPaths::stage_observations`) and their entity records
+    /// (`GpuPaths::records_in_lanes`, where the batch's rows have any), the resets run
+    /// (`GpuPaths::resets_in_workgroups`), the obstacles are rebuilt
+    /// (`GpuPaths::obstacles_in_workgroups`, where the batch's passes rebuild any) and a reset's
+    /// obstacles are built (`GpuPaths::obstacles_after_resets`) and the memory the readback is
     /// mapped from (`GpuDevice::readback_memory`) and the queue writes staged in
     /// (`GpuDevice::staging_memory`).
     pub fn device_description(&self) -> String {
@@ -257,12 +256,12 @@ impl GpuStages {
         } else {
             "WGSL through wgpu".to_owned()
         };
-        let observations = if self.dev.stage_observations {
+        let observations = if self.dev.paths.stage_observations {
             "staged through workgroup memory"
         } else {
             "written in place"
         };
-        let resets = if self.dev.resets_in_workgroups {
+        let resets = if self.dev.paths.resets_in_workgroups {
             "a workgroup's lanes each"
         } else {
             "one lane each"
@@ -281,12 +280,12 @@ impl GpuStages {
         } else {
             "over the scratch buffer"
         };
-        let left_out = if self.dev.leave_out.is_empty() {
+        let left_out = if self.dev.paths.leave_out.is_empty() {
             String::new()
         } else {
             format!(
                 "; DIAGNOSIS, results wrong: functions left out: {}",
-                self.dev.leave_out.join(", ")
+                self.dev.paths.leave_out.join(", ")
             )
         };
         let records = if self.entity_records > 0 {
@@ -310,7 +309,7 @@ impl GpuStages {
             .dev
             .staging_memory()
             .map_or(String::new(), |m| format!("; queue writes staged in {m}"));
-        let submitted = if self.dev.readback_before_host_work {
+        let submitted = if self.dev.paths.readback_before_host_work {
             "before"
         } else {
             "after"

@@ -18,7 +18,7 @@ use crate::systems::reset::ObstacleBuild;
 pub const POOL_STAGING_ROWS: usize = 64;
 
 /// How the reset pool's rows hold their ORCA obstacles on a device that rebuilds them after each
-/// reset (`after_resets`, `GpuDevice::obstacles_after_resets`) or not.
+/// reset (`after_resets`, `GpuPaths::obstacles_after_resets`) or not.
 pub(super) fn obstacle_build(after_resets: bool) -> ObstacleBuild {
     if after_resets {
         ObstacleBuild::Deferred
@@ -51,7 +51,7 @@ impl PoolScatter {
             dev,
             wgsl::POOL_SCATTER_PASS,
             group,
-            &wgsl::pool_scatter_shader(dev.scatter_last_first),
+            &wgsl::pool_scatter_shader(dev.paths.scatter_last_first),
         )?;
         // Room for a staging buffer's first rows in runs of one; it grows past that as needed.
         let runs = storage_buffer(
@@ -120,10 +120,10 @@ impl GpuStages {
 
     /// How the rows written into the reset pool must hold their ORCA obstacles: left to the
     /// device, which rebuilds them after each reset, where the device asks for it
-    /// (`GpuDevice::obstacles_after_resets`), else built
+    /// (`GpuPaths::obstacles_after_resets`), else built
     /// (`crate::backend::reset_pool::RowScratch::new`).
     pub fn pool_obstacles(&self) -> ObstacleBuild {
-        obstacle_build(self.dev.obstacles_after_resets)
+        obstacle_build(self.dev.paths.obstacles_after_resets)
     }
 
     /// Write `rows` (whole pool rows) into the reset pool from environment `first_env` on, in the

@@ -47,7 +47,7 @@ use super::timeline::Timeline;
 /// Most pieces the per-step columns are read back in, each a buffer and a submit of its own: the
 /// host copies piece `k` into its outputs while the device copies piece `k + 1` to host memory,
 /// so only the last piece's copy is not overlapped. A batch takes one piece per
-/// `GpuDevice::readback_piece_bytes` of its per-step columns, at least one and at most these
+/// `GpuPaths::readback_piece_bytes` of its per-step columns, at least one and at most these
 /// (a submit costs some tens of microseconds: small reads stay whole).
 pub(crate) const MOST_PIECES: usize = 4;
 /// Rows the first copy always has room for.
@@ -309,7 +309,7 @@ impl StepReadback {
     /// `vkQueueSubmit`: wgpu chains its submits with semaphores), so on such a device the caller
     /// makes these submits after the host's work that overlaps the step's passes, and on one that
     /// takes submits as they come right after the step's
-    /// ([`GpuDevice::readback_before_host_work`]).
+    /// ([`GpuPaths::readback_before_host_work`]).
     pub(crate) fn submit_other_pieces(
         &self,
         dev: &GpuDevice,
@@ -489,10 +489,10 @@ impl StepReadback {
 }
 
 /// The mapped buffers of the pieces of `span_words` words of per-step columns: one piece per
-/// `GpuDevice::readback_piece_bytes`, at least one, at most [`MOST_PIECES`].
+/// `GpuPaths::readback_piece_bytes`, at least one, at most [`MOST_PIECES`].
 fn piece_buffers(dev: &GpuDevice, span_words: usize) -> Vec<wgpu::Buffer> {
     let n = bytes_of::<u32>(span_words)
-        .div_ceil(dev.readback_piece_bytes.max(1))
+        .div_ceil(dev.paths.readback_piece_bytes.max(1))
         .clamp(1, MOST_PIECES as u64) as usize;
     (0..n)
         .map(|k| {

@@ -18,7 +18,7 @@
 //! arrays are read only where written: the observation's tile (`rows` in
 //! `shaders/observation.wgsl` reads the values its lanes stored before the barrier) and the
 //! obstacle rebuild's working memory (`backend::wgsl::with_obstacles_in_workgroup`, written
-//! before read as in `scratch`, which a test poisons: `GpuDevice::poison_orca_lists`). Zeroing
+//! before read as in `scratch`, which a test poisons: `GpuPaths::poison_orca_lists`). Zeroing
 //! the latter's 16 KiB in every workgroup made llvmpipe take minutes to compile its pipelines.
 //!
 //! Nor may a driver fuse a float product and a sum into one multiply-add. WGSL lets it, and naga

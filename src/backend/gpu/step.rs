@@ -178,8 +178,8 @@ impl GpuStages {
         // The readback's other pieces and the queued rebuild, each in a submit of its own: right
         // after the step's where the driver takes submits as they come; after the host's work
         // that overlaps the step's passes where it may hold a submit until the one before it
-        // has finished (`GpuDevice::readback_before_host_work`).
-        let early = self.dev.readback_before_host_work;
+        // has finished (`GpuPaths::readback_before_host_work`).
+        let early = self.dev.paths.readback_before_host_work;
         if early {
             piece_bytes += self.submit_after_step(selective, timed, queueing, &mut submits)?;
         }
@@ -327,7 +327,7 @@ impl GpuStages {
                 // rows of at most the device's workgroups per dimension.
                 let per_dimension = self.dev.limits.max_compute_workgroups_per_dimension;
                 let most =
-                    usize::try_from(self.dev.rebuild_workgroups.max(1)).unwrap_or(usize::MAX);
+                    usize::try_from(self.dev.paths.rebuild_workgroups.max(1)).unwrap_or(usize::MAX);
                 let (x, y) = workgroup_grid(self.n_envs.min(most), per_dimension);
                 pass.dispatch_workgroups(x, y, 1);
             }

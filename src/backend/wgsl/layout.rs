@@ -157,14 +157,14 @@ impl BatchLayout {
     }
 
     /// This layout with the observation staged in `scratch` (`on`) or written into its rows in
-    /// place: `obs_staged` (see [`scratch_words`], `GpuDevice::stage_observations`).
+    /// place: `obs_staged` (see [`scratch_words`], `GpuPaths::stage_observations`).
     pub fn with_staged_observation(self, on: bool) -> Self {
         self.with_flag("obs_staged", on)
     }
 
     /// This layout with the observation's entity records written by [`OBS_RECORDS_ENTRY`], a lane
     /// each, in a whole view (`on`), or by the observing lane: `obs_records_apart`
-    /// (`GpuDevice::records_in_lanes`).
+    /// (`GpuPaths::records_in_lanes`).
     pub fn with_records_apart(self, on: bool) -> Self {
         self.with_flag("obs_records_apart", on)
     }
@@ -172,7 +172,7 @@ impl BatchLayout {
     /// This layout with reset-pool rows whose ORCA obstacles are built as `obstacles` says:
     /// `pool_obstacles` 0, and `pool_row` and `pool_observation` without the words of
     /// [`POOL_OBSTACLE_COLUMNS`], where the rows leave them to the device
-    /// (`GpuDevice::obstacles_after_resets`).
+    /// (`GpuPaths::obstacles_after_resets`).
     #[expect(
         clippy::expect_used,
         reason = "the layout has a field per state column and for the pool"

@@ -61,7 +61,7 @@ pub fn shared_head() -> String {
 pub(super) const ORCA_LISTS_KEPT: &str = "const ORCA_POISON_LISTS: bool = false;\n";
 
 /// `src` (a prelude, or a shader assembled from one) with the ORCA lists poisoned at every clear:
-/// every entry NaN, every index one no list holds (`GpuDevice::poison_orca_lists`, for the test
+/// every entry NaN, every index one no list holds (`GpuPaths::poison_orca_lists`, for the test
 /// that no entry is read before it is written).
 pub fn with_poisoned_orca_lists(src: &str) -> String {
     src.replacen(
@@ -89,7 +89,7 @@ pub fn regroup_workgroup_bytes(classes: &SizeClasses) -> usize {
 
 /// `src` (a prelude, or a shader assembled from one) with each environment that `formation` and
 /// `social_events` work on taken by all the lanes of a workgroup, its regroupings shared out
-/// among them (`GpuDevice::regroups_in_workgroups`, where [`regroup_workgroup_bytes`] fits the
+/// among them (`GpuPaths::regroups_in_workgroups`, where [`regroup_workgroup_bytes`] fits the
 /// device).
 pub fn with_regroups_in_workgroups(src: &str) -> String {
     src.replacen(
@@ -100,7 +100,7 @@ pub fn with_regroups_in_workgroups(src: &str) -> String {
 }
 
 /// `src` (a prelude, or a shader assembled from one) with each reset of a step run by all the
-/// lanes of a workgroup (`GpuDevice::resets_in_workgroups`).
+/// lanes of a workgroup (`GpuPaths::resets_in_workgroups`).
 pub fn with_resets_in_workgroups(src: &str) -> String {
     src.replacen(
         RESETS_BY_ONE_LANE,
@@ -110,7 +110,7 @@ pub fn with_resets_in_workgroups(src: &str) -> String {
 }
 
 /// `src` (a shader) with each function of `names` that it defines returning at once: nothing, or
-/// its return type's zero value (`T()`). For diagnosis only (`GpuDevice::leave_out`): a pass
+/// its return type's zero value (`T()`). For diagnosis only (`GpuPaths::leave_out`): a pass
 /// timed without one of its functions says what that function costs on a device, and its results
 /// are wrong. Also returns the names found (a function is defined at the start of a line: `fn
 /// name(`).
@@ -371,7 +371,10 @@ pub(super) fn shared_constants() -> Vec<(&'static str, u32)> {
         ("NONE", crate::state::NONE),
         // The side masks of a rebuild on a workgroup's lanes: their size is in the workgroup
         // memory the rebuild takes (`REBUILD_LANES_WORDS`).
-        ("ORCA_OBSTACLES_MASK_WORDS", index(super::rebuild::REBUILD_MASK_WORDS)),
+        (
+            "ORCA_OBSTACLES_MASK_WORDS",
+            index(super::rebuild::REBUILD_MASK_WORDS),
+        ),
         ("AUTORESET_SAME_STEP", AutoresetMode::SameStep.code()),
         ("AUTORESET_NEXT_STEP", AutoresetMode::NextStep.code()),
         ("ROLE_STATIC", role::STATIC),

@@ -12,11 +12,11 @@ pub const REBUILD_ENTRY: &str = "rebuild";
 
 /// The rebuild entry point that takes the queued environments a workgroup at a time, its working
 /// memory in workgroup memory (built from [`with_obstacles_in_workgroup`]'s source; a dispatch of a
-/// workgroup per environment of the batch, at most `GpuDevice::rebuild_workgroups`, workgroup `w`
+/// workgroup per environment of the batch, at most `GpuPaths::rebuild_workgroups`, workgroup `w`
 /// of `W` taking queue entries `w`, `w + W`, ...), its first lane gathering the polygons and
 /// keeping the tree's stack, every lane taking a share of each polygon, of each tree node's split
 /// search and split, and of the store (`orca_obstacles_rebuild_on_lanes`): the
-/// GPU backend's choice on hardware adapters (`GpuDevice::obstacles_in_workgroups`), where a
+/// GPU backend's choice on hardware adapters (`GpuPaths::obstacles_in_workgroups`), where a
 /// rebuild over `scratch` is a chain of dependent storage-buffer accesses (2.4 of exp2's 5.1 ms a
 /// step on an H100), and in one lane the split search's quadratic loop was most of a rebuild (about
 /// 0.4 ms on an H200). (llvmpipe ends the loops of an invocation after 65,535 iterations in all, so

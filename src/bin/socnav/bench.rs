@@ -168,20 +168,20 @@ fn on_chosen_device(
         Some(paths) => {
             for path in paths {
                 match path {
-                    LanePath::Staging => dev.stage_observations = false,
-                    LanePath::Resets => dev.resets_in_workgroups = false,
-                    LanePath::Regroups => dev.regroups_in_workgroups = false,
-                    LanePath::Obstacles => dev.obstacles_in_workgroups = false,
-                    LanePath::Records => dev.records_in_lanes = false,
-                    LanePath::ResetObstacles => dev.obstacles_after_resets = false,
-                    LanePath::ReadbackAfterHostWork => dev.readback_before_host_work = false,
+                    LanePath::Staging => dev.paths.stage_observations = false,
+                    LanePath::Resets => dev.paths.resets_in_workgroups = false,
+                    LanePath::Regroups => dev.paths.regroups_in_workgroups = false,
+                    LanePath::Obstacles => dev.paths.obstacles_in_workgroups = false,
+                    LanePath::Records => dev.paths.records_in_lanes = false,
+                    LanePath::ResetObstacles => dev.paths.obstacles_after_resets = false,
+                    LanePath::ReadbackAfterHostWork => dev.paths.readback_before_host_work = false,
                 }
             }
         }
     }
-    dev.leave_out.clone_from(&a.leave_out);
+    dev.paths.leave_out.clone_from(&a.leave_out);
     if let Some(bytes) = a.readback_piece_bytes {
-        dev.readback_piece_bytes = bytes;
+        dev.paths.readback_piece_bytes = bytes;
     }
     let options = socnav::EnvOptions {
         n_envs: n,

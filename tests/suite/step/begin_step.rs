@@ -34,7 +34,7 @@ pub(crate) fn scatter_ends(
 
 /// Contract: `begin_step`: flags cleared, ticks counted, and NEXT_STEP resets copied from the
 /// reset pool equal the CPU's in-place resets (state, first observation, zeroed info), each reset
-/// run by one lane and by a workgroup's lanes (`GpuDevice::resets_in_workgroups`).
+/// run by one lane and by a workgroup's lanes (`GpuPaths::resets_in_workgroups`).
 #[test]
 fn begin_step() {
     for dev in devices_both_reset_ways() {

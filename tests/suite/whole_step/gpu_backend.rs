@@ -393,7 +393,7 @@ fn the_other_observation_path_steps_as_the_cpu() {
 /// Two batches on one device, stepped at once on two threads (what `socnav bench --halves` and
 /// Python's `send`/`recv` on two batches do), each hand the host the CPU's outputs and state bit
 /// for bit, with their readback submitted after the host's work and before it
-/// (`GpuDevice::readback_before_host_work`: with it, a batch's other pieces and queued rebuild
+/// (`GpuPaths::readback_before_host_work`: with it, a batch's other pieces and queued rebuild
 /// are submitted while the other batch may be submitting its step), over episodes that end and
 /// social events that regroup.
 #[test]
@@ -404,9 +404,9 @@ fn two_batches_stepped_at_once_on_one_device_step_as_the_cpu() {
     let c = regrouping_exp2(8);
     for before in [false, true] {
         let mut dev = dev.clone();
-        dev.readback_before_host_work = before;
+        dev.paths.readback_before_host_work = before;
         // Four pieces a step, so that there are other pieces to submit.
-        dev.readback_piece_bytes = 1 << 10;
+        dev.paths.readback_piece_bytes = 1 << 10;
         let twins: Vec<Twins> = [(33, 5), (34, 6)]
             .into_iter()
             .map(|(n, seed)| same_step_twins(&c, n, seed, dev.clone()))
@@ -482,7 +482,7 @@ fn stage_timing_times_every_pass_and_changes_nothing() {
 fn the_step_timeline_times_the_wait_on_the_devices_clock() {
     use socnav::backend::BackendChoice;
     let Some(mut dev) = device() else { return };
-    dev.readback_piece_bytes = 1 << 10;
+    dev.paths.readback_piece_bytes = 1 << 10;
     let copies_timed = dev
         .device
         .features()
@@ -622,13 +622,13 @@ fn staged_pool_rows_land_where_written_ones_do() {
 /// Contract: a place of the pool staged again while its earlier row still waits to be copied (as
 /// a state loaded, new seeds or new constants make the host do) takes the later row, whatever
 /// order the device's workgroups copy the staged rows in: here the scatter takes them last first
-/// (`GpuDevice::scatter_last_first`), and 30 places first get their neighbour's row, then their
+/// (`GpuPaths::scatter_last_first`), and 30 places first get their neighbour's row, then their
 /// own, in two queue writes before one submit (within the staging buffer's first room, so that
 /// no growth orders them).
 #[test]
 fn a_place_staged_twice_before_a_submit_takes_the_later_row() {
     let Some(mut dev) = device() else { return };
-    dev.scatter_last_first = true;
+    dev.paths.scatter_last_first = true;
     let (written, _, _) = reset_from_rows(&dev, written_in_place);
     let (staged, _, _) = reset_from_rows(&dev, |gpu, rows| {
         written_in_place(gpu, rows);
@@ -642,12 +642,12 @@ fn a_place_staged_twice_before_a_submit_takes_the_later_row() {
 /// Contract: a document loaded between steps (here environment 0's into environment 1, whose
 /// next episodes then differ from the ones the pool was filled for) steps on as the CPU's, bit for
 /// bit, through the resets that follow, with the reset pool's staged rows copied last first
-/// (`GpuDevice::scatter_last_first`): the rows the load makes the host generate go to places
+/// (`GpuPaths::scatter_last_first`): the rows the load makes the host generate go to places
 /// whose earlier rows still wait for their copy.
 #[test]
 fn a_loaded_document_steps_as_the_cpu_whatever_the_copies_order() {
     let Some(mut dev) = device() else { return };
-    dev.scatter_last_first = true;
+    dev.paths.scatter_last_first = true;
     let mut c = config("exp1");
     c.episode.length = 4;
     let mut twins = same_step_twins(&c, 8, 3, dev);

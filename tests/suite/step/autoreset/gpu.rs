@@ -9,7 +9,7 @@ use socnav::AutoresetMode;
 
 /// Contract: `autoreset` in each mode: SAME_STEP keeps the final observation, pairs and info
 /// and resets from the pool keeping the step's reward and flags, each reset run by one lane and
-/// by a workgroup's lanes (`GpuDevice::resets_in_workgroups`); NEXT_STEP marks the reset.
+/// by a workgroup's lanes (`GpuPaths::resets_in_workgroups`); NEXT_STEP marks the reset.
 #[test]
 fn autoreset() {
     for dev in devices_both_reset_ways() {

@@ -101,7 +101,7 @@ fn world(mut c: Config) -> Config {
 
 /// Both kinds of run, chained and from scattered states, on both of the shader's paths: the
 /// observation written into its rows in place and staged slot-major, then moved into the rows
-/// (`GpuDevice::stage_observations`; the device's default path first).
+/// (`GpuPaths::stage_observations`; the device's default path first).
 fn both(c: Config, n_envs: usize, runs: usize) {
     let (Some(default), Some(other)) = (device(), device_other_paths()) else {
         return;
@@ -220,7 +220,8 @@ fn padded() {
 fn staging_costs_one_observation_per_environment() {
     let n = 67;
     let env = rolled_out(config("exp2"), n, 1);
-    let Some((staged, in_place)) = bytes_with_and_without(&env, |d| &mut d.stage_observations)
+    let Some((staged, in_place)) =
+        bytes_with_and_without(&env, |d| &mut d.paths.stage_observations)
     else {
         return;
     };
@@ -232,14 +233,15 @@ fn staging_costs_one_observation_per_environment() {
 }
 
 /// Contract: where the reset pool's rows leave their ORCA obstacles to the device
-/// (`GpuDevice::obstacles_after_resets`), its two rows per environment (and the staging
+/// (`GpuPaths::obstacles_after_resets`), its two rows per environment (and the staging
 /// buffer's) hold none of the obstacles' columns (`wgsl::POOL_OBSTACLE_COLUMNS`: seven of the
 /// obstacle vertices' capacity and their count), and the batch's device memory says so.
 #[test]
 fn pool_rows_that_leave_their_obstacles_out_shrink_the_pool() {
     let n = 67;
     let env = rolled_out(config("exp2"), n, 1);
-    let Some((deferred, built)) = bytes_with_and_without(&env, |d| &mut d.obstacles_after_resets)
+    let Some((deferred, built)) =
+        bytes_with_and_without(&env, |d| &mut d.paths.obstacles_after_resets)
     else {
         return;
     };
@@ -273,7 +275,7 @@ fn bytes_with_and_without(
     Some((with, bytes(false, dev)))
 }
 
-/// Contract: a device that leaves shader functions out (`GpuDevice::leave_out`, for `socnav bench
+/// Contract: a device that leaves shader functions out (`GpuPaths::leave_out`, for `socnav bench
 /// --leave-out`: timings without a function, the results wrong) builds its batches' passes with
 /// them returning at once and says so in its description, and a batch refuses a name that none of
 /// its shaders defines, naming it.
@@ -298,9 +300,9 @@ fn functions_left_out_return_at_once_on_the_device() {
         "exp2 observes walls"
     );
     // The wall records in the observing lane, where `obs_walls` writes them (on hardware the
-    // records dispatch writes them by default: `GpuDevice::records_in_lanes`).
-    dev.records_in_lanes = false;
-    dev.leave_out = vec!["obs_walls".into()];
+    // records dispatch writes them by default: `GpuPaths::records_in_lanes`).
+    dev.paths.records_in_lanes = false;
+    dev.paths.leave_out = vec!["obs_walls".into()];
     let mut gpu = BatchEnv::on_device(config("exp2"), options(), dev.clone()).expect("batch");
     gpu.reset(None).expect("reset");
     gpu.step(Actions::Continuous(&actions)).expect("step");
@@ -313,7 +315,7 @@ fn functions_left_out_return_at_once_on_the_device() {
         "{}",
         gpu.device()
     );
-    dev.leave_out = vec!["obs_walls".into(), "obs_no_such_function".into()];
+    dev.paths.leave_out = vec!["obs_walls".into(), "obs_no_such_function".into()];
     let err = BatchEnv::on_device(config("exp2"), options(), dev)
         .expect_err("an unknown name is refused")
         .to_string();

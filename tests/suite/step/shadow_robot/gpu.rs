@@ -98,7 +98,7 @@ fn shadow_robot() {
 
 /// Issue 19: the backend's SPIR-V does not zero the ORCA lists (`backend::gpu::spirv`), so an
 /// entry read before it is written would hold whatever the lane's memory held. With every entry
-/// NaN and every index one no list holds at every clear (`GpuDevice::poison_orca_lists`), the
+/// NaN and every index one no list holds at every clear (`GpuPaths::poison_orca_lists`), the
 /// three ORCA stages stay bit-identical to the CPU from scattered agents (collisions, LP3,
 /// goals under the agent), with neighbours at their actual velocities: no entry is read before
 /// it is written. The three share one pipeline (the fused pass `motion`), compiled once more
@@ -108,7 +108,7 @@ fn orca_lists_are_written_before_they_are_read() {
     let Some(mut dev) = device() else {
         return;
     };
-    dev.poison_orca_lists = true;
+    dev.paths.poison_orca_lists = true;
     for stage in ["shadow_robot", "group_velocities", "human_motion"] {
         check_parity_on(
             dev.clone(),

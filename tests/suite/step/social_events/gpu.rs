@@ -263,7 +263,7 @@ fn perturb_into_a_star(s: &mut BatchState, o: &mut Outputs, p: &StepParams, rng:
 /// edited through `state_mut` can hold) leaves on the device what it leaves on the CPU, bit for
 /// bit: every slot of the capacity NaN in one ring, the count at the capacity, the flag at
 /// `OBSTACLES_FAILED`. In one lane and on a workgroup's lanes
-/// (`GpuDevice::obstacles_in_workgroups`), with the dispersals and formations of exp2 with seven
+/// (`GpuPaths::obstacles_in_workgroups`), with the dispersals and formations of exp2 with seven
 /// tables and standing groups that disperse.
 #[test]
 fn a_rebuild_beyond_the_capacity_poisons_as_the_cpu() {
@@ -276,7 +276,7 @@ fn a_rebuild_beyond_the_capacity_poisons_as_the_cpu() {
     c.counts.standing_groups_non_dispersing = [0, 0];
     for in_workgroups in [false, true] {
         let mut d = dev.clone();
-        d.obstacles_in_workgroups = in_workgroups;
+        d.paths.obstacles_in_workgroups = in_workgroups;
         let seen = parity_on(d, "social_events", c.clone(), 32, 8, perturb_into_a_star);
         let seen = seen.expect("a device");
         assert!(
@@ -287,20 +287,20 @@ fn a_rebuild_beyond_the_capacity_poisons_as_the_cpu() {
 }
 
 /// Contract: the obstacle rebuilds after a regrouping give the same bits with their working
-/// memory in workgroup memory, a workgroup at a time (`GpuDevice::obstacles_in_workgroups`,
+/// memory in workgroup memory, a workgroup at a time (`GpuPaths::obstacles_in_workgroups`,
 /// the hardware adapters' way), as the CPU's: `formation` in exp3 and `social_events` in stress
 /// (the largest obstacle region). That memory is not zeroed (`backend::gpu::spirv`), so it is
-/// poisoned before every rebuild here (`GpuDevice::poison_orca_lists`): a word read before it is
+/// poisoned before every rebuild here (`GpuPaths::poison_orca_lists`): a word read before it is
 /// written would change the result. exp3 runs twice: with a workgroup per environment, and with
-/// 64 workgroups in all (`GpuDevice::rebuild_workgroups`), each rebuilding every 64th queued
+/// 64 workgroups in all (`GpuPaths::rebuild_workgroups`), each rebuilding every 64th queued
 /// environment in turn (two or three each here), as a batch with more rebuilds in a step than that
 /// bound does on hardware. (Not fewer: llvmpipe ends an invocation's loops after 65,535
 /// iterations in all, about 18 of exp3's rebuilds; a GPU has no such limit.)
 #[test]
 fn rebuilds_in_workgroup_memory_match_the_cpu() {
     let Some(mut dev) = device() else { return };
-    dev.obstacles_in_workgroups = true;
-    dev.poison_orca_lists = true;
+    dev.paths.obstacles_in_workgroups = true;
+    dev.paths.poison_orca_lists = true;
     let mut total = Seen::default();
     let mut exp3 = eventful("exp3", 0.3);
     exp3.episode.time_step = 0.3;
@@ -308,7 +308,7 @@ fn rebuilds_in_workgroup_memory_match_the_cpu() {
     let seen = parity_on(dev.clone(), "formation", exp3.clone(), 256, 6, perturb);
     add(&mut total, seen.expect("a device"));
     let mut few = dev.clone();
-    few.rebuild_workgroups = 64;
+    few.paths.rebuild_workgroups = 64;
     let seen = parity_on(few, "formation", exp3, 256, 6, perturb);
     let seen = seen.expect("a device");
     assert!(
@@ -326,7 +326,7 @@ fn rebuilds_in_workgroup_memory_match_the_cpu() {
 }
 
 /// Contract: the regroupings of `formation` and `social_events` give the same bits with each
-/// queued environment on all the lanes of a workgroup (`GpuDevice::regroups_in_workgroups`, the
+/// queued environment on all the lanes of a workgroup (`GpuPaths::regroups_in_workgroups`, the
 /// hardware adapters' way: lane 0 runs the pass's logic, every lane takes slots of the four
 /// kinds' sorts and permutations, the remaps and the list positions), as the CPU's: crowd and
 /// laptop-use formations completing in exp3, and the dispersals of exp3, corridor_mixed (the
@@ -335,7 +335,7 @@ fn rebuilds_in_workgroup_memory_match_the_cpu() {
 #[test]
 fn regroupings_on_a_workgroups_lanes_match_the_cpu() {
     let Some(mut dev) = device() else { return };
-    dev.regroups_in_workgroups = true;
+    dev.paths.regroups_in_workgroups = true;
     let mut exp3 = eventful("exp3", 0.3);
     exp3.episode.time_step = 0.3;
     let perturb = crate::step::formation::perturb_formation;
@@ -449,9 +449,9 @@ fn zero_unused_obstacle_slots(s: &mut BatchState) {
 fn regroupings_and_resets_in_one_submit_rebuild_each_environment_once() {
     const STAGES: [&str; 3] = ["formation", "social_events", "autoreset"];
     let Some(mut dev) = device() else { return };
-    dev.obstacles_in_workgroups = true;
-    dev.obstacles_after_resets = true;
-    dev.poison_orca_lists = true;
+    dev.paths.obstacles_in_workgroups = true;
+    dev.paths.obstacles_after_resets = true;
+    dev.paths.poison_orca_lists = true;
     let mut config = eventful("exp3", 0.5);
     config.episode.time_step = 0.3;
     let n_envs = 256;
