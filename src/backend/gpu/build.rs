@@ -2,30 +2,16 @@
 //! buffers, sized and checked against the device's limits, their bind groups, and the passes'
 //! pipelines (`kernels`), in one scope that turns a device error into `SimError`.
 
-use super::GpuStages;
-use super::SngnnBinding;
 use super::device::GpuDevice;
-use super::kernels::Rebuild;
-use super::kernels::Ways;
-use super::kernels::build_pass;
-use super::kernels::member_mask_table;
-use super::kit::CreationScope;
-use super::kit::bind_kinds;
-use super::kit::bytes_of;
-use super::kit::check_binding;
-use super::kit::storage_buffer;
-use super::kit::uniform_buffer;
-use super::pipelines::Binding;
-use super::pipelines::Groups;
-use super::pool_writes::POOL_STAGING_ROWS;
-use super::pool_writes::PoolScatter;
-use super::pool_writes::obstacle_build;
-use super::pool_writes::staging_buffer;
-use super::readback;
+use super::kernels::{Rebuild, Ways, build_pass, member_mask_table};
+use super::kit::{
+    CreationScope, bind_kinds, bytes_of, check_binding, storage_buffer, uniform_buffer,
+};
+use super::pipelines::{Binding, Groups};
+use super::pool_writes::{POOL_STAGING_ROWS, PoolScatter, obstacle_build, staging_buffer};
 use super::readback::StepReadback;
-use crate::backend::obs_payload;
-use crate::backend::schedule;
-use crate::backend::wgsl;
+use super::{GpuStages, SngnnBinding, readback};
+use crate::backend::{obs_payload, schedule, wgsl};
 use crate::error::SimError;
 use crate::outputs::Outputs;
 use crate::params::StepParams;
@@ -269,20 +255,33 @@ impl GpuStages {
             mapped_at_creation: false,
         });
         let (member_masks, mask_stride) = member_mask_table(&dev);
+        // Bind group 0 in the order of its declaration (`wgsl::BATCH_BINDINGS`), by name.
+        let buffer_of = |name: &str| -> Result<&wgpu::Buffer, SimError> {
+            Ok(match name {
+                "params" => &params_buf,
+                "sf" => &state_table.f32s,
+                "su" => &state_table.u32s,
+                "actions" => &actions,
+                "outf" => &outputs_table.f32s,
+                "outu" => &outputs_table.u32s,
+                "pool" => &pool,
+                "batch" => &batch,
+                "scratch" => &scratch,
+                "rare" => &rare,
+                "pass_members" => &member_masks,
+                other => {
+                    return Err(SimError::Internal(format!(
+                        "the batch has no buffer for binding {other}"
+                    )));
+                }
+            })
+        };
+        let group0 = wgsl::BATCH_BINDINGS
+            .iter()
+            .map(|b| Ok((buffer_of(b.name)?, Binding::from(b.access))))
+            .collect::<Result<Vec<_>, SimError>>()?;
         let storage = |read_only| Binding::Storage { read_only };
-        let mut bound = vec![vec![
-            (&params_buf, storage(true)),
-            (&state_table.f32s, storage(false)),
-            (&state_table.u32s, storage(false)),
-            (&actions, storage(true)),
-            (&outputs_table.f32s, storage(false)),
-            (&outputs_table.u32s, storage(false)),
-            (&pool, storage(true)),
-            (&batch, Binding::Uniform),
-            (&scratch, storage(false)),
-            (&rare, storage(false)),
-            (&member_masks, Binding::DynamicUniform),
-        ]];
+        let mut bound = vec![group0];
         let gaps = sngnn.as_ref().map(|b| {
             let gaps = storage_buffer(
                 &dev,

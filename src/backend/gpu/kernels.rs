@@ -6,8 +6,7 @@ use super::device::GpuDevice;
 use super::kit::uniform_buffer;
 use super::pipelines;
 use super::pipelines::Binding;
-use crate::backend::schedule;
-use crate::backend::wgsl;
+use crate::backend::{schedule, wgsl};
 use crate::error::SimError;
 use crate::pipeline::Shader;
 

@@ -47,6 +47,19 @@ pub(crate) enum Binding {
     DynamicUniform,
 }
 
+impl From<crate::backend::wgsl::Access> for Binding {
+    /// The binding kind of a binding declared with `access` (`backend::wgsl::BATCH_BINDINGS`).
+    fn from(access: crate::backend::wgsl::Access) -> Self {
+        use crate::backend::wgsl::Access;
+        match access {
+            Access::Read => Self::Storage { read_only: true },
+            Access::ReadWrite => Self::Storage { read_only: false },
+            Access::Uniform => Self::Uniform,
+            Access::DynamicUniform => Self::DynamicUniform,
+        }
+    }
+}
+
 /// Bytes of a [`Binding::DynamicUniform`] (a `vec4<u32>`).
 pub(crate) const DYNAMIC_UNIFORM_BYTES: u64 = 16;
 

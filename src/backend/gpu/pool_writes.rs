@@ -4,10 +4,7 @@
 use super::GpuStages;
 use super::device::GpuDevice;
 use super::kernels::workgroup_grid;
-use super::kit::bind_buffers;
-use super::kit::bytes_of;
-use super::kit::storage_buffer;
-use super::kit::write_buffer_split;
+use super::kit::{bind_buffers, bytes_of, storage_buffer, write_buffer_split};
 use super::pipelines::Binding;
 use super::readback::words_to_bytes;
 use crate::backend::wgsl;

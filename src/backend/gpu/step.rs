@@ -2,19 +2,12 @@
 //! consecutive members in one), their recording into one submit with the rare work's queues and
 //! the queued obstacle rebuilds, the readback of a step, and the passes timed one by one.
 
-use super::GpuStages;
-use super::StepRead;
-use super::kernels::Rebuild;
-use super::kernels::workgroup_grid;
-use super::kit::bytes_of;
-use super::kit::map_and_read;
-use super::kit::map_and_read_after;
-use super::readback;
+use super::kernels::{Rebuild, workgroup_grid};
+use super::kit::{bytes_of, map_and_read, map_and_read_after};
 use super::readback::words_to_bytes;
 use super::timeline::Timeline;
-use crate::backend::obs_payload;
-use crate::backend::schedule;
-use crate::backend::wgsl;
+use super::{GpuStages, StepRead, readback};
+use crate::backend::{obs_payload, schedule, wgsl};
 use crate::error::SimError;
 
 /// One dispatch of a step: the pass that runs it (`schedule::pass_of`), and for a fused pass the mask

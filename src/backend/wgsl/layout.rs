@@ -4,8 +4,7 @@
 //! and the size classes that let one shader text serve every shipped config.
 
 use super::WORKGROUP_SIZE;
-use crate::state::columns::Elem;
-use crate::state::columns::ElementOrder;
+use crate::state::columns::{Elem, ElementOrder};
 use crate::systems::reset::ObstacleBuild;
 
 /// A table's columns as [`crate::state::BatchState::columns`] lists them: name, element kind,

@@ -15,17 +15,17 @@
 //! This module is plain text work (no wgpu), so the naga tests can assemble and validate the
 //! shaders without the `gpu` feature or a device.
 
-use rebuild::queued_rebuild_entries;
-use rebuild::reset_rebuild_entries;
-
 use super::schedule::{pass_files, rebuilds_resets, regroups};
 use crate::pipeline::FusedPass;
+use rebuild::{queued_rebuild_entries, reset_rebuild_entries};
 
+mod bindings;
 mod layout;
 mod pool;
 mod prelude;
 mod rebuild;
 
+pub use bindings::{Access, BATCH_BINDINGS, BindingDecl, SNGNN_GRAPH_BINDINGS, declarations};
 pub use layout::{
     BatchLayout, Columns, DEVICE_ORDER, OBS_RECORDS_ENTRY, OBS_ROWS_ENTRY, OBS_ROWS_STAGE,
     OBS_ROWS_TILE, ObstacleScratch, POOL_OBSTACLE_COLUMNS, POOL_OUTPUT_COLUMNS, SIZE_CLASS_NAMES,

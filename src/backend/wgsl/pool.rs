@@ -3,11 +3,7 @@
 //! rows of the environments whose episode ended. Which columns a row holds is `layout`'s.
 
 use super::WORKGROUP_SIZE;
-use super::layout::BatchLayout;
-use super::layout::Columns;
-use super::layout::POOL_OBSTACLE_COLUMNS;
-use super::layout::kind_of;
-use super::layout::pool_outputs;
+use super::layout::{BatchLayout, Columns, POOL_OBSTACLE_COLUMNS, kind_of, pool_outputs};
 use crate::state::columns::Elem;
 
 /// The label of the GPU backend's finished-rows pass, a shader generated from the output columns

@@ -4,17 +4,13 @@
 //! pass (poisoned ORCA lists, regroupings and resets on a workgroup's lanes, functions left out).
 
 use super::WORKGROUP_SIZE;
-use super::layout::BatchLayout;
-use super::layout::Columns;
-use super::layout::OBS_ROWS_TILE;
-use super::layout::PERMUTED_KINDS;
-use super::layout::SIZE_CLASS_NAMES;
-use super::layout::SizeClasses;
-use super::layout::columns_of;
-use super::layout::slot_index_functions;
+use super::bindings::{BATCH_BINDINGS, SNGNN_GRAPH_BINDINGS, declarations};
+use super::layout::{
+    BatchLayout, Columns, OBS_ROWS_TILE, PERMUTED_KINDS, SIZE_CLASS_NAMES, SizeClasses, columns_of,
+    slot_index_functions,
+};
 use super::pool::pool_functions;
-use crate::backend::schedule::RARE_QUEUES;
-use crate::backend::schedule::REBUILD_QUEUE;
+use crate::backend::schedule::{RARE_QUEUES, REBUILD_QUEUE};
 use crate::state::columns::Elem;
 
 /// The part of every shader's head that depends on neither the config nor the batch: the constants
@@ -160,18 +156,7 @@ pub fn prelude(state: Columns<'_>, outputs: Columns<'_>, classes: &SizeClasses) 
     out.push_str(&step_params_struct());
     let layout = BatchLayout::new(0, state, outputs, &crate::spec::ObsLayout::default(), None);
     out.push_str(&layout.wgsl_struct());
-    out.push_str(
-        "@group(0) @binding(0) var<storage, read> params: StepParams;\n\
-         @group(0) @binding(1) var<storage, read_write> sf: array<f32>;\n\
-         @group(0) @binding(2) var<storage, read_write> su: array<u32>;\n\
-         @group(0) @binding(3) var<storage, read> actions: array<f32>;\n\
-         @group(0) @binding(4) var<storage, read_write> outf: array<f32>;\n\
-         @group(0) @binding(5) var<storage, read_write> outu: array<u32>;\n\
-         @group(0) @binding(6) var<storage, read> pool: array<u32>;\n\
-         @group(0) @binding(7) var<uniform> batch: BatchLayout;\n\
-         @group(0) @binding(8) var<storage, read_write> scratch: array<u32>;\n\
-         @group(0) @binding(10) var<uniform> pass_members: vec4<u32>;\n",
-    );
+    out.push_str(&declarations(0, &BATCH_BINDINGS));
     out.push_str(&slot_index_functions(state));
     out.push_str(&rare_work_functions());
     out.push_str(&permute_functions(state));
@@ -250,16 +235,12 @@ pub fn sngnn_prelude() -> String {
     for (name, v) in floats {
         out.push_str(&format!("const {name}: f32 = {};\n", wgsl_f32(v)));
     }
-    out.push_str(
-        "@group(1) @binding(0) var<storage, read_write> sn_gu: array<u32>;\n\
-         @group(1) @binding(1) var<storage, read_write> sn_gf: array<f32>;\n\
-         @group(1) @binding(2) var<storage, read> sn_gaps: array<u32>;\n",
-    );
+    out.push_str(&declarations(1, &SNGNN_GRAPH_BINDINGS));
     out
 }
 
 /// The queues of the stages with rare work and the [`REBUILD_QUEUE`]: their indices `RARE_<STAGE>`
-/// and `RARE_REBUILD`, the binding `rare` (9), and `rare_push` (queue an environment) and
+/// and `RARE_REBUILD`, the type of the binding `rare` (`BATCH_BINDINGS`), and `rare_push` (queue an environment) and
 /// `rare_env` (lane `k`'s environment, or `NONE` past the queue's end).
 pub(super) fn rare_work_functions() -> String {
     let mut out = String::new();
@@ -274,7 +255,6 @@ pub(super) fn rare_work_functions() -> String {
     out.push_str(&format!("const RARE_REBUILD: u32 = {REBUILD_QUEUE}u;\n"));
     out.push_str(&format!(
         "struct RareWork {{\n    count: array<atomic<u32>, {n}>,\n    list: array<u32>,\n}}\n\
-         @group(0) @binding(9) var<storage, read_write> rare: RareWork;\n\
          fn rare_push(queue: u32, e: u32) {{\n\
          \x20   rare.list[queue * batch.n_envs + atomicAdd(&rare.count[queue], 1u)] = e;\n}}\n\
          fn rare_env(queue: u32, k: u32) -> u32 {{\n\
