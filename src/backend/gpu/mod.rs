@@ -1,7 +1,8 @@
 //! The GPU backend: the batch state in device storage buffers and the stages of
 //! [`crate::pipeline::STAGES`] as WGSL compute shaders (`shaders/<stage>.wgsl`).
 //!
-//! - [`device`]: finding and opening an adapter under the policy of docs/spec.md, adapters.
+//! - [`device`]: finding and opening an adapter under the policy of docs/spec.md, adapters;
+//!   [`paths`]: the ways a batch runs where two give the same bits ([`GpuPaths`]).
 //! - `kit`: buffers, their bindings, checks and readback; `pipelines`: bind group layouts and the
 //!   device's pipeline cache (`pipelines::PipelineCache`: each pipeline compiled once per device
 //!   and source, whatever the batch size or config).
@@ -17,12 +18,13 @@
 //!   (`tests/suite/step/sngnn_graph/gpu.rs`); [`GpuStages::attach_sngnn_net`] adds SNGNN-v2's
 //!   network over those graphs as the stage `sngnn_score` ([`GpuNet`], [`sngnn_net`]), which writes
 //!   each scored environment's raw score into its `r_discomfort_sngnn` column for the reward stage.
+//!   Its parts: `build` makes its data, `kernels` its passes' pipelines, `step` plans, records
+//!   and reads back runs of passes, `pool_writes` writes the reset pool's rows.
 //! - [`GpuBackend`]: the whole step in one submit, with one readback of the outputs, and resets
 //!   from a pool of rows the host generates off the step's critical path.
 
 use build::DeviceTable;
-use kernels::PassPipelines;
-use kernels::Rebuild;
+use kernels::{PassPipelines, Rebuild};
 use pool_writes::PoolScatter;
 
 pub mod backend;

@@ -10,6 +10,34 @@ use super::{GpuStages, StepRead, readback};
 use crate::backend::{obs_payload, schedule, wgsl};
 use crate::error::SimError;
 
+/// How a step is read back: `timed` on the device's clock (the step timeline is on and the step
+/// runs passes), `selective` (only the finished environments' rows of the columns that change
+/// rarely, `readback::StepReadback`) or the whole output table.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ReadHow {
+    pub(super) timed: bool,
+    pub(super) selective: bool,
+}
+
+/// What the step's own submit copies for the readback (bytes, words of the f32 table).
+struct Copied {
+    f_words: usize,
+    table_bytes: u64,
+    total: u64,
+    /// Whether the network's status is among them.
+    scored: bool,
+    /// Bytes of the readback's pieces copied so far.
+    piece_bytes: u64,
+}
+
+/// When a read-back step started, and the host's time in it: the work that overlaps the passes,
+/// and recording and submitting.
+struct StepTimes {
+    started: std::time::Instant,
+    host_work_s: f64,
+    submit_s: f64,
+}
+
 /// One dispatch of a step: the pass that runs it (`schedule::pass_of`), and for a fused pass the mask
 /// of the members it runs (`schedule::fused_passes`); `first` names its first stage in errors.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -101,41 +129,87 @@ impl GpuStages {
             });
         // The step timeline times a step read back whose passes run here (not the read after
         // passes timed alone, `time_passes`).
-        let timed = read.is_some() && !stages.is_empty();
-        if let Some(t) = self.timeline.as_ref().filter(|_| timed) {
-            t.at_start(&mut enc);
-        }
-        self.begin_submit(&mut enc);
-        let selective = read.is_some() && !self.step_read.whole_table_next;
-        if selective {
-            self.step_read.clear(&mut enc);
-        }
-        {
-            let timeline = self.timeline.as_ref().filter(|_| timed);
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("step"),
-                timestamp_writes: timeline.map(Timeline::pass_writes),
-            });
-            self.bind(&mut pass);
-            for dispatch in plan(stages) {
-                self.sngnn_unread |= self.record(&mut pass, &dispatch)?;
-            }
-            if let (None, Some(of)) = (&read, queueing) {
-                self.record_queued_rebuild(&mut pass, of)?;
-            }
-            if selective {
-                self.step_read.record(&mut pass);
-            }
-        }
+        let how = ReadHow {
+            timed: read.is_some() && !stages.is_empty(),
+            selective: read.is_some() && !self.step_read.whole_table_next,
+        };
+        let rebuild_in_pass = if read.is_none() { queueing } else { None };
+        self.record_passes(&mut enc, stages, how, rebuild_in_pass)?;
         let Some(read) = read else {
             self.dev.queue.submit([enc.finish()]);
             while_device_works(self);
             self.step_read.whole_table_next = true;
             return self.dev.take_errors();
         };
+        let mut copied = self.record_first_copies(&mut enc, how);
+        let mut submits = vec![self.dev.queue.submit([enc.finish()])];
+        // The readback's other pieces and the queued rebuild, each in a submit of its own: right
+        // after the step's where the driver takes submits as they come; after the host's work
+        // that overlaps the step's passes where it may hold a submit until the one before it
+        // has finished (`GpuPaths::readback_before_host_work`).
+        let early = self.dev.paths.readback_before_host_work;
+        if early {
+            copied.piece_bytes += self.submit_after_step(how, queueing, &mut submits)?;
+        }
+        let working = std::time::Instant::now();
+        while_device_works(self);
+        let host_work_s = working.elapsed().as_secs_f64();
+        if !early {
+            copied.piece_bytes += self.submit_after_step(how, queueing, &mut submits)?;
+        }
+        let times = StepTimes {
+            started,
+            host_work_s,
+            submit_s: started.elapsed().as_secs_f64() - host_work_s,
+        };
+        self.read_step(read, how, &copied, submits, times)
+    }
+
+    /// Record the step's compute pass into `enc`: the timeline's first timestamp, the submit's
+    /// clears, every dispatch of `stages`, the queued rebuild where it runs in the step's submit
+    /// (`rebuild`), and the finished rows' pass of a selective read.
+    fn record_passes(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        stages: &[&str],
+        how: ReadHow,
+        rebuild: Option<&str>,
+    ) -> Result<(), SimError> {
+        if let Some(t) = self.timeline.as_ref().filter(|_| how.timed) {
+            t.at_start(enc);
+        }
+        self.begin_submit(enc);
+        if how.selective {
+            self.step_read.clear(enc);
+        }
+        let timeline = self.timeline.as_ref().filter(|_| how.timed);
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("step"),
+            timestamp_writes: timeline.map(Timeline::pass_writes),
+        });
+        self.bind(&mut pass);
+        let mut scored = false;
+        for dispatch in plan(stages) {
+            scored |= self.record(&mut pass, &dispatch)?;
+        }
+        if let Some(of) = rebuild {
+            self.record_queued_rebuild(&mut pass, of)?;
+        }
+        if how.selective {
+            self.step_read.record(&mut pass);
+        }
+        drop(pass);
+        self.sngnn_unread |= scored;
+        Ok(())
+    }
+
+    /// Record the readback's copies of the step's own submit into `enc`: the output table (its
+    /// first rows and piece where the read is selective, else whole), the episode counters, the
+    /// network's status where it ran since the last read, and the timeline's resolve.
+    fn record_first_copies(&mut self, enc: &mut wgpu::CommandEncoder, how: ReadHow) -> Copied {
         let f_words = self.outputs.packed_f32.len();
-        let table_bytes = if selective {
-            self.step_read.copy_rows(&mut enc, &self.step_readback)
+        let table_bytes = if how.selective {
+            self.step_read.copy_rows(enc, &self.step_readback)
         } else {
             let (f_bytes, u_bytes) = (
                 words_to_bytes(f_words),
@@ -158,62 +232,72 @@ impl GpuStages {
             enc.copy_buffer_to_buffer(net.status_buffer(), 0, rb, total, e_bytes);
             total += e_bytes;
         }
-        let timeline = self.timeline.as_ref().filter(|_| timed);
+        let timeline = self.timeline.as_ref().filter(|_| how.timed);
         let mut piece_bytes = 0;
-        if selective {
+        if how.selective {
             let tables = self.output_tables();
-            piece_bytes = self.step_read.copy_first_piece(&mut enc, &tables, timeline);
+            piece_bytes = self.step_read.copy_first_piece(enc, &tables, timeline);
         } else if let Some(t) = timeline {
-            t.after_copy(&mut enc, 0);
-            t.resolve(&mut enc);
+            t.after_copy(enc, 0);
+            t.resolve(enc);
         }
-        let mut submits = vec![self.dev.queue.submit([enc.finish()])];
-        // The readback's other pieces and the queued rebuild, each in a submit of its own: right
-        // after the step's where the driver takes submits as they come; after the host's work
-        // that overlaps the step's passes where it may hold a submit until the one before it
-        // has finished (`GpuPaths::readback_before_host_work`).
-        let early = self.dev.paths.readback_before_host_work;
-        if early {
-            piece_bytes += self.submit_after_step(selective, timed, queueing, &mut submits)?;
+        Copied {
+            f_words,
+            table_bytes,
+            total,
+            scored,
+            piece_bytes,
         }
-        let working = std::time::Instant::now();
-        while_device_works(self);
-        let host_work_s = working.elapsed().as_secs_f64();
-        if !early {
-            piece_bytes += self.submit_after_step(selective, timed, queueing, &mut submits)?;
-        }
-        let submit_s = started.elapsed().as_secs_f64() - host_work_s;
+    }
+
+    /// Wait for the step's readback and copy it into `read`: the first submit's mapped words
+    /// (the table, the episode counters, the network's status), then the other pieces, then the
+    /// finished rows past the first copy's room; and the host path's statistics.
+    fn read_step(
+        &mut self,
+        read: StepRead<'_>,
+        how: ReadHow,
+        copied: &Copied,
+        submits: Vec<wgpu::SubmissionIndex>,
+        times: StepTimes,
+    ) -> Result<(), SimError> {
         let copies = submits.len();
-        let mut bytes = total + piece_bytes;
+        let mut bytes = copied.total + copied.piece_bytes;
         let rb = &self.step_readback;
         let (status, step_read) = (&mut self.sngnn_status, &self.step_read);
         let StepRead { out, episode, pool } = read;
-        let table_words = (table_bytes / 4) as usize;
+        let table_words = (copied.table_bytes / 4) as usize;
         let mut copy_s = 0.0;
         let mut finished = Ok(0);
-        map_and_read_after(&self.dev, rb, total, Some(submits[0].clone()), |words| {
-            let copying = std::time::Instant::now();
-            let (table, rest) = words.split_at(table_words);
-            let (ep, st) = rest.split_at(episode.len());
-            if selective {
-                finished = step_read.read_rows(table, out);
-            } else {
-                let (f, u) = table.split_at(f_words);
-                obs_payload::unpack(out, bytemuck::cast_slice(f), u);
-            }
-            episode.copy_from_slice(ep);
-            if scored {
-                status.copy_from_slice(st);
-            } else {
-                status.fill(0);
-            }
-            copy_s += copying.elapsed().as_secs_f64();
-        })?;
-        if selective {
+        map_and_read_after(
+            &self.dev,
+            rb,
+            copied.total,
+            Some(submits[0].clone()),
+            |words| {
+                let copying = std::time::Instant::now();
+                let (table, rest) = words.split_at(table_words);
+                let (ep, st) = rest.split_at(episode.len());
+                if how.selective {
+                    finished = step_read.read_rows(table, out);
+                } else {
+                    let (f, u) = table.split_at(copied.f_words);
+                    obs_payload::unpack(out, bytemuck::cast_slice(f), u);
+                }
+                episode.copy_from_slice(ep);
+                if copied.scored {
+                    status.copy_from_slice(st);
+                } else {
+                    status.fill(0);
+                }
+                copy_s += copying.elapsed().as_secs_f64();
+            },
+        )?;
+        if how.selective {
             copy_s += step_read.read_pieces(&self.dev, submits, out, pool)?;
         }
         let mut second = false;
-        if selective {
+        if how.selective {
             let count = finished?;
             let held = self.step_read.rows_hint();
             if count > held {
@@ -234,7 +318,7 @@ impl GpuStages {
         }
         // The timeline's own readback is not the step's: its time stays out of the wait.
         let timing = std::time::Instant::now();
-        if let Some(t) = self.timeline.as_ref().filter(|_| timed) {
+        if let Some(t) = self.timeline.as_ref().filter(|_| how.timed) {
             t.read(&self.dev, copies, &mut self.step_read.stats)?;
         }
         let timeline_s = timing.elapsed().as_secs_f64();
@@ -243,8 +327,9 @@ impl GpuStages {
         stats.bytes += bytes;
         stats.second_reads += u64::from(second);
         stats.copy_s += copy_s;
-        stats.submit_s += submit_s;
-        stats.wait_s += started.elapsed().as_secs_f64() - copy_s - host_work_s - timeline_s;
+        stats.submit_s += times.submit_s;
+        stats.wait_s +=
+            times.started.elapsed().as_secs_f64() - copy_s - times.host_work_s - timeline_s;
         Ok(())
     }
 
@@ -367,15 +452,14 @@ impl GpuStages {
     /// pieces copy.
     pub(super) fn submit_after_step(
         &self,
-        selective: bool,
-        timed: bool,
+        how: ReadHow,
         queueing: Option<&str>,
         submits: &mut Vec<wgpu::SubmissionIndex>,
     ) -> Result<u64, SimError> {
         let mut bytes = 0;
-        if selective {
+        if how.selective {
             let tables = self.output_tables();
-            let timeline = self.timeline.as_ref().filter(|_| timed);
+            let timeline = self.timeline.as_ref().filter(|_| how.timed);
             let (others, copied) = self
                 .step_read
                 .submit_other_pieces(&self.dev, &tables, timeline);

@@ -9,8 +9,15 @@
 //! dependencies first. Stage files are `shaders/<stage>.wgsl`, named after their Rust twin in
 //! `src/systems/`, with one environment per invocation. What the device compiles is a pass
 //! (`schedule::passes`): a stage's file with its entry point `main`, or a fused pass
-//! (`schedule::fused_passes`), whose members' files each define `fn stage_<name>(e: u32)` and whose
-//! `main` is generated ([`assemble_pass`]).
+//! (`schedule::fused_passes`), whose members' files each define `fn stage_<name>(e: u32)` and
+//! whose `main` is generated ([`assemble_pass`]).
+//!
+//! The parts: this file holds the sources and their assembly; `layout` the batch layout as the
+//! shaders see it (the uniform `batch`, element order, scratch, pool rows, permutation sizes, size
+//! classes); `bindings` the bind groups, declared once; `pool` the pool's copies and the generated
+//! pool and finished-row passes; `rebuild` the generated obstacle rebuilds; `prelude` the generated
+//! prelude and its documented rewrites. Each names only the parts before it in this list (and this
+//! file's shared constants).
 //!
 //! This module is plain text work (no wgpu), so the naga tests can assemble and validate the
 //! shaders without the `gpu` feature or a device.
