@@ -5,12 +5,12 @@
 // and resets at once; NEXT_STEP marks the environment so that `begin_step` resets it at the next
 // step; DISABLED leaves it to the caller.
 //
-// Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
-// environment, marks NEXT_STEP's and queues the pool rows of SAME_STEP's finished environments
-// (and the environments for the submit's one obstacle rebuild: `pool_reset_queue_rebuild`);
-// `main` keeps the finals of each queued environment and resets it with a team of lanes
-// (common/pool_reset.wgsl): a lane keeps the slots of the finals that it then overwrites, so no
-// lane reads what another writes.
+// Rare work out of the hot pass (the stage's GpuPlan: backend::schedule::has_rare_work):
+// `queue_work`, over every environment, marks NEXT_STEP's and queues the pool rows of SAME_STEP's
+// finished environments (and the environments for the submit's one obstacle rebuild:
+// `pool_reset_queue_rebuild`); `main` keeps the finals of each queued environment and resets it
+// with a team of lanes (common/pool_reset.wgsl): a lane keeps the slots of the finals that it then
+// overwrites, so no lane reads what another writes.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {

@@ -5,14 +5,14 @@
 // observation with reward 0 and takes no dynamics this step), and count the tick of every
 // environment that steps, first, as 0.1.1 does.
 //
-// Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
-// environment, clears the flags, counts the tick and queues the pool row of each environment that
-// resets (`pool_row_of`, chosen before the reset moves the episode counter on) and, where the
-// rows leave the ORCA obstacles to the device, the environment for the submit's one rebuild
-// (`pool_reset_queue_rebuild`: a reset environment takes no dynamics this step, so nothing reads
-// its obstacles before then); `main` resets each queued environment with a team of lanes (a reset
-// copies a whole state row and observation: common/pool_reset.wgsl). Each environment's
-// operations keep their order.
+// Rare work out of the hot pass (the stage's GpuPlan: backend::schedule::has_rare_work):
+// `queue_work`, over every environment, clears the flags, counts the tick and queues the pool row
+// of each environment that resets (`pool_row_of`, chosen before the reset moves the episode counter
+// on) and, where the rows leave the ORCA obstacles to the device, the environment for the submit's
+// one rebuild (`pool_reset_queue_rebuild`: a reset environment takes no dynamics this step, so
+// nothing reads its obstacles before then); `main` resets each queued environment with a team of
+// lanes (a reset copies a whole state row and observation: common/pool_reset.wgsl). Each
+// environment's operations keep their order.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn queue_work(@builtin(global_invocation_id) gid: vec3<u32>) {

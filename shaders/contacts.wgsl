@@ -90,7 +90,7 @@ fn push_out(e: u32, i: u32) {
 }
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_contacts(e: u32) {
     for (var i = at_human(e, 0u); i < at_human(e, su[batch.c_n_humans + e]); i += batch.k_human) {
         push_out(e, i);

@@ -11,13 +11,13 @@
 // (Mesa inlines every call, and each copy of the regrouping costs llvmpipe
 // compile time).
 //
-// Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
-// environment, queues those with a crowd forming or a walker at its laptop seat; `main` runs one
-// lane per queued environment, or one workgroup (REGROUP_LANES: its lane 0 the logic, every lane
-// a share of the regrouping). Any other environment `main` would leave as it is. The ORCA
-// obstacle rebuild that ends a regrouping is queued (RARE_REBUILD) for one dispatch after the
-// submit's last stage, `social_events`' regroupings with these (`rebuild` or
-// `rebuild_in_workgroups`, generated: backend::wgsl::REBUILD_PASSES).
+// Rare work out of the hot pass (the stage's GpuPlan: backend::schedule::has_rare_work):
+// `queue_work`, over every environment, queues those with a crowd forming or a walker at its laptop
+// seat; `main` runs one lane per queued environment, or one workgroup (REGROUP_LANES: its lane 0
+// the logic, every lane a share of the regrouping). Any other environment `main` would leave as it
+// is. The ORCA obstacle rebuild that ends a regrouping is queued (RARE_REBUILD) for one dispatch
+// after the submit's last stage, `social_events`' regroupings with these (`rebuild` or
+// `rebuild_in_workgroups`, generated: backend::schedule::regroups).
 //
 // Capacities: Rust asserts that a new group and a new laptop user fit their capacities
 // (guaranteed by `Caps`: crowd formation raises the group capacity to humans / 2, laptop-use

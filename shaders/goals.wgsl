@@ -17,7 +17,7 @@ fn goal_distance(ax: f32, ay: f32, bx: f32, by: f32) -> f32 {
 }
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_goals(e: u32) {
     // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
     var rng = rng_new(

@@ -6,7 +6,7 @@
 // Standing groups never move. Change both files in the same commit.
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_group_motion(e: u32) {
     // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
     var rng = rng_new(

@@ -12,7 +12,7 @@
 // If the ORCA lists overflow (common/orca_world.wgsl), the group's velocity becomes NaN.
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_group_velocities(e: u32) {
     for (var g = at_group(e, 0u); g < at_group(e, su[batch.c_n_groups + e]); g += batch.k_group) {
         if (su[batch.c_g_kind + g] != GROUP_MOVING) {

@@ -50,7 +50,7 @@ fn walk(i: u32, vx: f32, vy: f32) {
 }
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_human_motion(e: u32) {
     // Keyed like the Rust LazyStream (which only defers the key hash to the first draw).
     var rng = rng_new(

@@ -199,7 +199,7 @@ fn write_episode(e: u32) {
 }
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_metrics(e: u32) {
     let row = info_row(e);
     let tick = f32(su[batch.c_tick + e]);

@@ -17,7 +17,7 @@
 // same value of their environments store 128 consecutive bytes; `rows` then moves it into the
 // environment-major rows of `obs` that the host reads, a tile at a time through workgroup memory.
 // Elsewhere `stage_observation` writes the rows in place and `rows` is not dispatched. `rows` is
-// an entry point of the fused pass that holds the observation (`backend::wgsl::FUSED_PASSES`).
+// an entry point of the fused pass that holds the observation (`pipeline::FusedPass`).
 //
 // On a device that writes the entity records apart (`batch.obs_records_apart`,
 // `GpuPaths::records_in_lanes`), in a whole view, `stage_observation` writes the robot record,
@@ -627,7 +627,7 @@ fn obs_present(e: u32, t: u32) -> u32 {
 }
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_observation(e: u32) {
     fr = obs_frame(e);
     obs_e = e;

@@ -130,7 +130,7 @@ fn clamp_unit(x: f32) -> f32 {
 }
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_reward(e: u32) {
     let row = batch.co_info + e * batch.so_info;
     var r: f32;

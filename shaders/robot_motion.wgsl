@@ -19,7 +19,7 @@ fn command(e: u32) -> vec3<f32> {
 }
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_robot_motion(e: u32) {
     let cmd = command(e);
     sf[batch.c_robot_vx + e] = cmd.x;

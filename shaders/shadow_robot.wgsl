@@ -30,7 +30,7 @@ fn command_from_velocity(theta: f32, vx: f32, vy: f32) -> vec3<f32> {
 }
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_shadow_robot(e: u32) {
     if (su[batch.c_shadow_collided + e] != 0u || su[batch.c_shadow_reached + e] != 0u) {
         return;

@@ -12,15 +12,14 @@
 // inlines every call, and each copy of the regrouping costs llvmpipe compile time): a lane, or a
 // workgroup whose lanes share the regrouping (REGROUP_LANES, `regroup_canonicalize_on_lanes`).
 //
-// Rare work out of the hot pass (backend::wgsl::RARE_WORK_STAGES): `queue_work`, over every
-// environment, draws the events' chances in `main`'s order up to the first that hits and queues
-// the environments where one does; `main` runs one lane per queued environment (or one
-// workgroup: REGROUP_LANES) and redraws from the start (the step's stream is keyed by the tick,
-// so it draws the same numbers). Where no
-// chance hits, `main` would have changed nothing, and the environment is not queued. The ORCA
-// obstacle rebuild that ends a regrouping is queued (RARE_REBUILD) for one dispatch after the
-// submit's last stage, `formation`'s regroupings with these (`rebuild` or
-// `rebuild_in_workgroups`, generated: backend::wgsl::REBUILD_PASSES).
+// Rare work out of the hot pass (the stage's GpuPlan: backend::schedule::has_rare_work):
+// `queue_work`, over every environment, draws the events' chances in `main`'s order up to the first
+// that hits and queues the environments where one does; `main` runs one lane per queued environment
+// (or one workgroup: REGROUP_LANES) and redraws from the start (the step's stream is keyed by the
+// tick, so it draws the same numbers). Where no chance hits, `main` would have changed nothing, and
+// the environment is not queued. The ORCA obstacle rebuild that ends a regrouping is queued
+// (RARE_REBUILD) for one dispatch after the submit's last stage, `formation`'s regroupings with
+// these (`rebuild` or `rebuild_in_workgroups`, generated: backend::schedule::regroups).
 
 // Outcome of an attempt to start a formation (Rust `Start`).
 const START_STARTED: u32 = 0u;

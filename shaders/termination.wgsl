@@ -26,7 +26,7 @@ fn shadow_outcome(e: u32) {
 }
 
 // The stage over environment `e`, which steps this tick: its fused pass's entry point
-// (`backend::wgsl::FUSED_PASSES`, generated) calls it.
+// (`pipeline::FusedPass`, generated) calls it.
 fn stage_termination(e: u32) {
     let x = sf[batch.c_robot_x + e];
     let y = sf[batch.c_robot_y + e];

@@ -16,7 +16,7 @@
 // library (`backend::wgsl::assemble_pass_rebuilding_resets`), which zero the old tail past the
 // new count as every rebuild does: a step's resets queue their environments
 // (`pool_reset_queue_rebuild`) for the submit's one rebuild after its stages, with the
-// regroupings' (backend::wgsl::QUEUED_REBUILD_PASSES); the reset pass rebuilds after `main`.
+// regroupings' (backend::schedule::queues_rebuilds); the reset pass rebuilds after `main`.
 
 // Queue environment e, about to reset from its pool row, for the submit's one obstacle rebuild
 // (RARE_REBUILD) where the rows leave the obstacles to the device, unless a regrouping queued it

@@ -285,10 +285,10 @@ fn regroup_canonicalize(e: u32) {
     regroup_remap(e, &perms);
     // Compact list positions, as a loaded document numbers them.
     regroup_number_lists(e);
-    // Rust rebuilds the obstacles here; on the GPU one dispatch rebuilds those of every
-    // environment the submit regrouped, after its last stage (src/backend/wgsl/rebuild.rs,
-    // REBUILD_PASSES): nothing before it reads the `ov_*` columns. No environment starts a submit
-    // dirty, so one already dirty is already queued.
+    // Rust rebuilds the obstacles here; on the GPU one dispatch rebuilds those of every environment
+    // the submit regrouped, after its last stage (src/backend/wgsl/rebuild.rs;
+    // backend::schedule::queues_rebuilds): nothing before it reads the `ov_*` columns. No
+    // environment starts a submit dirty, so one already dirty is already queued.
     if (su[batch.c_obstacles_dirty + e] != 1u) {
         su[batch.c_obstacles_dirty + e] = 1u;
         rare_push(RARE_REBUILD, e);

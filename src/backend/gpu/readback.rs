@@ -1,20 +1,21 @@
 //! The step readback: what a step hands the host, and no more.
 //!
 //! A step writes some output columns for every environment (observation, counts, pairs, reward,
-//! flags, info, events) and the [`FINISHED_ONLY_COLUMNS`] (SAME_STEP finals, episode statistics
-//! and seed) only for the environments whose episode ended; every other environment keeps those
-//! as they were, on the device and in the host's copy alike. So the submit that runs a step
-//! also runs the finished-rows pass ([`wgsl::finished_rows_shader`]), which packs the finished
-//! environments' rows behind a counter, and copies into the mapped readback buffer the counter
-//! and the first [`StepReadback::rows_hint`] rows, and the per-step columns into up to
-//! [`MOST_PIECES`] buffers of their own, the first in the step's submit and each other in a submit
-//! of its own after the host's work that overlaps the passes (a driver may hold a submit until
-//! the one before it has finished): while the host copies one piece into its outputs, the device
-//! copies the next to host memory. When more environments
-//! finished than that, a second copy fetches the rest and the hint grows; the hint follows twice
-//! the most environments that finished in recent steps. Rows come in the order the device's
-//! atomic counter gave them; each carries its environment, where the host writes it, so the
-//! host's outputs are the same bits whatever that order.
+//! flags, info, events) and the [`FINISHED_ONLY_COLUMNS`] (SAME_STEP finals, episode statistics and
+//! seed) only for the environments whose episode ended; every other environment keeps those as they
+//! were, on the device and in the host's copy alike. So the submit that runs a step also runs the
+//! finished-rows pass ([`wgsl::finished_rows_shader`]), which packs the finished environments' rows
+//! behind a counter, and copies into the mapped readback buffer the counter and the first
+//! [`StepReadback::rows_hint`] rows, and the per-step columns into up to [`MOST_PIECES`] buffers of
+//! their own, the first in the step's submit and each other in a submit of its own, right after the
+//! step's on a hardware GPU and after the host's work that overlaps the passes on a software one,
+//! whose driver may hold a submit until the one before it has finished
+//! (`GpuPaths::readback_before_host_work`): while the host copies one piece into its outputs, the
+//! device copies the next to host memory. When more environments finished than that, a second copy
+//! fetches the rest and the hint grows; the hint follows twice the most environments that finished
+//! in recent steps. Rows come in the order the device's atomic counter gave them; each carries its
+//! environment, where the host writes it, so the host's outputs are the same bits whatever that
+//! order.
 //!
 //! The caller can leave optional per-step columns out ([`StepOutputs`]: info, interactions,
 //! events); those are then not read back at all ([`StepReadback::select`]).

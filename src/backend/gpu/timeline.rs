@@ -3,9 +3,9 @@
 //! The host's time from the submit to its outputs filled (`HostPath`'s `wait_s`, `refill_ahead_s`
 //! and `copy_s`, which run one after the other) then splits into the device's part: the copies
 //! recorded before the passes (the reset pool's new rows, the queue counters), the passes, and the
-//! readback's copies with any idle time between their submits (the other pieces are submitted after
-//! the host's rows ahead, so where those outlast the passes the device's wait for them counts
-//! here); and what the device's part does not explain: recording and submitting, waking up and
+//! readback's copies with any idle time between their submits (where the other pieces are
+//! submitted after the host's rows ahead, `GpuPaths::readback_before_host_work` off, and those
+//! outlast the passes, the device's wait for them counts here); and what the device's part does not explain: recording and submitting, waking up and
 //! mapping, and the copy of the last piece. `socnav bench --backend gpu` turns it on for a short
 //! run of its own (`Backend::set_step_timeline`); off, a step records no timestamps.
 
