@@ -14,113 +14,136 @@
 //! laptop sizes, wall thickness) must match the batch's config. A snapshot larger than the
 //! batch's capacities is an error naming the capacity.
 //!
+//! One set of serde types (`types`) describes the document for both directions: [`export`]
+//! fills them from the state and converts them to JSON; [`import`] reads them from JSON (module
+//! `values`: each value as the golden format has it, a refusal naming its path, such as
+//! `state.humans[3].x`), checks them against the batch's config and capacities and resolves the
+//! ids they link by (`validate`), writes them into the environment (`load`), and checks the
+//! state's invariants. Nothing is written before the document has been read and validated.
+//!
 //! The module sits above the stages, not in `state`: loading a document recomputes what the stages
 //! derive (list positions, episode sums, formations, the robot's world velocity, the SNGNN
 //! history) with the stages' own code.
 
-use serde_json::{Map, Value, json};
+use serde_json::Value;
 
 use crate::error::SimError;
 use crate::math;
 use crate::params::StepParams;
-use crate::state::{BatchState, NONE, blocker_kind, forming, group_kind, policy, role, room_shape};
+use crate::state::{BatchState, NONE, blocker_kind, forming, group_kind, policy, role};
 
-mod read;
+mod load;
 mod sngnn;
+mod types;
+mod validate;
+mod values;
 
-use read::Reader;
+use types::{
+    Blocker, Counts, CrowdForming, Document, EpisodeSums, Extras, Group, Human, HumanParams,
+    Laptop, LaptopForming, LaptopUser, Metrics, Plant, RewardInfo, RewardState, Robot, Room,
+    Shadow, Snapshot, Table, Wall,
+};
+use values::{Angle, Code, F32, Flag, Id, Lazy, List, Min, Object, Slot, U32, U64, Vector};
 
 /// Format tag of documents written by [`export`].
 pub const FORMAT: &str = "socnav-state/1";
 
-fn num(x: f32) -> Value {
-    if x.is_finite() {
-        json!(x as f64)
-    } else if x.is_nan() {
-        json!("nan")
-    } else if x > 0.0 {
-        json!("inf")
-    } else {
-        json!("-inf")
-    }
-}
-
-fn opt_index(i: u32) -> Value {
-    if i == NONE { Value::Null } else { json!(i) }
-}
-
-const ROLE_NAMES: [&str; 5] = ["static", "dynamic", "moving_group", "standing_group", "hl"];
-const SHAPE_NAMES: [&str; 4] = ["square", "rectangle", "L", "no-walls"];
-
 /// Environment `e` of `s` as a document.
 pub fn export(p: &StepParams, s: &BatchState, e: usize) -> Value {
+    // A document of f32s, strings, integers and booleans always converts.
+    serde_json::to_value(document(p, s, e)).unwrap_or(Value::Null)
+}
+
+/// Environment `e` of `s` as a [`Document`].
+fn document(p: &StepParams, s: &BatchState, e: usize) -> Document {
     let c = &s.strides;
     let wb = e * c.walls;
-    let walls: Vec<Value> = (wb..wb + s.n_walls[e] as usize)
-        .map(|w| {
-            json!({"id": s.w_id[w], "x": num(s.w_x[w]), "y": num(s.w_y[w]), "theta": num(s.w_theta[w]),
-                   "length": num(s.w_length[w]), "thickness": num(p.wall_thickness)})
+    let walls = (wb..wb + s.n_walls[e] as usize)
+        .map(|w| Wall {
+            id: U32(s.w_id[w]),
+            x: F32(s.w_x[w]),
+            y: F32(s.w_y[w]),
+            theta: Angle(s.w_theta[w]),
+            length: F32(s.w_length[w]),
+            thickness: Some(F32(p.wall_thickness)),
         })
         .collect();
     let bb = e * c.blockers;
-    let blockers: Vec<Value> = (bb..bb + s.n_blockers[e] as usize)
-        .map(|b| {
-            let kind = if s.b_kind[b] == blocker_kind::L_BLOCK {
-                "laptop"
+    let blockers = (bb..bb + s.n_blockers[e] as usize)
+        .map(|b| Blocker {
+            kind: Code::new(if s.b_kind[b] == blocker_kind::L_BLOCK {
+                blocker_kind::L_BLOCK
             } else {
-                "wall"
-            };
-            json!({"kind": kind, "x": num(s.b_x[b]), "y": num(s.b_y[b]), "theta": num(s.b_theta[b]),
-                   "length": num(s.b_length[b]), "width": num(s.b_width[b])})
+                blocker_kind::DOOR
+            }),
+            x: F32(s.b_x[b]),
+            y: F32(s.b_y[b]),
+            theta: Angle(s.b_theta[b]),
+            length: F32(s.b_length[b]),
+            width: F32(s.b_width[b]),
         })
         .collect();
-    json!({
-        "format": FORMAT,
-        "room": {"map_x": num(s.map_x[e]), "map_y": num(s.map_y[e]),
-                 "shape": SHAPE_NAMES[s.room_shape[e] as usize]},
-        "walls": walls,
-        "spawn_blockers": blockers,
-        "human_params": {
-            "orca_neighborDist": num(s.orca_neighbor_dist[e]), "orca_timeHorizon": num(s.orca_time_horizon[e]),
-            "orca_timeHorizonObst": num(s.orca_time_horizon_obst[e]), "orca_maxSpeed": num(s.orca_max_speed[e]),
-            "sfm_r0": num(s.sfm_r0[e]), "sfm_gamma": num(s.sfm_gamma[e]), "sfm_n": num(s.sfm_n[e]),
-            "sfm_n_prime": num(s.sfm_n_prime[e]), "sfm_lambda": num(s.sfm_lambda[e]),
+    Document {
+        format: FORMAT,
+        room: Room {
+            map_x: F32(s.map_x[e]),
+            map_y: F32(s.map_y[e]),
+            shape: Code::new(s.room_shape[e]),
         },
-        "counts": {"total_humans": s.n_humans[e]},
-        "state": export_snapshot(p, s, e),
-        "socnav": {
-            "episode": s.episode[e], "seed": s.episode_seed(e), "next_seed": s.next_seed(e),
-            "done": s.done[e] != 0, "pending_reset": s.pending_reset[e] != 0,
-            "episode_sums": {
-                "return": num(s.ep_return[e]), "min_human_distance": num(s.ep_min_human_dist[e]),
-                "min_obstacle_distance": num(s.ep_min_obstacle_dist[e]),
-                "sum_average_obstacle_distance": num(s.ep_sum_avg_obstacle_dist[e]),
-                "sum_time_to_collision": num(s.ep_sum_ttc[e]),
-                "sum_discomfort_dsrnn": num(s.ep_sum_discomfort_dsrnn[e]), "sum_sngnn_reward": num(s.ep_sum_sngnn[e]),
-            },
+        walls: List(walls),
+        spawn_blockers: List(blockers),
+        human_params: HumanParams {
+            orca_neighbor_dist: F32(s.orca_neighbor_dist[e]),
+            orca_time_horizon: F32(s.orca_time_horizon[e]),
+            orca_time_horizon_obst: F32(s.orca_time_horizon_obst[e]),
+            orca_max_speed: F32(s.orca_max_speed[e]),
+            sfm_r0: F32(s.sfm_r0[e]),
+            sfm_gamma: F32(s.sfm_gamma[e]),
+            sfm_n: F32(s.sfm_n[e]),
+            sfm_n_prime: F32(s.sfm_n_prime[e]),
+            sfm_lambda: F32(s.sfm_lambda[e]),
         },
-    })
+        counts: Counts {
+            total_humans: s.n_humans[e],
+        },
+        state: snapshot(p, s, e),
+        socnav: Some(Extras {
+            episode: U32(s.episode[e]),
+            seed: Some(U64(s.episode_seed(e))),
+            next_seed: Some(U64(s.next_seed(e))),
+            done: Flag(s.done[e] != 0),
+            pending_reset: Flag(s.pending_reset[e] != 0),
+            episode_sums: Some(EpisodeSums {
+                ret: F32(s.ep_return[e]),
+                min_human_distance: Min(s.ep_min_human_dist[e]),
+                min_obstacle_distance: Min(s.ep_min_obstacle_dist[e]),
+                sum_average_obstacle_distance: F32(s.ep_sum_avg_obstacle_dist[e]),
+                sum_time_to_collision: F32(s.ep_sum_ttc[e]),
+                sum_discomfort_dsrnn: F32(s.ep_sum_discomfort_dsrnn[e]),
+                sum_sngnn_reward: F32(s.ep_sum_sngnn[e]),
+            }),
+        }),
+    }
 }
 
-fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
+fn snapshot(p: &StepParams, s: &BatchState, e: usize) -> Snapshot {
     let c = &s.strides;
     let hb = e * c.humans;
-    let mut goals = Map::new();
+    let mut goals = std::collections::BTreeMap::new();
     goals.insert(
-        "0".into(),
-        json!([num(s.goal_x[e]), num(s.goal_y[e]), num(p.goal_radius)]),
+        "0".to_string(),
+        [F32(s.goal_x[e]), F32(s.goal_y[e]), F32(p.goal_radius)],
     );
-    let humans: Vec<Value> = (0..s.n_humans[e] as usize)
+    let humans = (0..s.n_humans[e] as usize)
         .map(|k| {
             let i = hb + k;
             let r = s.h_role[i];
-            let group_goal = r == role::MOVING_GROUP;
             // Every human has a goal: spawned laptop users and standing-group members their own
             // position, formed ones the seat or slot they walked to (0.1.1 keeps it).
-            let goal = json!([num(s.h_goal_x[i]), num(s.h_goal_y[i])]);
+            let goal = [s.h_goal_x[i], s.h_goal_y[i]];
             // The goal registry holds a moving group's goal disc with the group goal radius;
             // a member's own arrival test uses its group's member goal radius.
-            let registry_radius = if group_goal {
+            let registry_radius = if r == role::MOVING_GROUP {
                 p.group_goal_radius
             } else {
                 p.human_goal_radius
@@ -128,152 +151,213 @@ fn export_snapshot(p: &StepParams, s: &BatchState, e: usize) -> Value {
             if r != role::LAPTOP_USER && r != role::STANDING_GROUP {
                 goals.insert(
                     s.h_id[i].to_string(),
-                    json!([goal[0], goal[1], num(registry_radius)]),
+                    [F32(goal[0]), F32(goal[1]), F32(registry_radius)],
                 );
             }
             let goal_radius = match r {
-                role::LAPTOP_USER => Value::Null,
+                role::LAPTOP_USER => None,
                 _ if s.h_group[i] != NONE => {
-                    num(s.g_member_goal_radius[e * c.groups + s.h_group[i] as usize])
+                    Some(s.g_member_goal_radius[e * c.groups + s.h_group[i] as usize])
                 }
-                _ => num(p.human_goal_radius),
+                _ => Some(p.human_goal_radius),
             };
-            let mut h = json!({
-                "id": s.h_id[i], "x": num(s.h_x[i]), "y": num(s.h_y[i]), "theta": num(s.h_theta[i]),
-                "speed": num(s.h_speed[i]), "radius": num(p.human_radius), "goal": goal,
-                "goal_radius": goal_radius,
-                "policy": if s.h_policy[i] == policy::ORCA { "orca" } else { "sfm" },
-                "role": ROLE_NAMES[r as usize],
-            });
-            if s.h_group[i] != NONE {
-                h["group"] = json!(s.h_group[i]);
+            let index = |v: u32| (v != NONE).then_some(U32(v));
+            Human {
+                id: U32(s.h_id[i]),
+                x: F32(s.h_x[i]),
+                y: F32(s.h_y[i]),
+                theta: Angle(s.h_theta[i]),
+                speed: F32(s.h_speed[i]),
+                radius: Some(F32(p.human_radius)),
+                goal: Some(Vector(goal)),
+                goal_radius: goal_radius.map(|r| Lazy::Ready(F32(r))),
+                policy: Code::new(if s.h_policy[i] == policy::ORCA {
+                    policy::ORCA
+                } else {
+                    policy::SFM
+                }),
+                role: Code::new(r),
+                group: index(s.h_group[i]),
+                hl: index(s.h_laptop_user[i]),
+                forming_crowd: (s.h_forming[i] == forming::CROWD).then_some(Flag(true)),
+                forming_hl: (s.h_forming[i] == forming::LAPTOP).then_some(Lazy::Ready(Flag(true))),
             }
-            if s.h_laptop_user[i] != NONE {
-                h["hl"] = json!(s.h_laptop_user[i]);
-            }
-            match s.h_forming[i] {
-                forming::CROWD => h["forming_crowd"] = json!(true),
-                forming::LAPTOP => h["forming_hl"] = json!(true),
-                _ => {}
-            }
-            h
         })
         .collect();
     let gb = e * c.groups;
-    let groups: Vec<Value> = (gb..gb + s.n_groups[e] as usize)
+    let groups = (gb..gb + s.n_groups[e] as usize)
         .map(|g| {
-            let moving = s.g_kind[g] == group_kind::MOVING;
             let first = hb + s.g_first[g] as usize;
-            let members: Vec<u32> = (first..first + s.g_count[g] as usize).map(|i| s.h_id[i]).collect();
-            json!({
-                "kind": if moving { "moving" } else { "standing" }, "dispersable": s.g_dispersable[g] != 0,
-                "members": members, "centre": [num(s.g_x[g]), num(s.g_y[g])],
+            Group {
+                kind: Code::new(if s.g_kind[g] == group_kind::MOVING {
+                    group_kind::MOVING
+                } else {
+                    group_kind::STANDING
+                }),
+                dispersable: Flag(s.g_dispersable[g] != 0),
+                members: List(
+                    (first..first + s.g_count[g] as usize)
+                        .map(|i| Id(s.h_id[i]))
+                        .collect(),
+                ),
+                centre: Vector([s.g_x[g], s.g_y[g]]),
                 // A standing group's goal: its centre when spawned, the old goal when it stopped.
-                "goal": [num(s.g_goal_x[g]), num(s.g_goal_y[g])],
-                "goal_radius": num(p.group_goal_radius), "radius": num(p.group_radius), "noise": num(p.group_noise_std),
-            })
+                goal: Some(Vector([s.g_goal_x[g], s.g_goal_y[g]])),
+                goal_radius: F32(p.group_goal_radius),
+                radius: F32(p.group_radius),
+                noise: F32(p.group_noise_std),
+            }
         })
         .collect();
     let lb = e * c.laptops;
     let ub = e * c.laptop_users;
-    let users: Vec<Value> = (ub..ub + s.n_laptop_users[e] as usize)
+    let users = (ub..ub + s.n_laptop_users[e] as usize)
         .map(|u| {
             let h = hb + s.lu_human[u] as usize;
             let l = lb + s.lu_laptop[u] as usize;
-            json!({"human": s.h_id[h], "laptop": s.l_id[l], "dispersable": s.lu_dispersable[u] != 0,
-                   "centre": [num(0.5 * (s.h_x[h] + s.l_x[l])), num(0.5 * (s.h_y[h] + s.l_y[l]))],
-                   "distance": num(p.laptop_width + p.human_laptop_distance)})
+            LaptopUser {
+                human: U32(s.h_id[h]),
+                laptop: U32(s.l_id[l]),
+                dispersable: Flag(s.lu_dispersable[u] != 0),
+                centre: [
+                    F32(0.5 * (s.h_x[h] + s.l_x[l])),
+                    F32(0.5 * (s.h_y[h] + s.l_y[l])),
+                ],
+                distance: F32(p.laptop_width + p.human_laptop_distance),
+            }
         })
         .collect();
-    let laptops: Vec<Value> = (lb..lb + s.n_laptops[e] as usize)
-        .map(|l| {
-            json!({"id": s.l_id[l], "x": num(s.l_x[l]), "y": num(s.l_y[l]), "theta": num(s.l_theta[l]),
-                   "length": num(p.laptop_length), "width": num(p.laptop_width), "hl": opt_index(s.l_user[l])})
+    let laptops = (lb..lb + s.n_laptops[e] as usize)
+        .map(|l| Laptop {
+            id: U32(s.l_id[l]),
+            x: F32(s.l_x[l]),
+            y: F32(s.l_y[l]),
+            theta: Angle(s.l_theta[l]),
+            length: Some(F32(p.laptop_length)),
+            width: Some(F32(p.laptop_width)),
+            hl: (s.l_user[l] != NONE).then_some(U32(s.l_user[l])),
         })
         .collect();
     let tb = e * c.tables;
-    let tables: Vec<Value> = (tb..tb + s.n_tables[e] as usize)
-        .map(|t| {
-            json!({"id": s.t_id[t], "x": num(s.t_x[t]), "y": num(s.t_y[t]), "theta": num(s.t_theta[t]),
-                   "length": num(p.table_length), "width": num(p.table_width)})
+    let tables = (tb..tb + s.n_tables[e] as usize)
+        .map(|t| Table {
+            id: U32(s.t_id[t]),
+            x: F32(s.t_x[t]),
+            y: F32(s.t_y[t]),
+            theta: Angle(s.t_theta[t]),
+            length: Some(F32(p.table_length)),
+            width: Some(F32(p.table_width)),
         })
         .collect();
     let pb = e * c.plants;
-    let plants: Vec<Value> = (pb..pb + s.n_plants[e] as usize)
-        .map(|i| json!({"id": s.p_id[i], "x": num(s.p_x[i]), "y": num(s.p_y[i]), "radius": num(p.plant_radius)}))
+    let plants = (pb..pb + s.n_plants[e] as usize)
+        .map(|i| Plant {
+            id: U32(s.p_id[i]),
+            x: F32(s.p_x[i]),
+            y: F32(s.p_y[i]),
+            radius: Some(F32(p.plant_radius)),
+        })
         .collect();
-    let mut snapshot = json!({
-        "tick": s.tick[e],
-        "robot": {"x": num(s.robot_x[e]), "y": num(s.robot_y[e]), "theta": num(s.robot_theta[e]),
-                  "radius": num(p.robot_radius), "goal": [num(s.goal_x[e]), num(s.goal_y[e])],
-                  "goal_radius": num(p.goal_radius), "vel": [num(s.robot_vx[e]), num(s.robot_vy[e]), num(s.robot_w[e])]},
-        "shadow_robot": {"x": num(s.shadow_x[e]), "y": num(s.shadow_y[e]), "theta": num(s.shadow_theta[e]),
-                         "vel": [num(s.shadow_vx[e]), num(s.shadow_vy[e]), num(s.shadow_w[e])],
-                         "collided": s.shadow_collided[e] != 0, "reached": s.shadow_reached[e] != 0,
-                         "reach_tick": if s.shadow_reached[e] != 0 { json!(s.shadow_reach_tick[e]) } else { Value::Null },
-                         "path_length": num(s.shadow_path_length[e])},
-        "humans": humans,
-        "groups": groups,
-        "hl_interactions": users,
-        "laptops": laptops,
-        "tables": tables,
-        "plants": plants,
-        "crowd_forming": export_crowd_forming(s, e),
-        "hl_forming": if s.lf_active[e] != 0 {
-            json!({"human": s.h_id[hb + s.lf_human[e] as usize], "laptop": s.l_id[lb + s.lf_laptop[e] as usize],
-                   "seat": [num(s.lf_seat_x[e]), num(s.lf_seat_y[e]), num(s.lf_seat_theta[e])]})
-        } else { Value::Null },
-        "metrics": {
-            "prev_goal_distance": num(s.m_prev_goal_dist[e]), "failure_to_progress": s.m_failure_to_progress[e],
-            "stalled_time": num(s.m_stalled_time[e]), "path_length": num(s.m_path_length[e]),
-            "v_min": num(s.m_v_min[e]), "v_max": num(s.m_v_max[e]), "v_avg": num(s.m_v_avg[e]),
-            "prev_vel": [num(s.m_prev_vx[e]), num(s.m_prev_vy[e])],
-            "a_min": num(s.m_a_min[e]), "a_max": num(s.m_a_max[e]), "a_avg": num(s.m_a_avg[e]),
-            "prev_a": [num(s.m_prev_ax[e]), num(s.m_prev_ay[e])],
-            "jerk_min": num(s.m_j_min[e]), "jerk_max": num(s.m_j_max[e]), "jerk_avg": num(s.m_j_avg[e]),
-            "compliant_count": s.m_compliant[e],
+    let robot_vel = Vector([s.robot_vx[e], s.robot_vy[e], s.robot_w[e]]);
+    Snapshot {
+        tick: U32(s.tick[e]),
+        robot: Robot {
+            x: F32(s.robot_x[e]),
+            y: F32(s.robot_y[e]),
+            theta: Angle(s.robot_theta[e]),
+            radius: Some(F32(p.robot_radius)),
+            goal: Vector([s.goal_x[e], s.goal_y[e]]),
+            goal_radius: Some(F32(p.goal_radius)),
+            vel: robot_vel,
         },
-        "reward_state": {
-            "prev_distance": if s.r_has_prev[e] != 0 { num(s.r_prev_dist[e]) } else { Value::Null },
-            "info": {"DISCOMFORT_SNGNN": num(s.r_discomfort_sngnn[e]), "DISCOMFORT_DSRNN": num(s.r_discomfort_dsrnn[e]),
-                     "distance_reward": num(s.r_distance[e]), "alive_reward": num(s.r_alive[e]),
-                     "sngnn_reward": num(s.r_sngnn[e])},
+        shadow_robot: Shadow {
+            x: F32(s.shadow_x[e]),
+            y: F32(s.shadow_y[e]),
+            theta: Angle(s.shadow_theta[e]),
+            vel: Vector([s.shadow_vx[e], s.shadow_vy[e], s.shadow_w[e]]),
+            collided: Flag(s.shadow_collided[e] != 0),
+            reached: Flag(s.shadow_reached[e] != 0),
+            reach_tick: (s.shadow_reached[e] != 0).then_some(U32(s.shadow_reach_tick[e])),
+            path_length: F32(s.shadow_path_length[e]),
         },
-        "goals": Value::Object(goals),
-    });
-    if s.strides.frames > 0 {
-        snapshot["sngnn_frames"] = sngnn::export(p, s, e);
+        humans: List(humans),
+        groups: List(groups),
+        hl_interactions: List(users),
+        laptops: List(laptops),
+        tables: List(tables),
+        plants: List(plants),
+        crowd_forming: crowd_forming(s, e),
+        hl_forming: (s.lf_active[e] != 0).then(|| LaptopForming {
+            human: U32(s.h_id[hb + s.lf_human[e] as usize]),
+            laptop: U32(s.l_id[lb + s.lf_laptop[e] as usize]),
+            seat: Vector([s.lf_seat_x[e], s.lf_seat_y[e], s.lf_seat_theta[e]]),
+        }),
+        metrics: Metrics {
+            prev_goal_distance: F32(s.m_prev_goal_dist[e]),
+            failure_to_progress: U32(s.m_failure_to_progress[e]),
+            stalled_time: F32(s.m_stalled_time[e]),
+            path_length: F32(s.m_path_length[e]),
+            v_min: Min(s.m_v_min[e]),
+            v_max: F32(s.m_v_max[e]),
+            v_avg: F32(s.m_v_avg[e]),
+            prev_vel: Vector([s.m_prev_vx[e], s.m_prev_vy[e]]),
+            a_min: Min(s.m_a_min[e]),
+            a_max: F32(s.m_a_max[e]),
+            a_avg: F32(s.m_a_avg[e]),
+            prev_a: Vector([s.m_prev_ax[e], s.m_prev_ay[e]]),
+            jerk_min: Min(s.m_j_min[e]),
+            jerk_max: F32(s.m_j_max[e]),
+            jerk_avg: F32(s.m_j_avg[e]),
+            compliant_count: U32(s.m_compliant[e]),
+        },
+        reward_state: RewardState {
+            prev_distance: (s.r_has_prev[e] != 0).then_some(F32(s.r_prev_dist[e])),
+            info: RewardInfo {
+                discomfort_sngnn: F32(s.r_discomfort_sngnn[e]),
+                discomfort_dsrnn: F32(s.r_discomfort_dsrnn[e]),
+                distance_reward: F32(s.r_distance[e]),
+                alive_reward: F32(s.r_alive[e]),
+                sngnn_reward: F32(s.r_sngnn[e]),
+            },
+        },
+        goals,
+        group_noise: List::default(),
+        sngnn_frames: (s.strides.frames > 0).then(|| Lazy::Ready(sngnn::export(p, s, e))),
     }
-    snapshot
 }
 
-fn export_crowd_forming(s: &BatchState, e: usize) -> Value {
+fn crowd_forming(s: &BatchState, e: usize) -> Option<CrowdForming> {
     if s.cf_active[e] == 0 {
-        return Value::Null;
+        return None;
     }
     let c = &s.strides;
     let hb = e * c.humans;
     let sb = e * c.group_size;
     let n = s.cf_count[e] as usize;
-    let mut slot_of = Map::new();
-    let humans: Vec<u32> = (0..n)
+    let mut slot_of = serde_json::Map::new();
+    let humans = (0..n)
         .map(|k| {
             let id = s.h_id[hb + s.cf_human[sb + k] as usize];
-            slot_of.insert(id.to_string(), json!(k));
+            slot_of.insert(id.to_string(), Value::from(k));
             id
         })
         .collect();
-    let slots: Vec<Value> = (sb..sb + n)
+    let slots = (sb..sb + n)
         .map(|k| {
-            json!([
-                num(s.cf_slot_x[k]),
-                num(s.cf_slot_y[k]),
-                num(s.cf_slot_theta[k])
-            ])
+            Slot(
+                F32(s.cf_slot_x[k]),
+                F32(s.cf_slot_y[k]),
+                Angle(s.cf_slot_theta[k]),
+            )
         })
         .collect();
-    json!({"humans": humans, "slot_of": slot_of, "slots": slots, "centre": [num(s.cf_x[e]), num(s.cf_y[e])],
-           "almost_formed_count": s.cf_close_steps[e]})
+    Some(CrowdForming {
+        humans,
+        slot_of: Object(slot_of),
+        slots: List(slots),
+        centre: Vector([s.cf_x[e], s.cf_y[e]]),
+        almost_formed_count: U32(s.cf_close_steps[e]),
+    })
 }
 
 /// What a document must be before its keys are read: a JSON object, and where it names its
@@ -314,24 +398,13 @@ fn json_kind(v: &Value) -> &'static str {
 /// Load environment `e` of `s` from `doc`.
 pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Result<(), SimError> {
     check_envelope(doc)?;
-    let r = Reader::root(doc);
+    let doc: Document = values::parse_at(doc, "")?;
+    let plan = validate::validate(&doc, p, &s.strides)?;
     // Unused slots hold zeros (crate::state): nothing of the environment's previous contents
     // remains beyond what the document fills.
     s.clear_slots(e);
-    read::room(p, &r, s, e)?;
-    read::human_params(p, &r.at("human_params")?, s, e)?;
-    let st = r.at("state")?;
-    read::snapshot(p, &st, s, e)?;
+    load::write(&doc, &plan, s, e);
     sngnn::check_entity_ids(s, e)?;
-    match r.opt("socnav") {
-        Some(x) => read::extras(&x, s, e)?,
-        None => {
-            // A 0.1.1 snapshot: a running episode whose per-episode sums start here.
-            s.done[e] = 0;
-            s.pending_reset[e] = 0;
-            crate::systems::reset::init_episode_sums(&mut s.env_chunk(e), 0);
-        }
-    }
     crate::systems::regroup::number_lists(&mut s.env_chunk(e), 0);
     // What a step must keep true must hold of what it starts from: an entity at NaN or far
     // outside the room would break the step's geometry (ORCA's obstacle processing).
@@ -358,19 +431,10 @@ pub fn import(p: &StepParams, s: &mut BatchState, e: usize, doc: &Value) -> Resu
     }
     // The SNGNN previous poses (derived, like the caches above) and the frame history.
     crate::sngnn::frame::start_episode(&mut s.env_chunk(e), 0);
-    sngnn::import(&st, s, e)?;
+    sngnn::import(doc.state.sngnn_frames.as_ref(), s, e)?;
     s.stepping[e] = 0;
     s.obstacles_dirty[e] = 1;
     Ok(())
-}
-
-/// The room shape code of a shape name (`room_shape::*` follows [`SHAPE_NAMES`]).
-fn shape_code(name: &str) -> Option<u32> {
-    const _: () = assert!(room_shape::SQUARE == 0 && room_shape::NO_WALLS == 3);
-    SHAPE_NAMES
-        .iter()
-        .position(|n| *n == name)
-        .map(|i| i as u32)
 }
 
 /// The metrics' and the reward's previous goal distances are, by definition, the distance from

@@ -9,52 +9,155 @@
 //! newest `Caps::frames` frames (older ones can never be stacked into a graph), and every frame
 //! must show the snapshot's humans and objects: totals are constant within an episode.
 
-use serde_json::{Value, json};
+use serde::{Deserialize, Serialize};
 
-use super::num;
-use super::read::{Reader, capacity, err};
+use super::values::{F32, Lazy, List, U32, Vector, capacity, err, object};
 use crate::error::SimError;
 use crate::params::StepParams;
 use crate::sngnn::history::{self, FrameHead, History, Link, Object, Person};
 use crate::state::BatchState;
 
+/// One frame of the history.
+#[derive(Clone, Serialize, Deserialize)]
+#[serde(remote = "Self")]
+pub(super) struct Frame {
+    robot: FrameRobot,
+    /// 0.1.1's list of one goal; only the first is read.
+    goal: List<Lazy<Point>, true>,
+    tick: U32,
+    /// Seconds since the episode began (0.1.1's); not read.
+    #[serde(skip_deserializing)]
+    timestamp: f64,
+    command: Vector<3>,
+    #[serde(default)]
+    people: List<Pose>,
+    #[serde(default)]
+    objects: List<ObjectPose>,
+    #[serde(default)]
+    interaction: List<LinkIds>,
+}
+
+/// The world pose a frame was taken from (m, m, rad).
+#[derive(Clone, Serialize, Deserialize)]
+#[serde(remote = "Self")]
+struct FrameRobot {
+    x: F32,
+    y: F32,
+    theta: F32,
+}
+
+#[derive(Clone, Serialize, Deserialize)]
+#[serde(remote = "Self")]
+struct Point {
+    x: F32,
+    y: F32,
+}
+
+/// A person of a frame ([`Person`]).
+#[derive(Clone, Serialize, Deserialize)]
+#[serde(remote = "Self")]
+struct Pose {
+    id: U32,
+    x: F32,
+    y: F32,
+    a: F32,
+    vx: F32,
+    vy: F32,
+    va: F32,
+}
+
+/// An object of a frame ([`Object`]): a pose and a size.
+#[derive(Clone, Serialize, Deserialize)]
+#[serde(remote = "Self")]
+struct ObjectPose {
+    id: U32,
+    x: F32,
+    y: F32,
+    a: F32,
+    vx: F32,
+    vy: F32,
+    va: F32,
+    size_x: F32,
+    size_y: F32,
+}
+
+#[derive(Clone, Serialize, Deserialize)]
+#[serde(remote = "Self")]
+struct LinkIds {
+    src: U32,
+    dst: U32,
+}
+
+object!(
+    Frame: "robot",
+    FrameRobot: "x",
+    Point: "x",
+    Pose: "id",
+    ObjectPose: "id",
+    LinkIds: "src",
+);
+
+fn pose(p: &Person) -> Pose {
+    Pose {
+        id: U32(p.id),
+        x: F32(p.x),
+        y: F32(p.y),
+        a: F32(p.a),
+        vx: F32(p.vx),
+        vy: F32(p.vy),
+        va: F32(p.va),
+    }
+}
+
 /// The history of environment `e`, newest first.
-pub(super) fn export(p: &StepParams, s: &BatchState, e: usize) -> Value {
+pub(super) fn export(p: &StepParams, s: &BatchState, e: usize) -> List<Lazy<Frame>> {
     let h = History::of_batch(s, e);
-    let frames: Vec<Value> = (0..h.len())
+    let frames = (0..h.len())
         .map(|age| {
             let f = h.frame(age);
             let head = f.head();
-            let people: Vec<Value> = f.people().map(|p| person(&p)).collect();
-            let objects: Vec<Value> = f
-                .objects()
-                .map(|o| {
-                    let mut v = person(&o.pose);
-                    v["size_x"] = num(o.size_x);
-                    v["size_y"] = num(o.size_y);
-                    v
-                })
-                .collect();
-            let links: Vec<Value> = f
-                .links()
-                .map(|l| json!({"src": l.src, "dst": l.dst}))
-                .collect();
             let [x, y, theta] = head.robot;
-            json!({
-                "tick": head.tick, "timestamp": history::timestamp(p.dt, head.tick),
-                "robot": {"x": num(x), "y": num(y), "theta": num(theta)},
-                "goal": [{"x": num(head.goal[0]), "y": num(head.goal[1])}],
-                "command": head.command.map(num),
-                "people": people, "objects": objects, "interaction": links,
+            Lazy::Ready(Frame {
+                tick: U32(head.tick),
+                timestamp: history::timestamp(p.dt, head.tick),
+                robot: FrameRobot {
+                    x: F32(x),
+                    y: F32(y),
+                    theta: F32(theta),
+                },
+                goal: List(vec![Lazy::Ready(Point {
+                    x: F32(head.goal[0]),
+                    y: F32(head.goal[1]),
+                })]),
+                command: Vector(head.command),
+                people: List(f.people().map(|p| pose(&p)).collect()),
+                objects: List(
+                    f.objects()
+                        .map(|o| ObjectPose {
+                            id: U32(o.pose.id),
+                            x: F32(o.pose.x),
+                            y: F32(o.pose.y),
+                            a: F32(o.pose.a),
+                            vx: F32(o.pose.vx),
+                            vy: F32(o.pose.vy),
+                            va: F32(o.pose.va),
+                            size_x: F32(o.size_x),
+                            size_y: F32(o.size_y),
+                        })
+                        .collect(),
+                ),
+                interaction: List(
+                    f.links()
+                        .map(|l| LinkIds {
+                            src: U32(l.src),
+                            dst: U32(l.dst),
+                        })
+                        .collect(),
+                ),
             })
         })
         .collect();
-    Value::Array(frames)
-}
-
-fn person(p: &Person) -> Value {
-    json!({"id": p.id, "x": num(p.x), "y": num(p.y), "a": num(p.a),
-           "vx": num(p.vx), "vy": num(p.vy), "va": num(p.va)})
+    List(frames)
 }
 
 /// Humans plus laptops, plants and tables of environment `e`: the entities with a graph node.
@@ -102,16 +205,24 @@ pub(super) fn check_entity_ids(s: &BatchState, e: usize) -> Result<(), SimError>
     Ok(())
 }
 
-/// Load `st.sngnn_frames` (if any) into the emptied history of environment `e`.
-pub(super) fn import(st: &Reader<'_>, s: &mut BatchState, e: usize) -> Result<(), SimError> {
+/// Load `state.sngnn_frames` (if any) into the emptied history of environment `e`.
+pub(super) fn import(
+    frames: Option<&Lazy<List<Lazy<Frame>>>>,
+    s: &mut BatchState,
+    e: usize,
+) -> Result<(), SimError> {
     if s.strides.frames == 0 {
         return Ok(());
     }
-    let frames = st.list("sngnn_frames")?;
+    let path = "state.sngnn_frames";
+    let frames = match frames {
+        Some(f) => f.get(path)?.0,
+        None => Vec::new(),
+    };
     let kept = frames.len().min(s.strides.frames);
     // Oldest first, so that the newest ends up newest.
-    for r in frames[..kept].iter().rev() {
-        let frame = read_frame(r, s, e)?;
+    for (i, f) in frames[..kept].iter().enumerate().rev() {
+        let frame = check_frame(&f.get(&format!("{path}[{i}]"))?, i, s, e)?;
         let mut chunk = s.env_chunk(e);
         let slot = history::begin_frame(&mut chunk, 0, &frame.head);
         for p in &frame.people {
@@ -135,54 +246,52 @@ struct FrameRecord {
     links: Vec<Link>,
 }
 
-fn read_frame(r: &Reader<'_>, s: &BatchState, e: usize) -> Result<FrameRecord, SimError> {
-    let robot = r.at("robot")?;
-    let goal = r.at("goal")?.items()?;
-    let goal = goal
+/// Frame `i` of the document, checked against the snapshot of environment `e`.
+fn check_frame(f: &Frame, i: usize, s: &BatchState, e: usize) -> Result<FrameRecord, SimError> {
+    let path = format!("state.sngnn_frames[{i}]");
+    let goal = f
+        .goal
+        .0
         .first()
-        .ok_or_else(|| err(r.path(), "has an empty `goal` list"))?;
+        .ok_or_else(|| err(&path, "has an empty `goal` list"))?
+        .get(&format!("{path}.goal[0]"))?;
     let head = FrameHead {
-        tick: r.u("tick")?,
-        robot: [robot.f("x")?, robot.f("y")?, robot.f("theta")?],
-        goal: [goal.f("x")?, goal.f("y")?],
-        command: r.vec::<3>("command")?,
+        tick: f.tick.0,
+        robot: [f.robot.x.0, f.robot.y.0, f.robot.theta.0],
+        goal: [goal.x.0, goal.y.0],
+        command: f.command.0,
     };
     let n = entities(s, e) as u32;
-    let id = |r: &Reader<'_>, key: &str| -> Result<u32, SimError> {
-        let id = r.u(key)?;
-        if id == 0 || id > n {
+    let id = |list: &str, k: usize, key: &str, id: U32| -> Result<u32, SimError> {
+        if id.0 == 0 || id.0 > n {
             return Err(err(
-                r.path(),
+                &format!("{path}.{list}[{k}]"),
                 format!(
-                    "`{key}` = {id} is not an id of the snapshot's humans and objects (1..={n})"
+                    "`{key}` = {} is not an id of the snapshot's humans and objects (1..={n})",
+                    id.0
                 ),
             ));
         }
-        Ok(id)
+        Ok(id.0)
     };
-    let pose = |r: &Reader<'_>| -> Result<Person, SimError> {
-        Ok(Person {
-            id: id(r, "id")?,
-            x: r.f("x")?,
-            y: r.f("y")?,
-            a: r.f("a")?,
-            vx: r.f("vx")?,
-            vy: r.f("vy")?,
-            va: r.f("va")?,
-        })
-    };
-    let people = r.list("people")?;
-    same_count(r, "people", people.len(), s.n_humans[e] as usize, "humans")?;
-    let objects = r.list("objects")?;
+    let people = &f.people.0;
+    same_count(
+        &path,
+        "people",
+        people.len(),
+        s.n_humans[e] as usize,
+        "humans",
+    )?;
+    let objects = &f.objects.0;
     let n_objects = (s.n_laptops[e] + s.n_plants[e] + s.n_tables[e]) as usize;
     same_count(
-        r,
+        &path,
         "objects",
         objects.len(),
         n_objects,
         "laptops, plants and tables",
     )?;
-    let links = r.list("interaction")?;
+    let links = &f.interaction.0;
     capacity(
         "interaction entries in an SNGNN frame",
         links.len(),
@@ -191,23 +300,47 @@ fn read_frame(r: &Reader<'_>, s: &BatchState, e: usize) -> Result<FrameRecord, S
     )?;
     Ok(FrameRecord {
         head,
-        people: people.iter().map(pose).collect::<Result<_, _>>()?,
+        people: people
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                Ok(Person {
+                    id: id("people", k, "id", p.id)?,
+                    x: p.x.0,
+                    y: p.y.0,
+                    a: p.a.0,
+                    vx: p.vx.0,
+                    vy: p.vy.0,
+                    va: p.va.0,
+                })
+            })
+            .collect::<Result<_, SimError>>()?,
         objects: objects
             .iter()
-            .map(|o| {
+            .enumerate()
+            .map(|(k, o)| {
                 Ok(Object {
-                    pose: pose(o)?,
-                    size_x: o.f("size_x")?,
-                    size_y: o.f("size_y")?,
+                    pose: Person {
+                        id: id("objects", k, "id", o.id)?,
+                        x: o.x.0,
+                        y: o.y.0,
+                        a: o.a.0,
+                        vx: o.vx.0,
+                        vy: o.vy.0,
+                        va: o.va.0,
+                    },
+                    size_x: o.size_x.0,
+                    size_y: o.size_y.0,
                 })
             })
             .collect::<Result<_, SimError>>()?,
         links: links
             .iter()
-            .map(|l| {
+            .enumerate()
+            .map(|(k, l)| {
                 Ok(Link {
-                    src: id(l, "src")?,
-                    dst: id(l, "dst")?,
+                    src: id("interaction", k, "src", l.src)?,
+                    dst: id("interaction", k, "dst", l.dst)?,
                 })
             })
             .collect::<Result<_, SimError>>()?,
@@ -217,7 +350,7 @@ fn read_frame(r: &Reader<'_>, s: &BatchState, e: usize) -> Result<FrameRecord, S
 /// A frame shows every human and object of the snapshot (their totals are constant within an
 /// episode), which also keeps it within the frame's capacities.
 fn same_count(
-    r: &Reader<'_>,
+    path: &str,
     key: &str,
     n: usize,
     expected: usize,
@@ -225,7 +358,7 @@ fn same_count(
 ) -> Result<(), SimError> {
     if n != expected {
         return Err(err(
-            r.path(),
+            path,
             format!(
                 "lists {n} {key}, but the snapshot has {expected} {what} (a frame shows them all)"
             ),
