@@ -3,7 +3,7 @@
 //! pass it runs in, fused with its neighbours or alone; whether its rare work is queued out of the
 //! hot pass; whether it regroups or resets environments, leaving ORCA obstacles to rebuild). The
 //! CPU backend runs the stages in this order over chunks of environments; the GPU backend derives
-//! its passes, queues and rebuild entry points from the same list (`backend::wgsl`). Adding a
+//! its passes, queues and rebuild entry points from the same list (`backend::schedule`). Adding a
 //! stage means adding one entry here (and its `src/systems/<name>.rs` / `shaders/<name>.wgsl`
 //! pair); a test checks every plan against its shader file.
 
@@ -31,8 +31,8 @@ pub struct Stage {
     pub gpu: GpuPlan,
 }
 
-/// A stage's plan on the GPU. The backend's schedule is derived from these (`backend::wgsl`:
-/// the passes, the rare-work queues, the rebuild entry points); the shader files agree with them
+/// A stage's plan on the GPU. The backend's schedule is derived from these (`backend::schedule`:
+/// the passes, the rare-work queues, the passes that rebuild); the shader files agree with them
 /// (`tests/suite/foundations/shaders_validate.rs`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct GpuPlan {
